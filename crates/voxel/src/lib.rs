@@ -1,0 +1,12 @@
+//! `ssbvb-voxel`: everything the renderer consumes, built on the CPU (no wgpu here).
+//!
+//! Pipeline of the preparation stage (see `ARCHITECTURE.md`, "Preparation"):
+//! load a model ([`load`]) → fit it into object space [-1, 1]³ ([`model::ObjectSpace`]) →
+//! voxelize it on a 2^L grid ([`voxelize`]) → sparse voxel octree whose every level is a
+//! LOD ([`svo`]) → per LOD a packed point cloud ([`point_cloud`]) and a sparse lookup of
+//! 16³ pages ([`sparse_lookup`]) → a conservative proxy mesh ([`proxy`]). The exact CPU
+//! reference ray caster ([`reference`]) is the ground truth every GPU technique is
+//! measured against; [`cache`] stores a prepared asset on disk.
+
+pub mod asset;
+pub mod model;
