@@ -1,1 +1,34 @@
-//! ssbvb-graph
+//! `ssbvb-graph`: the RON render-graph format and its resolution into a scheduled DAG.
+//!
+//! A pipeline file declares **resources** (textures with a format and a size relative to
+//! the screen or fixed; buffers with an element layout and a count) and **passes** (a name,
+//! a [`PassKind`] with typed parameters, and the resources bound to the kind's read and
+//! write slots). Edges come from the data: a pass that reads a resource runs after every
+//! pass that writes it. [`resolve_str`] / [`resolve_file`] validate everything (collecting
+//! every error of a file, each with pass, resource, line and column), prune what does not
+//! reach the `output`, schedule the rest topologically and alias transient resources whose
+//! lifetimes do not overlap. [`PipelineWatcher`] re-resolves a file that changed on disk
+//! and keeps the last good pipeline on error.
+//!
+//! The crate needs no GPU (it depends on `wgpu-types` only), so all of this is unit-tested
+//! on any machine. Executing a resolved pipeline is `ssbvb-passes`' job.
+
+pub mod error;
+pub mod locate;
+pub mod pass_kind;
+pub mod resolve;
+pub mod schema;
+pub mod watch;
+
+pub use error::{GraphError, Loc, PipelineErrors};
+pub use locate::Position;
+pub use pass_kind::{Access, BillboardMode, KIND_NAMES, PassKind, PassStage, SlotClass, SlotDesc};
+pub use resolve::{
+    BoundSlot, Dependency, MemoryReport, PhysicalResource, ResolvedPipeline, ResolvedResource,
+    ResourceUsage, ScheduledPass, resolve_file, resolve_str,
+};
+pub use schema::{
+    Binding, Bindings, BufferLayout, CountDesc, Format, PassDesc, PipelineDesc, ResourceDesc,
+    SizeDesc,
+};
+pub use watch::{PipelineWatcher, ReloadOutcome};

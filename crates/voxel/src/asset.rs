@@ -145,7 +145,10 @@ impl PackedVoxel {
 
     /// Texture coordinate in [0, 1].
     pub fn uv(&self) -> [f32; 2] {
-        [(self.uv & 0xffff) as f32 / 65535.0, (self.uv >> 16) as f32 / 65535.0]
+        [
+            (self.uv & 0xffff) as f32 / 65535.0,
+            (self.uv >> 16) as f32 / 65535.0,
+        ]
     }
 }
 
@@ -213,7 +216,14 @@ impl SparseLookup {
                 }
             }
         }
-        Self { level, pages_per_axis, page_table, pool, coarse, coarse_per_axis }
+        Self {
+            level,
+            pages_per_axis,
+            page_table,
+            pool,
+            coarse,
+            coarse_per_axis,
+        }
     }
 
     /// The voxel id at `cell`, or `None` when the cell is empty or outside the grid.
@@ -280,7 +290,12 @@ mod tests {
 
     #[test]
     fn packed_voxel_round_trips() {
-        let v = PackedVoxel::new([65535, 7, 1234], [0.0, 0.0, -1.0], [1.0, 0.5, 0.0, 1.0], [0.25, 0.75]);
+        let v = PackedVoxel::new(
+            [65535, 7, 1234],
+            [0.0, 0.0, -1.0],
+            [1.0, 0.5, 0.0, 1.0],
+            [0.25, 0.75],
+        );
         assert_eq!(v.cell(), [65535, 7, 1234]);
         let n = v.normal();
         assert!((n[2] + 1.0).abs() < 1e-3, "{n:?}");

@@ -9,4 +9,5 @@
 //! measured against; [`cache`] stores a prepared asset on disk.
 
 pub mod asset;
+pub mod load;
 pub mod model;

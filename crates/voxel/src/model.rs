@@ -34,7 +34,10 @@ pub struct Material {
 
 impl Default for Material {
     fn default() -> Self {
-        Self { base_color: [0.8, 0.8, 0.8, 1.0], base_color_texture: None }
+        Self {
+            base_color: [0.8, 0.8, 0.8, 1.0],
+            base_color_texture: None,
+        }
     }
 }
 
@@ -89,8 +92,15 @@ impl ObjectSpace {
     /// A degenerate (zero-extent) box gets scale 1 so nothing divides by zero.
     pub fn from_bounds(min: DVec3, max: DVec3) -> Self {
         let extent = (max - min).max_element();
-        let scale = if extent > 0.0 && extent.is_finite() { 2.0 / extent } else { 1.0 };
-        Self { center: (min + max) * 0.5, scale }
+        let scale = if extent > 0.0 && extent.is_finite() {
+            2.0 / extent
+        } else {
+            1.0
+        };
+        Self {
+            center: (min + max) * 0.5,
+            scale,
+        }
     }
 
     /// Model coordinates → object space.

@@ -1,0 +1,259 @@
+//! The RON pipeline file, as written by users (deserialized with serde).
+//!
+//! See the README's "Pipeline RON reference" for the format with an example. Nothing here
+//! is validated beyond syntax: [`crate::resolve`] checks meaning and reports every error.
+
+use std::fmt;
+
+use serde::de::{MapAccess, SeqAccess, Visitor};
+use serde::{Deserialize, Deserializer, Serialize};
+
+use crate::pass_kind::PassKind;
+
+/// A whole pipeline file: named resources, passes and the one output.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, rename = "Pipeline")]
+pub struct PipelineDesc {
+    /// Transient per-frame resources by name, in file order.
+    pub resources: NamedResources,
+    /// Passes in file order (the order only breaks ties in the schedule).
+    pub passes: Vec<PassDesc>,
+    /// The resource the frame produces (a texture); everything else serves it.
+    pub output: String,
+}
+
+/// Resources in file order; duplicates are kept so validation can report them.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+pub struct NamedResources(pub Vec<(String, ResourceDesc)>);
+
+impl<'de> Deserialize<'de> for NamedResources {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = NamedResources;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a map of resource name to Texture(..) or Buffer(..)")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> Result<Self::Value, A::Error> {
+                let mut out = Vec::new();
+                while let Some((k, v)) = m.next_entry::<String, ResourceDesc>()? {
+                    out.push((k, v));
+                }
+                Ok(NamedResources(out))
+            }
+        }
+        d.deserialize_map(V)
+    }
+}
+
+/// One transient resource.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+pub enum ResourceDesc {
+    /// A 2D texture.
+    Texture {
+        /// Texel format.
+        format: Format,
+        /// Size, relative to the screen or fixed.
+        size: SizeDesc,
+    },
+    /// A buffer of elements of one layout.
+    Buffer {
+        /// Element layout (each pass slot names the layout it needs).
+        layout: BufferLayout,
+        /// Element count, relative to the screen's pixel count or fixed.
+        count: CountDesc,
+    },
+}
+
+/// Texture size of a resource.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+pub enum SizeDesc {
+    /// The screen (render target) size.
+    Screen,
+    /// The screen size times a factor (rounded up, at least 1 texel).
+    ScreenScaled(f32),
+    /// A fixed size in texels.
+    Fixed(u32, u32),
+}
+
+/// Element count of a buffer resource.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+pub enum CountDesc {
+    /// One element per screen pixel.
+    ScreenPixels,
+    /// Screen pixels times a factor (rounded up, at least 1).
+    ScreenPixelsScaled(f32),
+    /// A fixed count.
+    Fixed(u64),
+}
+
+/// Element layouts of buffer resources; WGSL declares the matching structs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, Serialize)]
+pub enum BufferLayout {
+    /// One SSBVB slot: a copied point-cloud entry plus where it came from (32 bytes).
+    VoxelSlot,
+    /// Indirect draw arguments (`vertex_count, instance_count, first_vertex,
+    /// first_instance`, 16 bytes).
+    DrawIndirect,
+    /// Indirect dispatch arguments (`x, y, z`, 12 bytes).
+    DispatchIndirect,
+    /// Plain `u32`s.
+    U32,
+    /// `vec4<f32>`s.
+    Vec4F32,
+}
+
+impl BufferLayout {
+    /// Bytes per element.
+    pub fn element_size(self) -> u64 {
+        match self {
+            BufferLayout::VoxelSlot => 32,
+            BufferLayout::DrawIndirect => 16,
+            BufferLayout::DispatchIndirect => 12,
+            BufferLayout::U32 => 4,
+            BufferLayout::Vec4F32 => 16,
+        }
+    }
+}
+
+/// Texture formats a pipeline file may name (a subset of wgpu's, spelled like wgpu's).
+#[allow(missing_docs)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, Serialize)]
+pub enum Format {
+    R32Uint,
+    R32Sint,
+    R32Float,
+    Rg32Float,
+    Rg16Float,
+    Rgba8Unorm,
+    Rgba8UnormSrgb,
+    Bgra8Unorm,
+    Bgra8UnormSrgb,
+    Rgba16Float,
+    Rgba32Float,
+    Rgba32Uint,
+    Depth32Float,
+    Depth24PlusStencil8,
+    Depth32FloatStencil8,
+}
+
+impl Format {
+    /// The wgpu format.
+    pub fn to_wgpu(self) -> wgpu_types::TextureFormat {
+        use wgpu_types::TextureFormat as T;
+        match self {
+            Format::R32Uint => T::R32Uint,
+            Format::R32Sint => T::R32Sint,
+            Format::R32Float => T::R32Float,
+            Format::Rg32Float => T::Rg32Float,
+            Format::Rg16Float => T::Rg16Float,
+            Format::Rgba8Unorm => T::Rgba8Unorm,
+            Format::Rgba8UnormSrgb => T::Rgba8UnormSrgb,
+            Format::Bgra8Unorm => T::Bgra8Unorm,
+            Format::Bgra8UnormSrgb => T::Bgra8UnormSrgb,
+            Format::Rgba16Float => T::Rgba16Float,
+            Format::Rgba32Float => T::Rgba32Float,
+            Format::Rgba32Uint => T::Rgba32Uint,
+            Format::Depth32Float => T::Depth32Float,
+            Format::Depth24PlusStencil8 => T::Depth24PlusStencil8,
+            Format::Depth32FloatStencil8 => T::Depth32FloatStencil8,
+        }
+    }
+
+    /// Bytes per texel (for memory reports; Depth24PlusStencil8 counted as 4).
+    pub fn bytes_per_texel(self) -> u64 {
+        match self {
+            Format::R32Uint | Format::R32Sint | Format::R32Float => 4,
+            Format::Rg16Float => 4,
+            Format::Rg32Float => 8,
+            Format::Rgba8Unorm | Format::Rgba8UnormSrgb => 4,
+            Format::Bgra8Unorm | Format::Bgra8UnormSrgb => 4,
+            Format::Rgba16Float => 8,
+            Format::Rgba32Float | Format::Rgba32Uint => 16,
+            Format::Depth32Float | Format::Depth24PlusStencil8 => 4,
+            Format::Depth32FloatStencil8 => 8,
+        }
+    }
+
+    /// Whether this is a depth (or depth-stencil) format.
+    pub fn is_depth(self) -> bool {
+        matches!(
+            self,
+            Format::Depth32Float | Format::Depth24PlusStencil8 | Format::Depth32FloatStencil8
+        )
+    }
+
+    /// Whether the format has a stencil aspect.
+    pub fn has_stencil(self) -> bool {
+        matches!(
+            self,
+            Format::Depth24PlusStencil8 | Format::Depth32FloatStencil8
+        )
+    }
+}
+
+/// One pass of the pipeline.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PassDesc {
+    /// Unique pass name (used in errors, timings and `after`).
+    pub name: String,
+    /// What the pass does, with its typed parameters.
+    pub kind: PassKind,
+    /// Resources the pass reads, bound to the kind's read slots.
+    #[serde(default)]
+    pub reads: Bindings,
+    /// Resources the pass writes, bound to the kind's write slots.
+    #[serde(default)]
+    pub writes: Bindings,
+    /// Passes this one must run after even without a data dependency (for two passes that
+    /// write the same resource: the later one names the earlier here).
+    #[serde(default)]
+    pub after: Vec<String>,
+}
+
+/// Slot → resource bindings of one pass.
+///
+/// In RON either a list of names, each both the slot and the resource
+/// (`["entry", "ssbvb"]`), or a map from slot to resource (`{"normal": "smoothed_normal"}`).
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+pub struct Bindings(pub Vec<Binding>);
+
+/// One slot bound to one resource.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Binding {
+    /// The slot name the pass kind declares (also its WGSL global name).
+    pub slot: String,
+    /// The resource name from `resources`.
+    pub resource: String,
+}
+
+impl<'de> Deserialize<'de> for Bindings {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = Bindings;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str(r#"a list of names ["a", "b"] or a map {"slot": "resource"}"#)
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut s: A) -> Result<Self::Value, A::Error> {
+                let mut out = Vec::new();
+                while let Some(name) = s.next_element::<String>()? {
+                    out.push(Binding {
+                        slot: name.clone(),
+                        resource: name,
+                    });
+                }
+                Ok(Bindings(out))
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> Result<Self::Value, A::Error> {
+                let mut out = Vec::new();
+                while let Some((slot, resource)) = m.next_entry::<String, String>()? {
+                    out.push(Binding { slot, resource });
+                }
+                Ok(Bindings(out))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}

@@ -1,0 +1,410 @@
+//! Resolution of pipeline files: the bundled SSBVB pipeline, and one test per error kind
+//! asserting that the message names the culprit (pass, resource) and the line.
+
+use ssbvb_graph::{GraphError, PipelineErrors, ResolvedPipeline, resolve_file, resolve_str};
+
+const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
+
+fn ok(src: &str) -> ResolvedPipeline {
+    match resolve_str(src, "test.ron") {
+        Ok(p) => p,
+        Err(e) => panic!("expected a valid pipeline, got:\n{e}"),
+    }
+}
+
+fn err(src: &str) -> PipelineErrors {
+    match resolve_str(src, "test.ron") {
+        Ok(p) => panic!("expected errors, got a pipeline:\n{}", p.describe((64, 64))),
+        Err(e) => e,
+    }
+}
+
+/// Line (1-based) of the first line of `src` containing `needle`.
+fn line_of(src: &str, needle: &str) -> usize {
+    src.lines()
+        .position(|l| l.contains(needle))
+        .expect("needle in source")
+        + 1
+}
+
+fn assert_mentions(e: &PipelineErrors, parts: &[&str]) {
+    let text = e.to_string();
+    for p in parts {
+        assert!(
+            text.contains(p),
+            "error text does not mention {p:?}:\n{text}"
+        );
+    }
+}
+
+#[test]
+fn ssbvb_pipeline_resolves_in_the_expected_order() {
+    let p = ok(SSBVB);
+    let order: Vec<_> = p.passes.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(
+        order,
+        [
+            "empty_space",
+            "filter",
+            "triangles",
+            "billboards",
+            "smooth",
+            "composite"
+        ]
+    );
+    assert!(p.pruned_passes.is_empty());
+    assert!(p.pruned_resources.is_empty());
+    assert_eq!(p.resources[p.output].name, "color");
+    // entry (first used by empty_space, last by filter) and gbuffer_position (triangles ..
+    // composite) have one descriptor and disjoint lifetimes: they share memory.
+    let entry = &p.resources[p.resource("entry").unwrap()];
+    let pos = &p.resources[p.resource("gbuffer_position").unwrap()];
+    assert_eq!(entry.physical, pos.physical);
+    let m = p.memory((640, 480));
+    assert_eq!(m.unaliased - m.aliased, 640 * 480 * 16);
+    // Usages are derived from the slots: entry is written as an attachment and sampled.
+    let text = p.describe((640, 480));
+    assert!(text.contains("shares memory with"), "{text}");
+}
+
+#[test]
+fn resolve_file_reads_the_bundled_pipeline_and_reports_missing_files() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../assets/pipelines/ssbvb.ron"
+    );
+    resolve_file(std::path::Path::new(path)).expect("bundled pipeline resolves");
+    let e = resolve_file(std::path::Path::new("/nonexistent/p.ron")).unwrap_err();
+    assert!(matches!(e.errors[0], GraphError::Io { .. }));
+    assert_mentions(&e, &["/nonexistent/p.ron"]);
+}
+
+#[test]
+fn passes_not_reaching_the_output_are_pruned() {
+    // A smoothing pass whose output nobody reads, and a resource nobody binds.
+    let src = SSBVB
+        .replace(
+            r#""normal": "smoothed_normal""#,
+            r#""normal": "gbuffer_normal""#,
+        )
+        .replace(
+            r#""color":"#,
+            r#""unused": Texture(format: R32Float, size: Screen),
+    "color":"#,
+        );
+    let p = ok(&src);
+    assert_eq!(p.pruned_passes, ["smooth"]);
+    assert_eq!(p.pruned_resources, ["smoothed_normal", "unused"]);
+    assert!(p.passes.iter().all(|q| q.name != "smooth"));
+}
+
+#[test]
+fn syntax_error_has_line_and_column() {
+    let src = SSBVB
+        .replace(r#"writes: ["color"],"#, r#"writes: ["color"]"#)
+        .replacen("output", "output output", 1);
+    let e = err(&src);
+    assert!(matches!(e.errors[0], GraphError::Syntax { .. }), "{e}");
+    let pos = e.errors[0].loc().pos.expect("position");
+    assert!(pos.line > 1 && pos.col >= 1, "{e}");
+    assert_mentions(&e, &["test.ron:"]);
+}
+
+#[test]
+fn unknown_pass_kinds_are_all_reported_with_suggestions() {
+    let src = SSBVB
+        .replace("kind: Composite,", "kind: Compsite,")
+        .replace("kind: Triangles,", "kind: Trianglez,");
+    let e = err(&src);
+    assert_eq!(e.errors.len(), 2, "{e}");
+    let composite = format!("test.ron:{}:", line_of(&src, "Compsite"));
+    assert_mentions(
+        &e,
+        &[
+            "`Compsite`",
+            "did you mean `Composite`",
+            "pass `composite`",
+            &composite,
+        ],
+    );
+    assert_mentions(
+        &e,
+        &[
+            "`Trianglez`",
+            "did you mean `Triangles`",
+            "pass `triangles`",
+        ],
+    );
+}
+
+#[test]
+fn read_with_no_producer_names_pass_resource_and_line() {
+    let src = SSBVB.replace(
+        r#"(name: "empty_space", kind: EmptySpacePrepass, writes: ["entry", "prepass_depth"]),"#,
+        "",
+    );
+    let e = err(&src);
+    let line = line_of(&src, r#"reads: ["entry"]"#);
+    assert!(
+        e.errors.iter().any(|x| matches!(x, GraphError::NoProducer { pass, resource, .. } if pass == "filter" && resource == "entry")),
+        "{e}"
+    );
+    assert_mentions(
+        &e,
+        &[
+            "pass `filter` reads resource `entry`",
+            &format!("test.ron:{line}:"),
+        ],
+    );
+}
+
+#[test]
+fn two_unordered_writers_are_an_error() {
+    let src = SSBVB.replace(r#"after: ["triangles"],"#, "");
+    let e = err(&src);
+    assert_mentions(
+        &e,
+        &[
+            "written by passes `triangles` and `billboards`",
+            "after: [\"triangles\"]",
+        ],
+    );
+    assert!(
+        e.errors
+            .iter()
+            .all(|x| matches!(x, GraphError::UnorderedWriters { .. })),
+        "{e}"
+    );
+}
+
+#[test]
+fn cycles_name_the_passes_on_them() {
+    // The filter now also runs after composite, which (through billboards) depends on it.
+    let src = SSBVB.replace(
+        r#"writes: ["ssbvb", "billboard_draw"],"#,
+        r#"writes: ["ssbvb", "billboard_draw"], after: ["composite"],"#,
+    );
+    let e = err(&src);
+    let GraphError::Cycle { cycle, .. } = &e.errors[0] else {
+        panic!("{e}")
+    };
+    for p in ["filter", "billboards", "composite"] {
+        assert!(cycle.iter().any(|c| c == p), "{cycle:?}");
+    }
+    assert!(!cycle.iter().any(|c| c == "empty_space"), "{cycle:?}");
+    assert_eq!(cycle.first(), cycle.last());
+    assert_mentions(
+        &e,
+        &[
+            "cycle between passes",
+            &format!("test.ron:{}:", line_of(&src, r#"name: "filter""#)),
+        ],
+    );
+    // A pass after itself.
+    let src = SSBVB.replace(
+        "kind: Composite,",
+        r#"kind: Composite, after: ["composite"],"#,
+    );
+    assert_mentions(
+        &err(&src),
+        &["cycle between passes: composite -> composite"],
+    );
+}
+
+#[test]
+fn format_class_and_layout_mismatches_name_slot_and_resource() {
+    let src = SSBVB.replace(
+        r#""entry":            Texture(format: Rgba32Float"#,
+        r#""entry":            Texture(format: Rgba8Unorm"#,
+    );
+    let e = err(&src);
+    assert_mentions(
+        &e,
+        &[
+            "slot `entry` accepts formats Rgba32Float",
+            "resource `entry` is Rgba8Unorm",
+        ],
+    );
+    assert!(
+        e.errors.len() >= 2,
+        "both the prepass and the filter see it: {e}"
+    );
+
+    let src = SSBVB.replace(
+        r#""ssbvb":            Buffer(layout: VoxelSlot"#,
+        r#""ssbvb":            Buffer(layout: U32"#,
+    );
+    assert_mentions(
+        &err(&src),
+        &["slot `ssbvb` needs buffer layout VoxelSlot", "layout U32"],
+    );
+
+    let src = SSBVB.replace(
+        r#""billboard_draw":   Buffer(layout: DrawIndirect, count: Fixed(1))"#,
+        r#""billboard_draw":   Texture(format: R32Uint, size: Screen)"#,
+    );
+    assert_mentions(
+        &err(&src),
+        &[
+            "slot `billboard_draw` needs a storage buffer",
+            "is a texture",
+        ],
+    );
+}
+
+#[test]
+fn unknown_resources_slots_and_missing_slots() {
+    let src = SSBVB.replace(r#"reads: ["entry"],"#, r#"reads: {"entry": "entyr"},"#);
+    let e = err(&src);
+    assert_mentions(
+        &e,
+        &[
+            "pass `filter` uses resource `entyr`",
+            "did you mean `entry`",
+            &format!("test.ron:{}:", line_of(&src, "entyr")),
+        ],
+    );
+
+    let src = SSBVB.replace(
+        r#"reads: ["gbuffer_normal", "depth_stencil"],"#,
+        r#"reads: ["gbuffer_normal", "depth_stencil", "color"],"#,
+    );
+    assert_mentions(
+        &err(&src),
+        &["pass `smooth` (Smooth) has no slot `color` among its reads"],
+    );
+
+    let src = SSBVB.replace(r#"writes: ["color"],"#, "");
+    let e = err(&src);
+    assert_mentions(
+        &e,
+        &["pass `composite` (Composite) does not bind its write slot `color`"],
+    );
+}
+
+#[test]
+fn attachment_sizes_must_agree() {
+    let src = SSBVB.replace(
+        r#""prepass_depth":    Texture(format: Depth32Float, size: Screen)"#,
+        r#""prepass_depth":    Texture(format: Depth32Float, size: ScreenScaled(0.5))"#,
+    );
+    assert_mentions(
+        &err(&src),
+        &[
+            "pass `empty_space`",
+            "`entry` (Screen) and `prepass_depth` (ScreenScaled(0.5)) differ in size",
+        ],
+    );
+}
+
+#[test]
+fn bad_declarations_are_reported_together() {
+    let src = SSBVB
+        .replace(
+            "Smooth(max_i: 1.0, min_dist: 0.5)",
+            "Smooth(max_i: -1.0, min_dist: 0.5)",
+        )
+        .replace(r#"count: Fixed(1)"#, "count: Fixed(0)")
+        .replace(r#"name: "smooth","#, r#"name: "filter","#);
+    let e = err(&src);
+    assert_mentions(
+        &e,
+        &[
+            "max_i must be a number >= 0",
+            "resource `billboard_draw`: Fixed count",
+            "pass `filter` is declared more than once",
+        ],
+    );
+    assert!(e.errors.len() >= 3, "{e}");
+    // The duplicate is reported where it is declared the second time.
+    let dup = e
+        .errors
+        .iter()
+        .find(|x| matches!(x, GraphError::DuplicatePass { .. }))
+        .unwrap();
+    let second = src
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| l.contains(r#"name: "filter""#))
+        .nth(1)
+        .unwrap()
+        .0
+        + 1;
+    assert_eq!(dup.loc().pos.unwrap().line, second, "{e}");
+}
+
+#[test]
+fn output_must_exist_be_a_texture_and_have_a_writer() {
+    assert_mentions(
+        &err(&SSBVB.replace(r#"output: "color""#, r#"output: "colour""#)),
+        &[
+            "output `colour` is not a declared resource",
+            "did you mean `color`",
+        ],
+    );
+    assert_mentions(
+        &err(&SSBVB.replace(r#"output: "color""#, r#"output: "ssbvb""#)),
+        &["output `ssbvb` must be a texture"],
+    );
+}
+
+#[test]
+fn unknown_after_suggests_a_pass() {
+    let e = err(&SSBVB.replace(r#"after: ["triangles"]"#, r#"after: ["triangle"]"#));
+    assert_mentions(
+        &e,
+        &[
+            "pass `billboards` runs after `triangle`, which is not a pass",
+            "did you mean `triangles`",
+        ],
+    );
+}
+
+#[test]
+fn garbage_never_panics() {
+    // Truncations and byte edits of a real file give errors, never a panic.
+    let bytes = SSBVB.as_bytes();
+    for cut in (0..bytes.len()).step_by(7) {
+        let s = String::from_utf8_lossy(&bytes[..cut]);
+        let _ = resolve_str(&s, "cut.ron");
+    }
+    for i in (0..bytes.len()).step_by(13) {
+        let mut b = bytes.to_vec();
+        b[i] = b"(){}[]\":,x0"[i % 11];
+        let _ = resolve_str(&String::from_utf8_lossy(&b), "edit.ron");
+    }
+}
+
+#[test]
+fn watcher_keeps_the_last_good_pipeline_on_error() {
+    use ssbvb_graph::{PipelineWatcher, ReloadOutcome};
+    let dir = std::env::temp_dir().join(format!("ssbvb-watch-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("p.ron");
+    std::fs::write(&path, SSBVB).unwrap();
+    let mut w = PipelineWatcher::new(&path).unwrap();
+    assert!(matches!(w.poll(), ReloadOutcome::Unchanged));
+    // An invalid edit (different length, so the change is seen even within one mtime tick).
+    std::fs::write(
+        &path,
+        SSBVB.replace("kind: Composite,", "kind: Compositee,"),
+    )
+    .unwrap();
+    match w.poll() {
+        ReloadOutcome::Failed(e) => assert!(e.to_string().contains("Compositee"), "{e}"),
+        other => panic!("expected failure, got {other:?}"),
+    }
+    assert_eq!(w.current().passes.len(), 6, "previous pipeline kept");
+    // A valid edit that prunes the smoothing pass.
+    std::fs::write(
+        &path,
+        SSBVB.replace(
+            r#""normal": "smoothed_normal""#,
+            r#""normal": "gbuffer_normal""#,
+        ),
+    )
+    .unwrap();
+    assert!(matches!(w.poll(), ReloadOutcome::Reloaded));
+    assert_eq!(w.current().pruned_passes, ["smooth"]);
+    std::fs::remove_dir_all(&dir).ok();
+}
