@@ -1,1 +1,373 @@
-//! ssbvb-gpu
+//! `ssbvb-gpu`: the GPU context every other part of ssbvb renders with.
+//!
+//! - [`GpuContext::new_headless`] picks an adapter: a real GPU when there is one, else a
+//!   software one (Vulkan lavapipe first, GL llvmpipe as a last resort), overridable with
+//!   `SSBVB_ADAPTER` (a name substring, or `software` / `hardware`) and wgpu's own
+//!   `WGPU_BACKEND`. It enables timestamp queries and `Depth32FloatStencil8` when the
+//!   adapter has them, and asks for the adapter's full limits (the defaults are WebGPU's
+//!   minimums).
+//! - Validation errors become Rust errors: [`GpuContext::validated`] wraps work in error
+//!   scopes, and errors outside any scope are collected ([`GpuContext::take_uncaptured_errors`])
+//!   instead of wgpu's default panic, so tests can fail on them with a message.
+//! - [`readback`] copies textures (with 256-byte row padding handled) and buffers to the
+//!   CPU, and writes PNGs atomically.
+
+pub mod readback;
+
+use std::sync::{Arc, Mutex};
+
+pub use wgpu;
+
+/// Errors of the GPU layer.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No adapter could be found or created.
+    #[error("no GPU adapter found ({tried}); {hint}")]
+    NoAdapter {
+        /// What was tried.
+        tried: String,
+        /// What to install or set.
+        hint: String,
+    },
+    /// The adapter refused to create a device.
+    #[error("cannot create a device on {adapter}: {message}")]
+    RequestDevice {
+        /// Adapter name.
+        adapter: String,
+        /// wgpu's message.
+        message: String,
+    },
+    /// wgpu reported a validation, out-of-memory or internal error.
+    #[error("wgpu {kind} error in {label}: {message}")]
+    Wgpu {
+        /// What was being done.
+        label: String,
+        /// "validation", "out-of-memory" or "internal".
+        kind: &'static str,
+        /// wgpu's message.
+        message: String,
+    },
+    /// Waiting for the device or mapping a buffer failed.
+    #[error("GPU readback of {label} failed: {message}")]
+    Readback {
+        /// What was being read.
+        label: String,
+        /// Why.
+        message: String,
+    },
+    /// Writing an image failed.
+    #[error("cannot write {path}: {message}")]
+    Write {
+        /// The file.
+        path: String,
+        /// Why.
+        message: String,
+    },
+}
+
+/// What adapter a context runs on, for reports and benchmark output.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct AdapterReport {
+    /// Adapter name (e.g. `llvmpipe (LLVM 15.0.6, 256 bits)`).
+    pub name: String,
+    /// Backend (Vulkan, Gl, …).
+    pub backend: String,
+    /// Device type (DiscreteGpu, Cpu, …).
+    pub device_type: String,
+    /// Driver and driver info.
+    pub driver: String,
+    /// Whether it is a software rasterizer (absolute timings mean little there).
+    pub is_software: bool,
+    /// Whether GPU timestamp queries are enabled (inside passes as well).
+    pub timestamps: bool,
+}
+
+impl std::fmt::Display for AdapterReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} ({}, {}{}{})",
+            self.name,
+            self.backend,
+            self.device_type,
+            if self.driver.is_empty() {
+                String::new()
+            } else {
+                format!(", {}", self.driver)
+            },
+            if self.is_software {
+                ", software: timings are not representative"
+            } else {
+                ""
+            }
+        )
+    }
+}
+
+/// Options for creating a context.
+#[derive(Debug, Clone, Default)]
+pub struct ContextOptions {
+    /// Adapter preference; `None` reads `SSBVB_ADAPTER` from the environment.
+    pub adapter: Option<AdapterChoice>,
+}
+
+/// Which adapter to prefer.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum AdapterChoice {
+    /// The best hardware adapter, else software (the default).
+    Auto,
+    /// Only a real GPU.
+    Hardware,
+    /// Only a software adapter (lavapipe, then llvmpipe).
+    Software,
+    /// The first adapter whose name contains this (case-insensitive).
+    Named(String),
+}
+
+impl AdapterChoice {
+    /// Parses `SSBVB_ADAPTER`-style text: `auto`, `hardware`, `software`, or a name.
+    pub fn parse(s: &str) -> Self {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "" | "auto" => AdapterChoice::Auto,
+            "hardware" | "gpu" => AdapterChoice::Hardware,
+            "software" | "cpu" => AdapterChoice::Software,
+            _ => AdapterChoice::Named(s.trim().to_string()),
+        }
+    }
+}
+
+/// A device with its queue and what it can do.
+pub struct GpuContext {
+    /// The wgpu instance (kept for surfaces).
+    pub instance: wgpu::Instance,
+    /// The chosen adapter.
+    pub adapter: wgpu::Adapter,
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    report: AdapterReport,
+    uncaptured: Arc<Mutex<Vec<String>>>,
+}
+
+impl std::fmt::Debug for GpuContext {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GpuContext")
+            .field("adapter", &self.report)
+            .finish()
+    }
+}
+
+/// Hint printed when no adapter exists.
+pub const NO_ADAPTER_HINT: &str = "install a Vulkan driver (on Debian/Ubuntu without a GPU: \
+     `apt-get install -y mesa-vulkan-drivers libvulkan1` for lavapipe), or run `cargo xtask test`, \
+     which installs it when it can";
+
+/// Rank of an adapter for `Auto`: lower is better.
+fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
+    let ty = match info.device_type {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
+    };
+    // Among equals, Vulkan first (lavapipe before GL llvmpipe), GL last.
+    let backend = match info.backend {
+        wgpu::Backend::Vulkan => 0,
+        wgpu::Backend::Metal | wgpu::Backend::Dx12 => 1,
+        wgpu::Backend::Gl => 3,
+        _ => 2,
+    };
+    (ty, backend)
+}
+
+fn is_software(info: &wgpu::AdapterInfo) -> bool {
+    info.device_type == wgpu::DeviceType::Cpu
+        || ["llvmpipe", "lavapipe", "swiftshader", "warp", "software"]
+            .iter()
+            .any(|s| info.name.to_ascii_lowercase().contains(s))
+}
+
+impl GpuContext {
+    /// Creates a headless context on the preferred adapter (see the crate docs).
+    pub fn new_headless(options: &ContextOptions) -> Result<Self, GpuError> {
+        let choice = options.adapter.clone().unwrap_or_else(|| {
+            AdapterChoice::parse(&std::env::var("SSBVB_ADAPTER").unwrap_or_default())
+        });
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = wgpu::Backends::VULKAN
+            | wgpu::Backends::GL
+            | wgpu::Backends::METAL
+            | wgpu::Backends::DX12;
+        // Validation on unless WGPU_VALIDATION=0; WGPU_BACKEND narrows the backends.
+        desc.flags = wgpu::InstanceFlags::VALIDATION | wgpu::InstanceFlags::DEBUG;
+        let desc = desc.with_env();
+        let backends = desc.backends;
+        let instance = wgpu::Instance::new(desc);
+        let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
+        let seen: Vec<String> = adapters
+            .iter()
+            .map(|a| format!("{} [{:?}]", a.get_info().name, a.get_info().backend))
+            .collect();
+        adapters.retain(|a| {
+            let info = a.get_info();
+            match &choice {
+                AdapterChoice::Auto => true,
+                AdapterChoice::Hardware => !is_software(&info),
+                AdapterChoice::Software => is_software(&info),
+                AdapterChoice::Named(n) => info
+                    .name
+                    .to_ascii_lowercase()
+                    .contains(&n.to_ascii_lowercase()),
+            }
+        });
+        adapters.sort_by_key(|a| rank(&a.get_info()));
+        let Some(adapter) = adapters.into_iter().next() else {
+            return Err(GpuError::NoAdapter {
+                tried: format!(
+                    "backends {backends:?}, choice {choice:?}, adapters seen: {}",
+                    if seen.is_empty() {
+                        "none".to_string()
+                    } else {
+                        seen.join(", ")
+                    }
+                ),
+                hint: NO_ADAPTER_HINT.to_string(),
+            });
+        };
+        Self::from_adapter(instance, adapter)
+    }
+
+    /// Creates the device on a chosen adapter with the features ssbvb uses when present.
+    pub fn from_adapter(
+        instance: wgpu::Instance,
+        adapter: wgpu::Adapter,
+    ) -> Result<Self, GpuError> {
+        let info = adapter.get_info();
+        let wanted = wgpu::Features::TIMESTAMP_QUERY
+            | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
+            | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES
+            | wgpu::Features::DEPTH32FLOAT_STENCIL8
+            | wgpu::Features::INDIRECT_FIRST_INSTANCE
+            | wgpu::Features::FLOAT32_FILTERABLE;
+        let features = adapter.features() & wanted;
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("ssbvb"),
+            required_features: features,
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::RequestDevice {
+            adapter: info.name.clone(),
+            message: e.to_string(),
+        })?;
+        let uncaptured = Arc::new(Mutex::new(Vec::new()));
+        let sink = uncaptured.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            log::error!("uncaptured wgpu error: {e}");
+            if let Ok(mut v) = sink.lock() {
+                v.push(e.to_string());
+            }
+        }));
+        let timestamps = features.contains(
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
+        );
+        let report = AdapterReport {
+            name: info.name.clone(),
+            backend: format!("{:?}", info.backend),
+            device_type: format!("{:?}", info.device_type),
+            driver: format!("{} {}", info.driver, info.driver_info)
+                .trim()
+                .to_string(),
+            is_software: is_software(&info),
+            timestamps,
+        };
+        Ok(Self {
+            instance,
+            adapter,
+            device,
+            queue,
+            report,
+            uncaptured,
+        })
+    }
+
+    /// The adapter this context runs on.
+    pub fn report(&self) -> &AdapterReport {
+        &self.report
+    }
+
+    /// Whether the device has `feature`.
+    pub fn has(&self, feature: wgpu::Features) -> bool {
+        self.device.features().contains(feature)
+    }
+
+    /// The best depth-stencil format: `Depth32FloatStencil8` when available (32-bit depth
+    /// for precision at 4096³), else `Depth24PlusStencil8` (always available).
+    pub fn depth_stencil_format(&self) -> wgpu::TextureFormat {
+        if self.has(wgpu::Features::DEPTH32FLOAT_STENCIL8) {
+            wgpu::TextureFormat::Depth32FloatStencil8
+        } else {
+            wgpu::TextureFormat::Depth24PlusStencil8
+        }
+    }
+
+    /// Runs `f` inside validation, out-of-memory and internal error scopes and turns the
+    /// first error into [`GpuError::Wgpu`] naming `label`.
+    pub fn validated<T>(
+        &self,
+        label: &str,
+        f: impl FnOnce(&wgpu::Device) -> T,
+    ) -> Result<T, GpuError> {
+        let internal = self.device.push_error_scope(wgpu::ErrorFilter::Internal);
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let out = f(&self.device);
+        let errors = [
+            ("validation", pollster::block_on(validation.pop())),
+            ("out-of-memory", pollster::block_on(oom.pop())),
+            ("internal", pollster::block_on(internal.pop())),
+        ];
+        for (kind, e) in errors {
+            if let Some(e) = e {
+                return Err(GpuError::Wgpu {
+                    label: label.to_string(),
+                    kind,
+                    message: e.to_string(),
+                });
+            }
+        }
+        Ok(out)
+    }
+
+    /// Errors wgpu reported outside any error scope since the last call (empty is good).
+    pub fn take_uncaptured_errors(&self) -> Vec<String> {
+        self.uncaptured
+            .lock()
+            .map(|mut v| std::mem::take(&mut *v))
+            .unwrap_or_default()
+    }
+
+    /// Blocks until all submitted work is done.
+    pub fn wait_idle(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Readback {
+                label: "device poll".into(),
+                message: e.to_string(),
+            })
+    }
+
+    /// Creates a shader module from WGSL, failing with the compiler's message (file, line)
+    /// instead of a panic or a deferred error.
+    pub fn shader(&self, label: &str, wgsl: &str) -> Result<wgpu::ShaderModule, GpuError> {
+        self.validated(label, |d| {
+            d.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(label),
+                source: wgpu::ShaderSource::Wgsl(wgsl.into()),
+            })
+        })
+    }
+}
