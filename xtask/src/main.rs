@@ -1,1 +1,175 @@
-fn main() {}
+//! Project tasks: `cargo xtask validate-shaders [--dir DIR]`, `cargo xtask test [ARGS]`.
+
+mod shaders;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode};
+
+use anyhow::{Context, Result, bail};
+
+const USAGE: &str = "usage:
+  cargo xtask validate-shaders [--dir DIR]   parse and validate every .wgsl under shaders/ (or DIR)
+  cargo xtask test [CARGO TEST ARGS]         make sure a GPU adapter exists, check formatting, validate
+                                             shaders, run clippy (-D warnings) and all workspace tests";
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let result = match args.first().map(String::as_str) {
+        Some("validate-shaders") => validate_shaders(&args[1..]),
+        Some("test") => test(&args[1..]),
+        Some("-h" | "--help") | None => {
+            println!("{USAGE}");
+            Ok(true)
+        }
+        Some(other) => {
+            eprintln!("unknown task `{other}`\n{USAGE}");
+            Ok(false)
+        }
+    };
+    match result {
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::FAILURE,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("xtask lives in the workspace")
+        .to_path_buf()
+}
+
+fn validate_shaders(args: &[String]) -> Result<bool> {
+    let dir = match args {
+        [] => workspace_root().join("shaders"),
+        [flag, dir] if flag == "--dir" => PathBuf::from(dir),
+        _ => bail!("validate-shaders takes only `--dir DIR`\n{USAGE}"),
+    };
+    let report = shaders::validate_dir(&dir, &ssbvb_passes::registered_kinds())?;
+    for line in &report.errors {
+        eprintln!("{line}");
+    }
+    println!(
+        "validate-shaders: {} file(s) under {}, {} registered pass kind(s) checked, {} error(s)",
+        report.files,
+        dir.display(),
+        report.kinds_checked,
+        report.errors.len()
+    );
+    Ok(report.errors.is_empty())
+}
+
+/// Whether a Vulkan driver (ICD) is installed, looking where the Vulkan loader looks.
+fn vulkan_icd_present() -> bool {
+    let mut dirs = vec![
+        PathBuf::from("/usr/share/vulkan/icd.d"),
+        PathBuf::from("/etc/vulkan/icd.d"),
+        PathBuf::from("/usr/local/share/vulkan/icd.d"),
+    ];
+    if let Ok(files) =
+        std::env::var("VK_ICD_FILENAMES").or_else(|_| std::env::var("VK_DRIVER_FILES"))
+    {
+        return files.split(':').any(|f| Path::new(f).exists());
+    }
+    if let Ok(xdg) = std::env::var("XDG_DATA_DIRS") {
+        dirs.extend(xdg.split(':').map(|d| Path::new(d).join("vulkan/icd.d")));
+    }
+    dirs.iter().any(|d| {
+        std::fs::read_dir(d)
+            .map(|rd| {
+                rd.flatten()
+                    .any(|e| e.path().extension().is_some_and(|x| x == "json"))
+            })
+            .unwrap_or(false)
+    })
+}
+
+fn is_root() -> bool {
+    Command::new("id")
+        .arg("-u")
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
+        .unwrap_or(false)
+}
+
+/// Makes sure a Vulkan adapter can exist: on Linux without a Vulkan driver, installs Mesa's
+/// lavapipe when running as root with apt, else says what to install.
+fn ensure_adapter() -> Result<()> {
+    if !cfg!(target_os = "linux") || vulkan_icd_present() {
+        return Ok(());
+    }
+    let apt = Path::new("/usr/bin/apt-get").exists();
+    if apt && is_root() {
+        eprintln!(
+            "xtask: no Vulkan driver found; installing Mesa's lavapipe (mesa-vulkan-drivers)"
+        );
+        let ok = |c: &mut Command| c.status().map(|s| s.success()).unwrap_or(false);
+        let env = [("DEBIAN_FRONTEND", "noninteractive")];
+        if !ok(Command::new("apt-get").args(["update", "-qq"]).envs(env)) {
+            eprintln!("xtask: apt-get update failed; trying the install anyway");
+        }
+        if !ok(Command::new("apt-get")
+            .args(["install", "-y", "-qq", "mesa-vulkan-drivers", "libvulkan1"])
+            .envs(env))
+        {
+            bail!("apt-get install mesa-vulkan-drivers libvulkan1 failed");
+        }
+        if vulkan_icd_present() {
+            return Ok(());
+        }
+        bail!("mesa-vulkan-drivers installed but no Vulkan ICD file appeared");
+    }
+    bail!(
+        "no Vulkan driver found and cannot install one here (needs root and apt). Install Mesa's \
+         software Vulkan driver: `sudo apt-get install -y mesa-vulkan-drivers libvulkan1` \
+         (Debian/Ubuntu), `dnf install mesa-vulkan-drivers` (Fedora), or a GPU driver"
+    )
+}
+
+fn test(extra: &[String]) -> Result<bool> {
+    ensure_adapter()?;
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let root = workspace_root();
+    let run = |args: &[&str]| -> Result<bool> {
+        eprintln!("xtask: cargo {}", args.join(" "));
+        Ok(Command::new(&cargo)
+            .current_dir(&root)
+            .args(args)
+            .status()
+            .context("running cargo")?
+            .success())
+    };
+    if !run(&["fmt", "--all", "--check"])? {
+        eprintln!("xtask: formatting differs; run `cargo fmt --all`");
+        return Ok(false);
+    }
+    if !validate_shaders(&[])? {
+        return Ok(false);
+    }
+    if !run(&[
+        "clippy",
+        "--workspace",
+        "--all-targets",
+        "--quiet",
+        "--",
+        "-D",
+        "warnings",
+    ])? {
+        return Ok(false);
+    }
+    let mut cmd = Command::new(&cargo);
+    cmd.current_dir(workspace_root())
+        .args(["test", "--workspace"])
+        .args(extra);
+    // One backend for headless tests: with all of them the GL path logs EGL errors and
+    // finds a second llvmpipe adapter.
+    if std::env::var_os("WGPU_BACKEND").is_none() {
+        cmd.env("WGPU_BACKEND", "vulkan");
+    }
+    let status = cmd.status().context("running cargo test")?;
+    Ok(status.success())
+}

@@ -13,6 +13,7 @@
 //!   CPU, and writes PNGs atomically.
 
 pub mod readback;
+pub mod shader_source;
 
 use std::sync::{Arc, Mutex};
 

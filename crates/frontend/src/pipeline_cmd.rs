@@ -1,0 +1,53 @@
+//! `ssbvb pipeline check <file.ron>`: resolve a pipeline and print its schedule.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::Subcommand;
+
+/// Pipeline subcommands.
+#[derive(Subcommand)]
+pub enum PipelineCommand {
+    /// Resolve a pipeline file: print the schedule (pass order, resources with sizes,
+    /// aliasing, pruned items); exit non-zero with every error otherwise.
+    Check {
+        /// The pipeline file.
+        file: PathBuf,
+        /// Screen size for the resource sizes in the report.
+        #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+        size: (u32, u32),
+    },
+}
+
+/// Parses `WxH`.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WxH, got `{s}`"))?;
+    let p = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|e| format!("bad size `{s}`: {e}"))
+    };
+    let (w, h) = (p(w)?, p(h)?);
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        return Err(format!("size must be 1..=16384 per side, got {w}x{h}"));
+    }
+    Ok((w, h))
+}
+
+/// Runs a pipeline subcommand.
+pub fn run(cmd: &PipelineCommand) -> anyhow::Result<ExitCode> {
+    match cmd {
+        PipelineCommand::Check { file, size } => match ssbvb_graph::resolve_file(file) {
+            Ok(p) => {
+                print!("{}", p.describe(*size));
+                Ok(ExitCode::SUCCESS)
+            }
+            Err(e) => {
+                eprint!("{e}");
+                Ok(ExitCode::FAILURE)
+            }
+        },
+    }
+}

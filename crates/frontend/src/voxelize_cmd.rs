@@ -1,0 +1,225 @@
+//! `ssbvb voxelize <model> --level N [-o out] [--json] [--no-cache]`: prepares a model
+//! (voxelization, LOD chain, point clouds, sparse lookups, proxy meshes), through the asset
+//! cache unless `--no-cache`, and reports per-level sizes and times.
+//!
+//! Output contract: a progress bar on stderr (only when stderr is a terminal and `--json`
+//! is not given); then either a human-readable summary on stdout, or with `--json` exactly
+//! one JSON object on stdout and nothing else there. `-o out` also writes the asset cache
+//! file to `out` (atomically: temporary file in the same folder, then rename).
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde::Serialize;
+use ssbvb_voxel::cache::{
+    CacheStatus, hash_source, load_or_prepare, write_cache,
+};
+use ssbvb_voxel::load::load_model;
+use ssbvb_voxel::prepare::{LevelStats, StageTimes, asset_level_stats, prepare_asset};
+use ssbvb_voxel::progress::Progress;
+use ssbvb_voxel::voxelize::VoxelizeReport;
+
+/// Arguments of `ssbvb voxelize`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct VoxelizeArgs {
+    /// Model file (.obj, .ply, .gltf, .glb, .vox, .raw).
+    pub model: PathBuf,
+    /// Octree level of the finest grid (2^level cells per axis), 0..=12.
+    #[arg(long)]
+    pub level: u32,
+    /// Also write the prepared asset (cache format) to this file.
+    #[arg(short = 'o', long)]
+    pub out: Option<PathBuf>,
+    /// Print one JSON object on stdout instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// Neither read nor write the asset cache; always prepare from the model.
+    #[arg(long)]
+    pub no_cache: bool,
+}
+
+/// An indicatif bar driven by the preparation stages.
+struct Bar(ProgressBar);
+
+impl Progress for Bar {
+    fn begin(&self, stage: &str, total: u64) {
+        self.0.set_length(total);
+        self.0.set_position(0);
+        self.0.set_message(stage.to_string());
+    }
+
+    fn advance(&self, units: u64) {
+        self.0.inc(units);
+    }
+}
+
+/// What the JSON output holds (and the table shows).
+#[derive(Serialize)]
+struct Report {
+    model: PathBuf,
+    level: u32,
+    /// "hit", "rebuilt" or "disabled".
+    cache: CacheReport,
+    /// Where `-o` wrote the asset.
+    output: Option<PathBuf>,
+    object_space_center: [f64; 3],
+    object_space_scale: f64,
+    /// Stage times when the asset was prepared (absent on a cache hit).
+    stages: Option<StageTimes>,
+    /// Voxelizer report when the asset was prepared.
+    voxelize: Option<VoxelizeReport>,
+    /// Seconds for the whole command (load or prepare, and writing `-o`).
+    total_s: f64,
+    levels: Vec<LevelStats>,
+}
+
+#[derive(Serialize)]
+struct CacheReport {
+    status: &'static str,
+    reason: Option<String>,
+    path: Option<PathBuf>,
+    write_error: Option<String>,
+}
+
+/// Runs `ssbvb voxelize`.
+pub fn run(args: &VoxelizeArgs) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let bar = if args.json || !std::io::stderr().is_terminal() {
+        ProgressBar::hidden()
+    } else {
+        let bar = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
+        bar.set_style(
+            ProgressStyle::with_template("{spinner} {msg:<26} [{bar:40}] {pos}/{len} {elapsed}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> "),
+        );
+        bar
+    };
+    let progress = Bar(bar);
+
+    let (asset, cache, stats) = if args.no_cache {
+        let model = load_model(&args.model)?;
+        let (asset, stats) = prepare_asset(&model, args.level, &progress)
+            .with_context(|| format!("{}: preparation failed", args.model.display()))?;
+        let cache =
+            CacheReport { status: "disabled", reason: None, path: None, write_error: None };
+        (asset, cache, Some(stats))
+    } else {
+        let (asset, outcome) = load_or_prepare(&args.model, args.level, None, &progress)?;
+        let (status, reason) = match outcome.status {
+            CacheStatus::Hit => ("hit", None),
+            CacheStatus::Rebuilt { reason } => ("rebuilt", Some(reason)),
+        };
+        let cache = CacheReport {
+            status,
+            reason,
+            path: Some(outcome.cache_path),
+            write_error: outcome.cache_write_error,
+        };
+        (asset, cache, outcome.stats)
+    };
+    progress.0.finish_and_clear();
+
+    if let Some(out) = &args.out {
+        let hash = hash_source(&args.model)?;
+        write_cache(out, &asset, hash, args.level)?;
+    }
+
+    let levels = match &stats {
+        Some(s) => s.levels.clone(),
+        None => asset_level_stats(&asset),
+    };
+    let report = Report {
+        model: args.model.clone(),
+        level: args.level,
+        cache,
+        output: args.out.clone(),
+        object_space_center: asset.object_space.center.to_array(),
+        object_space_scale: asset.object_space.scale,
+        stages: stats.as_ref().map(|s| s.stages.clone()),
+        voxelize: stats.map(|s| s.voxelize),
+        total_s: start.elapsed().as_secs_f64(),
+        levels,
+    };
+    if let Some(e) = &report.cache.write_error {
+        eprintln!("warning: the asset cache could not be written: {e}");
+    }
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        print!("{}", table(&report));
+    }
+    Ok(())
+}
+
+fn mib(bytes: u64) -> String {
+    format!("{:.2}", bytes as f64 / (1024.0 * 1024.0))
+}
+
+/// The human-readable summary.
+fn table(r: &Report) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = writeln!(s, "model   {}", r.model.display());
+    let cache = match (&r.cache.reason, &r.cache.path) {
+        (Some(reason), Some(p)) => format!("{reason}, rebuilt ({})", p.display()),
+        (None, Some(p)) => format!("hit ({})", p.display()),
+        _ => "disabled".to_string(),
+    };
+    let _ = writeln!(s, "cache   {cache}");
+    if let Some(out) = &r.output {
+        let _ = writeln!(s, "output  {}", out.display());
+    }
+    let c = r.object_space_center;
+    let _ = writeln!(
+        s,
+        "object  centre ({:.6}, {:.6}, {:.6}), scale {:.6e}",
+        c[0], c[1], c[2], r.object_space_scale
+    );
+    if let Some(v) = &r.voxelize {
+        let skipped = v.skipped_non_finite + v.skipped_bad_index;
+        if v.triangles > 0 {
+            let _ = writeln!(
+                s,
+                "input   {} triangles ({} skipped, {} degenerate)",
+                v.triangles, skipped, v.degenerate
+            );
+        } else {
+            let _ = writeln!(s, "input   {} voxels", v.source_voxels);
+        }
+    }
+    if let Some(t) = &r.stages {
+        let _ = writeln!(
+            s,
+            "stages  voxelize {:.3}s, octree {:.3}s, point clouds {:.3}s, lookups {:.3}s, proxies {:.3}s",
+            t.voxelize_s, t.octree_s, t.point_clouds_s, t.lookups_s, t.proxies_s
+        );
+    }
+    let _ = writeln!(s, "total   {:.3}s", r.total_s);
+    let _ = writeln!(s);
+    let _ = writeln!(
+        s,
+        "{:>5} {:>12} {:>8} {:>12} {:>11} {:>8} {:>11} {:>9} {:>8}",
+        "level", "voxels", "pages", "points MiB", "lookup MiB", "% dense", "octree MiB", "proxy tri", "time s"
+    );
+    for l in &r.levels {
+        let secs = l.seconds.map_or_else(|| "-".to_string(), |t| format!("{t:.3}"));
+        let _ = writeln!(
+            s,
+            "{:>5} {:>12} {:>8} {:>12} {:>11} {:>8.3} {:>11} {:>9} {:>8}",
+            l.level,
+            l.voxels,
+            l.resident_pages,
+            mib(l.point_cloud_bytes),
+            mib(l.lookup_bytes),
+            l.lookup_percent_of_dense,
+            mib(l.octree_bytes),
+            l.proxy_triangles,
+            secs
+        );
+    }
+    s
+}
