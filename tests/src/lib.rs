@@ -1,1 +1,147 @@
-//! cross-crate integration tests
+//! Harness of the cross-crate GPU tests: one shared device per test binary, assets from
+//! the shared models (prepared once per process), renders of a pipeline with readback of
+//! any live resource, and the CPU reference of the same view.
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex, OnceLock};
+
+use glam::DAffine3;
+use ssbvb_gpu::{ContextOptions, GpuContext, wgpu};
+use ssbvb_passes::frame::FrameResource;
+use ssbvb_passes::{GpuScene, LodPolicy, Profiling, Renderer, Scene};
+use ssbvb_voxel::asset::VoxelAsset;
+use ssbvb_voxel::camera::Camera;
+use ssbvb_voxel::reference::{self, ReferenceImage};
+
+/// The device shared by every test of this binary. No adapter is a failure with
+/// instructions, never a skip.
+pub fn ctx() -> &'static GpuContext {
+    static CTX: OnceLock<GpuContext> = OnceLock::new();
+    CTX.get_or_init(|| {
+        let c =
+            GpuContext::new_headless(&ContextOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+        eprintln!("adapter: {}", c.report());
+        c
+    })
+}
+
+/// `shared/models` beside the repository (fails the test when it is missing).
+pub fn models_dir() -> PathBuf {
+    let p = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/models"));
+    assert!(
+        p.is_dir(),
+        "shared models folder {} is missing: CI clones the repository with shared/ beside it",
+        p.display()
+    );
+    p
+}
+
+/// The asset of a shared model file at `level`, prepared once per process.
+pub fn model_asset(file: &str, level: u32) -> Arc<VoxelAsset> {
+    static CACHE: OnceLock<Mutex<HashMap<(String, u32), Arc<VoxelAsset>>>> = OnceLock::new();
+    let cache = CACHE.get_or_init(Default::default);
+    if let Some(a) = cache.lock().unwrap().get(&(file.to_string(), level)) {
+        return a.clone();
+    }
+    let path = models_dir().join(file);
+    let model = ssbvb_voxel::load::load_model(&path).unwrap_or_else(|e| panic!("{e}"));
+    let (asset, _) =
+        ssbvb_voxel::prepare::prepare_asset(&model, level, &ssbvb_voxel::progress::NoProgress)
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let asset = Arc::new(asset);
+    cache
+        .lock()
+        .unwrap()
+        .insert((file.to_string(), level), asset.clone());
+    asset
+}
+
+/// A scene with one asset placed once with its object space as world space.
+pub fn single_object_scene(asset: Arc<VoxelAsset>, level: u32) -> Scene {
+    Scene {
+        objects: vec![ssbvb_passes::VoxelObject {
+            asset,
+            instances: vec![DAffine3::IDENTITY],
+            lod: LodPolicy::Fixed(level),
+        }],
+        ..Default::default()
+    }
+}
+
+/// A rendered frame and what produced it.
+pub struct Frame {
+    /// The renderer (its resources hold every live resource of the pipeline).
+    pub renderer: Renderer,
+    /// The scene on the GPU.
+    pub scene: GpuScene,
+}
+
+/// Renders one frame of `scene` with the pipeline text `pipeline` at `size`.
+pub fn render(pipeline: &str, scene: Scene, camera: &Camera, size: (u32, u32)) -> Frame {
+    let c = ctx();
+    let resolved =
+        ssbvb_graph::resolve_str(pipeline, "test pipeline").unwrap_or_else(|e| panic!("{e}"));
+    let mut gpu_scene = GpuScene::new(c, scene).unwrap_or_else(|e| panic!("{e}"));
+    let mut renderer =
+        Renderer::new(c, &gpu_scene, resolved, size).unwrap_or_else(|e| panic!("{e}"));
+    renderer
+        .render(c, &mut gpu_scene, camera, Profiling::Off)
+        .unwrap_or_else(|e| panic!("{e}"));
+    c.wait_idle().unwrap();
+    let errs = c.take_uncaptured_errors();
+    assert!(errs.is_empty(), "wgpu errors: {errs:#?}");
+    Frame {
+        renderer,
+        scene: gpu_scene,
+    }
+}
+
+impl Frame {
+    /// Bytes of a live resource (texture: tightly packed rows; depth-stencil: depth aspect).
+    pub fn read(&self, name: &str) -> Vec<u8> {
+        let i = self
+            .renderer
+            .resource(name)
+            .unwrap_or_else(|| panic!("resource `{name}` is not live"));
+        match self.renderer.resources.get(i) {
+            FrameResource::Buffer(b) => ctx().read_buffer(b).unwrap(),
+            FrameResource::Texture(t) => {
+                let aspect = if t.texture.format().is_depth_stencil_format() {
+                    wgpu::TextureAspect::DepthOnly
+                } else {
+                    wgpu::TextureAspect::All
+                };
+                ctx().read_texture(&t.texture, aspect).unwrap().bytes
+            }
+        }
+    }
+
+    /// A live texture as f32s.
+    pub fn read_f32(&self, name: &str) -> Vec<f32> {
+        bytemuck::pod_collect_to_vec(&self.read(name))
+    }
+
+    /// A live resource as u32s.
+    pub fn read_u32(&self, name: &str) -> Vec<u32> {
+        bytemuck::pod_collect_to_vec(&self.read(name))
+    }
+}
+
+/// The CPU reference of `scene` (fixed LODs only) seen by `camera` at `size`.
+pub fn reference_of(scene: &Scene, camera: &Camera, size: (u32, u32)) -> ReferenceImage {
+    let mut instances = Vec::new();
+    for o in &scene.objects {
+        let level = match o.lod {
+            LodPolicy::Fixed(l) => l.min(o.asset.lods.len() as u32 - 1),
+            LodPolicy::Auto { .. } => panic!("reference_of needs fixed LODs"),
+        };
+        for xf in &o.instances {
+            instances.push(reference::Instance {
+                lod: &o.asset.lods[level as usize],
+                object_to_world: *xf,
+            });
+        }
+    }
+    reference::render(&instances, camera, size.0, size.1, &scene.light)
+}

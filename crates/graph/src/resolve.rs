@@ -580,6 +580,25 @@ impl<'a> Ctx<'a> {
                 }
             }
         };
+        let mut kept = Vec::new();
+        for k in &desc.keep {
+            match res_index.get(k.as_str()) {
+                Some(&r) if !writers[r].is_empty() => kept.push(r),
+                Some(_) => self.errors.push(GraphError::BadOutput {
+                    at: self.at(self.loc.resource_declarations(k).last().copied()),
+                    output: k.clone(),
+                    message: "is kept but written by no pass".to_string(),
+                }),
+                None => self.errors.push(GraphError::BadOutput {
+                    at: self.at(self.loc.output()),
+                    output: k.clone(),
+                    message: format!(
+                        "(in `keep`) is not a declared resource{}",
+                        suggest(k, desc.resources.0.iter().map(|(n, _)| n.as_str()))
+                    ),
+                }),
+            }
+        }
         if !self.errors.is_empty() || cyclic {
             return None;
         }
@@ -589,6 +608,9 @@ impl<'a> Ctx<'a> {
         // touches, or a live pass runs after it (explicit ordering is a promise of effect).
         let mut live = vec![false; desc.passes.len()];
         let mut stack: Vec<usize> = writers[output].clone();
+        for &k in &kept {
+            stack.extend(writers[k].iter().copied());
+        }
         while let Some(p) = stack.pop() {
             if std::mem::replace(&mut live[p], true) {
                 continue;
@@ -662,9 +684,12 @@ impl<'a> Ctx<'a> {
             });
         }
         let output = res_map[&output];
-        resources[output].last_use = passes.len().saturating_sub(1);
-        if let ResourceUsage::Texture(u) = &mut resources[output].usage {
-            *u |= wgpu_types::TextureUsages::COPY_SRC;
+        let kept: Vec<usize> = kept.iter().map(|k| res_map[k]).collect();
+        for &r in kept.iter().chain([&output]) {
+            resources[r].last_use = passes.len().saturating_sub(1);
+            if let ResourceUsage::Texture(u) = &mut resources[r].usage {
+                *u |= wgpu_types::TextureUsages::COPY_SRC;
+            }
         }
         let physical = allocate(&mut resources, output);
 

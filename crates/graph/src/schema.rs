@@ -20,6 +20,10 @@ pub struct PipelineDesc {
     pub passes: Vec<PassDesc>,
     /// The resource the frame produces (a texture); everything else serves it.
     pub output: String,
+    /// Extra resources to keep alive (with the passes that write them) although the output
+    /// does not need them: debug views and readback in tests.
+    #[serde(default)]
+    pub keep: Vec<String>,
 }
 
 /// Resources in file order; duplicates are kept so validation can report them.

@@ -408,3 +408,30 @@ fn watcher_keeps_the_last_good_pipeline_on_error() {
     assert_eq!(w.current().pruned_passes, ["smooth"]);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn kept_resources_keep_their_writers_alive() {
+    // Output the entry texture only: everything after the prepass is pruned...
+    let src = SSBVB.replace(r#"output: "color""#, r#"output: "entry""#);
+    let p = ok(&src);
+    assert_eq!(
+        p.passes.iter().map(|p| p.name.as_str()).collect::<Vec<_>>(),
+        ["empty_space"]
+    );
+    // ...unless the SSBVB is kept for readback.
+    let src = SSBVB.replace(r#"output: "color""#, r#"output: "entry", keep: ["ssbvb"]"#);
+    let p = ok(&src);
+    assert_eq!(
+        p.passes.iter().map(|p| p.name.as_str()).collect::<Vec<_>>(),
+        ["empty_space", "filter"]
+    );
+    let ssbvb = &p.resources[p.resource("ssbvb").unwrap()];
+    assert_eq!(ssbvb.last_use, 1);
+    assert_mentions(
+        &err(&SSBVB.replace(r#"output: "color""#, r#"output: "color", keep: ["sbvb"]"#)),
+        &[
+            "`sbvb` (in `keep`) is not a declared resource",
+            "did you mean `ssbvb`",
+        ],
+    );
+}

@@ -1,0 +1,622 @@
+//! The scene on the GPU: every LOD of every asset in shared buffers, proxy meshes,
+//! triangle meshes, and the per-frame constants and visible instances (group 0 of every
+//! pass; WGSL declarations in `shaders/common.inc.wgsl`).
+
+use bytemuck::{Pod, Zeroable};
+use glam::{DAffine3, DMat4, DVec3};
+use ssbvb_gpu::wgpu::util::DeviceExt;
+use ssbvb_gpu::{GpuContext, wgpu};
+use ssbvb_voxel::asset::{PAGE_CELLS, PackedVoxel};
+use ssbvb_voxel::camera::Camera;
+
+use crate::PassError;
+use crate::scene::{LodPolicy, Scene};
+
+/// Mirror of WGSL `Frame`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct FrameUniform {
+    /// Camera-relative world → clip.
+    pub view_proj: [[f32; 4]; 4],
+    /// Clip → camera-relative world.
+    pub inv_view_proj: [[f32; 4]; 4],
+    /// Camera-relative world → view.
+    pub view: [[f32; 4]; 4],
+    /// Right axis scaled by the half-width of the view at distance 1.
+    pub cam_right: [f32; 4],
+    /// Up axis scaled by the half-height of the view at distance 1.
+    pub cam_up: [f32; 4],
+    /// Forward axis.
+    pub cam_forward: [f32; 4],
+    /// width, height, 1/width, 1/height.
+    pub screen: [f32; 4],
+    /// Towards the light (xyz), ambient (w).
+    pub light_dir: [f32; 4],
+    /// Light colour (rgb), specular (w).
+    pub light_color: [f32; 4],
+    /// shininess, near, far (0 = infinite), visible instance count.
+    pub misc: [f32; 4],
+}
+
+/// Mirror of WGSL `Instance` (160 bytes).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct InstanceUniform {
+    /// Object → camera-relative world.
+    pub object_to_world: [[f32; 4]; 4],
+    /// Camera-relative world → object.
+    pub world_to_object: [[f32; 4]; 4],
+    /// Camera in object space (xyz), world size of a cell (w).
+    pub camera_object: [f32; 4],
+    /// Index into the LOD table.
+    pub lod: u32,
+    /// Grid level of that LOD.
+    pub level: u32,
+    /// Bit 0: camera inside the proxy.
+    pub flags: u32,
+    /// Index of the instance in the whole scene.
+    pub scene_index: u32,
+}
+
+/// Mirror of WGSL `LodInfo` (32 bytes).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq, Eq)]
+pub struct LodInfo {
+    /// Grid level.
+    pub level: u32,
+    /// Pages per axis.
+    pub pages_per_axis: u32,
+    /// Coarse blocks per axis.
+    pub coarse_per_axis: u32,
+    /// First voxel in the voxel buffer.
+    pub voxel_offset: u32,
+    /// First page-table entry.
+    pub page_table_offset: u32,
+    /// First page in the page pool.
+    pub page_offset: u32,
+    /// First word of coarse bits.
+    pub coarse_offset: u32,
+    /// Padding.
+    pub pad: u32,
+}
+
+/// Where a proxy mesh lives in the shared proxy buffers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ProxyRange {
+    /// First index.
+    pub first_index: u32,
+    /// Index count.
+    pub index_count: u32,
+    /// Added to every index.
+    pub base_vertex: i32,
+}
+
+/// One instance that survived culling this frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VisibleInstance {
+    /// Index in the scene's flattened instance list.
+    pub scene_index: u32,
+    /// Which object it belongs to.
+    pub object: usize,
+    /// Chosen level.
+    pub level: u32,
+    /// Its proxy in the proxy buffers.
+    pub proxy: ProxyRange,
+    /// The camera is inside its proxy (the prepass draws back faces).
+    pub camera_inside: bool,
+}
+
+/// GPU bytes of one object's asset (all LODs), for reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub struct ObjectMemory {
+    /// Point clouds.
+    pub point_cloud_bytes: u64,
+    /// Page tables, page pools and coarse occupancy.
+    pub lookup_bytes: u64,
+    /// Proxy meshes.
+    pub proxy_bytes: u64,
+}
+
+impl ObjectMemory {
+    /// Sum.
+    pub fn total(&self) -> u64 {
+        self.point_cloud_bytes + self.lookup_bytes + self.proxy_bytes
+    }
+}
+
+/// A triangle object on the GPU.
+pub struct GpuTriangleMesh {
+    /// Interleaved position (xyz) + normal (xyz) f32 vertices.
+    pub vertices: wgpu::Buffer,
+    /// u32 indices.
+    pub indices: wgpu::Buffer,
+    /// Index count.
+    pub index_count: u32,
+    /// Per-mesh uniform (model matrix camera-relative, normal matrix, colour), 160 bytes.
+    pub uniform: wgpu::Buffer,
+}
+
+/// Mirror of WGSL `Mesh` in triangles.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct MeshUniform {
+    /// Model → camera-relative world.
+    pub model: [[f32; 4]; 4],
+    /// Inverse transpose of the model's linear part (as a 4×4).
+    pub normal_matrix: [[f32; 4]; 4],
+    /// Linear RGBA albedo.
+    pub color: [f32; 4],
+    /// Padding to 16-byte multiple of a dynamic offset friendly size.
+    pub pad: [f32; 4],
+}
+
+/// The scene on the GPU.
+pub struct GpuScene {
+    /// The CPU scene (transforms are read each frame).
+    pub scene: Scene,
+    /// Group 0 layout shared by every pass.
+    pub layout: wgpu::BindGroupLayout,
+    /// Group 0 of the current frame.
+    pub bind_group: wgpu::BindGroup,
+    /// Per-frame constants.
+    pub frame_buffer: wgpu::Buffer,
+    /// Visible instances (capacity grows as needed).
+    pub instance_buffer: wgpu::Buffer,
+    /// LOD table.
+    pub lod_buffer: wgpu::Buffer,
+    /// Point clouds.
+    pub voxel_buffer: wgpu::Buffer,
+    /// Page tables.
+    pub page_table_buffer: wgpu::Buffer,
+    /// Page pools.
+    pub page_buffer: wgpu::Buffer,
+    /// Coarse occupancy.
+    pub coarse_buffer: wgpu::Buffer,
+    /// Proxy vertices (object space, vec4).
+    pub proxy_vertices: wgpu::Buffer,
+    /// Proxy indices.
+    pub proxy_indices: wgpu::Buffer,
+    /// `lod_base[object]`: index of the object's level 0 in the LOD table.
+    pub lod_base: Vec<u32>,
+    /// `proxies[object][level]`.
+    pub proxies: Vec<Vec<ProxyRange>>,
+    /// Triangle meshes, one per scene triangle object.
+    pub meshes: Vec<GpuTriangleMesh>,
+    /// Instances drawn this frame, in instance-buffer order.
+    pub visible: Vec<VisibleInstance>,
+    /// GPU memory per object.
+    pub memory: Vec<ObjectMemory>,
+    /// The camera of the current frame.
+    pub camera: Camera,
+    /// Screen size of the current frame.
+    pub screen: (u32, u32),
+}
+
+fn storage(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+    // Empty bindings are invalid: keep at least 16 bytes.
+    let mut data = bytes.to_vec();
+    if data.len() < 16 {
+        data.resize(16, 0);
+    }
+    ctx.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: &data,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+        })
+}
+
+fn mat(m: DMat4) -> [[f32; 4]; 4] {
+    m.as_mat4().to_cols_array_2d()
+}
+
+fn checked_u32(v: usize, what: &str) -> Result<u32, PassError> {
+    u32::try_from(v).map_err(|_| {
+        PassError::TooLarge(format!("{what}: {v} does not fit the GPU's 32-bit indices"))
+    })
+}
+
+impl GpuScene {
+    /// Uploads every LOD of every object's asset and the triangle meshes.
+    pub fn new(ctx: &GpuContext, scene: Scene) -> Result<Self, PassError> {
+        let mut lods: Vec<LodInfo> = Vec::new();
+        let mut voxels: Vec<PackedVoxel> = Vec::new();
+        let mut page_tables: Vec<u32> = Vec::new();
+        let mut pages: Vec<u32> = Vec::new();
+        let mut coarse: Vec<u32> = Vec::new();
+        let mut proxy_v: Vec<[f32; 4]> = Vec::new();
+        let mut proxy_i: Vec<u32> = Vec::new();
+        let mut lod_base = Vec::new();
+        let mut proxies = Vec::new();
+        let mut memory = Vec::new();
+        for obj in &scene.objects {
+            if obj.asset.lods.is_empty() {
+                return Err(PassError::BadScene(
+                    "an object's asset has no LOD levels".into(),
+                ));
+            }
+            lod_base.push(checked_u32(lods.len(), "LOD count")?);
+            let mut ranges = Vec::new();
+            let mut mem = ObjectMemory::default();
+            for lod in &obj.asset.lods {
+                let l = &lod.lookup;
+                lods.push(LodInfo {
+                    level: lod.level,
+                    pages_per_axis: l.pages_per_axis,
+                    coarse_per_axis: l.coarse_per_axis,
+                    voxel_offset: checked_u32(voxels.len(), "voxel count")?,
+                    page_table_offset: checked_u32(page_tables.len(), "page table size")?,
+                    page_offset: checked_u32(pages.len() / PAGE_CELLS, "page count")?,
+                    coarse_offset: checked_u32(coarse.len(), "coarse size")?,
+                    pad: 0,
+                });
+                voxels.extend_from_slice(&lod.point_cloud.voxels);
+                page_tables.extend_from_slice(&l.page_table);
+                pages.extend_from_slice(&l.pool);
+                coarse.extend_from_slice(&l.coarse);
+                checked_u32(pages.len(), "page pool size")?;
+                mem.point_cloud_bytes += (lod.point_cloud.voxels.len() * 16) as u64;
+                mem.lookup_bytes += l.bytes() as u64;
+                mem.proxy_bytes +=
+                    (lod.proxy.positions.len() * 16 + lod.proxy.triangles.len() * 12) as u64;
+                ranges.push(ProxyRange {
+                    first_index: checked_u32(proxy_i.len(), "proxy indices")?,
+                    index_count: checked_u32(lod.proxy.triangles.len() * 3, "proxy indices")?,
+                    base_vertex: checked_u32(proxy_v.len(), "proxy vertices")? as i32,
+                });
+                proxy_v.extend(lod.proxy.positions.iter().map(|p| [p[0], p[1], p[2], 1.0]));
+                proxy_i.extend(lod.proxy.triangles.iter().flatten());
+            }
+            proxies.push(ranges);
+            memory.push(mem);
+        }
+        let d = &ctx.device;
+        let ro = |binding: u32| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::VERTEX
+                | wgpu::ShaderStages::FRAGMENT
+                | wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let mut entries = vec![wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::VERTEX
+                | wgpu::ShaderStages::FRAGMENT
+                | wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }];
+        entries.extend((1..=6).map(ro));
+        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("scene"),
+            entries: &entries,
+        });
+        let frame_buffer = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame"),
+            size: std::mem::size_of::<FrameUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let total_instances: usize = scene.objects.iter().map(|o| o.instances.len()).sum();
+        let instance_buffer = Self::instance_buffer(ctx, total_instances.max(1));
+        let lod_buffer = storage(ctx, "lods", bytemuck::cast_slice(&lods));
+        let voxel_buffer = storage(ctx, "voxels", bytemuck::cast_slice(&voxels));
+        let page_table_buffer = storage(ctx, "page_tables", bytemuck::cast_slice(&page_tables));
+        let page_buffer = storage(ctx, "pages", bytemuck::cast_slice(&pages));
+        let coarse_buffer = storage(ctx, "coarse", bytemuck::cast_slice(&coarse));
+        let proxy_vertices = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("proxy vertices"),
+            contents: bytemuck::cast_slice(if proxy_v.is_empty() {
+                &[[0f32; 4]][..]
+            } else {
+                &proxy_v
+            }),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let proxy_indices = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("proxy indices"),
+            contents: bytemuck::cast_slice(if proxy_i.is_empty() {
+                &[0u32; 4][..]
+            } else {
+                &proxy_i
+            }),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        let meshes = scene
+            .triangles
+            .iter()
+            .map(|t| {
+                let verts: Vec<f32> = t
+                    .positions
+                    .iter()
+                    .zip(t.normals.iter().chain(std::iter::repeat(&[0.0, 1.0, 0.0])))
+                    .flat_map(|(p, n)| [p[0], p[1], p[2], n[0], n[1], n[2]])
+                    .collect();
+                GpuTriangleMesh {
+                    vertices: d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("mesh vertices"),
+                        contents: bytemuck::cast_slice(&verts),
+                        usage: wgpu::BufferUsages::VERTEX,
+                    }),
+                    indices: d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("mesh indices"),
+                        contents: bytemuck::cast_slice(&t.indices),
+                        usage: wgpu::BufferUsages::INDEX,
+                    }),
+                    index_count: t.indices.len() as u32,
+                    uniform: d.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("mesh uniform"),
+                        size: std::mem::size_of::<MeshUniform>() as u64,
+                        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    }),
+                }
+            })
+            .collect();
+        let bind_group = Self::make_bind_group(
+            ctx,
+            &layout,
+            [
+                &frame_buffer,
+                &instance_buffer,
+                &lod_buffer,
+                &voxel_buffer,
+                &page_table_buffer,
+                &page_buffer,
+                &coarse_buffer,
+            ],
+        );
+        Ok(Self {
+            scene,
+            layout,
+            bind_group,
+            frame_buffer,
+            instance_buffer,
+            lod_buffer,
+            voxel_buffer,
+            page_table_buffer,
+            page_buffer,
+            coarse_buffer,
+            proxy_vertices,
+            proxy_indices,
+            lod_base,
+            proxies,
+            meshes,
+            visible: Vec::new(),
+            memory,
+            camera: Camera::default(),
+            screen: (1, 1),
+        })
+    }
+
+    fn instance_buffer(ctx: &GpuContext, n: usize) -> wgpu::Buffer {
+        ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("instances"),
+            size: (n * std::mem::size_of::<InstanceUniform>()) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    fn make_bind_group(
+        ctx: &GpuContext,
+        layout: &wgpu::BindGroupLayout,
+        bufs: [&wgpu::Buffer; 7],
+    ) -> wgpu::BindGroup {
+        let entries: Vec<_> = bufs
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("scene"),
+            layout,
+            entries: &entries,
+        })
+    }
+
+    /// Culls instances against the view frustum, chooses each one's LOD and writes the frame
+    /// constants and the visible instances for `camera` at `screen`.
+    pub fn update(&mut self, ctx: &GpuContext, camera: &Camera, screen: (u32, u32)) {
+        self.camera = *camera;
+        self.screen = screen;
+        let (w, h) = (screen.0.max(1) as f64, screen.1.max(1) as f64);
+        let aspect = w / h;
+        let eye = camera.position;
+        let rot = camera.view_rotation_matrix();
+        let view_proj = camera.projection(aspect) * rot;
+        let (right, up, forward) = camera.basis();
+        let tan_y = (camera.fov_y_deg.clamp(1e-9, 179.999).to_radians() * 0.5).tan();
+        let tan_x = tan_y * aspect;
+        let light = &self.scene.light;
+        let ld = DVec3::from(light.direction.map(|v| v as f64)).normalize_or(DVec3::Z);
+        let frame = FrameUniform {
+            view_proj: mat(view_proj),
+            inv_view_proj: mat(view_proj.inverse()),
+            view: mat(rot),
+            cam_right: (right * tan_x).as_vec3().extend(0.0).into(),
+            cam_up: (up * tan_y).as_vec3().extend(0.0).into(),
+            cam_forward: forward.as_vec3().extend(0.0).into(),
+            screen: [w as f32, h as f32, (1.0 / w) as f32, (1.0 / h) as f32],
+            light_dir: [ld.x as f32, ld.y as f32, ld.z as f32, light.ambient],
+            light_color: [
+                light.color[0],
+                light.color[1],
+                light.color[2],
+                light.specular,
+            ],
+            misc: [
+                light.shininess,
+                camera.near as f32,
+                if camera.is_infinite() {
+                    0.0
+                } else {
+                    camera.far as f32
+                },
+                0.0,
+            ],
+        };
+
+        // Frustum planes in camera-relative world space (normals pointing inwards).
+        let planes = frustum_planes(right, up, forward, tan_x, tan_y);
+        let mut visible = Vec::new();
+        let mut uniforms = Vec::new();
+        let mut scene_index = 0u32;
+        for (oi, obj) in self.scene.objects.iter().enumerate() {
+            let max_level = obj.asset.lods.len() as u32 - 1;
+            for xf in &obj.instances {
+                let si = scene_index;
+                scene_index += 1;
+                if !xf.matrix3.determinant().is_finite()
+                    || xf.matrix3.determinant() == 0.0
+                    || !xf.translation.is_finite()
+                {
+                    continue;
+                }
+                // Bounding sphere of the object box [-1, 1]^3.
+                let center = xf.translation - eye;
+                let radius = (xf.matrix3 * DVec3::ONE).length().max(
+                    [
+                        DVec3::new(1.0, 1.0, -1.0),
+                        DVec3::new(1.0, -1.0, 1.0),
+                        DVec3::new(-1.0, 1.0, 1.0),
+                    ]
+                    .iter()
+                    .map(|c| (xf.matrix3 * *c).length())
+                    .fold(0.0, f64::max),
+                );
+                if planes.iter().any(|(n, d)| n.dot(center) + d < -radius) {
+                    continue;
+                }
+                let level = match obj.lod {
+                    LodPolicy::Fixed(l) => l.min(max_level),
+                    LodPolicy::Auto { bias } => {
+                        // Cell size in world units at level L: 2 * scale / 2^L. Projected
+                        // size in pixels at distance d: cell / (d * 2 tan_y) * height.
+                        let scale = radius / 3f64.sqrt();
+                        let dist = (center.length() - radius).max(camera.near.max(1e-9));
+                        let ideal = (2.0 * scale * h / (dist * 2.0 * tan_y)).log2();
+                        let l = if ideal.is_finite() {
+                            ideal.round() as i64
+                        } else {
+                            max_level as i64
+                        };
+                        (l + bias as i64).clamp(0, max_level as i64) as u32
+                    }
+                };
+                let lod_index = self.lod_base[oi] + level;
+                // Camera-relative object → world.
+                let rel = DAffine3 {
+                    matrix3: xf.matrix3,
+                    translation: center,
+                };
+                let inv = rel.inverse();
+                let cam_obj = inv.transform_point3(DVec3::ZERO);
+                let lod = &obj.asset.lods[level as usize];
+                let camera_inside = inside_resident_page(&lod.lookup, cam_obj);
+                let cell_world = 2.0 * scale_of(xf) / (1u64 << level) as f64;
+                uniforms.push(InstanceUniform {
+                    object_to_world: mat(DMat4::from(rel)),
+                    world_to_object: mat(DMat4::from(inv)),
+                    camera_object: [
+                        cam_obj.x as f32,
+                        cam_obj.y as f32,
+                        cam_obj.z as f32,
+                        cell_world as f32,
+                    ],
+                    lod: lod_index,
+                    level,
+                    flags: camera_inside as u32,
+                    scene_index: si,
+                });
+                visible.push(VisibleInstance {
+                    scene_index: si,
+                    object: oi,
+                    level,
+                    proxy: self.proxies[oi][level as usize],
+                    camera_inside,
+                });
+            }
+        }
+        let mut frame = frame;
+        frame.misc[3] = visible.len() as f32;
+        ctx.queue
+            .write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&frame));
+        if !uniforms.is_empty() {
+            ctx.queue
+                .write_buffer(&self.instance_buffer, 0, bytemuck::cast_slice(&uniforms));
+        }
+        for (mesh, t) in self.meshes.iter().zip(&self.scene.triangles) {
+            let model = DAffine3 {
+                matrix3: t.transform.matrix3,
+                translation: t.transform.translation - eye,
+            };
+            let nm = DMat4::from_mat3(model.matrix3.inverse().transpose());
+            let u = MeshUniform {
+                model: mat(DMat4::from(model)),
+                normal_matrix: mat(nm),
+                color: t.color,
+                pad: [0.0; 4],
+            };
+            ctx.queue
+                .write_buffer(&mesh.uniform, 0, bytemuck::bytes_of(&u));
+        }
+        self.visible = visible;
+    }
+
+    /// Bytes of the shared voxel buffers (all objects).
+    pub fn total_memory(&self) -> u64 {
+        self.memory.iter().map(ObjectMemory::total).sum()
+    }
+}
+
+/// Uniform scale of an instance transform (cube root of |det|).
+fn scale_of(xf: &DAffine3) -> f64 {
+    xf.matrix3.determinant().abs().cbrt()
+}
+
+/// Whether an object-space point lies in a resident page of a lookup (then the proxy,
+/// the union of resident pages, contains it and the prepass draws back faces).
+fn inside_resident_page(lookup: &ssbvb_voxel::asset::SparseLookup, p: DVec3) -> bool {
+    if !(p.abs().max_element() < 1.0) {
+        return false;
+    }
+    let n = (1u64 << lookup.level) as f64;
+    let cell = ((p + 1.0) * 0.5 * n).floor();
+    let ps = ssbvb_voxel::asset::PAGE_SIZE as f64;
+    let page = (cell / ps).floor();
+    lookup.page_resident([page.x as u32, page.y as u32, page.z as u32])
+}
+
+/// The four side planes of the view frustum through the eye (origin), as (inward normal, d).
+/// The near and far planes are not used: instances behind the eye fail a side plane test or
+/// are handled by the prepass depth test.
+fn frustum_planes(
+    right: DVec3,
+    up: DVec3,
+    forward: DVec3,
+    tan_x: f64,
+    tan_y: f64,
+) -> [(DVec3, f64); 4] {
+    let n = |v: DVec3| v.normalize_or(forward);
+    [
+        (n(forward * tan_x + right), 0.0),
+        (n(forward * tan_x - right), 0.0),
+        (n(forward * tan_y + up), 0.0),
+        (n(forward * tan_y - up), 0.0),
+    ]
+}

@@ -1,0 +1,205 @@
+// Shared declarations of every ssbvb pass (included with `//#include "common.inc.wgsl"`).
+// Rust mirrors of these structs live in crates/passes/src/gpu_scene.rs; keep them equal.
+//
+// Spaces: object space is [-1, 1]^3 (the voxel grid); "world" on the GPU is always
+// camera-relative world space (world - camera position, in f32) so that objects at 1e7
+// world units keep their precision; view space looks down -Z; clip is reversed-Z.
+
+// Per-frame constants (group 0, binding 0).
+struct Frame {
+    // Camera-relative world -> clip (reversed Z: near -> 1, far -> 0).
+    view_proj: mat4x4<f32>,
+    // Its inverse (clip -> camera-relative world).
+    inv_view_proj: mat4x4<f32>,
+    // Camera-relative world -> view (a rotation).
+    view: mat4x4<f32>,
+    // Ray through NDC (x, y): forward.xyz + x * right.xyz + y * up.xyz (not normalized);
+    // right and up are pre-scaled by the half-extents of the view at distance 1.
+    cam_right: vec4<f32>,
+    cam_up: vec4<f32>,
+    cam_forward: vec4<f32>,
+    // width, height, 1 / width, 1 / height of the screen in pixels.
+    screen: vec4<f32>,
+    // Direction towards the light (normalized) in xyz; ambient factor in w.
+    light_dir: vec4<f32>,
+    // Light colour in rgb; specular strength in w.
+    light_color: vec4<f32>,
+    // x: shininess, y: near, z: far (0 = infinite), w: number of visible instances.
+    misc: vec4<f32>,
+}
+
+// One visible instance of a voxel asset (group 0, binding 1), rebuilt every frame.
+struct Instance {
+    // Object space -> camera-relative world.
+    object_to_world: mat4x4<f32>,
+    // Camera-relative world -> object space.
+    world_to_object: mat4x4<f32>,
+    // Camera position in object space (xyz); w: world size of one cell of the chosen LOD.
+    camera_object: vec4<f32>,
+    // Index into `lods` of the chosen LOD.
+    lod: u32,
+    // Grid level of the chosen LOD (2^level cells per axis).
+    level: u32,
+    // Bit 0: the camera is inside this instance's proxy.
+    flags: u32,
+    // Index of the instance in the scene (stable across frames, for ids in the G-buffer).
+    scene_index: u32,
+}
+
+// Where one LOD of one asset lives in the shared voxel buffers (group 0, binding 2).
+struct LodInfo {
+    level: u32,
+    // Pages per axis of the page table (16^3 cells per page).
+    pages_per_axis: u32,
+    // Blocks per axis of the coarse occupancy (4^3 pages per block).
+    coarse_per_axis: u32,
+    // First voxel of this LOD in `voxels`.
+    voxel_offset: u32,
+    // First entry of this LOD's page table in `page_tables`.
+    page_table_offset: u32,
+    // First page of this LOD in `pages` (in pages of 4096 cells).
+    page_offset: u32,
+    // First word of this LOD's coarse bits in `coarse`.
+    coarse_offset: u32,
+    _pad: u32,
+}
+
+// A point-cloud voxel as packed by ssbvb-voxel (asset.rs, `PackedVoxel`): 16 bytes.
+struct PackedVoxel {
+    xy: u32,        // x bits 0..16, y bits 16..32
+    z_normal: u32,  // z bits 0..16, octahedral normal u bits 16..24, v bits 24..32
+    color: u32,     // linear RGBA8, r in the low byte
+    uv: u32,        // two 16-bit unorms
+}
+
+// One SSBVB entry: the hit voxel of one pixel and where it came from (32 bytes).
+struct VoxelSlot {
+    voxel: PackedVoxel,
+    // Index into `instances`.
+    instance: u32,
+    // y * width + x of the pixel whose ray found it.
+    pixel: u32,
+    // World distance along the pixel's ray to the voxel's entered face.
+    t: f32,
+    // Entered face: 0..2 = -X/-Y/-Z side (normal points -axis), 3..5 = +X/+Y/+Z side.
+    face: u32,
+}
+
+const PAGE_SIZE: u32 = 16u;
+const PAGE_CELLS: u32 = 4096u;
+const COARSE_PAGES: u32 = 4u;
+const EMPTY_PAGE: u32 = 0xffffffffu;
+// Stencil values: voxel billboards and triangle objects.
+const STENCIL_VOXEL: u32 = 1u;
+const STENCIL_TRIANGLE: u32 = 2u;
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(0) @binding(1) var<storage, read> instances: array<Instance>;
+@group(0) @binding(2) var<storage, read> lods: array<LodInfo>;
+@group(0) @binding(3) var<storage, read> voxels: array<PackedVoxel>;
+@group(0) @binding(4) var<storage, read> page_tables: array<u32>;
+@group(0) @binding(5) var<storage, read> pages: array<u32>;
+@group(0) @binding(6) var<storage, read> coarse: array<u32>;
+
+fn voxel_cell(v: PackedVoxel) -> vec3<u32> {
+    return vec3(v.xy & 0xffffu, v.xy >> 16u, v.z_normal & 0xffffu);
+}
+
+// Inverse of the octahedral encoding in asset.rs; always a unit vector.
+fn voxel_normal(v: PackedVoxel) -> vec3<f32> {
+    let u = f32((v.z_normal >> 16u) & 0xffu) / 255.0 * 2.0 - 1.0;
+    let w = f32(v.z_normal >> 24u) / 255.0 * 2.0 - 1.0;
+    var n = vec3(u, w, 1.0 - abs(u) - abs(w));
+    if n.z < 0.0 {
+        let s = select(vec2(-1.0), vec2(1.0), n.xy >= vec2(0.0));
+        n = vec3((1.0 - abs(n.yx)) * s, n.z);
+    }
+    return normalize(n);
+}
+
+fn voxel_color(v: PackedVoxel) -> vec4<f32> {
+    return unpack4x8unorm(v.color);
+}
+
+// Cell size in object units of a level-`level` grid.
+fn cell_size(level: u32) -> f32 {
+    return 2.0 / f32(1u << level);
+}
+
+// Object-space box of a cell.
+fn cell_min(cell: vec3<u32>, level: u32) -> vec3<f32> {
+    return vec3<f32>(cell) * cell_size(level) - 1.0;
+}
+
+// Voxel id + 1 at a cell of a LOD (0 when empty); the cell must be inside the grid.
+fn lookup_cell(lod: LodInfo, cell: vec3<u32>) -> u32 {
+    let p = cell / PAGE_SIZE;
+    let ppa = lod.pages_per_axis;
+    let page = page_tables[lod.page_table_offset + p.x + ppa * (p.y + ppa * p.z)];
+    if page == EMPTY_PAGE {
+        return 0u;
+    }
+    let l = cell % PAGE_SIZE;
+    return pages[(lod.page_offset + page) * PAGE_CELLS + l.x + PAGE_SIZE * (l.y + PAGE_SIZE * l.z)];
+}
+
+fn page_resident(lod: LodInfo, cell: vec3<u32>) -> bool {
+    let p = cell / PAGE_SIZE;
+    let ppa = lod.pages_per_axis;
+    return page_tables[lod.page_table_offset + p.x + ppa * (p.y + ppa * p.z)] != EMPTY_PAGE;
+}
+
+fn coarse_occupied(lod: LodInfo, cell: vec3<u32>) -> bool {
+    let b = cell / (PAGE_SIZE * COARSE_PAGES);
+    let cpa = lod.coarse_per_axis;
+    let i = b.x + cpa * (b.y + cpa * b.z);
+    return (coarse[lod.coarse_offset + i / 32u] & (1u << (i % 32u))) != 0u;
+}
+
+// Normalized world (camera-relative) direction of the ray through pixel position `px`
+// (in pixels, row 0 at the top; pixel centres at +0.5), exactly as the CPU reference.
+fn pixel_ray(px: vec2<f32>) -> vec3<f32> {
+    let ndc = vec2(px.x * frame.screen.z * 2.0 - 1.0, 1.0 - px.y * frame.screen.w * 2.0);
+    return normalize(frame.cam_forward.xyz + ndc.x * frame.cam_right.xyz + ndc.y * frame.cam_up.xyz);
+}
+
+// World-space unit normal of an entered face (see VoxelSlot.face), through the instance's
+// inverse transpose.
+fn face_normal_world(inst: Instance, face: u32) -> vec3<f32> {
+    var n = vec3(0.0);
+    n[face % 3u] = select(-1.0, 1.0, face >= 3u);
+    let m = inst.world_to_object;
+    // Inverse transpose of object_to_world's linear part = transpose of world_to_object's.
+    let nw = transpose(mat3x3(m[0].xyz, m[1].xyz, m[2].xyz)) * n;
+    return normalize(nw);
+}
+
+// World-space unit normal of a voxel's stored normal.
+fn voxel_normal_world(inst: Instance, v: PackedVoxel) -> vec3<f32> {
+    let m = inst.world_to_object;
+    return normalize(transpose(mat3x3(m[0].xyz, m[1].xyz, m[2].xyz)) * voxel_normal(v));
+}
+
+// Blinn-Phong exactly as ssbvb-voxel's shading::shade (linear RGB).
+fn shade(albedo: vec3<f32>, normal: vec3<f32>, view_dir: vec3<f32>) -> vec3<f32> {
+    let l = safe_normalize(frame.light_dir.xyz, vec3(0.0, 0.0, 1.0));
+    let n = safe_normalize(normal, vec3(0.0, 0.0, 1.0));
+    let v = safe_normalize(view_dir, n);
+    let h = safe_normalize(l + v, n);
+    let ndl = max(dot(n, l), 0.0);
+    let ndh = max(dot(n, h), 0.0);
+    var spec = 0.0;
+    if ndl > 0.0 && ndh > 0.0 {
+        spec = frame.light_color.w * pow(ndh, max(frame.misc.x, 0.0));
+    }
+    let c = frame.light_color.rgb;
+    return frame.light_dir.w * albedo + ndl * albedo * c + spec * c;
+}
+
+fn safe_normalize(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
+    let l2 = dot(v, v);
+    if l2 > 1e-20 && l2 < 1e30 {
+        return v * inverseSqrt(l2);
+    }
+    return fallback;
+}
