@@ -39,7 +39,8 @@ pub fn models_dir() -> PathBuf {
 
 /// The asset of a shared model file at `level`, prepared once per process.
 pub fn model_asset(file: &str, level: u32) -> Arc<VoxelAsset> {
-    static CACHE: OnceLock<Mutex<HashMap<(String, u32), Arc<VoxelAsset>>>> = OnceLock::new();
+    type AssetCache = Mutex<HashMap<(String, u32), Arc<VoxelAsset>>>;
+    static CACHE: OnceLock<AssetCache> = OnceLock::new();
     let cache = CACHE.get_or_init(Default::default);
     if let Some(a) = cache.lock().unwrap().get(&(file.to_string(), level)) {
         return a.clone();

@@ -202,6 +202,7 @@ mod tests {
         .unwrap();
         std::fs::write(dir.path().join("syntax.wgsl"), "fn f( {\n").unwrap();
         let r = validate_dir(dir.path(), &[]).unwrap();
+        assert_eq!(r.errors.len(), 2, "{:#?}", r.errors);
         // An error inside an included file is reported at that file's line.
         std::fs::write(
             dir.path().join("common.inc.wgsl"),

@@ -1,6 +1,10 @@
 //! The `ssbvb` command-line tool.
 
 mod pipeline_cmd;
+mod progress;
+mod render_cmd;
+mod scene_file;
+mod voxelize_cmd;
 
 use std::process::ExitCode;
 
@@ -19,6 +23,11 @@ enum Command {
     /// Render pipeline files (RON).
     #[command(subcommand)]
     Pipeline(pipeline_cmd::PipelineCommand),
+    /// Render one frame of a scene or model to a PNG (GPU SSBVB pipeline, or the CPU
+    /// reference with --reference).
+    Render(render_cmd::RenderArgs),
+    /// Voxelize a model: every LOD, sparse lookup pages, proxy meshes; cached on disk.
+    Voxelize(voxelize_cmd::VoxelizeArgs),
     /// Print the GPU adapter ssbvb would use (set SSBVB_ADAPTER / WGPU_BACKEND to choose).
     Adapter,
 }
@@ -28,6 +37,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Pipeline(c) => pipeline_cmd::run(&c),
         Command::Adapter => adapter(),
+        Command::Render(a) => render_cmd::run(&a).map(|_| ExitCode::SUCCESS),
+        Command::Voxelize(a) => voxelize_cmd::run(&a).map(|_| ExitCode::SUCCESS),
     };
     match result {
         Ok(code) => code,

@@ -12,15 +12,13 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Context;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::Serialize;
-use ssbvb_voxel::cache::{
-    CacheStatus, hash_source, load_or_prepare, write_cache,
-};
+use ssbvb_voxel::cache::{CacheStatus, hash_source, load_or_prepare, write_cache};
 use ssbvb_voxel::load::load_model;
 use ssbvb_voxel::prepare::{LevelStats, StageTimes, asset_level_stats, prepare_asset};
-use ssbvb_voxel::progress::Progress;
 use ssbvb_voxel::voxelize::VoxelizeReport;
+
+use crate::progress::BarProgress;
 
 /// Arguments of `ssbvb voxelize`.
 #[derive(Debug, Clone, clap::Args)]
@@ -39,21 +37,6 @@ pub struct VoxelizeArgs {
     /// Neither read nor write the asset cache; always prepare from the model.
     #[arg(long)]
     pub no_cache: bool,
-}
-
-/// An indicatif bar driven by the preparation stages.
-struct Bar(ProgressBar);
-
-impl Progress for Bar {
-    fn begin(&self, stage: &str, total: u64) {
-        self.0.set_length(total);
-        self.0.set_position(0);
-        self.0.set_message(stage.to_string());
-    }
-
-    fn advance(&self, units: u64) {
-        self.0.inc(units);
-    }
 }
 
 /// What the JSON output holds (and the table shows).
@@ -87,25 +70,18 @@ struct CacheReport {
 /// Runs `ssbvb voxelize`.
 pub fn run(args: &VoxelizeArgs) -> anyhow::Result<()> {
     let start = Instant::now();
-    let bar = if args.json || !std::io::stderr().is_terminal() {
-        ProgressBar::hidden()
-    } else {
-        let bar = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
-        bar.set_style(
-            ProgressStyle::with_template("{spinner} {msg:<26} [{bar:40}] {pos}/{len} {elapsed}")
-                .unwrap_or_else(|_| ProgressStyle::default_bar())
-                .progress_chars("=> "),
-        );
-        bar
-    };
-    let progress = Bar(bar);
+    let progress = BarProgress::new(!args.json && std::io::stderr().is_terminal());
 
     let (asset, cache, stats) = if args.no_cache {
         let model = load_model(&args.model)?;
         let (asset, stats) = prepare_asset(&model, args.level, &progress)
             .with_context(|| format!("{}: preparation failed", args.model.display()))?;
-        let cache =
-            CacheReport { status: "disabled", reason: None, path: None, write_error: None };
+        let cache = CacheReport {
+            status: "disabled",
+            reason: None,
+            path: None,
+            write_error: None,
+        };
         (asset, cache, Some(stats))
     } else {
         let (asset, outcome) = load_or_prepare(&args.model, args.level, None, &progress)?;
@@ -121,7 +97,7 @@ pub fn run(args: &VoxelizeArgs) -> anyhow::Result<()> {
         };
         (asset, cache, outcome.stats)
     };
-    progress.0.finish_and_clear();
+    progress.finish();
 
     if let Some(out) = &args.out {
         let hash = hash_source(&args.model)?;
@@ -202,14 +178,24 @@ fn table(r: &Report) -> String {
     let _ = writeln!(s);
     let _ = writeln!(
         s,
-        "{:>5} {:>12} {:>8} {:>12} {:>11} {:>8} {:>11} {:>9} {:>8}",
-        "level", "voxels", "pages", "points MiB", "lookup MiB", "% dense", "octree MiB", "proxy tri", "time s"
+        "{:>5} {:>12} {:>8} {:>12} {:>11} {:>10} {:>11} {:>9} {:>8}",
+        "level",
+        "voxels",
+        "pages",
+        "points MiB",
+        "lookup MiB",
+        "% dense",
+        "octree MiB",
+        "proxy tri",
+        "time s"
     );
     for l in &r.levels {
-        let secs = l.seconds.map_or_else(|| "-".to_string(), |t| format!("{t:.3}"));
+        let secs = l
+            .seconds
+            .map_or_else(|| "-".to_string(), |t| format!("{t:.3}"));
         let _ = writeln!(
             s,
-            "{:>5} {:>12} {:>8} {:>12} {:>11} {:>8.3} {:>11} {:>9} {:>8}",
+            "{:>5} {:>12} {:>8} {:>12} {:>11} {:>10.2} {:>11} {:>9} {:>8}",
             l.level,
             l.voxels,
             l.resident_pages,

@@ -294,6 +294,39 @@ impl GpuContext {
         })
     }
 
+    /// Wraps a device the caller already has (embedding ssbvb in an existing wgpu
+    /// renderer). The device keeps the caller's features and limits; errors outside error
+    /// scopes go to the caller's own handler, not to [`GpuContext::take_uncaptured_errors`].
+    pub fn from_parts(
+        instance: wgpu::Instance,
+        adapter: wgpu::Adapter,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+    ) -> Self {
+        let info = adapter.get_info();
+        let features = device.features();
+        let report = AdapterReport {
+            name: info.name.clone(),
+            backend: format!("{:?}", info.backend),
+            device_type: format!("{:?}", info.device_type),
+            driver: format!("{} {}", info.driver, info.driver_info)
+                .trim()
+                .to_string(),
+            is_software: is_software(&info),
+            timestamps: features.contains(
+                wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
+            ),
+        };
+        Self {
+            instance,
+            adapter,
+            device,
+            queue,
+            report,
+            uncaptured: Arc::new(Mutex::new(Vec::new())),
+        }
+    }
+
     /// The adapter this context runs on.
     pub fn report(&self) -> &AdapterReport {
         &self.report

@@ -70,7 +70,7 @@ impl Locator {
                     }
                     Some('*') => {
                         let mut prev = ' ';
-                        while let Some(d) = it.next() {
+                        for d in it.by_ref() {
                             bump!(d);
                             if prev == '*' && d == '/' {
                                 break;

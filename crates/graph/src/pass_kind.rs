@@ -358,17 +358,15 @@ impl PassKind {
     pub fn parameter_problems(&self) -> Vec<String> {
         let mut out = Vec::new();
         match *self {
-            PassKind::RayMarchFilter { max_steps } => {
-                if max_steps == 0 {
-                    out.push("max_steps must be at least 1".to_string());
-                }
+            PassKind::RayMarchFilter { max_steps: 0 } => {
+                out.push("max_steps must be at least 1".to_string());
             }
-            PassKind::Billboards { size_scale, .. } => {
-                if !(size_scale.is_finite() && size_scale > 0.0) {
-                    out.push(format!(
-                        "size_scale must be a positive number, got {size_scale}"
-                    ));
-                }
+            PassKind::Billboards { size_scale, .. }
+                if !(size_scale.is_finite() && size_scale > 0.0) =>
+            {
+                out.push(format!(
+                    "size_scale must be a positive number, got {size_scale}"
+                ));
             }
             PassKind::Smooth { max_i, min_dist } => {
                 if !(max_i.is_finite() && max_i >= 0.0) {

@@ -350,7 +350,7 @@ fn parse(src: &str, file: &str, loc: &Locator) -> Result<PipelineDesc, Vec<Graph
                 col: e.span.start.col,
             };
             let already = matches!(e.code, ron::Error::NoSuchEnumVariant { outer: Some(ref o), .. } if o == "PassKind");
-            if !(already && !errors.is_empty()) {
+            if !already || errors.is_empty() {
                 let message = match &e.code {
                     ron::Error::NoSuchEnumVariant {
                         expected, found, ..
@@ -522,8 +522,7 @@ impl<'a> Ctx<'a> {
 
         // Writers of one resource must be ordered (only meaningful without cycles).
         if !cyclic {
-            for r in 0..nres {
-                let w = &writers[r];
+            for (r, w) in writers.iter().enumerate() {
                 for i in 0..w.len() {
                     for j in i + 1..w.len() {
                         let (a, b) = (nodes[w[i]], nodes[w[j]]);

@@ -23,7 +23,9 @@ pub struct FrameTexture {
     pub depth_view: Option<wgpu::TextureView>,
 }
 
-/// One live resource's GPU object (aliases share one).
+/// One live resource's GPU object (aliases share one). Few exist per frame, so the
+/// size difference of the variants does not matter.
+#[allow(clippy::large_enum_variant)]
 pub enum FrameResource {
     /// A texture.
     Texture(FrameTexture),
@@ -45,22 +47,30 @@ impl FrameResources {
         pipeline: &ResolvedPipeline,
         screen: (u32, u32),
     ) -> Result<Self, PassError> {
+        Self::with_imports(ctx, pipeline, screen, &[])
+    }
+
+    /// Like [`FrameResources::new`], but the named resources are the caller's textures
+    /// (their size must be the resource's size at `screen`, their format its format, their
+    /// usage at least what the graph derived). An imported resource must not be aliased.
+    pub fn with_imports(
+        ctx: &GpuContext,
+        pipeline: &ResolvedPipeline,
+        screen: (u32, u32),
+        imports: &[(&str, wgpu::Texture)],
+    ) -> Result<Self, PassError> {
         let mut physical = Vec::new();
         for (i, p) in pipeline.physical.iter().enumerate() {
             let name = pipeline.resources[p.aliases[0]].name.clone();
             let label = format!("{name} (physical {i})");
+            if let Some((_, tex)) = imports.iter().find(|(n, _)| *n == name) {
+                physical.push(FrameResource::Texture(import(ctx, tex, &name, p, screen)?));
+                continue;
+            }
             let r = match (&p.desc, p.usage) {
                 (ResourceDesc::Texture { format, size }, ResourceUsage::Texture(usage)) => {
                     let (w, h) = size.resolve(screen);
-                    let format = match format.to_wgpu() {
-                        // Fall back when the device lacks 32-bit depth with stencil.
-                        wgpu::TextureFormat::Depth32FloatStencil8
-                            if !ctx.has(wgpu::Features::DEPTH32FLOAT_STENCIL8) =>
-                        {
-                            wgpu::TextureFormat::Depth24PlusStencil8
-                        }
-                        f => f,
-                    };
+                    let format = texture_format(ctx, *format);
                     let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
                         label: Some(&label),
                         size: wgpu::Extent3d {
@@ -91,7 +101,7 @@ impl FrameResources {
                 }
                 (ResourceDesc::Buffer { layout, count }, ResourceUsage::Buffer(usage)) => {
                     let size = count.resolve(screen) * layout.element_size();
-                    let max = ctx.device.limits().max_storage_buffer_binding_size as u64;
+                    let max = ctx.device.limits().max_storage_buffer_binding_size;
                     if size > max {
                         return Err(PassError::TooLarge(format!(
                             "resource `{name}` needs {size} bytes, the device binds at most {max}"
@@ -134,6 +144,71 @@ impl FrameResources {
             FrameResource::Buffer(b) => b,
             FrameResource::Texture(_) => panic!("resource {i} is a texture"),
         }
+    }
+}
+
+/// Checks a caller's texture against a physical resource and wraps it.
+fn import(
+    ctx: &GpuContext,
+    tex: &wgpu::Texture,
+    name: &str,
+    p: &ssbvb_graph::PhysicalResource,
+    screen: (u32, u32),
+) -> Result<FrameTexture, PassError> {
+    if p.aliases.len() > 1 {
+        return Err(PassError::BadScene(format!(
+            "imported resource `{name}` shares memory with another resource"
+        )));
+    }
+    let (ResourceDesc::Texture { size, format }, ResourceUsage::Texture(usage)) =
+        (&p.desc, p.usage)
+    else {
+        return Err(PassError::BadScene(format!(
+            "imported resource `{name}` is not a texture"
+        )));
+    };
+    let want_format = texture_format(ctx, *format);
+    if tex.format() != want_format {
+        return Err(PassError::BadScene(format!(
+            "imported `{name}` has format {:?}; the pipeline needs {want_format:?}",
+            tex.format()
+        )));
+    }
+    let want = size.resolve(screen);
+    if (tex.width(), tex.height()) != want || !tex.usage().contains(usage) {
+        return Err(PassError::BadScene(format!(
+            "imported `{name}` is {}x{} with usage {:?}; the pipeline needs {}x{} with {usage:?}",
+            tex.width(),
+            tex.height(),
+            tex.usage(),
+            want.0,
+            want.1
+        )));
+    }
+    let view = tex.create_view(&Default::default());
+    let depth_view = tex.format().is_depth_stencil_format().then(|| {
+        tex.create_view(&wgpu::TextureViewDescriptor {
+            aspect: wgpu::TextureAspect::DepthOnly,
+            ..Default::default()
+        })
+    });
+    Ok(FrameTexture {
+        texture: tex.clone(),
+        view,
+        depth_view,
+    })
+}
+
+/// The wgpu format of a pipeline format on this device (Depth32FloatStencil8 falls back
+/// to Depth24PlusStencil8 where the feature is missing).
+pub fn texture_format(ctx: &GpuContext, format: ssbvb_graph::Format) -> wgpu::TextureFormat {
+    match format.to_wgpu() {
+        wgpu::TextureFormat::Depth32FloatStencil8
+            if !ctx.has(wgpu::Features::DEPTH32FLOAT_STENCIL8) =>
+        {
+            wgpu::TextureFormat::Depth24PlusStencil8
+        }
+        f => f,
     }
 }
 
@@ -219,14 +294,7 @@ pub fn slot_format(
         .resource_of(slot)
         .unwrap_or_else(|| panic!("pass `{}` has no slot `{slot}`", pass.name));
     match &pipeline.resources[r].desc {
-        ResourceDesc::Texture { format, .. } => match format.to_wgpu() {
-            wgpu::TextureFormat::Depth32FloatStencil8
-                if !ctx.has(wgpu::Features::DEPTH32FLOAT_STENCIL8) =>
-            {
-                wgpu::TextureFormat::Depth24PlusStencil8
-            }
-            f => f,
-        },
+        ResourceDesc::Texture { format, .. } => texture_format(ctx, *format),
         ResourceDesc::Buffer { .. } => panic!("slot `{slot}` is a buffer"),
     }
 }
@@ -287,7 +355,20 @@ impl Renderer {
         pipeline: ResolvedPipeline,
         screen: (u32, u32),
     ) -> Result<Self, PassError> {
-        let resources = FrameResources::new(ctx, &pipeline, screen)?;
+        Self::with_imports(ctx, scene, pipeline, screen, &[])
+    }
+
+    /// Like [`Renderer::new`], drawing into the caller's textures for the named resources
+    /// (see [`FrameResources::with_imports`]). Imported resources keep their contents: no
+    /// pass clears them, so the frame composes onto what the caller drew.
+    pub fn with_imports(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        pipeline: ResolvedPipeline,
+        screen: (u32, u32),
+        imports: &[(&str, wgpu::Texture)],
+    ) -> Result<Self, PassError> {
+        let resources = FrameResources::with_imports(ctx, &pipeline, screen, imports)?;
         let mut passes = Vec::new();
         for p in &pipeline.passes {
             let node = ctx
@@ -305,7 +386,10 @@ impl Renderer {
             let mut firsts = Vec::new();
             for b in p.bindings.iter().filter(|b| b.slot.access == Access::Write) {
                 let phys = pipeline.resources[b.resource].physical;
-                if written[phys] != Some(b.resource) {
+                let imported = imports
+                    .iter()
+                    .any(|(n, _)| *n == pipeline.resources[b.resource].name);
+                if written[phys] != Some(b.resource) && !imported {
                     firsts.push(b.slot.name);
                     written[phys] = Some(b.resource);
                 }
@@ -340,6 +424,28 @@ impl Renderer {
     /// Index of a live resource by name.
     pub fn resource(&self, name: &str) -> Option<usize> {
         self.pipeline.resource(name)
+    }
+
+    /// The SSBVB fill count of the last frame: billboards the ray-march filter emitted (the
+    /// `instance_count` of the draw it fills). `None` when the pipeline has no filter.
+    pub fn fill_count(&self, ctx: &GpuContext) -> Result<Option<u32>, PassError> {
+        let Some(pass) = self
+            .pipeline
+            .passes
+            .iter()
+            .find(|p| matches!(p.kind, ssbvb_graph::PassKind::RayMarchFilter { .. }))
+        else {
+            return Ok(None);
+        };
+        let r = pass
+            .resource_of("billboard_draw")
+            .expect("the filter binds billboard_draw");
+        let bytes = ctx
+            .read_buffer(self.resources.buffer(r))
+            .map_err(PassError::Gpu)?;
+        Ok(Some(u32::from_le_bytes([
+            bytes[4], bytes[5], bytes[6], bytes[7],
+        ])))
     }
 
     /// The output texture.

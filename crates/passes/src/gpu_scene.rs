@@ -502,22 +502,7 @@ impl GpuScene {
                 if planes.iter().any(|(n, d)| n.dot(center) + d < -radius) {
                     continue;
                 }
-                let level = match obj.lod {
-                    LodPolicy::Fixed(l) => l.min(max_level),
-                    LodPolicy::Auto { bias } => {
-                        // Cell size in world units at level L: 2 * scale / 2^L. Projected
-                        // size in pixels at distance d: cell / (d * 2 tan_y) * height.
-                        let scale = radius / 3f64.sqrt();
-                        let dist = (center.length() - radius).max(camera.near.max(1e-9));
-                        let ideal = (2.0 * scale * h / (dist * 2.0 * tan_y)).log2();
-                        let l = if ideal.is_finite() {
-                            ideal.round() as i64
-                        } else {
-                            max_level as i64
-                        };
-                        (l + bias as i64).clamp(0, max_level as i64) as u32
-                    }
-                };
+                let level = choose_level(obj.lod, xf, camera, screen, max_level);
                 let lod_index = self.lod_base[oi] + level;
                 // Camera-relative object → world.
                 let rel = DAffine3 {
@@ -584,6 +569,38 @@ impl GpuScene {
     }
 }
 
+/// The LOD level of an instance for a camera and screen: fixed, or the level whose cell
+/// projects closest to one pixel (at the instance's nearest bounding-sphere point) plus the
+/// bias, clamped to `0..=max_level`.
+pub fn choose_level(
+    policy: LodPolicy,
+    xf: &DAffine3,
+    camera: &Camera,
+    screen: (u32, u32),
+    max_level: u32,
+) -> u32 {
+    match policy {
+        LodPolicy::Fixed(l) => l.min(max_level),
+        LodPolicy::Auto { bias } => {
+            // Cell size in world units at level L: 2 * scale / 2^L. Projected size in
+            // pixels at distance d: cell / (d * 2 tan(fov/2)) * height.
+            let h = screen.1.max(1) as f64;
+            let tan_y = (camera.fov_y_deg.clamp(1e-9, 179.999).to_radians() * 0.5).tan();
+            let scale = scale_of(xf);
+            let radius = scale * 3f64.sqrt();
+            let dist =
+                ((xf.translation - camera.position).length() - radius).max(camera.near.max(1e-9));
+            let ideal = (2.0 * scale * h / (dist * 2.0 * tan_y)).log2();
+            let l = if ideal.is_finite() {
+                ideal.round() as i64
+            } else {
+                max_level as i64
+            };
+            (l + bias as i64).clamp(0, max_level as i64) as u32
+        }
+    }
+}
+
 /// Uniform scale of an instance transform (cube root of |det|).
 fn scale_of(xf: &DAffine3) -> f64 {
     xf.matrix3.determinant().abs().cbrt()
@@ -592,7 +609,8 @@ fn scale_of(xf: &DAffine3) -> f64 {
 /// Whether an object-space point lies in a resident page of a lookup (then the proxy,
 /// the union of resident pages, contains it and the prepass draws back faces).
 fn inside_resident_page(lookup: &ssbvb_voxel::asset::SparseLookup, p: DVec3) -> bool {
-    if !(p.abs().max_element() < 1.0) {
+    // NaN-safe: a NaN coordinate is not inside.
+    if p.abs().max_element().partial_cmp(&1.0) != Some(std::cmp::Ordering::Less) {
         return false;
     }
     let n = (1u64 << lookup.level) as f64;

@@ -6,10 +6,17 @@
 //! cloud, page tables, page pools and coarse occupancy; `shaders/common.inc.wgsl`); group 1
 //! holds the pass's graph resources, bound by slot name.
 
+pub mod billboards;
+pub mod composite;
+pub mod embed;
+pub mod empty_space;
 pub mod frame;
 pub mod gpu_scene;
+pub mod ray_march_filter;
 pub mod scene;
 pub mod shaders;
+pub mod smooth;
+pub mod triangles;
 
 pub use frame::{FrameStats, PassTiming, Profiling, Recorder, Renderer};
 pub use gpu_scene::{GpuScene, ObjectMemory};
@@ -63,8 +70,15 @@ pub fn registered_kinds() -> Vec<PassKind> {
 }
 
 fn is_implemented(kind: &PassKind) -> bool {
-    let _ = kind;
-    false
+    matches!(
+        kind,
+        PassKind::EmptySpacePrepass
+            | PassKind::RayMarchFilter { .. }
+            | PassKind::Smooth { .. }
+            | PassKind::Composite
+            | PassKind::Billboards { .. }
+            | PassKind::Triangles
+    )
 }
 
 /// Builds the pass object of a scheduled pass.
@@ -74,9 +88,22 @@ pub fn create_pass(
     pipeline: &ResolvedPipeline,
     pass: &ScheduledPass,
 ) -> Result<Box<dyn PassNode>, PassError> {
-    let _ = (ctx, scene, pipeline);
-    Err(PassError::NotImplemented {
-        pass: pass.name.clone(),
-        kind: pass.kind.name(),
-    })
+    match pass.kind {
+        PassKind::EmptySpacePrepass => Ok(Box::new(empty_space::EmptySpace::new(
+            ctx, scene, pipeline, pass,
+        )?)),
+        PassKind::RayMarchFilter { .. } => Ok(Box::new(ray_march_filter::RayMarchFilter::new(
+            ctx, scene, pipeline, pass,
+        )?)),
+        PassKind::Billboards { .. } => Ok(Box::new(billboards::Billboards::new(
+            ctx, scene, pipeline, pass,
+        )?)),
+        PassKind::Triangles => Ok(Box::new(triangles::Triangles::new(
+            ctx, scene, pipeline, pass,
+        )?)),
+        PassKind::Smooth { .. } => Ok(Box::new(smooth::Smooth::new(ctx, scene, pipeline, pass)?)),
+        PassKind::Composite => Ok(Box::new(composite::Composite::new(
+            ctx, scene, pipeline, pass,
+        )?)),
+    }
 }

@@ -5,10 +5,33 @@ use ssbvb_gpu::shader_source::preprocess;
 use crate::PassError;
 
 /// Every shader file under `shaders/` by name.
-const FILES: &[(&str, &str)] = &[(
-    "common.inc.wgsl",
-    include_str!("../../../shaders/common.inc.wgsl"),
-)];
+const FILES: &[(&str, &str)] = &[
+    (
+        "common.inc.wgsl",
+        include_str!("../../../shaders/common.inc.wgsl"),
+    ),
+    (
+        "empty_space.wgsl",
+        include_str!("../../../shaders/empty_space.wgsl"),
+    ),
+    (
+        "ray_march_filter.wgsl",
+        include_str!("../../../shaders/ray_march_filter.wgsl"),
+    ),
+    (
+        "billboards.wgsl",
+        include_str!("../../../shaders/billboards.wgsl"),
+    ),
+    (
+        "triangles.wgsl",
+        include_str!("../../../shaders/triangles.wgsl"),
+    ),
+    ("smooth.wgsl", include_str!("../../../shaders/smooth.wgsl")),
+    (
+        "composite.wgsl",
+        include_str!("../../../shaders/composite.wgsl"),
+    ),
+];
 
 /// The raw text of a shader file.
 pub fn raw(name: &str) -> Option<&'static str> {
@@ -21,4 +44,18 @@ pub fn source(name: &str) -> Result<String, PassError> {
     preprocess(name, main, &|n| raw(n).map(str::to_string))
         .map(|p| p.source)
         .map_err(PassError::Shader)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn every_registered_kind_has_its_shader_embedded() {
+        for kind in crate::registered_kinds() {
+            super::source(kind.shader_file()).unwrap_or_else(|e| panic!("{}: {e}", kind.name()));
+        }
+        assert_eq!(
+            crate::registered_kinds().len(),
+            ssbvb_graph::KIND_NAMES.len()
+        );
+    }
 }

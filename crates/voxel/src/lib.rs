@@ -8,6 +8,16 @@
 //! reference ray caster ([`reference`]) is the ground truth every GPU technique is
 //! measured against; [`cache`] stores a prepared asset on disk.
 
+pub mod accuracy;
 pub mod asset;
+pub mod cache;
+pub mod camera;
 pub mod load;
 pub mod model;
+pub mod prepare;
+pub mod progress;
+pub mod proxy;
+pub mod reference;
+pub mod shading;
+pub mod svo;
+pub mod voxelize;

@@ -1,4 +1,8 @@
 //! The GPU test binary: every test shares one device (see `ssbvb_tests::ctx`). Modules are
 //! grouped by pass or by property.
 
+mod billboards;
+mod empty_space;
 mod pipeline;
+mod ray_march_filter;
+mod triangles;

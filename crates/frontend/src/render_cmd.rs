@@ -1,0 +1,321 @@
+//! `ssbvb render`: one frame of a scene (or of a single model) to a PNG, with the SSBVB
+//! pipeline on the GPU or with the CPU reference ray caster.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use glam::{DAffine3, DVec3};
+use serde::Serialize;
+use ssbvb_passes::{GpuScene, LodPolicy, Profiling, Renderer, Scene, VoxelObject};
+use ssbvb_voxel::camera::Camera;
+
+use crate::pipeline_cmd::parse_size;
+use crate::progress::BarProgress;
+use crate::scene_file;
+
+/// Arguments of `ssbvb render`.
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// A scene file (.ron) or a model file (.obj, .ply, .gltf, .glb, .vox, .raw); default:
+    /// the bundled default scene (the bunny on a ground plane).
+    pub input: Option<PathBuf>,
+    /// Voxelization level for a model file (2^level cells per axis).
+    #[arg(long)]
+    pub level: Option<u32>,
+    /// Image size.
+    #[arg(long, default_value = "640x480", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Camera position `x,y,z`.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub camera_pos: Option<DVec3>,
+    /// Point the camera looks at, `x,y,z`.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub look_at: Option<DVec3>,
+    /// Up direction `x,y,z` (default +Y).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub up: Option<DVec3>,
+    /// Vertical field of view in degrees.
+    #[arg(long)]
+    pub fov_y: Option<f64>,
+    /// Pipeline file (default: the scene's, or assets/pipelines/ssbvb.ron).
+    #[arg(long)]
+    pub pipeline: Option<PathBuf>,
+    /// Render with the exact CPU reference ray caster instead of the GPU.
+    #[arg(long)]
+    pub reference: bool,
+    /// Output PNG.
+    #[arg(short = 'o', long, default_value = "render.png")]
+    pub output: PathBuf,
+    /// Print the report as one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Parses `x,y,z`.
+pub fn parse_vec3(s: &str) -> Result<DVec3, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| {
+            p.trim()
+                .parse::<f64>()
+                .map_err(|e| format!("bad number `{p}` in `{s}`: {e}"))
+        })
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(DVec3::new(x, y, z)),
+        _ => Err(format!("expected three finite numbers x,y,z, got `{s}`")),
+    }
+}
+
+/// The bundled asset folder: `assets/` of the working directory if it has the default
+/// scene, else the one this binary was built from.
+pub fn assets_dir() -> PathBuf {
+    let here = PathBuf::from("assets");
+    if here.join("scenes/default.ron").is_file() {
+        return here;
+    }
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets")
+}
+
+#[derive(Serialize)]
+struct Report {
+    output: String,
+    mode: &'static str,
+    adapter: Option<String>,
+    adapter_is_software: Option<bool>,
+    size: [u32; 2],
+    camera: Camera,
+    pipeline: Option<String>,
+    passes: Vec<ssbvb_passes::PassTiming>,
+    frame_wall_ms: f64,
+    ssbvb_fill_count: Option<u32>,
+    covered_pixels: Option<usize>,
+    visible_instances: usize,
+    gpu_memory_bytes: Vec<ObjectReport>,
+    asset_notes: Vec<String>,
+}
+
+#[derive(Serialize)]
+struct ObjectReport {
+    object: usize,
+    #[serde(flatten)]
+    memory: ssbvb_passes::ObjectMemory,
+    total: u64,
+}
+
+/// Runs `ssbvb render`.
+pub fn run(args: &RenderArgs) -> Result<()> {
+    let progress = BarProgress::new(!args.json && std::io::stderr().is_terminal());
+    let default_scene = assets_dir().join("scenes/default.ron");
+    let input = args.input.clone().unwrap_or(default_scene);
+    let is_scene = input
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ron"));
+    let (scene, mut camera, scene_pipeline, notes) = if is_scene {
+        if args.level.is_some() {
+            bail!("--level applies to a model file; a scene names each object's level");
+        }
+        let s = scene_file::load(&input, &progress)?;
+        (s.scene, s.camera, Some(s.pipeline), s.notes)
+    } else {
+        let level = args.level.unwrap_or(8);
+        let (asset, outcome) = ssbvb_voxel::cache::load_or_prepare(&input, level, None, &progress)
+            .with_context(|| format!("preparing {}", input.display()))?;
+        let scene = Scene {
+            objects: vec![VoxelObject {
+                asset: Arc::new(asset),
+                instances: vec![DAffine3::IDENTITY],
+                lod: LodPolicy::Fixed(level),
+            }],
+            ..Default::default()
+        };
+        (
+            scene,
+            Camera::default(),
+            None,
+            vec![format!("{}: {outcome}", input.display())],
+        )
+    };
+    progress.finish();
+    if let Some(p) = args.camera_pos {
+        camera.position = p;
+    }
+    if let Some(p) = args.look_at {
+        camera.look_at = p;
+    }
+    if let Some(u) = args.up {
+        camera.up = u;
+    }
+    if let Some(f) = args.fov_y {
+        if !(f > 0.0 && f < 180.0) {
+            bail!("--fov-y must be in (0, 180) degrees, got {f}");
+        }
+        camera.fov_y_deg = f;
+    }
+    if camera.position == camera.look_at {
+        bail!("the camera position and --look-at are the same point");
+    }
+    let (w, h) = args.size;
+    let start = Instant::now();
+    let report = if args.reference {
+        let mut instances = Vec::new();
+        for o in &scene.objects {
+            let max = o.asset.lods.len() as u32 - 1;
+            for xf in &o.instances {
+                let level =
+                    ssbvb_passes::gpu_scene::choose_level(o.lod, xf, &camera, args.size, max);
+                instances.push(ssbvb_voxel::reference::Instance {
+                    lod: &o.asset.lods[level as usize],
+                    object_to_world: *xf,
+                });
+            }
+        }
+        if !scene.triangles.is_empty() && !args.json {
+            eprintln!(
+                "note: the CPU reference renders voxel objects only; triangle objects are left out"
+            );
+        }
+        let img = ssbvb_voxel::reference::render(&instances, &camera, w, h, &scene.light);
+        img.to_png(&args.output)
+            .with_context(|| format!("writing {}", args.output.display()))?;
+        Report {
+            output: args.output.display().to_string(),
+            mode: "reference",
+            adapter: None,
+            adapter_is_software: None,
+            size: [w, h],
+            camera,
+            pipeline: None,
+            passes: Vec::new(),
+            frame_wall_ms: start.elapsed().as_secs_f64() * 1e3,
+            ssbvb_fill_count: None,
+            covered_pixels: Some(img.coverage()),
+            visible_instances: instances.len(),
+            gpu_memory_bytes: Vec::new(),
+            asset_notes: notes,
+        }
+    } else {
+        let pipeline_path = args
+            .pipeline
+            .clone()
+            .or(scene_pipeline)
+            .unwrap_or_else(|| assets_dir().join("pipelines/ssbvb.ron"));
+        let pipeline =
+            ssbvb_graph::resolve_file(&pipeline_path).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let ctx = ssbvb_gpu::GpuContext::new_headless(&Default::default())?;
+        let mut gpu_scene = GpuScene::new(&ctx, scene)?;
+        let mut renderer = Renderer::new(&ctx, &gpu_scene, pipeline, args.size)?;
+        let profiling = if ctx.report().is_software {
+            Profiling::TimestampsAndWall
+        } else {
+            Profiling::Timestamps
+        };
+        // One warm-up frame (pipeline caches, lazy allocations), then the measured one.
+        renderer.render(&ctx, &mut gpu_scene, &camera, Profiling::Off)?;
+        let stats = renderer.render(&ctx, &mut gpu_scene, &camera, profiling)?;
+        let out = ctx.read_texture(
+            &renderer.output().texture,
+            ssbvb_gpu::wgpu::TextureAspect::All,
+        )?;
+        let rgba = to_rgba8(&out)?;
+        ssbvb_gpu::readback::write_png_rgba8(&args.output, w, h, &rgba)?;
+        let fill = renderer.fill_count(&ctx)?;
+        Report {
+            output: args.output.display().to_string(),
+            mode: "gpu",
+            adapter: Some(ctx.report().to_string()),
+            adapter_is_software: Some(ctx.report().is_software),
+            size: [w, h],
+            camera,
+            pipeline: Some(pipeline_path.display().to_string()),
+            passes: stats.passes,
+            frame_wall_ms: stats.frame_wall_ms,
+            ssbvb_fill_count: fill,
+            covered_pixels: Some(rgba.chunks(4).filter(|p| p[3] > 0).count()),
+            visible_instances: stats.visible_instances,
+            gpu_memory_bytes: gpu_scene
+                .memory
+                .iter()
+                .enumerate()
+                .map(|(i, m)| ObjectReport {
+                    object: i,
+                    memory: *m,
+                    total: m.total(),
+                })
+                .collect(),
+            asset_notes: notes,
+        }
+    };
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_report(&report);
+    }
+    Ok(())
+}
+
+/// RGBA8 bytes of an output texture (sRGB or not, RGBA or BGRA).
+fn to_rgba8(t: &ssbvb_gpu::readback::TextureData) -> Result<Vec<u8>> {
+    use ssbvb_gpu::wgpu::TextureFormat as F;
+    match t.format {
+        F::Rgba8Unorm | F::Rgba8UnormSrgb => Ok(t.bytes.clone()),
+        F::Bgra8Unorm | F::Bgra8UnormSrgb => Ok(t
+            .bytes
+            .chunks(4)
+            .flat_map(|p| [p[2], p[1], p[0], p[3]])
+            .collect()),
+        other => bail!(
+            "cannot write an output of format {other:?} as PNG; use an 8-bit RGBA/BGRA output"
+        ),
+    }
+}
+
+fn print_report(r: &Report) {
+    println!(
+        "wrote {} ({}x{}, {})",
+        r.output, r.size[0], r.size[1], r.mode
+    );
+    if let Some(a) = &r.adapter {
+        println!("adapter: {a}");
+    }
+    if let Some(p) = &r.pipeline {
+        println!("pipeline: {p}");
+    }
+    for n in &r.asset_notes {
+        println!("asset: {n}");
+    }
+    if !r.passes.is_empty() {
+        println!("{:<16} {:>12} {:>12}", "pass", "gpu ms", "wall ms");
+        for p in &r.passes {
+            let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
+            println!("{:<16} {:>12} {:>12}", p.name, f(p.gpu_ms), f(p.wall_ms));
+        }
+        if r.adapter_is_software == Some(true) {
+            println!(
+                "(software adapter: GPU timestamps are unreliable here; wall ms is each pass submitted and waited alone)"
+            );
+        }
+    }
+    println!("frame wall time: {:.2} ms", r.frame_wall_ms);
+    if let Some(f) = r.ssbvb_fill_count {
+        println!("SSBVB fill count: {f} billboards");
+    }
+    if let Some(c) = r.covered_pixels {
+        println!("covered pixels: {c}");
+    }
+    println!("visible instances: {}", r.visible_instances);
+    for o in &r.gpu_memory_bytes {
+        println!(
+            "GPU memory, object {}: {} bytes (point clouds {}, lookup {}, proxies {})",
+            o.object,
+            o.total,
+            o.memory.point_cloud_bytes,
+            o.memory.lookup_bytes,
+            o.memory.proxy_bytes
+        );
+    }
+}

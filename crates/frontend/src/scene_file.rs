@@ -1,0 +1,268 @@
+//! Scene files (`assets/scenes/*.ron`): voxel objects, triangle objects, camera, light and
+//! pipeline. Paths inside a scene are relative to the scene file.
+//!
+//! ```ron
+//! Scene(
+//!   pipeline: "../pipelines/ssbvb.ron",
+//!   camera: (position: (1.8, 1.2, 2.6), look_at: (0.0, -0.1, 0.0), fov_y: 45.0),
+//!   objects: [
+//!     (model: "../models/bunny.obj", level: 8, lod: Fixed(8),
+//!      instances: [(translation: (0.0, 0.0, 0.0), rotation_y_deg: 0.0, scale: 1.0)]),
+//!   ],
+//!   triangles: [Plane(center: (0.0, -1.0, 0.0), half_size: 3.0, color: (0.55, 0.6, 0.55, 1.0))],
+//! )
+//! ```
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use anyhow::{Context, Result, anyhow};
+use glam::{DAffine3, DQuat, DVec3};
+use serde::Deserialize;
+use ssbvb_passes::{LodPolicy, Scene, TriangleObject, VoxelObject};
+use ssbvb_voxel::camera::Camera;
+use ssbvb_voxel::shading::Light;
+
+/// A scene file as written.
+#[derive(Debug, Deserialize)]
+#[serde(rename = "Scene", deny_unknown_fields)]
+pub struct SceneFile {
+    /// Pipeline file (relative to the scene file).
+    #[serde(default = "default_pipeline")]
+    pub pipeline: String,
+    /// The camera.
+    #[serde(default)]
+    pub camera: CameraDesc,
+    /// The light (defaults to the reference's default light).
+    #[serde(default)]
+    pub light: Option<Light>,
+    /// Voxel objects.
+    #[serde(default)]
+    pub objects: Vec<ObjectDesc>,
+    /// Triangle objects.
+    #[serde(default)]
+    pub triangles: Vec<TriangleDesc>,
+}
+
+fn default_pipeline() -> String {
+    "../pipelines/ssbvb.ron".to_string()
+}
+
+/// A pinhole camera as written in a scene.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDesc {
+    /// Eye position.
+    pub position: (f64, f64, f64),
+    /// Target point.
+    #[serde(default)]
+    pub look_at: (f64, f64, f64),
+    /// Up direction.
+    #[serde(default = "up")]
+    pub up: (f64, f64, f64),
+    /// Vertical field of view in degrees.
+    #[serde(default = "fov")]
+    pub fov_y: f64,
+    /// Near plane.
+    #[serde(default = "near")]
+    pub near: f64,
+    /// Far plane (0 or less: infinite).
+    #[serde(default = "far")]
+    pub far: f64,
+}
+
+fn up() -> (f64, f64, f64) {
+    (0.0, 1.0, 0.0)
+}
+fn fov() -> f64 {
+    45.0
+}
+fn near() -> f64 {
+    0.01
+}
+fn far() -> f64 {
+    1000.0
+}
+
+impl Default for CameraDesc {
+    fn default() -> Self {
+        Self {
+            position: (0.0, 0.0, 3.0),
+            look_at: (0.0, 0.0, 0.0),
+            up: up(),
+            fov_y: fov(),
+            near: near(),
+            far: far(),
+        }
+    }
+}
+
+impl CameraDesc {
+    /// The camera.
+    pub fn camera(&self) -> Camera {
+        let v = |t: (f64, f64, f64)| DVec3::new(t.0, t.1, t.2);
+        Camera {
+            position: v(self.position),
+            look_at: v(self.look_at),
+            up: v(self.up),
+            fov_y_deg: self.fov_y,
+            near: self.near,
+            far: if self.far > 0.0 {
+                self.far
+            } else {
+                f64::INFINITY
+            },
+        }
+    }
+}
+
+/// LOD choice as written.
+#[derive(Debug, Deserialize, Clone, Copy)]
+pub enum LodDesc {
+    /// A fixed level.
+    Fixed(u32),
+    /// Automatic with a bias.
+    Auto {
+        /// Levels added (positive = finer).
+        #[serde(default)]
+        bias: i32,
+    },
+}
+
+/// One voxel object.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectDesc {
+    /// Model file (relative to the scene file).
+    pub model: String,
+    /// Voxelization level (finest LOD).
+    pub level: u32,
+    /// LOD policy (default: the finest level).
+    #[serde(default)]
+    pub lod: Option<LodDesc>,
+    /// Placements (default: one at the origin).
+    #[serde(default)]
+    pub instances: Option<Vec<InstanceDesc>>,
+}
+
+/// One placement of an object.
+#[derive(Debug, Deserialize, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+pub struct InstanceDesc {
+    /// World position of the object-space origin.
+    #[serde(default)]
+    pub translation: (f64, f64, f64),
+    /// Rotation about +Y in degrees.
+    #[serde(default)]
+    pub rotation_y_deg: f64,
+    /// Uniform scale (object space [-1, 1]³ becomes [-scale, scale]³).
+    #[serde(default = "one")]
+    pub scale: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl InstanceDesc {
+    /// Object → world.
+    pub fn transform(&self) -> DAffine3 {
+        DAffine3::from_scale_rotation_translation(
+            DVec3::splat(self.scale),
+            DQuat::from_rotation_y(self.rotation_y_deg.to_radians()),
+            DVec3::new(self.translation.0, self.translation.1, self.translation.2),
+        )
+    }
+}
+
+/// A triangle object.
+#[derive(Debug, Deserialize)]
+pub enum TriangleDesc {
+    /// A horizontal square facing +Y.
+    Plane {
+        /// Centre.
+        center: (f64, f64, f64),
+        /// Half the edge length.
+        half_size: f32,
+        /// Linear RGBA.
+        color: (f32, f32, f32, f32),
+    },
+}
+
+/// A scene ready to upload, with its camera and pipeline path.
+pub struct LoadedScene {
+    /// The scene.
+    pub scene: Scene,
+    /// The camera.
+    pub camera: Camera,
+    /// The pipeline file.
+    pub pipeline: PathBuf,
+    /// One line per object about its asset cache (hit or rebuilt and why).
+    pub notes: Vec<String>,
+}
+
+/// Reads a scene file and prepares (or loads from cache) every object's asset.
+pub fn load(path: &Path, progress: &dyn ssbvb_voxel::progress::Progress) -> Result<LoadedScene> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read scene {}", path.display()))?;
+    // Optional fields are written plainly (`lod: Fixed(8)`, not `lod: Some(Fixed(8))`).
+    let options =
+        ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+    let file: SceneFile = options.from_str(&text).map_err(|e| {
+        anyhow!(
+            "{}:{}:{}: {}",
+            path.display(),
+            e.span.start.line,
+            e.span.start.col,
+            e.code
+        )
+    })?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut scene = Scene {
+        light: file.light.unwrap_or_default(),
+        ..Default::default()
+    };
+    let mut notes = Vec::new();
+    for o in &file.objects {
+        let model = dir.join(&o.model);
+        let (asset, outcome) = ssbvb_voxel::cache::load_or_prepare(&model, o.level, None, progress)
+            .with_context(|| format!("scene {}: object {}", path.display(), o.model))?;
+        notes.push(format!("{}: {outcome}", o.model));
+        let lod = match o.lod {
+            None => LodPolicy::Fixed(o.level),
+            Some(LodDesc::Fixed(l)) => LodPolicy::Fixed(l),
+            Some(LodDesc::Auto { bias }) => LodPolicy::Auto { bias },
+        };
+        let instances = o.instances.clone().unwrap_or_else(|| {
+            vec![InstanceDesc {
+                translation: (0.0, 0.0, 0.0),
+                rotation_y_deg: 0.0,
+                scale: 1.0,
+            }]
+        });
+        scene.objects.push(VoxelObject {
+            asset: Arc::new(asset),
+            instances: instances.iter().map(InstanceDesc::transform).collect(),
+            lod,
+        });
+    }
+    for t in &file.triangles {
+        match *t {
+            TriangleDesc::Plane {
+                center,
+                half_size,
+                color,
+            } => scene.triangles.push(TriangleObject::ground_plane(
+                DVec3::new(center.0, center.1, center.2),
+                half_size,
+                [color.0, color.1, color.2, color.3],
+            )),
+        }
+    }
+    Ok(LoadedScene {
+        scene,
+        camera: file.camera.camera(),
+        pipeline: dir.join(&file.pipeline),
+        notes,
+    })
+}

@@ -1,0 +1,129 @@
+//! `composite`: deferred Blinn-Phong (the CPU reference's formula) into the output colour
+//! (see `shaders/composite.wgsl`).
+
+use ssbvb_gpu::{GpuContext, wgpu};
+use ssbvb_graph::{ResolvedPipeline, ScheduledPass};
+
+use crate::frame::{Recorder, slot_format};
+use crate::gpu_scene::GpuScene;
+use crate::{PassError, PassNode, shaders};
+
+/// The composite pass.
+pub struct Composite {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
+impl Composite {
+    /// Compiles the pipeline for the output's format (sRGB encoding in the shader for
+    /// 8-bit non-sRGB targets).
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        pipeline: &ResolvedPipeline,
+        pass: &ScheduledPass,
+    ) -> Result<Self, PassError> {
+        let d = &ctx.device;
+        let module = ctx.shader("composite.wgsl", &shaders::source("composite.wgsl")?)?;
+        let tex = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("composite"),
+            entries: &[tex(0), tex(1), tex(2)],
+        });
+        let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("composite"),
+            bind_group_layouts: &[Some(&scene.layout), Some(&layout)],
+            immediate_size: 0,
+        });
+        let out = slot_format(ctx, pipeline, pass, "color");
+        let encode = matches!(
+            out,
+            wgpu::TextureFormat::Rgba8Unorm | wgpu::TextureFormat::Bgra8Unorm
+        );
+        let constants = [("ENCODE_SRGB", if encode { 1.0 } else { 0.0 })];
+        let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("composite"),
+            layout: Some(&pl),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &constants,
+                    ..Default::default()
+                },
+                targets: &[Some(out.into())],
+            }),
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            multiview_mask: None,
+            cache: None,
+        });
+        Ok(Self { pipeline, layout })
+    }
+}
+
+impl PassNode for Composite {
+    fn record(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder<'_>,
+    ) -> Result<(), PassError> {
+        let view = |slot: &str| wgpu::BindingResource::TextureView(&rec.texture(slot).view);
+        let bg = rec
+            .gpu
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("composite"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: view("albedo"),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: view("normal"),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: view("position"),
+                    },
+                ],
+            });
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(&rec.pass.name),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &rec.texture("color").view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: rec.load_op("color", wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            timestamp_writes: rec.render_timestamps(),
+            ..Default::default()
+        });
+        pass.set_bind_group(0, &rec.scene.bind_group, &[]);
+        pass.set_bind_group(1, &bg, &[]);
+        pass.set_pipeline(&self.pipeline);
+        pass.draw(0..3, 0..1);
+        Ok(())
+    }
+}

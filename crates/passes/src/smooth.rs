@@ -1,0 +1,240 @@
+//! `smooth`: Gaussian smoothing of voxel normals with the paper's distance-dependent offset
+//! (Eq. 1), stencil-tested so only voxel pixels change (see `shaders/smooth.wgsl`).
+
+use ssbvb_gpu::{GpuContext, wgpu};
+use ssbvb_graph::{PassKind, ResolvedPipeline, ScheduledPass};
+
+use crate::frame::{Recorder, slot_format};
+use crate::gpu_scene::GpuScene;
+use crate::{PassError, PassNode, shaders};
+
+/// Eq. 1 of the paper made total, exactly as `smooth.wgsl` computes it:
+/// `I = max(0, min(MaxI / (Dist − MinDist)², MaxI))` for `Dist > MinDist`, and `MaxI` for
+/// `Dist ≤ MinDist` (the singularity at `Dist = MinDist` and the rising branch below it
+/// both take the limit from above) and for a NaN distance. Always finite, in `[0, MaxI]`.
+pub fn smoothing_offset(dist: f32, max_i: f32, min_dist: f32) -> f32 {
+    let x = dist - min_dist;
+    // Dist <= MinDist, or NaN.
+    if x.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return max_i;
+    }
+    (max_i / (x * x)).clamp(0.0, max_i)
+}
+
+/// The smoothing pass.
+pub struct Smooth {
+    smooth: wgpu::RenderPipeline,
+    copy: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
+}
+
+impl Smooth {
+    /// Compiles both pipelines (voxel pixels smoothed, all others copied).
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        pipeline: &ResolvedPipeline,
+        pass: &ScheduledPass,
+    ) -> Result<Self, PassError> {
+        let PassKind::Smooth { max_i, min_dist } = pass.kind else {
+            unreachable!("smooth pass of another kind")
+        };
+        let d = &ctx.device;
+        let module = ctx.shader("smooth.wgsl", &shaders::source("smooth.wgsl")?)?;
+        let normal_format = slot_format(ctx, pipeline, pass, "gbuffer_normal");
+        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("smooth"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Depth,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("smooth"),
+            bind_group_layouts: &[Some(&scene.layout), Some(&layout)],
+            immediate_size: 0,
+        });
+        let ds_format = slot_format(ctx, pipeline, pass, "depth_stencil");
+        let out_format = slot_format(ctx, pipeline, pass, "smoothed_normal");
+        let constants = [("MAX_I", max_i as f64), ("MIN_DIST", min_dist as f64)];
+        let make = |entry: &str, compare: wgpu::CompareFunction| {
+            let face = wgpu::StencilFaceState {
+                compare,
+                fail_op: wgpu::StencilOperation::Keep,
+                depth_fail_op: wgpu::StencilOperation::Keep,
+                pass_op: wgpu::StencilOperation::Keep,
+            };
+            d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pl),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &constants,
+                        ..Default::default()
+                    },
+                    targets: &[Some(out_format.into())],
+                }),
+                primitive: Default::default(),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: ds_format,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::Always),
+                    stencil: wgpu::StencilState {
+                        front: face,
+                        back: face,
+                        read_mask: 0xff,
+                        write_mask: 0,
+                    },
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let _ = normal_format;
+        let smooth = make("fs_smooth", wgpu::CompareFunction::Equal);
+        let copy = make("fs_main", wgpu::CompareFunction::NotEqual);
+        let sampler = d.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("smooth"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        Ok(Self {
+            smooth,
+            copy,
+            layout,
+            sampler,
+        })
+    }
+}
+
+/// Stencil value of voxel pixels (`STENCIL_VOXEL` in common.inc.wgsl).
+pub const STENCIL_VOXEL: u32 = 1;
+
+impl PassNode for Smooth {
+    fn record(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder<'_>,
+    ) -> Result<(), PassError> {
+        let ds = rec.texture("depth_stencil");
+        let depth_view = ds
+            .depth_view
+            .as_ref()
+            .expect("depth-stencil texture has a depth view");
+        let bg = rec
+            .gpu
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("smooth"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(
+                            &rec.texture("gbuffer_normal").view,
+                        ),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(depth_view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::Sampler(&self.sampler),
+                    },
+                ],
+            });
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(&rec.pass.name),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &rec.texture("smoothed_normal").view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: rec.load_op("smoothed_normal", wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            // Read-only: the stencil selects pixels, the depth is sampled for Dist.
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &ds.view,
+                depth_ops: None,
+                stencil_ops: None,
+            }),
+            timestamp_writes: rec.render_timestamps(),
+            ..Default::default()
+        });
+        pass.set_bind_group(0, &rec.scene.bind_group, &[]);
+        pass.set_bind_group(1, &bg, &[]);
+        pass.set_stencil_reference(STENCIL_VOXEL);
+        pass.set_pipeline(&self.smooth);
+        pass.draw(0..3, 0..1);
+        pass.set_pipeline(&self.copy);
+        pass.draw(0..3, 0..1);
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::smoothing_offset;
+
+    #[test]
+    fn eq1_is_total_finite_and_monotone() {
+        let (max_i, min_dist) = (2.0, 0.5);
+        // At, below and far below MinDist: MaxI, never Inf or NaN.
+        assert_eq!(smoothing_offset(0.5, max_i, min_dist), max_i);
+        assert_eq!(smoothing_offset(0.4999, max_i, min_dist), max_i);
+        assert_eq!(smoothing_offset(-1e30, max_i, min_dist), max_i);
+        assert_eq!(smoothing_offset(f32::NAN, max_i, min_dist), max_i);
+        // Just above: Eq. 1 is clamped to MaxI; then it decays as 1 / x².
+        assert_eq!(smoothing_offset(0.5001, max_i, min_dist), max_i);
+        assert!((smoothing_offset(2.5, max_i, min_dist) - 0.5).abs() < 1e-6);
+        assert!((smoothing_offset(10.5, max_i, min_dist) - 0.02).abs() < 1e-6);
+        // Far above: tends to 0, stays finite (1e30² overflows to inf: 2 / inf = 0).
+        assert_eq!(smoothing_offset(1e30, max_i, min_dist), 0.0);
+        assert_eq!(smoothing_offset(f32::INFINITY, max_i, min_dist), 0.0);
+        let mut prev = max_i;
+        for i in 0..1000 {
+            let v = smoothing_offset(0.5 + i as f32 * 0.01, max_i, min_dist);
+            assert!(v.is_finite() && v <= prev && v >= 0.0);
+            prev = v;
+        }
+    }
+}

@@ -1,0 +1,840 @@
+//! The on-disk asset cache: a prepared [`VoxelAsset`] in a versioned, checksummed file.
+//!
+//! # Format (version [`FORMAT_VERSION`], all integers little-endian)
+//!
+//! ```text
+//! header (88 bytes)
+//!   magic           [u8; 8]   b"SSBVBAST"
+//!   version         u32       FORMAT_VERSION
+//!   reserved        u32       0
+//!   source_hash     [u8; 16]  XXH3-128 of the source model file's bytes
+//!   level           u32       finest level
+//!   lod_count       u32       level + 1
+//!   center          [f64; 3]  ObjectSpace::center
+//!   scale           f64       ObjectSpace::scale
+//!   section_count   u32       3 · lod_count
+//!   reserved        u32       0
+//!   header_checksum u64       XXH3-64 of the 80 bytes above
+//! sections, for each LOD l = 0 ..= level, in this order:
+//!   point_cloud (kind 1): PackedVoxel[]   (16 bytes each, Morton order)
+//!   proxy_positions (kind 2): [f32; 3][]
+//!   proxy_triangles (kind 3): [u32; 3][]
+//! each section = kind u32, lod u32, length u64 (payload bytes), checksum u64
+//!   (XXH3-64 of kind, lod, length and the payload), then the payload.
+//! ```
+//!
+//! The sparse lookups are not stored: they are a pure function of the point clouds
+//! (rebuilt with [`lookup_from_codes`] on read, which costs about as much as reading the
+//! pages would) and would make the file several times larger at high levels.
+//!
+//! Reading never trusts the file: every length is checked against the bytes left in the
+//! file before anything is allocated, every section's checksum is verified, and the point
+//! clouds are checked to be strictly Morton-ordered and inside the grid before a lookup
+//! is built from them. Any problem is a [`CacheError`] naming the file, never a panic.
+//! Writing is atomic: a temporary file in the destination folder is written, flushed to
+//! disk and renamed over the destination.
+
+use std::fs::File;
+use std::io::{self, BufReader, BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+
+use bytemuck::{Pod, Zeroable};
+use serde::Serialize;
+use xxhash_rust::xxh3::{Xxh3, xxh3_64};
+
+use crate::asset::{LodLevel, MAX_LEVEL, PackedVoxel, PointCloud, ProxyMesh, VoxelAsset};
+use crate::load::{LoadError, load_model};
+use crate::model::ObjectSpace;
+use crate::prepare::{PrepareStats, lookup_from_codes, prepare_asset};
+use crate::progress::Progress;
+use crate::svo::morton_encode;
+use crate::voxelize::VoxelizeError;
+
+/// File magic.
+pub const MAGIC: [u8; 8] = *b"SSBVBAST";
+/// Version of the file format and of the preparation that produced it. Bump it whenever
+/// either changes, so stale caches are rebuilt instead of read.
+pub const FORMAT_VERSION: u32 = 1;
+/// Bytes of the fixed header.
+const HEADER_BYTES: usize = 88;
+/// Bytes of a section header.
+const SECTION_HEADER_BYTES: usize = 24;
+
+const KIND_POINT_CLOUD: u32 = 1;
+const KIND_PROXY_POSITIONS: u32 = 2;
+const KIND_PROXY_TRIANGLES: u32 = 3;
+
+fn kind_name(kind: u32) -> &'static str {
+    match kind {
+        KIND_POINT_CLOUD => "point_cloud",
+        KIND_PROXY_POSITIONS => "proxy_positions",
+        KIND_PROXY_TRIANGLES => "proxy_triangles",
+        _ => "unknown",
+    }
+}
+
+/// Why a cache file could not be written or read.
+#[derive(Debug, thiserror::Error)]
+pub enum CacheError {
+    /// An I/O error (other than a file that ends early). The message already includes
+    /// the operating system's error, so it is not repeated as a `source()`.
+    #[error("{}: {error}", .path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        error: io::Error,
+    },
+    /// The file does not start with [`MAGIC`].
+    #[error("{}: not an ssbvb asset cache (bad magic)", .path.display())]
+    BadMagic {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The file was written by another format version.
+    #[error("{}: cache format version {found}, expected {expected}", .path.display())]
+    UnsupportedVersion {
+        /// The file.
+        path: PathBuf,
+        /// Version in the file.
+        found: u32,
+        /// Version this build reads.
+        expected: u32,
+    },
+    /// The file was prepared from different source bytes.
+    #[error("{}: prepared from a different source file (hash mismatch)", .path.display())]
+    SourceMismatch {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The file holds another level.
+    #[error("{}: prepared at level {found}, expected level {expected}", .path.display())]
+    LevelMismatch {
+        /// The file.
+        path: PathBuf,
+        /// Level in the file.
+        found: u32,
+        /// Level asked for.
+        expected: u32,
+    },
+    /// The file ends before `what` is complete.
+    #[error("{}: truncated in {what}", .path.display())]
+    Truncated {
+        /// The file.
+        path: PathBuf,
+        /// The part that is incomplete.
+        what: String,
+    },
+    /// A checksum does not match.
+    #[error("{}: checksum mismatch in section {section}", .path.display())]
+    Checksum {
+        /// The file.
+        path: PathBuf,
+        /// The section (`header`, `point_cloud of level 3`, ...).
+        section: String,
+    },
+    /// The content is inconsistent (wrong section order, absurd length, unsorted point
+    /// cloud, out-of-range index, ...), or the asset to write is.
+    #[error("{}: corrupt cache: {reason}", .path.display())]
+    Corrupt {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+impl CacheError {
+    fn io(path: &Path, error: io::Error) -> CacheError {
+        CacheError::Io {
+            path: path.to_path_buf(),
+            error,
+        }
+    }
+
+    fn corrupt(path: &Path, reason: impl Into<String>) -> CacheError {
+        CacheError::Corrupt {
+            path: path.to_path_buf(),
+            reason: reason.into(),
+        }
+    }
+
+    /// Short description used in rebuild reasons ("cache missing", "cache corrupt (…)").
+    fn rebuild_reason(&self) -> String {
+        match self {
+            CacheError::Io { error, .. } if error.kind() == io::ErrorKind::NotFound => {
+                "cache missing".into()
+            }
+            CacheError::Io { error, .. } => format!("cache unreadable ({error})"),
+            CacheError::BadMagic { .. } => "cache corrupt (bad magic)".into(),
+            CacheError::UnsupportedVersion { found, .. } => {
+                format!("cache from format version {found} (this build writes {FORMAT_VERSION})")
+            }
+            CacheError::SourceMismatch { .. } => "cache stale (source file changed)".into(),
+            CacheError::LevelMismatch { found, .. } => format!("cache holds level {found}"),
+            CacheError::Truncated { what, .. } => format!("cache corrupt (truncated in {what})"),
+            CacheError::Checksum { section, .. } => {
+                format!("cache corrupt (checksum mismatch in section {section})")
+            }
+            CacheError::Corrupt { reason, .. } => format!("cache corrupt ({reason})"),
+        }
+    }
+}
+
+/// XXH3-128 of a file's bytes (streamed): the source hash the cache is keyed by.
+pub fn hash_source(path: &Path) -> Result<u128, CacheError> {
+    let mut file = File::open(path).map_err(|e| CacheError::io(path, e))?;
+    let mut hasher = Xxh3::new();
+    let mut buf = vec![0u8; 1 << 20];
+    loop {
+        let n = file.read(&mut buf).map_err(|e| CacheError::io(path, e))?;
+        if n == 0 {
+            break;
+        }
+        hasher.update(&buf[..n]);
+    }
+    Ok(hasher.digest128())
+}
+
+/// Where caches go by default: `$SSBVB_CACHE_DIR`, else `$XDG_CACHE_HOME/ssbvb`, else
+/// `$HOME/.cache/ssbvb`, else `<temp dir>/ssbvb-cache` (never next to the source).
+pub fn default_cache_dir() -> PathBuf {
+    let env = |k: &str| {
+        std::env::var_os(k)
+            .filter(|v| !v.is_empty())
+            .map(PathBuf::from)
+    };
+    if let Some(d) = env("SSBVB_CACHE_DIR") {
+        return d;
+    }
+    if let Some(d) = env("XDG_CACHE_HOME") {
+        return d.join("ssbvb");
+    }
+    if let Some(h) = env("HOME") {
+        return h.join(".cache").join("ssbvb");
+    }
+    std::env::temp_dir().join("ssbvb-cache")
+}
+
+/// File name of the cache of a source (by hash) at a level.
+pub fn cache_file_name(source_hash: u128, level: u32) -> String {
+    format!("{source_hash:032x}-L{level}.ssbvbast")
+}
+
+/// Reinterprets a slice of plain data as bytes in file order (little-endian).
+fn le_bytes<T: Pod>(data: &[T]) -> std::borrow::Cow<'_, [u8]> {
+    let bytes: &[u8] = bytemuck::cast_slice(data);
+    if cfg!(target_endian = "little") {
+        std::borrow::Cow::Borrowed(bytes)
+    } else {
+        // Every payload type is made of 4-byte words.
+        let mut v = bytes.to_vec();
+        v.chunks_exact_mut(4).for_each(|w| w.reverse());
+        std::borrow::Cow::Owned(v)
+    }
+}
+
+fn section_checksum(kind: u32, lod: u32, payload: &[u8]) -> u64 {
+    let mut h = Xxh3::new();
+    h.update(&kind.to_le_bytes());
+    h.update(&lod.to_le_bytes());
+    h.update(&(payload.len() as u64).to_le_bytes());
+    h.update(payload);
+    h.digest()
+}
+
+/// Writes `asset` (prepared at `level` from a source with hash `source_hash`) to `path`
+/// atomically: a temporary file in the same folder is written, synced and renamed. The
+/// folder is created if needed.
+pub fn write_cache(
+    path: &Path,
+    asset: &VoxelAsset,
+    source_hash: u128,
+    level: u32,
+) -> Result<(), CacheError> {
+    if asset.lods.len() != level as usize + 1
+        || asset
+            .lods
+            .iter()
+            .enumerate()
+            .any(|(l, lod)| lod.level != l as u32)
+    {
+        return Err(CacheError::corrupt(
+            path,
+            format!("asset to write does not hold levels 0..={level}"),
+        ));
+    }
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    std::fs::create_dir_all(&dir).map_err(|e| CacheError::io(&dir, e))?;
+    let tmp = tempfile::Builder::new()
+        .prefix(".ssbvbast-")
+        .suffix(".tmp")
+        .tempfile_in(&dir)
+        .map_err(|e| CacheError::io(&dir, e))?;
+    let write = |file: &File| -> io::Result<()> {
+        let mut w = BufWriter::with_capacity(1 << 20, file);
+        let mut h = Vec::with_capacity(HEADER_BYTES);
+        h.extend_from_slice(&MAGIC);
+        h.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        h.extend_from_slice(&0u32.to_le_bytes());
+        h.extend_from_slice(&source_hash.to_le_bytes());
+        h.extend_from_slice(&level.to_le_bytes());
+        h.extend_from_slice(&(asset.lods.len() as u32).to_le_bytes());
+        for c in asset.object_space.center.to_array() {
+            h.extend_from_slice(&c.to_le_bytes());
+        }
+        h.extend_from_slice(&asset.object_space.scale.to_le_bytes());
+        h.extend_from_slice(&(3 * asset.lods.len() as u32).to_le_bytes());
+        h.extend_from_slice(&0u32.to_le_bytes());
+        let checksum = xxh3_64(&h);
+        h.extend_from_slice(&checksum.to_le_bytes());
+        debug_assert_eq!(h.len(), HEADER_BYTES);
+        w.write_all(&h)?;
+        for lod in &asset.lods {
+            let sections: [(u32, std::borrow::Cow<'_, [u8]>); 3] = [
+                (KIND_POINT_CLOUD, le_bytes(&lod.point_cloud.voxels)),
+                (KIND_PROXY_POSITIONS, le_bytes(&lod.proxy.positions)),
+                (KIND_PROXY_TRIANGLES, le_bytes(&lod.proxy.triangles)),
+            ];
+            for (kind, payload) in sections {
+                w.write_all(&kind.to_le_bytes())?;
+                w.write_all(&lod.level.to_le_bytes())?;
+                w.write_all(&(payload.len() as u64).to_le_bytes())?;
+                w.write_all(&section_checksum(kind, lod.level, &payload).to_le_bytes())?;
+                w.write_all(&payload)?;
+            }
+        }
+        w.flush()?;
+        drop(w);
+        file.sync_all()
+    };
+    // Temporary files are created private (0600); a cache is ordinary data.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let _ = tmp
+            .as_file()
+            .set_permissions(std::fs::Permissions::from_mode(0o644));
+    }
+    write(tmp.as_file()).map_err(|e| CacheError::io(tmp.path(), e))?;
+    tmp.persist(path)
+        .map_err(|e| CacheError::io(path, e.error))?;
+    // Make the rename itself durable (best effort: not every platform can sync a folder).
+    if let Ok(d) = File::open(&dir) {
+        let _ = d.sync_all();
+    }
+    Ok(())
+}
+
+/// A reader that knows how many bytes the file has left, so lengths read from the file are
+/// checked before anything is allocated for them.
+struct Source<'a> {
+    path: &'a Path,
+    reader: BufReader<File>,
+    remaining: u64,
+}
+
+impl Source<'_> {
+    fn read_exact(&mut self, buf: &mut [u8], what: &str) -> Result<(), CacheError> {
+        if (buf.len() as u64) > self.remaining {
+            return Err(CacheError::Truncated {
+                path: self.path.to_path_buf(),
+                what: what.into(),
+            });
+        }
+        self.reader.read_exact(buf).map_err(|e| {
+            if e.kind() == io::ErrorKind::UnexpectedEof {
+                CacheError::Truncated {
+                    path: self.path.to_path_buf(),
+                    what: what.into(),
+                }
+            } else {
+                CacheError::io(self.path, e)
+            }
+        })?;
+        self.remaining -= buf.len() as u64;
+        Ok(())
+    }
+
+    /// Reads one section, which must be of `kind` for `lod`, as a vector of `T`.
+    fn section<T: Pod + Zeroable>(&mut self, kind: u32, lod: u32) -> Result<Vec<T>, CacheError> {
+        let name = format!("{} of level {lod}", kind_name(kind));
+        let mut head = [0u8; SECTION_HEADER_BYTES];
+        self.read_exact(&mut head, &name)?;
+        let u32_at = |o: usize| u32::from_le_bytes(head[o..o + 4].try_into().unwrap_or_default());
+        let u64_at = |o: usize| u64::from_le_bytes(head[o..o + 8].try_into().unwrap_or_default());
+        let (found_kind, found_lod, len, checksum) = (u32_at(0), u32_at(4), u64_at(8), u64_at(16));
+        if found_kind != kind || found_lod != lod {
+            return Err(CacheError::corrupt(
+                self.path,
+                format!(
+                    "expected section {name}, found {} of level {found_lod}",
+                    kind_name(found_kind)
+                ),
+            ));
+        }
+        let size = std::mem::size_of::<T>() as u64;
+        if !len.is_multiple_of(size) {
+            return Err(CacheError::corrupt(
+                self.path,
+                format!("section {name} has {len} bytes, not a multiple of {size}"),
+            ));
+        }
+        if len > self.remaining {
+            return Err(CacheError::Truncated {
+                path: self.path.to_path_buf(),
+                what: name,
+            });
+        }
+        let mut data: Vec<T> = vec![T::zeroed(); (len / size) as usize];
+        self.read_exact(bytemuck::cast_slice_mut(&mut data), &name)?;
+        let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut data);
+        if section_checksum(kind, lod, bytes) != checksum {
+            return Err(CacheError::Checksum {
+                path: self.path.to_path_buf(),
+                section: name,
+            });
+        }
+        if cfg!(target_endian = "big") {
+            bytes.chunks_exact_mut(4).for_each(|w| w.reverse());
+        }
+        Ok(data)
+    }
+}
+
+/// Reads a cache file written by [`write_cache`], expecting the given source hash and
+/// level. Every inconsistency is an error; nothing in the file can cause a panic or an
+/// allocation larger than the file.
+pub fn read_cache(
+    path: &Path,
+    expected_source_hash: u128,
+    level: u32,
+) -> Result<VoxelAsset, CacheError> {
+    let file = File::open(path).map_err(|e| CacheError::io(path, e))?;
+    let size = file.metadata().map_err(|e| CacheError::io(path, e))?.len();
+    let mut src = Source {
+        path,
+        reader: BufReader::with_capacity(1 << 20, file),
+        remaining: size,
+    };
+
+    let mut h = [0u8; HEADER_BYTES];
+    if size < MAGIC.len() as u64 {
+        return Err(CacheError::BadMagic {
+            path: path.to_path_buf(),
+        });
+    }
+    src.read_exact(&mut h[..MAGIC.len()], "header")?;
+    if h[..8] != MAGIC {
+        return Err(CacheError::BadMagic {
+            path: path.to_path_buf(),
+        });
+    }
+    src.read_exact(&mut h[MAGIC.len()..], "header")?;
+    let u32_at = |o: usize| u32::from_le_bytes(h[o..o + 4].try_into().unwrap_or_default());
+    let f64_at = |o: usize| f64::from_le_bytes(h[o..o + 8].try_into().unwrap_or_default());
+    let version = u32_at(8);
+    if version != FORMAT_VERSION {
+        return Err(CacheError::UnsupportedVersion {
+            path: path.to_path_buf(),
+            found: version,
+            expected: FORMAT_VERSION,
+        });
+    }
+    let stored_checksum = u64::from_le_bytes(h[80..88].try_into().unwrap_or_default());
+    if xxh3_64(&h[..80]) != stored_checksum {
+        return Err(CacheError::Checksum {
+            path: path.to_path_buf(),
+            section: "header".into(),
+        });
+    }
+    let source_hash = u128::from_le_bytes(h[16..32].try_into().unwrap_or_default());
+    if source_hash != expected_source_hash {
+        return Err(CacheError::SourceMismatch {
+            path: path.to_path_buf(),
+        });
+    }
+    let found_level = u32_at(32);
+    if found_level != level {
+        return Err(CacheError::LevelMismatch {
+            path: path.to_path_buf(),
+            found: found_level,
+            expected: level,
+        });
+    }
+    if level > MAX_LEVEL || u32_at(36) != level + 1 || u32_at(72) != 3 * (level + 1) {
+        return Err(CacheError::corrupt(
+            path,
+            "inconsistent level / section counts",
+        ));
+    }
+    let object_space = ObjectSpace {
+        center: glam::DVec3::new(f64_at(40), f64_at(48), f64_at(56)),
+        scale: f64_at(64),
+    };
+    let scale_ok = object_space.scale.is_finite() && object_space.scale > 0.0;
+    if !(object_space.center.is_finite() && scale_ok) {
+        return Err(CacheError::corrupt(path, "non-finite object space"));
+    }
+
+    let mut lods = Vec::with_capacity(level as usize + 1);
+    for l in 0..=level {
+        let voxels: Vec<PackedVoxel> = src.section(KIND_POINT_CLOUD, l)?;
+        let codes = validated_codes(path, l, &voxels)?;
+        let positions: Vec<[f32; 3]> = src.section(KIND_PROXY_POSITIONS, l)?;
+        let triangles: Vec<[u32; 3]> = src.section(KIND_PROXY_TRIANGLES, l)?;
+        if !positions.iter().flatten().all(|c| c.is_finite()) {
+            return Err(CacheError::corrupt(
+                path,
+                format!("non-finite proxy vertex in level {l}"),
+            ));
+        }
+        if triangles
+            .iter()
+            .flatten()
+            .any(|&i| i as usize >= positions.len())
+        {
+            return Err(CacheError::corrupt(
+                path,
+                format!("proxy index out of range in level {l}"),
+            ));
+        }
+        let lookup = lookup_from_codes(l, &codes);
+        lods.push(LodLevel {
+            level: l,
+            point_cloud: PointCloud { voxels },
+            lookup,
+            proxy: ProxyMesh {
+                positions,
+                triangles,
+            },
+        });
+    }
+    if src.remaining != 0 {
+        return Err(CacheError::corrupt(
+            path,
+            format!("{} trailing bytes", src.remaining),
+        ));
+    }
+    Ok(VoxelAsset { object_space, lods })
+}
+
+/// Morton codes of a point cloud read from a file, checked to be inside the level's grid
+/// and strictly increasing (distinct), which the lookup construction relies on.
+fn validated_codes(
+    path: &Path,
+    level: u32,
+    voxels: &[PackedVoxel],
+) -> Result<Vec<u64>, CacheError> {
+    if level < 32 && voxels.len() as u64 > 1u64 << (3 * level).min(63) {
+        return Err(CacheError::corrupt(
+            path,
+            format!("too many voxels for level {level}"),
+        ));
+    }
+    let n = 1u32 << level;
+    let mut codes = Vec::with_capacity(voxels.len());
+    for v in voxels {
+        let c = v.cell();
+        if c.iter().any(|&x| x >= n) {
+            return Err(CacheError::corrupt(
+                path,
+                format!("voxel cell {c:?} outside level {level}"),
+            ));
+        }
+        let code = morton_encode(c);
+        if codes.last().is_some_and(|&p| p >= code) {
+            return Err(CacheError::corrupt(
+                path,
+                format!("point cloud of level {level} not in strict Morton order"),
+            ));
+        }
+        codes.push(code);
+    }
+    Ok(codes)
+}
+
+/// Whether an asset came from the cache or was rebuilt, and why.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "status", rename_all = "snake_case")]
+pub enum CacheStatus {
+    /// Read from a valid cache file.
+    Hit,
+    /// Prepared from the source (the reason says why the cache was not used).
+    Rebuilt {
+        /// Why: "cache missing", "cache corrupt (checksum mismatch in section …)", …
+        reason: String,
+    },
+}
+
+/// What [`load_or_prepare`] did.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PrepareOutcome {
+    /// The cache file read or written.
+    pub cache_path: PathBuf,
+    /// Hit or rebuilt (with the reason).
+    pub status: CacheStatus,
+    /// Preparation statistics when the asset was rebuilt.
+    pub stats: Option<PrepareStats>,
+    /// Set when the rebuilt asset could not be written to the cache (the asset is still
+    /// returned; the next run rebuilds again).
+    pub cache_write_error: Option<String>,
+}
+
+impl std::fmt::Display for PrepareOutcome {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.status {
+            CacheStatus::Hit => write!(f, "cache hit ({})", self.cache_path.display())?,
+            CacheStatus::Rebuilt { reason } => {
+                write!(f, "{reason}, rebuilt ({})", self.cache_path.display())?
+            }
+        }
+        if let Some(e) = &self.cache_write_error {
+            write!(f, "; cache not written: {e}")?;
+        }
+        Ok(())
+    }
+}
+
+/// Why [`load_or_prepare`] failed.
+#[derive(Debug, thiserror::Error)]
+pub enum PrepareError {
+    /// The model could not be loaded.
+    #[error(transparent)]
+    Load(#[from] LoadError),
+    /// The model could not be voxelized.
+    #[error("{}: {error}", .path.display())]
+    Voxelize {
+        /// The model file.
+        path: PathBuf,
+        /// What went wrong.
+        error: VoxelizeError,
+    },
+    /// The source file could not be read for hashing.
+    #[error(transparent)]
+    Cache(#[from] CacheError),
+}
+
+/// Returns the asset of `model_path` at `level`: read from the cache when a valid cache
+/// file exists, otherwise prepared (with the default [`crate::prepare::PrepareOptions`])
+/// and written to the cache. `cache_dir` defaults to [`default_cache_dir`]. A cache that
+/// cannot be written is reported in the outcome, not an error.
+pub fn load_or_prepare(
+    model_path: &Path,
+    level: u32,
+    cache_dir: Option<&Path>,
+    progress: &dyn Progress,
+) -> Result<(VoxelAsset, PrepareOutcome), PrepareError> {
+    let source_hash = hash_source(model_path)?;
+    let dir = cache_dir.map_or_else(default_cache_dir, Path::to_path_buf);
+    let cache_path = dir.join(cache_file_name(source_hash, level));
+    let reason = match read_cache(&cache_path, source_hash, level) {
+        Ok(asset) => {
+            let outcome = PrepareOutcome {
+                cache_path,
+                status: CacheStatus::Hit,
+                stats: None,
+                cache_write_error: None,
+            };
+            return Ok((asset, outcome));
+        }
+        Err(e) => e.rebuild_reason(),
+    };
+    let model = load_model(model_path)?;
+    let (asset, stats) =
+        prepare_asset(&model, level, progress).map_err(|error| PrepareError::Voxelize {
+            path: model_path.to_path_buf(),
+            error,
+        })?;
+    drop(model);
+    let cache_write_error = write_cache(&cache_path, &asset, source_hash, level)
+        .err()
+        .map(|e| e.to_string());
+    let outcome = PrepareOutcome {
+        cache_path,
+        status: CacheStatus::Rebuilt { reason },
+        stats: Some(stats),
+        cache_write_error,
+    };
+    Ok((asset, outcome))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Mesh, Model};
+    use crate::progress::NoProgress;
+    use glam::Vec3;
+
+    fn asset() -> VoxelAsset {
+        let mesh = Mesh {
+            positions: vec![
+                Vec3::new(0.1, 0.2, 0.3),
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(0.0, 1.3, 0.1),
+                Vec3::new(0.2, 0.1, 0.9),
+            ],
+            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+            ..Default::default()
+        };
+        let (mut asset, _) = prepare_asset(&Model::Mesh(mesh), 5, &NoProgress).unwrap();
+        // A proxy in every level, so the proxy sections are exercised too.
+        for lod in &mut asset.lods {
+            lod.proxy = ProxyMesh {
+                positions: vec![[-1.0, -1.0, -1.0], [1.0, -1.0, -1.0], [0.0, 1.0, 0.5]],
+                triangles: vec![[0, 1, 2]],
+            };
+        }
+        asset
+    }
+
+    #[test]
+    fn round_trip_is_exact() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("sub/dir/a.ssbvbast");
+        let a = asset();
+        write_cache(&path, &a, 0xdead_beef_u128 << 64 | 42, 5).unwrap();
+        let b = read_cache(&path, 0xdead_beef_u128 << 64 | 42, 5).unwrap();
+        assert_eq!(a, b);
+        // Only the cache file is left in the folder (the temporary file was renamed).
+        assert_eq!(
+            std::fs::read_dir(path.parent().unwrap()).unwrap().count(),
+            1
+        );
+        assert!(matches!(
+            read_cache(&path, 7, 5),
+            Err(CacheError::SourceMismatch { .. })
+        ));
+        assert!(matches!(
+            read_cache(&path, 0xdead_beef_u128 << 64 | 42, 4),
+            Err(CacheError::LevelMismatch {
+                found: 5,
+                expected: 4,
+                ..
+            })
+        ));
+        assert!(write_cache(&path, &a, 1, 4).is_err());
+    }
+
+    #[test]
+    fn damaged_files_are_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.ssbvbast");
+        write_cache(&path, &asset(), 99, 5).unwrap();
+        let good = std::fs::read(&path).unwrap();
+        let bad = dir.path().join("bad.ssbvbast");
+        // Truncation at many offsets, including inside every section.
+        let step = (good.len() / 300).max(1);
+        for cut in (0..good.len())
+            .step_by(step)
+            .chain([good.len() - 1, HEADER_BYTES, 87, 89])
+        {
+            std::fs::write(&bad, &good[..cut]).unwrap();
+            let e = read_cache(&bad, 99, 5).unwrap_err();
+            assert!(e.to_string().contains("bad.ssbvbast"), "{e}");
+        }
+        // A flipped byte anywhere is caught.
+        for pos in (0..good.len()).step_by(step) {
+            let mut b = good.clone();
+            b[pos] ^= 0x40;
+            std::fs::write(&bad, &b).unwrap();
+            assert!(read_cache(&bad, 99, 5).is_err(), "flip at {pos} accepted");
+        }
+        // A flip in the point-cloud payload of level 5 is a checksum error naming it.
+        let mut b = good.clone();
+        let last_pc = good.len() - 200;
+        b[last_pc] ^= 1;
+        std::fs::write(&bad, &b).unwrap();
+        let e = read_cache(&bad, 99, 5).unwrap_err();
+        assert!(matches!(e, CacheError::Checksum { .. }), "{e}");
+        // Magic and version.
+        let mut b = good.clone();
+        b[0] = b'X';
+        std::fs::write(&bad, &b).unwrap();
+        assert!(matches!(
+            read_cache(&bad, 99, 5),
+            Err(CacheError::BadMagic { .. })
+        ));
+        let mut b = good.clone();
+        b[8..12].copy_from_slice(&0u32.to_le_bytes());
+        std::fs::write(&bad, &b).unwrap();
+        assert!(matches!(
+            read_cache(&bad, 99, 5),
+            Err(CacheError::UnsupportedVersion { found: 0, .. })
+        ));
+        // An absurd section length is refused before allocating.
+        let mut b = good.clone();
+        b[HEADER_BYTES + 8..HEADER_BYTES + 16].copy_from_slice(&(u64::MAX - 15).to_le_bytes());
+        std::fs::write(&bad, &b).unwrap();
+        assert!(matches!(
+            read_cache(&bad, 99, 5),
+            Err(CacheError::Truncated { .. })
+        ));
+        // Trailing garbage.
+        let mut b = good.clone();
+        b.extend_from_slice(b"junk");
+        std::fs::write(&bad, &b).unwrap();
+        assert!(matches!(
+            read_cache(&bad, 99, 5),
+            Err(CacheError::Corrupt { .. })
+        ));
+        assert!(matches!(
+            read_cache(&dir.path().join("none"), 99, 5),
+            Err(CacheError::Io { .. })
+        ));
+    }
+
+    #[test]
+    fn load_or_prepare_reports_what_it_did() {
+        let dir = tempfile::tempdir().unwrap();
+        let model = dir.path().join("tri.obj");
+        std::fs::write(
+            &model,
+            "v 0 0 0\nv 1 0 0\nv 0 1 0.5\nv 0.3 0.2 1\nf 1 2 3\nf 1 2 4\n",
+        )
+        .unwrap();
+        let cache = dir.path().join("cache");
+        let (a, first) = load_or_prepare(&model, 4, Some(&cache), &NoProgress).unwrap();
+        assert_eq!(
+            first.status,
+            CacheStatus::Rebuilt {
+                reason: "cache missing".into()
+            }
+        );
+        assert!(first.stats.is_some() && first.cache_write_error.is_none());
+        let (b, second) = load_or_prepare(&model, 4, Some(&cache), &NoProgress).unwrap();
+        assert_eq!(second.status, CacheStatus::Hit);
+        assert_eq!(a, b);
+        // Corrupt the cache: rebuilt, with the reason.
+        let mut bytes = std::fs::read(&second.cache_path).unwrap();
+        let n = bytes.len();
+        bytes[n - 49] ^= 0xff; // last byte of the level-4 point cloud (two empty proxy sections follow)
+        std::fs::write(&second.cache_path, &bytes).unwrap();
+        let (c, third) = load_or_prepare(&model, 4, Some(&cache), &NoProgress).unwrap();
+        match &third.status {
+            CacheStatus::Rebuilt { reason } => {
+                assert!(
+                    reason.starts_with("cache corrupt (checksum mismatch in section"),
+                    "{reason}"
+                )
+            }
+            s => panic!("{s:?}"),
+        }
+        assert!(third.to_string().contains("rebuilt"));
+        assert_eq!(a, c);
+        assert_eq!(
+            load_or_prepare(&model, 4, Some(&cache), &NoProgress)
+                .unwrap()
+                .1
+                .status,
+            CacheStatus::Hit
+        );
+        // A missing model is a load error naming it.
+        let e = load_or_prepare(&dir.path().join("nope.obj"), 4, Some(&cache), &NoProgress)
+            .unwrap_err();
+        assert!(e.to_string().contains("nope.obj"), "{e}");
+    }
+}

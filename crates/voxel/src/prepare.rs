@@ -1,0 +1,448 @@
+//! The whole preparation of one model: voxelize → LOD chain → per-level point cloud,
+//! sparse lookup and proxy mesh, with statistics.
+//!
+//! Memory is the constraint at high levels (level 12 of the bunny is ~57 M voxels), so the
+//! stages hand their data on and free it: the LOD chain is built from the voxelization,
+//! then each level, finest first, is turned into its point cloud and lookup and its
+//! floating-point attributes are dropped before the next level is converted.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::asset::{
+    COARSE_PAGES, EMPTY_PAGE, LodLevel, MAX_LEVEL, PAGE_CELLS, PAGE_SIZE, PackedVoxel, PointCloud,
+    SparseLookup, VoxelAsset,
+};
+use crate::model::Model;
+use crate::progress::Progress;
+use crate::proxy::build_proxy;
+use crate::svo::{LevelVoxels, build_lod_chain, morton_decode, octree_bytes};
+use crate::voxelize::{
+    VoxelFill, VoxelizeError, VoxelizeReport, voxelize_mesh, voxelize_voxels_with,
+};
+
+/// Highest level [`prepare_asset`] accepts unless [`PrepareOptions::max_level`] raises it
+/// (level 12 of a scanned model is already ~57 M voxels and several GiB while building).
+pub const DEFAULT_MAX_LEVEL: u32 = 12;
+
+/// Knobs of [`prepare_asset_with`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct PrepareOptions {
+    /// Highest level accepted; values above [`MAX_LEVEL`] are treated as [`MAX_LEVEL`].
+    pub max_level: u32,
+    /// Which occupied cells a voxel model keeps (meshes are always surface-voxelized).
+    pub voxel_fill: VoxelFill,
+}
+
+impl Default for PrepareOptions {
+    fn default() -> Self {
+        Self {
+            max_level: DEFAULT_MAX_LEVEL,
+            voxel_fill: VoxelFill::Shell,
+        }
+    }
+}
+
+/// Wall-clock seconds of each preparation stage.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct StageTimes {
+    /// Voxelization (or voxel-model resampling) of the finest level.
+    pub voxelize_s: f64,
+    /// Building the coarser levels (octree / LOD chain).
+    pub octree_s: f64,
+    /// Packing the point clouds of all levels.
+    pub point_clouds_s: f64,
+    /// Building the sparse lookups of all levels.
+    pub lookups_s: f64,
+    /// Building the proxy meshes of all levels.
+    pub proxies_s: f64,
+    /// The whole preparation.
+    pub total_s: f64,
+}
+
+/// Size statistics of one LOD level.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LevelStats {
+    /// Grid level.
+    pub level: u32,
+    /// Voxels (point-cloud entries).
+    pub voxels: u64,
+    /// Resident 16³ pages of the sparse lookup.
+    pub resident_pages: u64,
+    /// Bytes of the packed point cloud (16 per voxel).
+    pub point_cloud_bytes: u64,
+    /// Bytes of the sparse lookup (page table + resident pages + coarse occupancy).
+    pub lookup_bytes: u64,
+    /// Bytes a dense `u32` lookup texture of the level would take.
+    pub dense_lookup_bytes: u64,
+    /// `lookup_bytes` as a percentage of `dense_lookup_bytes`.
+    pub lookup_percent_of_dense: f64,
+    /// Octree nodes down to this level (levels 0..=level).
+    pub octree_nodes: u64,
+    /// Bytes of the octree down to this level: 8-byte nodes plus 16-byte packed
+    /// attributes per node (see [`octree_bytes`]).
+    pub octree_bytes: u64,
+    /// Triangles of the level's proxy mesh.
+    pub proxy_triangles: u64,
+    /// Seconds spent on this level's point cloud, lookup and proxy (absent when the
+    /// level came from the cache).
+    pub seconds: Option<f64>,
+}
+
+/// What [`prepare_asset`] did.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PrepareStats {
+    /// Finest level.
+    pub level: u32,
+    /// Object-space centre (model units).
+    pub object_space_center: [f64; 3],
+    /// Object-space scale (model units → object units).
+    pub object_space_scale: f64,
+    /// Skipped inputs and fallbacks of the voxelizer.
+    pub voxelize: VoxelizeReport,
+    /// Time per stage.
+    pub stages: StageTimes,
+    /// Per level, from 0 to the finest.
+    pub levels: Vec<LevelStats>,
+}
+
+impl LevelStats {
+    /// Statistics of a prepared level; `octree_nodes` counts the nodes of levels
+    /// `0..=lod.level`.
+    pub fn of(lod: &LodLevel, octree_nodes: u64, seconds: Option<f64>) -> LevelStats {
+        let lookup_bytes = lod.lookup.bytes() as u64;
+        let dense = lod.lookup.dense_bytes();
+        LevelStats {
+            level: lod.level,
+            voxels: lod.point_cloud.voxels.len() as u64,
+            resident_pages: lod.lookup.resident_pages() as u64,
+            point_cloud_bytes: std::mem::size_of_val(lod.point_cloud.voxels.as_slice()) as u64,
+            lookup_bytes,
+            dense_lookup_bytes: dense,
+            lookup_percent_of_dense: 100.0 * lookup_bytes as f64 / dense as f64,
+            octree_nodes,
+            octree_bytes: octree_bytes(octree_nodes),
+            proxy_triangles: lod.proxy.triangles.len() as u64,
+            seconds,
+        }
+    }
+}
+
+/// Per-level statistics of an asset (without times), e.g. of one read from the cache.
+pub fn asset_level_stats(asset: &VoxelAsset) -> Vec<LevelStats> {
+    let mut nodes = 0u64;
+    asset
+        .lods
+        .iter()
+        .map(|lod| {
+            nodes += lod.point_cloud.voxels.len() as u64;
+            LevelStats::of(lod, nodes, None)
+        })
+        .collect()
+}
+
+/// Prepares a model at `level` with the default options (levels up to
+/// [`DEFAULT_MAX_LEVEL`], voxel models as shells).
+pub fn prepare_asset(
+    model: &Model,
+    level: u32,
+    progress: &dyn Progress,
+) -> Result<(VoxelAsset, PrepareStats), VoxelizeError> {
+    prepare_asset_with(model, level, &PrepareOptions::default(), progress)
+}
+
+/// Prepares a model: voxelizes it at `level`, builds every coarser level down to 0, and per
+/// level the point cloud, the sparse lookup and the proxy mesh.
+pub fn prepare_asset_with(
+    model: &Model,
+    level: u32,
+    options: &PrepareOptions,
+    progress: &dyn Progress,
+) -> Result<(VoxelAsset, PrepareStats), VoxelizeError> {
+    let max = options.max_level.min(MAX_LEVEL);
+    if level > max {
+        return Err(VoxelizeError::LevelTooHigh { level, max });
+    }
+    let start = Instant::now();
+    let mut stages = StageTimes::default();
+
+    let set = match model {
+        Model::Mesh(mesh) => voxelize_mesh(mesh, level, progress)?,
+        Model::Voxels(voxels) => voxelize_voxels_with(voxels, level, options.voxel_fill, progress)?,
+    };
+    stages.voxelize_s = start.elapsed().as_secs_f64();
+    let object_space = set.object_space;
+    let report = set.report;
+
+    let t = Instant::now();
+    let mut chain: Vec<Option<LevelVoxels>> = build_lod_chain(set.voxels, progress)
+        .into_iter()
+        .map(Some)
+        .collect();
+    stages.octree_s = t.elapsed().as_secs_f64();
+
+    progress.begin("point clouds and lookups", chain.len() as u64);
+    let mut lods: Vec<LodLevel> = Vec::with_capacity(chain.len());
+    let mut seconds = vec![0.0; chain.len()];
+    // Finest first: it is the largest, and freeing its attributes early lowers the peak.
+    for l in (0..chain.len()).rev() {
+        let Some(voxels) = chain[l].take() else {
+            continue;
+        };
+        let t = Instant::now();
+        let point_cloud = point_cloud_of(&voxels);
+        let t_pc = t.elapsed().as_secs_f64();
+        stages.point_clouds_s += t_pc;
+        // Free the float attributes now (a partially moved struct would keep them alive
+        // to the end of the iteration, next to the lookup being built).
+        let LevelVoxels {
+            codes,
+            normals,
+            colors,
+            uvs,
+            ..
+        } = voxels;
+        drop((normals, colors, uvs));
+        let t = Instant::now();
+        let lookup = lookup_from_codes(l as u32, &codes);
+        drop(codes);
+        let t_lookup = t.elapsed().as_secs_f64();
+        stages.lookups_s += t_lookup;
+        let t = Instant::now();
+        let proxy = build_proxy(&lookup);
+        let t_proxy = t.elapsed().as_secs_f64();
+        stages.proxies_s += t_proxy;
+        seconds[l] = t_pc + t_lookup + t_proxy;
+        lods.push(LodLevel {
+            level: l as u32,
+            point_cloud,
+            lookup,
+            proxy,
+        });
+        progress.advance(1);
+    }
+    progress.end();
+    lods.reverse();
+
+    let asset = VoxelAsset { object_space, lods };
+    stages.total_s = start.elapsed().as_secs_f64();
+    let mut levels = asset_level_stats(&asset);
+    for (s, secs) in levels.iter_mut().zip(seconds) {
+        s.seconds = Some(secs);
+    }
+    let stats = PrepareStats {
+        level,
+        object_space_center: object_space.center.to_array(),
+        object_space_scale: object_space.scale,
+        voxelize: report,
+        stages,
+        levels,
+    };
+    Ok((asset, stats))
+}
+
+/// Packs a level's voxels (Morton order is kept: voxel id = index).
+pub fn point_cloud_of(voxels: &LevelVoxels) -> PointCloud {
+    let voxels: Vec<PackedVoxel> = (0..voxels.len())
+        .into_par_iter()
+        .map(|i| {
+            PackedVoxel::new(
+                morton_decode(voxels.codes[i]),
+                voxels.normals[i],
+                voxels.colors[i],
+                voxels.uvs[i],
+            )
+        })
+        .collect();
+    PointCloud { voxels }
+}
+
+/// Builds the sparse lookup of a level from its strictly increasing Morton codes (voxel id
+/// = index), in parallel. The result equals [`SparseLookup::from_cells`] on the same cells.
+///
+/// Morton order is hierarchical: the page of a cell is `code >> 12` (16³ = 2^12 cells), so
+/// the voxels of one page are a contiguous run of the codes and pages appear in Morton
+/// order — the order `from_cells` assigns pool slots in. Each page's run is then filled
+/// independently, and the pool is allocated once at its final size.
+///
+/// # Panics
+///
+/// When `level > MAX_LEVEL` (as [`SparseLookup::from_cells`] does). Codes must be strictly
+/// increasing and inside the grid; [`crate::cache::read_cache`] checks that before calling.
+pub fn lookup_from_codes(level: u32, codes: &[u64]) -> SparseLookup {
+    assert!(level <= MAX_LEVEL, "level {level} above MAX_LEVEL");
+    let pages_per_axis = ((1u32 << level) / PAGE_SIZE).max(1);
+    let ppa = pages_per_axis as usize;
+    let page_bits = 3 * PAGE_SIZE.trailing_zeros();
+
+    let mut runs: Vec<(u64, usize)> = Vec::new(); // (page Morton code, first voxel id)
+    for (i, &c) in codes.iter().enumerate() {
+        let page = c >> page_bits;
+        if runs.last().is_none_or(|r| r.0 != page) {
+            runs.push((page, i));
+        }
+    }
+    let mut pool = vec![0u32; runs.len() * PAGE_CELLS];
+    pool.par_chunks_mut(PAGE_CELLS)
+        .enumerate()
+        .for_each(|(p, page)| {
+            let end = runs.get(p + 1).map_or(codes.len(), |r| r.1);
+            for (id, &code) in codes.iter().enumerate().take(end).skip(runs[p].1) {
+                let c = morton_decode(code);
+                let l = c.map(|v| (v % PAGE_SIZE) as usize);
+                page[l[0] + PAGE_SIZE as usize * (l[1] + PAGE_SIZE as usize * l[2])] =
+                    id as u32 + 1;
+            }
+        });
+    let mut page_table = vec![EMPTY_PAGE; ppa * ppa * ppa];
+    let coarse_per_axis = pages_per_axis.div_ceil(COARSE_PAGES);
+    let cpa = coarse_per_axis as usize;
+    let mut coarse = vec![0u32; (cpa * cpa * cpa).div_ceil(32)];
+    for (p, &(page, _)) in runs.iter().enumerate() {
+        let [x, y, z] = morton_decode(page).map(|v| v as usize);
+        page_table[x + ppa * (y + ppa * z)] = p as u32;
+        let c = COARSE_PAGES as usize;
+        let b = x / c + cpa * (y / c + cpa * (z / c));
+        coarse[b / 32] |= 1 << (b % 32);
+    }
+    SparseLookup {
+        level,
+        pages_per_axis,
+        page_table,
+        pool,
+        coarse,
+        coarse_per_axis,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Mesh, VoxelModel};
+    use crate::progress::NoProgress;
+    use crate::svo::{Svo, morton_encode};
+    use glam::Vec3;
+
+    fn tetra() -> Model {
+        Model::Mesh(Mesh {
+            positions: vec![
+                Vec3::new(0.1, 0.2, 0.3),
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(0.0, 1.3, 0.1),
+                Vec3::new(0.2, 0.1, 0.9),
+            ],
+            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+            ..Default::default()
+        })
+    }
+
+    #[test]
+    fn lookup_from_codes_equals_from_cells() {
+        for level in [0u32, 1, 3, 4, 5, 7] {
+            let n = 1u32 << level;
+            let mut codes: Vec<u64> = (0..500u32)
+                .map(|i| morton_encode([(i * 7) % n, (i * 13 + 1) % n, (i * 31 + 2) % n]))
+                .collect();
+            codes.sort_unstable();
+            codes.dedup();
+            let fast = lookup_from_codes(level, &codes);
+            let reference = SparseLookup::from_cells(
+                level,
+                codes
+                    .iter()
+                    .map(|&c| morton_decode(c))
+                    .collect::<Vec<_>>()
+                    .into_iter(),
+            );
+            assert_eq!(fast, reference, "level {level}");
+        }
+        let empty = lookup_from_codes(6, &[]);
+        assert_eq!(empty.resident_pages(), 0);
+        assert_eq!(
+            empty,
+            SparseLookup::from_cells(
+                6,
+                std::iter::empty::<[u32; 3]>()
+                    .collect::<Vec<_>>()
+                    .into_iter()
+            )
+        );
+    }
+
+    #[test]
+    fn prepared_levels_are_parents_of_finer_levels() {
+        let (asset, stats) = prepare_asset(&tetra(), 6, &NoProgress).unwrap();
+        assert_eq!(asset.lods.len(), 7);
+        assert_eq!(stats.levels.len(), 7);
+        for (l, lod) in asset.lods.iter().enumerate() {
+            assert_eq!(lod.level, l as u32);
+            assert_eq!(lod.lookup.level, l as u32);
+            let cells: Vec<[u32; 3]> = lod.point_cloud.voxels.iter().map(|v| v.cell()).collect();
+            // Morton order, and the lookup maps every cell to its id.
+            assert!(
+                cells
+                    .windows(2)
+                    .all(|w| morton_encode(w[0]) < morton_encode(w[1]))
+            );
+            for (id, c) in cells.iter().enumerate() {
+                assert_eq!(lod.lookup.get(*c), Some(id as u32));
+            }
+            if l + 1 < asset.lods.len() {
+                let mut parents: Vec<[u32; 3]> = asset.lods[l + 1]
+                    .point_cloud
+                    .voxels
+                    .iter()
+                    .map(|v| v.cell().map(|c| c / 2))
+                    .collect();
+                parents.sort_by_key(|&c| morton_encode(c));
+                parents.dedup();
+                assert_eq!(parents, cells, "level {l}");
+            }
+            assert_eq!(stats.levels[l].voxels as usize, cells.len());
+        }
+        assert_eq!(asset.lods[0].point_cloud.voxels.len(), 1);
+        let svo = Svo::from_asset(&asset).unwrap();
+        assert_eq!(svo.nodes.len() as u64, stats.levels[6].octree_nodes);
+        // Same cells as a direct voxelization at the coarser level.
+        let (coarse, _) = prepare_asset(&tetra(), 4, &NoProgress).unwrap();
+        assert_eq!(
+            coarse.lods[4].point_cloud.voxels.len(),
+            asset.lods[4].point_cloud.voxels.len()
+        );
+        for (a, b) in coarse.lods[4]
+            .point_cloud
+            .voxels
+            .iter()
+            .zip(&asset.lods[4].point_cloud.voxels)
+        {
+            assert_eq!(a.cell(), b.cell());
+        }
+    }
+
+    #[test]
+    fn levels_are_validated() {
+        assert!(matches!(
+            prepare_asset(&tetra(), 13, &NoProgress),
+            Err(VoxelizeError::LevelTooHigh { level: 13, max: 12 })
+        ));
+        let opts = PrepareOptions {
+            max_level: 99,
+            ..Default::default()
+        };
+        assert!(matches!(
+            prepare_asset_with(&tetra(), 17, &opts, &NoProgress),
+            Err(VoxelizeError::LevelTooHigh { level: 17, max: 16 })
+        ));
+        let (asset, _) = prepare_asset(&tetra(), 0, &NoProgress).unwrap();
+        assert_eq!(asset.lods.len(), 1);
+        let vox = Model::Voxels(VoxelModel {
+            voxels: vec![[0, 0, 0], [1, 0, 0]],
+            colors: vec![],
+        });
+        let (asset, stats) = prepare_asset(&vox, 3, &NoProgress).unwrap();
+        assert_eq!(asset.lods.len(), 4);
+        assert!(stats.levels[3].voxels > 0);
+    }
+}
