@@ -118,6 +118,19 @@ impl Frame {
         }
     }
 
+    /// The stencil aspect of a live depth-stencil texture, one byte per pixel.
+    pub fn read_stencil(&self, name: &str) -> Vec<u8> {
+        let i = self
+            .renderer
+            .resource(name)
+            .unwrap_or_else(|| panic!("resource `{name}` is not live"));
+        let t = self.renderer.resources.texture(i);
+        ctx()
+            .read_texture(&t.texture, wgpu::TextureAspect::StencilOnly)
+            .unwrap()
+            .bytes
+    }
+
     /// A live texture as f32s.
     pub fn read_f32(&self, name: &str) -> Vec<f32> {
         bytemuck::pod_collect_to_vec(&self.read(name))

@@ -5,4 +5,5 @@ mod billboards;
 mod empty_space;
 mod pipeline;
 mod ray_march_filter;
+mod smooth_composite;
 mod triangles;
