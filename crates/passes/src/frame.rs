@@ -461,6 +461,10 @@ impl Renderer {
         camera: &Camera,
         profiling: Profiling,
     ) -> Result<FrameStats, PassError> {
+        if profiling != Profiling::Off {
+            // Earlier unwaited frames must not be billed to this one.
+            ctx.wait_idle().map_err(PassError::Gpu)?;
+        }
         let start = Instant::now();
         scene.update(ctx, camera, self.screen);
         let use_ts = profiling != Profiling::Off && self.queries.is_some();
