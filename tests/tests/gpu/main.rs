@@ -1,6 +1,7 @@
 //! The GPU test binary: every test shares one device (see `ssbvb_tests::ctx`). Modules are
 //! grouped by pass or by property.
 
+mod all_models;
 mod billboards;
 mod empty_space;
 mod pipeline;

@@ -3,6 +3,7 @@
 
 use glam::DVec3;
 use ssbvb_passes::TriangleObject;
+use ssbvb_tests::f16_to_f32;
 use ssbvb_voxel::camera::Camera;
 
 const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
@@ -154,23 +155,5 @@ fn composite_matches_the_reference_shading() {
         if r[3] == 0 && g[3] == 0 {
             assert_eq!(g, [0, 0, 0, 0]);
         }
-    }
-}
-
-/// IEEE half → f32 (the G-buffer normals are Rgba16Float).
-fn f16_to_f32(h: u16) -> f32 {
-    let s = if h >> 15 == 1 { -1.0 } else { 1.0 };
-    let e = ((h >> 10) & 0x1f) as i32;
-    let m = (h & 0x3ff) as f32;
-    match e {
-        0 => s * m * 2f32.powi(-24),
-        31 => {
-            if m == 0.0 {
-                s * f32::INFINITY
-            } else {
-                f32::NAN
-            }
-        }
-        _ => s * (1.0 + m / 1024.0) * 2f32.powi(e - 15),
     }
 }
