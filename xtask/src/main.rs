@@ -170,6 +170,19 @@ fn test(extra: &[String]) -> Result<bool> {
     if std::env::var_os("WGPU_BACKEND").is_none() {
         cmd.env("WGPU_BACKEND", "vulkan");
     }
+    // Mesa's Vulkan WSI probes XDG_RUNTIME_DIR and prints an error per device when it is
+    // unset (typical in CI containers); give it a private folder.
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        let dir = std::env::temp_dir().join("ssbvb-xdg-runtime");
+        if std::fs::create_dir_all(&dir).is_ok() {
+            #[cfg(unix)]
+            {
+                use std::os::unix::fs::PermissionsExt;
+                let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700));
+            }
+            cmd.env("XDG_RUNTIME_DIR", &dir);
+        }
+    }
     let status = cmd.status().context("running cargo test")?;
     Ok(status.success())
 }

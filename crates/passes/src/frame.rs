@@ -429,23 +429,15 @@ impl Renderer {
     /// The SSBVB fill count of the last frame: billboards the ray-march filter emitted (the
     /// `instance_count` of the draw it fills). `None` when the pipeline has no filter.
     pub fn fill_count(&self, ctx: &GpuContext) -> Result<Option<u32>, PassError> {
-        let Some(pass) = self
+        let has_filter = self
             .pipeline
             .passes
             .iter()
-            .find(|p| matches!(p.kind, ssbvb_graph::PassKind::RayMarchFilter { .. }))
-        else {
+            .any(|p| matches!(p.kind, ssbvb_graph::PassKind::RayMarchFilter { .. }));
+        if !has_filter {
             return Ok(None);
-        };
-        let r = pass
-            .resource_of("billboard_draw")
-            .expect("the filter binds billboard_draw");
-        let bytes = ctx
-            .read_buffer(self.resources.buffer(r))
-            .map_err(PassError::Gpu)?;
-        Ok(Some(u32::from_le_bytes([
-            bytes[4], bytes[5], bytes[6], bytes[7],
-        ])))
+        }
+        crate::ray_march_filter::fill_count(ctx, self).map(Some)
     }
 
     /// The output texture.

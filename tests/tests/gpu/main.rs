@@ -3,6 +3,7 @@
 
 mod all_models;
 mod billboards;
+mod embed;
 mod empty_space;
 mod pipeline;
 mod ray_march_filter;
