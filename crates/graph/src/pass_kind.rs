@@ -49,10 +49,21 @@ pub enum PassKind {
     },
     /// Deferred lighting (directional + ambient Blinn-Phong) into the output colour.
     Composite,
+    /// Baseline: per pixel, a plain cell-by-cell Amanatides–Woo DDA over a dense 3D texture
+    /// of the visible object's LOD, writing the same G-buffer as the billboards (stencil =
+    /// voxel).
+    DenseDda {
+        /// Most DDA steps (cells) per ray and instance.
+        #[serde(default = "default_dense_max_steps")]
+        max_steps: u32,
+    },
 }
 
 fn default_max_steps() -> u32 {
     1024
+}
+fn default_dense_max_steps() -> u32 {
+    4096
 }
 fn one() -> f32 {
     1.0
@@ -79,6 +90,7 @@ pub const KIND_NAMES: &[&str] = &[
     "Triangles",
     "Smooth",
     "Composite",
+    "DenseDda",
 ];
 
 /// Whether a slot is read or written by the pass.
@@ -238,6 +250,7 @@ impl PassKind {
             PassKind::Triangles => "Triangles",
             PassKind::Smooth { .. } => "Smooth",
             PassKind::Composite => "Composite",
+            PassKind::DenseDda { .. } => "DenseDda",
         }
     }
 
@@ -258,6 +271,9 @@ impl PassKind {
                 min_dist: default_min_dist(),
             },
             PassKind::Composite,
+            PassKind::DenseDda {
+                max_steps: default_dense_max_steps(),
+            },
         ]
     }
 
@@ -271,6 +287,7 @@ impl PassKind {
             PassKind::Triangles => "triangles.wgsl",
             PassKind::Smooth { .. } => "smooth.wgsl",
             PassKind::Composite => "composite.wgsl",
+            PassKind::DenseDda { .. } => "dense_dda.wgsl",
         }
     }
 
@@ -348,7 +365,7 @@ impl PassKind {
             PassKind::EmptySpacePrepass => EMPTY_SPACE,
             PassKind::RayMarchFilter { .. } => FILTER,
             PassKind::Billboards { .. } => BILLBOARDS,
-            PassKind::Triangles => &GBUFFER_WRITES,
+            PassKind::Triangles | PassKind::DenseDda { .. } => &GBUFFER_WRITES,
             PassKind::Smooth { .. } => SMOOTH,
             PassKind::Composite => COMPOSITE,
         }
@@ -358,7 +375,7 @@ impl PassKind {
     pub fn parameter_problems(&self) -> Vec<String> {
         let mut out = Vec::new();
         match *self {
-            PassKind::RayMarchFilter { max_steps: 0 } => {
+            PassKind::RayMarchFilter { max_steps: 0 } | PassKind::DenseDda { max_steps: 0 } => {
                 out.push("max_steps must be at least 1".to_string());
             }
             PassKind::Billboards { size_scale, .. }

@@ -638,3 +638,77 @@ fn frustum_planes(
         (n(forward * tan_y - up), 0.0),
     ]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn auto_lod_picks_the_level_whose_cell_is_about_one_pixel() {
+        let cam = Camera {
+            fov_y_deg: 90.0,
+            ..Camera::new(DVec3::new(0.0, 0.0, 10.0), DVec3::ZERO)
+        };
+        // tan(45°) = 1: at distance d (to the nearest bounding-sphere point) a screen of
+        // height h shows 2d world units, so a cell of 2 / 2^L projects to h / (d 2^L) px.
+        let xf = DAffine3::IDENTITY;
+        let d = 10.0 - 3f64.sqrt();
+        let h = 720u32;
+        let want = (h as f64 / d).log2().round() as u32;
+        assert_eq!(
+            choose_level(LodPolicy::Auto { bias: 0 }, &xf, &cam, (1280, h), 12),
+            want
+        );
+        assert_eq!(
+            choose_level(LodPolicy::Auto { bias: 1 }, &xf, &cam, (1280, h), 12),
+            want + 1
+        );
+        assert_eq!(
+            choose_level(LodPolicy::Auto { bias: -20 }, &xf, &cam, (1280, h), 12),
+            0
+        );
+        // Twice the distance: one level coarser; a far object clamps at 0, a near one at max.
+        let far = Camera {
+            position: DVec3::new(0.0, 0.0, 2.0 * d + 3f64.sqrt()),
+            ..cam
+        };
+        assert_eq!(
+            choose_level(LodPolicy::Auto { bias: 0 }, &xf, &far, (1280, h), 12),
+            want - 1
+        );
+        let very_far = Camera {
+            position: DVec3::new(0.0, 0.0, 1e9),
+            ..cam
+        };
+        assert_eq!(
+            choose_level(LodPolicy::Auto { bias: 0 }, &xf, &very_far, (1280, h), 12),
+            0
+        );
+        let inside = Camera {
+            position: DVec3::new(0.0, 0.0, 0.5),
+            ..cam
+        };
+        assert_eq!(
+            choose_level(LodPolicy::Auto { bias: 0 }, &xf, &inside, (1280, h), 9),
+            9
+        );
+        assert_eq!(
+            choose_level(LodPolicy::Fixed(15), &xf, &cam, (1280, h), 9),
+            9
+        );
+    }
+
+    #[test]
+    fn frustum_planes_contain_the_view_axis_and_exclude_what_is_behind() {
+        let (r, u, f) = (DVec3::X, DVec3::Y, DVec3::NEG_Z);
+        let planes = frustum_planes(r, u, f, 1.0, 1.0);
+        let inside = |p: DVec3, radius: f64| planes.iter().all(|(n, d)| n.dot(p) + d >= -radius);
+        assert!(inside(DVec3::new(0.0, 0.0, -5.0), 0.1));
+        assert!(!inside(DVec3::new(0.0, 0.0, 5.0), 0.1), "behind the camera");
+        assert!(!inside(DVec3::new(20.0, 0.0, -5.0), 1.0), "far right");
+        assert!(
+            inside(DVec3::new(5.5, 0.0, -5.0), 1.0),
+            "sphere crossing the right plane"
+        );
+    }
+}

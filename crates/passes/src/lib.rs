@@ -8,6 +8,7 @@
 
 pub mod billboards;
 pub mod composite;
+pub mod dense_dda;
 pub mod embed;
 pub mod empty_space;
 pub mod frame;
@@ -78,6 +79,7 @@ fn is_implemented(kind: &PassKind) -> bool {
             | PassKind::Composite
             | PassKind::Billboards { .. }
             | PassKind::Triangles
+            | PassKind::DenseDda { .. }
     )
 }
 
@@ -103,6 +105,9 @@ pub fn create_pass(
         )?)),
         PassKind::Smooth { .. } => Ok(Box::new(smooth::Smooth::new(ctx, scene, pipeline, pass)?)),
         PassKind::Composite => Ok(Box::new(composite::Composite::new(
+            ctx, scene, pipeline, pass,
+        )?)),
+        PassKind::DenseDda { .. } => Ok(Box::new(dense_dda::DenseDda::new(
             ctx, scene, pipeline, pass,
         )?)),
     }

@@ -26,6 +26,10 @@ const FILES: &[(&str, &str)] = &[
         "triangles.wgsl",
         include_str!("../../../shaders/triangles.wgsl"),
     ),
+    (
+        "dense_dda.wgsl",
+        include_str!("../../../shaders/dense_dda.wgsl"),
+    ),
     ("smooth.wgsl", include_str!("../../../shaders/smooth.wgsl")),
     (
         "composite.wgsl",

@@ -3,6 +3,7 @@
 
 mod all_models;
 mod billboards;
+mod dense_dda;
 mod embed;
 mod empty_space;
 mod pipeline;

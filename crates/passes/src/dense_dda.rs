@@ -1,0 +1,268 @@
+//! `dense_dda`: the dense-DDA baseline (`DenseDda`; `shaders/dense_dda.wgsl`).
+//!
+//! A render pass drawing one fullscreen triangle into the G-buffer (the same attachments,
+//! formats, clear/load rules, `Greater` depth test and stencil = voxel as the billboards;
+//! see [`crate::triangles`]): per pixel the fragment shader casts the pixel's ray through
+//! every visible instance with a plain cell-by-cell Amanatides–Woo DDA over a **dense**
+//! `R32Uint` 3D texture (voxel id + 1, 0 = empty) and writes the nearest hit with its exact
+//! depth (`frag_depth`) and the entered face's normal. The shared smoothing and composite
+//! run after it unchanged.
+//!
+//! The dense texture of an (object, level) pair is built lazily, the first frame it is
+//! needed, from the asset's sparse lookup: each resident 16³ page is written with
+//! `queue.write_texture` into a zero-initialized texture, then cached for later frames.
+//!
+//! # Limits
+//!
+//! - Levels above [`MAX_DENSE_LEVEL`] (8: 256³ cells × 4 bytes = 64 MiB) are refused with
+//!   [`PassError::TooLarge`].
+//! - One dense texture is bound per frame, so every visible instance must belong to the
+//!   same object and use the same LOD level (e.g. `LodPolicy::Fixed`); otherwise the frame
+//!   fails with [`PassError::BadScene`].
+//! - Cost is O(instances × cells along the ray) per pixel: no empty-space skipping.
+
+use std::collections::HashMap;
+
+use ssbvb_gpu::{GpuContext, wgpu};
+use ssbvb_graph::{PassKind, ResolvedPipeline, ScheduledPass};
+use ssbvb_voxel::asset::{EMPTY_PAGE, PAGE_CELLS, PAGE_SIZE, SparseLookup};
+
+use crate::billboards::STENCIL_VOXEL;
+use crate::frame::Recorder;
+use crate::gpu_scene::GpuScene;
+use crate::triangles::{begin_gbuffer_pass, gbuffer_depth_stencil, gbuffer_targets};
+use crate::{PassError, PassNode, shaders};
+
+/// The finest level a dense texture is built for (256³ `u32` = 64 MiB).
+pub const MAX_DENSE_LEVEL: u32 = 8;
+
+/// The compiled dense-DDA pass and its cache of dense textures.
+pub struct DenseDda {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    /// `(object, level)` → dense texture view.
+    textures: HashMap<(usize, u32), wgpu::TextureView>,
+}
+
+impl DenseDda {
+    /// Compiles the pipeline for the formats bound to `pass`; `max_steps` becomes the WGSL
+    /// override `MAX_STEPS`.
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        pipeline: &ResolvedPipeline,
+        pass: &ScheduledPass,
+    ) -> Result<Self, PassError> {
+        let PassKind::DenseDda { max_steps } = pass.kind else {
+            return Err(PassError::Shader(format!(
+                "pass `{}` is not a DenseDda",
+                pass.name
+            )));
+        };
+        let module = ctx.shader("dense_dda.wgsl", &shaders::source("dense_dda.wgsl")?)?;
+        let targets = gbuffer_targets(ctx, pipeline, pass);
+        let depth_stencil = gbuffer_depth_stencil(ctx, pipeline, pass);
+        let label = format!("pass `{}`: dense_dda pipeline", pass.name);
+        let (pipeline, layout) = ctx.validated(&label, |d| {
+            let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("dense_dda"),
+                entries: &[wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Uint,
+                        view_dimension: wgpu::TextureViewDimension::D3,
+                        multisampled: false,
+                    },
+                    count: None,
+                }],
+            });
+            let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("dense_dda"),
+                bind_group_layouts: &[Some(&scene.layout), Some(&layout)],
+                immediate_size: 0,
+            });
+            let constants = [("MAX_STEPS", f64::from(max_steps))];
+            let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("dense_dda"),
+                layout: Some(&pl),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &constants,
+                        ..Default::default()
+                    },
+                    targets: &targets,
+                }),
+                primitive: Default::default(),
+                depth_stencil: Some(depth_stencil),
+                multisample: Default::default(),
+                multiview_mask: None,
+                cache: None,
+            });
+            (pipeline, layout)
+        })?;
+        Ok(Self {
+            pipeline,
+            layout,
+            textures: HashMap::new(),
+        })
+    }
+
+    /// The (object, level) every visible instance uses, or `None` when nothing is visible.
+    fn chosen(scene: &GpuScene) -> Result<Option<(usize, u32)>, PassError> {
+        let Some(first) = scene.visible.first() else {
+            return Ok(None);
+        };
+        let key = (first.object, first.level);
+        if let Some(other) = scene.visible.iter().find(|v| (v.object, v.level) != key) {
+            return Err(PassError::BadScene(format!(
+                "DenseDda binds one dense texture per frame: every visible instance must use \
+                 the same object and level, but object {} level {} and object {} level {} are \
+                 both visible (use one object and a fixed LOD)",
+                key.0, key.1, other.object, other.level
+            )));
+        }
+        if key.1 > MAX_DENSE_LEVEL {
+            return Err(PassError::TooLarge(format!(
+                "DenseDda: object {} at level {} needs a dense {n}³ texture ({} MiB); the \
+                 dense baseline supports levels up to {MAX_DENSE_LEVEL} (256³, 64 MiB)",
+                key.0,
+                key.1,
+                ((1u64 << (3 * key.1)) * 4) >> 20,
+                n = 1u64 << key.1,
+            )));
+        }
+        Ok(Some(key))
+    }
+}
+
+/// A dense `R32Uint` texture of a lookup (voxel id + 1, 0 empty), written page by page.
+fn dense_texture(ctx: &GpuContext, lookup: &SparseLookup) -> Result<wgpu::TextureView, PassError> {
+    let n = 1u32 << lookup.level;
+    let label = format!("dense_dda texture level {}", lookup.level);
+    let texture = ctx.validated(&label, |d| {
+        d.create_texture(&wgpu::TextureDescriptor {
+            label: Some(&label),
+            size: wgpu::Extent3d {
+                width: n,
+                height: n,
+                depth_or_array_layers: n,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D3,
+            format: wgpu::TextureFormat::R32Uint,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        })
+    })?;
+    // A page's extent (levels below 4: the grid is smaller than its single page).
+    let e = n.min(PAGE_SIZE);
+    let ppa = lookup.pages_per_axis;
+    let mut block = vec![0u32; (e * e * e) as usize];
+    for pz in 0..ppa {
+        for py in 0..ppa {
+            for px in 0..ppa {
+                let page = lookup.page_table[(px + ppa * (py + ppa * pz)) as usize];
+                if page == EMPTY_PAGE {
+                    continue;
+                }
+                let src = &lookup.pool[page as usize * PAGE_CELLS..][..PAGE_CELLS];
+                for z in 0..e {
+                    for y in 0..e {
+                        let s = (PAGE_SIZE * (y + PAGE_SIZE * z)) as usize;
+                        let t = (e * (y + e * z)) as usize;
+                        block[t..t + e as usize].copy_from_slice(&src[s..s + e as usize]);
+                    }
+                }
+                ctx.queue.write_texture(
+                    wgpu::TexelCopyTextureInfo {
+                        texture: &texture,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d {
+                            x: px * PAGE_SIZE,
+                            y: py * PAGE_SIZE,
+                            z: pz * PAGE_SIZE,
+                        },
+                        aspect: wgpu::TextureAspect::All,
+                    },
+                    bytemuck::cast_slice(&block),
+                    wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(e * 4),
+                        rows_per_image: Some(e),
+                    },
+                    wgpu::Extent3d {
+                        width: e,
+                        height: e,
+                        depth_or_array_layers: e,
+                    },
+                );
+            }
+        }
+    }
+    Ok(texture.create_view(&Default::default()))
+}
+
+impl PassNode for DenseDda {
+    fn record(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder<'_>,
+    ) -> Result<(), PassError> {
+        let chosen = Self::chosen(rec.scene)?;
+        let bind_group = match chosen {
+            Some((object, level)) => {
+                let view = match self.textures.entry((object, level)) {
+                    std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
+                    std::collections::hash_map::Entry::Vacant(e) => {
+                        let lod = &rec.scene.scene.objects[object].asset.lods[level as usize];
+                        e.insert(dense_texture(rec.gpu, &lod.lookup)?)
+                    }
+                };
+                Some(
+                    rec.gpu
+                        .device
+                        .create_bind_group(&wgpu::BindGroupDescriptor {
+                            label: Some("dense_dda"),
+                            layout: &self.layout,
+                            entries: &[wgpu::BindGroupEntry {
+                                binding: 0,
+                                resource: wgpu::BindingResource::TextureView(view),
+                            }],
+                        }),
+                )
+            }
+            None => None,
+        };
+        // Always begin the pass, so its clears happen even when nothing is visible.
+        let mut pass = begin_gbuffer_pass(encoder, rec, STENCIL_VOXEL);
+        if let Some(bg) = &bind_group {
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &rec.scene.bind_group, &[]);
+            pass.set_bind_group(1, bg, &[]);
+            pass.draw(0..3, 0..1);
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn shader_declares_the_dense_texture_and_max_steps() {
+        let src = crate::shaders::source("dense_dda.wgsl").unwrap();
+        assert!(src.contains("var dense: texture_3d<u32>"));
+        assert!(src.contains("override MAX_STEPS: u32"));
+        assert!(src.contains("const STENCIL_VOXEL: u32 = 1u;"));
+        assert_eq!(crate::billboards::STENCIL_VOXEL, 1);
+    }
+}
