@@ -190,6 +190,13 @@ pub fn write_png_rgba8(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Res
             .map_err(|e| err(e.to_string()))?;
     }
     tmp.as_file().sync_all().map_err(|e| err(e.to_string()))?;
+    // tempfile creates files 0600; an image is an ordinary user file.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(tmp.path(), std::fs::Permissions::from_mode(0o644))
+            .map_err(|e| err(e.to_string()))?;
+    }
     tmp.persist(path).map_err(|e| err(e.error.to_string()))?;
     Ok(())
 }
