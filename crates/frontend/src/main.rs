@@ -1,5 +1,6 @@
 //! The `ssbvb` command-line tool.
 
+mod bench_cmd;
 mod pipeline_cmd;
 mod progress;
 mod render_cmd;
@@ -26,6 +27,9 @@ enum Command {
     /// Render one frame of a scene or model to a PNG (GPU SSBVB pipeline, or the CPU
     /// reference with --reference).
     Render(render_cmd::RenderArgs),
+    /// Benchmark techniques × levels × resolutions against the CPU reference (CSV, JSON,
+    /// Markdown).
+    Bench(bench_cmd::BenchArgs),
     /// Voxelize a model: every LOD, sparse lookup pages, proxy meshes; cached on disk.
     Voxelize(voxelize_cmd::VoxelizeArgs),
     /// Print the GPU adapter ssbvb would use (set SSBVB_ADAPTER / WGPU_BACKEND to choose).
@@ -37,6 +41,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Pipeline(c) => pipeline_cmd::run(&c),
         Command::Adapter => adapter(),
+        Command::Bench(a) => bench_cmd::run(&a).map(|_| ExitCode::SUCCESS),
         Command::Render(a) => render_cmd::run(&a).map(|_| ExitCode::SUCCESS),
         Command::Voxelize(a) => voxelize_cmd::run(&a).map(|_| ExitCode::SUCCESS),
     };

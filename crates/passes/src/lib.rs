@@ -13,6 +13,7 @@ pub mod embed;
 pub mod empty_space;
 pub mod frame;
 pub mod gpu_scene;
+pub mod measure;
 pub mod ray_march_filter;
 pub mod scene;
 pub mod shaders;

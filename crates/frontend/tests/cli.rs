@@ -1,0 +1,163 @@
+//! The `ssbvb` binary as users run it: exit codes, the CLI contracts, error messages.
+
+use std::path::Path;
+use std::process::Command;
+
+fn ssbvb() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_ssbvb"));
+    c.current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."));
+    c.env(
+        "WGPU_BACKEND",
+        std::env::var("WGPU_BACKEND").unwrap_or_else(|_| "vulkan".into()),
+    );
+    c
+}
+
+const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
+
+fn check(src: &str) -> (bool, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("p.ron");
+    std::fs::write(&p, src).unwrap();
+    let out = ssbvb()
+        .args(["pipeline", "check"])
+        .arg(&p)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr),
+    )
+}
+
+fn line_of(src: &str, needle: &str) -> usize {
+    src.lines().position(|l| l.contains(needle)).unwrap() + 1
+}
+
+#[test]
+fn pipeline_check_prints_the_schedule_and_names_culprits() {
+    let (ok, text) = check(SSBVB);
+    assert!(ok, "{text}");
+    assert!(
+        text.contains("0. empty_space")
+            && text.contains("5. composite")
+            && text.contains("pruned passes: none"),
+        "{text}"
+    );
+
+    let src = SSBVB.replace("kind: Composite,", "kind: Compsite,");
+    let (ok, text) = check(&src);
+    assert!(!ok);
+    assert!(
+        text.contains(&format!("p.ron:{}:", line_of(&src, "Compsite")))
+            && text.contains("did you mean `Composite`"),
+        "{text}"
+    );
+
+    let src = SSBVB.replace(
+        r#"(name: "empty_space", kind: EmptySpacePrepass, writes: ["entry", "prepass_depth"]),"#,
+        "",
+    );
+    let (ok, text) = check(&src);
+    assert!(!ok);
+    assert!(
+        text.contains("pass `filter` reads resource `entry`, but no pass writes it"),
+        "{text}"
+    );
+    assert!(
+        text.contains(&format!("p.ron:{}:", line_of(&src, r#"reads: ["entry"]"#))),
+        "{text}"
+    );
+
+    let src = SSBVB.replace(
+        r#"writes: ["ssbvb", "billboard_draw"],"#,
+        r#"writes: ["ssbvb", "billboard_draw"], after: ["composite"],"#,
+    );
+    let (ok, text) = check(&src);
+    assert!(!ok);
+    assert!(
+        text.contains("cycle between passes")
+            && text.contains("filter")
+            && text.contains("composite"),
+        "{text}"
+    );
+}
+
+#[test]
+fn bad_inputs_give_clear_errors() {
+    let out = ssbvb()
+        .args([
+            "render",
+            "/nonexistent/model.obj",
+            "--reference",
+            "-o",
+            "/tmp/never.png",
+        ])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/model.obj"));
+    let out = ssbvb().args(["render", "--size", "0x10"]).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("size"));
+}
+
+#[test]
+fn render_json_and_bench_quick() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("r.png");
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/models/bunny.obj");
+    let out = ssbvb()
+        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+        .arg("render")
+        .arg(&model)
+        .args([
+            "--level",
+            "5",
+            "--size",
+            "64x48",
+            "--camera-pos",
+            "0,0.3,2.6",
+            "--json",
+            "-o",
+        ])
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&out.stdout).expect("stdout is one JSON object");
+    assert_eq!(json["mode"], "gpu");
+    assert!(json["adapter"].as_str().unwrap().len() > 3);
+    let fill = json["ssbvb_fill_count"].as_u64().unwrap();
+    assert!(fill > 100 && fill <= 64 * 48, "{fill}");
+    assert!(png.is_file());
+
+    let out = ssbvb()
+        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+        .args(["bench", "--preset", "quick", "--out"])
+        .arg(dir.path().join("bench"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("adapter:") && stdout.contains("| ssbvb-flat |"),
+        "{stdout}"
+    );
+    let csv = std::fs::read_to_string(dir.path().join("bench/bench.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 6, "{csv}");
+    for r in rows {
+        let iou: f64 = r.split(',').nth(12).unwrap().parse().unwrap();
+        assert!(iou >= 0.97, "{r}");
+    }
+}

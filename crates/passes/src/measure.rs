@@ -1,0 +1,76 @@
+//! What a rendered frame shows, per pixel, for accuracy against the CPU reference
+//! (`ssbvb_voxel::accuracy`): read back from the G-buffer and, when the pipeline has a
+//! ray-march filter, the voxel of each pixel's SSBVB slot.
+
+use ssbvb_gpu::{GpuContext, wgpu};
+use ssbvb_voxel::accuracy::GpuHit;
+
+use crate::PassError;
+use crate::frame::Renderer;
+
+/// IEEE half → f32.
+pub fn f16_to_f32(h: u16) -> f32 {
+    let s = if h >> 15 == 1 { -1.0 } else { 1.0 };
+    let e = ((h >> 10) & 0x1f) as i32;
+    let m = (h & 0x3ff) as f32;
+    match e {
+        0 => s * m * 2f32.powi(-24),
+        31 if m == 0.0 => s * f32::INFINITY,
+        31 => f32::NAN,
+        _ => s * (1.0 + m / 1024.0) * 2f32.powi(e - 15),
+    }
+}
+
+fn read(
+    ctx: &GpuContext,
+    r: &Renderer,
+    name: &str,
+) -> Result<ssbvb_gpu::readback::TextureData, PassError> {
+    let i = r.resource(name).ok_or_else(|| {
+        PassError::BadScene(format!(
+            "the pipeline has no live resource `{name}` to measure"
+        ))
+    })?;
+    Ok(ctx.read_texture(&r.resources.texture(i).texture, wgpu::TextureAspect::All)?)
+}
+
+/// Per pixel of the last frame (row-major, row 0 at the top): the hit the G-buffer shows
+/// (`gbuffer_albedo` alpha > 0), its distance from the eye (from `gbuffer_position`), its
+/// normal (`gbuffer_normal`, Rgba16Float or Rgba32Float) and, with a filter, the voxel cell
+/// of its SSBVB slot (else `[u32::MAX; 3]`, which never counts as the same voxel).
+/// Instance 0 is assumed (single-object scenes).
+pub fn gbuffer_hits(ctx: &GpuContext, r: &Renderer) -> Result<Vec<Option<GpuHit>>, PassError> {
+    let albedo = read(ctx, r, "gbuffer_albedo")?;
+    let pos = read(ctx, r, "gbuffer_position")?.as_f32();
+    let normal_tex = read(ctx, r, "gbuffer_normal")?;
+    let normal: Vec<f32> = match normal_tex.format {
+        wgpu::TextureFormat::Rgba16Float => normal_tex
+            .bytes
+            .chunks(2)
+            .map(|h| f16_to_f32(u16::from_le_bytes([h[0], h[1]])))
+            .collect(),
+        _ => normal_tex.as_f32(),
+    };
+    let n = (albedo.width * albedo.height) as usize;
+    let mut cells = vec![[u32::MAX; 3]; n];
+    if r.fill_count(ctx)?.is_some() {
+        for s in crate::ray_march_filter::read_slots(ctx, r)? {
+            if let Some(c) = cells.get_mut(s.pixel as usize) {
+                *c = s.voxel.cell();
+            }
+        }
+    }
+    Ok((0..n)
+        .map(|i| {
+            (albedo.bytes[i * 4 + 3] > 0).then(|| {
+                let p = &pos[i * 4..i * 4 + 3];
+                GpuHit {
+                    instance: 0,
+                    cell: cells[i],
+                    t: (p[0] as f64).hypot(p[1] as f64).hypot(p[2] as f64),
+                    normal: [normal[i * 4], normal[i * 4 + 1], normal[i * 4 + 2]],
+                }
+            })
+        })
+        .collect())
+}
