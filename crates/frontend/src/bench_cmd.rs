@@ -1,18 +1,20 @@
 //! `ssbvb bench`: technique × model × level × resolution on one adapter, with warm-up
 //! frames, timed frames (median and spread), per-pass times, the SSBVB fill count, GPU
-//! memory, and accuracy against the CPU reference. Writes CSV, JSON and a Markdown table.
+//! memory, and accuracy against the CPU reference. Writes CSV, JSON and a Markdown table,
+//! PNG plots, and with `--sweep` (or `--preset full`) speed–accuracy knob sweeps.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::time::Instant;
 
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use glam::{DAffine3, DVec3};
 use serde::Serialize;
-use ssbvb_passes::{GpuScene, LodPolicy, Profiling, Renderer, Scene, VoxelObject};
+use ssbvb_passes::LodPolicy;
 use ssbvb_voxel::camera::Camera;
 
+use crate::bench_plot::{PlotInfo, Series};
+use crate::bench_sweep::{SweepConfig, SweepRow};
 use crate::render_cmd::assets_dir;
 
 /// Benchmark presets.
@@ -36,6 +38,11 @@ pub struct BenchArgs {
     /// Print the results as one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
+    /// Also sweep the knobs of the default SSBVB pipeline one at a time (ray-march
+    /// max_steps, billboard size_scale, smoothing max_i, LOD bias) and write sweeps.csv
+    /// and trade_<knob>.png; always on with `--preset full`.
+    #[arg(long)]
+    pub sweep: bool,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -61,6 +68,11 @@ const TECHNIQUES: &[Technique] = &[
         name: "dense-dda",
         pipeline: "dense_dda.ron",
         max_level: 8,
+    },
+    Technique {
+        name: "octree",
+        pipeline: "octree_ray_cast.ron",
+        max_level: 16,
     },
 ];
 
@@ -96,9 +108,13 @@ struct Report {
     camera: Camera,
     rows: Vec<Row>,
     skipped: Vec<String>,
+    /// Knob sweeps (empty without `--sweep`).
+    sweeps: Vec<SweepRow>,
+    /// The PNG plots written next to the report.
+    plots: Vec<PlotInfo>,
 }
 
-fn median(v: &mut [f64]) -> f64 {
+pub(crate) fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
 }
@@ -155,6 +171,22 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             }
         }
     }
+    let sweeps = if args.sweep || matches!(args.preset, Preset::Full) {
+        let cfg = sweep_config(args.preset);
+        let (asset, _) = ssbvb_voxel::cache::load_or_prepare(
+            &model,
+            cfg.level,
+            None,
+            &ssbvb_voxel::progress::NoProgress,
+        )
+        .with_context(|| format!("preparing {}", model.display()))?;
+        crate::bench_sweep::run_sweeps(&ctx, &Arc::new(asset), &camera, &cfg, !args.json)?
+    } else {
+        Vec::new()
+    };
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let plots = write_plots(&args.out, &rows, &sweeps)?;
     let report = Report {
         adapter: ctx.report().to_string(),
         adapter_is_software: software,
@@ -167,6 +199,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         camera,
         rows,
         skipped,
+        sweeps,
+        plots,
     };
     write_outputs(&args.out, &report)?;
     if args.json {
@@ -174,6 +208,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     } else {
         print!("{}", markdown(&report));
         println!("wrote {}/bench.{{csv,json,md}}", args.out.display());
+        if !report.sweeps.is_empty() {
+            println!("wrote {}/sweeps.csv", args.out.display());
+        }
+        for p in &report.plots {
+            println!("wrote {}/{}", args.out.display(), p.file);
+        }
     }
     Ok(())
 }
@@ -192,45 +232,23 @@ fn run_one(
     voxels: usize,
 ) -> Result<Row> {
     let (file, mode) = t.pipeline.split_once('#').unwrap_or((t.pipeline, ""));
-    let path = assets_dir().join("pipelines").join(file);
-    let mut src =
-        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    let (mut src, label) = crate::bench_sweep::pipeline_source(file)?;
     if !mode.is_empty() {
         src = src.replace("Billboards(mode: Flat", &format!("Billboards(mode: {mode}"));
     }
-    let pipeline = ssbvb_graph::resolve_str(&src, &path.display().to_string())
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
-    let scene = Scene {
-        objects: vec![VoxelObject {
-            asset: asset.clone(),
-            instances: vec![DAffine3::IDENTITY],
-            lod: LodPolicy::Fixed(level),
-        }],
-        ..Default::default()
+    let setup = crate::bench_sweep::Setup {
+        ctx,
+        asset,
+        lod: LodPolicy::Fixed(level),
+        level,
+        size,
+        camera,
+        reference,
+        warmup,
+        frames,
     };
-    let mut gpu_scene = GpuScene::new(ctx, scene)?;
-    let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, size)?;
-    for _ in 0..warmup {
-        renderer.render(ctx, &mut gpu_scene, camera, Profiling::Off)?;
-    }
-    ctx.wait_idle()?;
-    let mut times = Vec::new();
-    for _ in 0..frames.max(1) {
-        let t0 = Instant::now();
-        renderer.render(ctx, &mut gpu_scene, camera, Profiling::Off)?;
-        ctx.wait_idle()?;
-        times.push(t0.elapsed().as_secs_f64() * 1e3);
-    }
-    let profiling = if ctx.report().is_software {
-        Profiling::TimestampsAndWall
-    } else {
-        Profiling::Timestamps
-    };
-    let stats = renderer.render(ctx, &mut gpu_scene, camera, profiling)?;
-    let fill = renderer.fill_count(ctx)?;
-    let hits = ssbvb_passes::measure::gbuffer_hits(ctx, &renderer)?;
-    let acc = ssbvb_voxel::accuracy::compare(reference, &hits, &[2.0 / (1u64 << level) as f64])
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let m = crate::bench_sweep::measure(&setup, &src, &label, false)?;
+    let (fill, acc, mut times) = (m.fill, m.acc, m.times);
     let (min, max) = times
         .iter()
         .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
@@ -244,10 +262,10 @@ fn run_one(
         frame_ms_median: median(&mut times),
         frame_ms_min: min,
         frame_ms_max: max,
-        passes: stats.passes,
+        passes: m.passes,
         fill_count: fill,
         voxels,
-        gpu_memory_bytes: gpu_scene.total_memory(),
+        gpu_memory_bytes: m.gpu_memory,
         coverage_iou: acc.coverage_iou,
         same_voxel_rate: fill.map(|_| acc.same_voxel_rate),
         depth_error_voxels_median: acc.depth_error_voxels.median,
@@ -280,7 +298,121 @@ fn markdown(r: &Report) -> String {
         s.push_str(&format!("\nskipped: {k}"));
     }
     s.push('\n');
+    s.push_str(&crate::bench_sweep::markdown(&r.sweeps));
+    if !r.plots.is_empty() {
+        s.push_str(&crate::bench_plot::markdown(&r.plots));
+    }
     s
+}
+
+/// Sweep sizes of a preset.
+fn sweep_config(preset: Preset) -> SweepConfig {
+    match preset {
+        Preset::Quick => SweepConfig {
+            size: (160, 120),
+            level: 6,
+            warmup: 1,
+            frames: 2,
+            max_steps: &[8, 32, 1024],
+            size_scale: &[0.9, 1.0, 1.3],
+            max_i: &[0.0, 1.0, 3.0],
+            lod_bias: &[-2, -1, 0],
+        },
+        Preset::Full => SweepConfig {
+            size: (640, 480),
+            level: 9,
+            warmup: 3,
+            frames: 10,
+            max_steps: &[4, 8, 16, 32, 64, 1024],
+            size_scale: &[0.8, 0.9, 1.0, 1.1, 1.3],
+            max_i: &[0.0, 1.0, 2.0, 3.0],
+            lod_bias: &[-3, -2, -1, 0],
+        },
+    }
+}
+
+/// time_vs_level.png, time_vs_resolution.png (main matrix) and trade_<knob>.png (sweeps).
+fn write_plots(dir: &Path, rows: &[Row], sweeps: &[SweepRow]) -> Result<Vec<PlotInfo>> {
+    use std::collections::BTreeMap;
+    let mut plots = Vec::new();
+    type Points = Vec<(f64, f64)>;
+    let mut by_size: BTreeMap<(&str, u32, u32), Points> = BTreeMap::new();
+    let mut by_level: BTreeMap<(&str, u32), Points> = BTreeMap::new();
+    for r in rows {
+        by_size
+            .entry((r.technique, r.width, r.height))
+            .or_default()
+            .push((r.level as f64, r.frame_ms_median));
+        by_level
+            .entry((r.technique, r.level))
+            .or_default()
+            .push(((r.width * r.height) as f64 / 1e6, r.frame_ms_median));
+    }
+    let sorted = |mut p: Vec<(f64, f64)>| {
+        p.sort_by(|a, b| a.0.total_cmp(&b.0));
+        p
+    };
+    if !rows.is_empty() {
+        let series: Vec<Series> = by_size
+            .into_iter()
+            .map(|((t, w, h), p)| Series {
+                name: format!("{t} {w}x{h}"),
+                points: sorted(p),
+            })
+            .collect();
+        plots.push(crate::bench_plot::plot(
+            dir,
+            "time_vs_level.png",
+            "Frame time vs level (per technique and resolution)",
+            ("level", "frame ms (median)"),
+            &series,
+        )?);
+        let series: Vec<Series> = by_level
+            .into_iter()
+            .map(|((t, l), p)| Series {
+                name: format!("{t} level {l}"),
+                points: sorted(p),
+            })
+            .collect();
+        plots.push(crate::bench_plot::plot(
+            dir,
+            "time_vs_resolution.png",
+            "Frame time vs resolution (per technique and level)",
+            ("megapixels", "frame ms (median)"),
+            &series,
+        )?);
+    }
+    let mut knobs: Vec<&str> = sweeps.iter().map(|r| r.knob).collect();
+    knobs.dedup();
+    for knob in knobs {
+        let pts: Vec<&SweepRow> = sweeps
+            .iter()
+            .filter(|r| r.knob == knob && r.psnr_pixels > 0)
+            .collect();
+        let values: Vec<String> = pts.iter().map(|r| r.value.to_string()).collect();
+        // RMSE in 8-bit levels from the PSNR (0 where the images are identical).
+        let points = pts
+            .iter()
+            .map(|r| {
+                let rmse = r.psnr_db.map_or(0.0, |p| 255.0 * 10f64.powf(-p / 20.0));
+                (r.frame_ms_median, rmse)
+            })
+            .collect();
+        plots.push(crate::bench_plot::plot(
+            dir,
+            &format!("trade_{knob}.png"),
+            &format!("Shaded error vs frame time, {knob} swept"),
+            (
+                "frame ms (median)",
+                "composite RMSE vs reference (8-bit levels, pixels both cover)",
+            ),
+            &[Series {
+                name: format!("{knob} = {} (in this order)", values.join(", ")),
+                points,
+            }],
+        )?);
+    }
+    Ok(plots)
 }
 
 /// Writes bench.csv, bench.json and bench.md atomically into `dir`.
@@ -311,11 +443,15 @@ fn write_outputs(dir: &Path, r: &Report) -> Result<()> {
             x.normal_error_deg_median
         ));
     }
-    for (name, body) in [
+    let mut files = vec![
         ("bench.csv", csv),
         ("bench.json", serde_json::to_string_pretty(r)?),
         ("bench.md", markdown(r)),
-    ] {
+    ];
+    if !r.sweeps.is_empty() {
+        files.push(("sweeps.csv", crate::bench_sweep::csv(&r.sweeps)));
+    }
+    for (name, body) in files {
         let path = dir.join(name);
         let tmp = dir.join(format!(".{name}.tmp"));
         std::fs::write(&tmp, body).with_context(|| format!("writing {}", tmp.display()))?;

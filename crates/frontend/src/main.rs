@@ -1,6 +1,8 @@
 //! The `ssbvb` command-line tool.
 
 mod bench_cmd;
+mod bench_plot;
+mod bench_sweep;
 mod pipeline_cmd;
 mod progress;
 mod render_cmd;

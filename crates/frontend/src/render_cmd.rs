@@ -259,7 +259,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 }
 
 /// RGBA8 bytes of an output texture (sRGB or not, RGBA or BGRA).
-fn to_rgba8(t: &ssbvb_gpu::readback::TextureData) -> Result<Vec<u8>> {
+pub(crate) fn to_rgba8(t: &ssbvb_gpu::readback::TextureData) -> Result<Vec<u8>> {
     use ssbvb_gpu::wgpu::TextureFormat as F;
     match t.format {
         F::Rgba8Unorm | F::Rgba8UnormSrgb => Ok(t.bytes.clone()),

@@ -155,9 +155,66 @@ fn render_json_and_bench_quick() {
     );
     let csv = std::fs::read_to_string(dir.path().join("bench/bench.csv")).unwrap();
     let rows: Vec<&str> = csv.lines().skip(1).collect();
-    assert_eq!(rows.len(), 6, "{csv}");
+    assert_eq!(rows.len(), 8, "{csv}");
     for r in rows {
         let iou: f64 = r.split(',').nth(12).unwrap().parse().unwrap();
         assert!(iou >= 0.97, "{r}");
+    }
+}
+
+#[test]
+fn bench_quick_sweep_writes_sweeps_and_plots() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = ssbvb()
+        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+        .args(["bench", "--preset", "quick", "--sweep", "--out"])
+        .arg(dir.path().join("bench"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("## Knob sweeps"), "{stdout}");
+    let csv = std::fs::read_to_string(dir.path().join("bench/sweeps.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    // Four knobs, three values each, at 160x120.
+    assert_eq!(rows.len(), 12, "{csv}");
+    for knob in ["max_steps", "size_scale", "max_i", "lod_bias"] {
+        let n = rows.iter().filter(|r| r[col("knob")] == knob).count();
+        assert_eq!(n, 3, "{knob}: {csv}");
+    }
+    for r in &rows {
+        assert_eq!((r[col("width")], r[col("height")]), ("160", "120"), "{csv}");
+        let ms: f64 = r[col("frame_ms_median")].parse().unwrap();
+        assert!(ms > 0.0, "{csv}");
+        let iou: f64 = r[col("coverage_iou")].parse().unwrap();
+        assert!((0.0..=1.0).contains(&iou), "{csv}");
+    }
+    // The default pipeline matches the reference closely, with a finite shaded PSNR.
+    let default = rows
+        .iter()
+        .find(|r| r[col("knob")] == "max_steps" && r[col("is_default")] == "true")
+        .unwrap();
+    let iou: f64 = default[col("coverage_iou")].parse().unwrap();
+    assert!(iou >= 0.97, "{csv}");
+    let psnr: f64 = default[col("psnr_db")].parse().unwrap();
+    assert!(psnr > 15.0, "{csv}");
+    let json: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("bench/bench.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(json["sweeps"].as_array().unwrap().len(), 12);
+    for png in ["time_vs_level.png", "trade_max_steps.png"] {
+        let bytes = std::fs::read(dir.path().join("bench").join(png)).unwrap();
+        assert!(bytes.starts_with(b"\x89PNG"), "{png}");
     }
 }

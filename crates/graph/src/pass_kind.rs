@@ -57,6 +57,15 @@ pub enum PassKind {
         #[serde(default = "default_dense_max_steps")]
         max_steps: u32,
     },
+    /// Baseline: per pixel, a stack-based front-to-back ray cast through the sparse voxel
+    /// octree (`Svo`) of the visible object down to each instance's LOD level (the
+    /// reference point of the paper, cf. Laine & Karras' ESVO), writing the same G-buffer
+    /// as the billboards (stencil = voxel).
+    OctreeRayCast {
+        /// Most traversal steps (child visits, descents and pops) per ray and instance.
+        #[serde(default = "default_dense_max_steps")]
+        max_steps: u32,
+    },
 }
 
 fn default_max_steps() -> u32 {
@@ -91,6 +100,7 @@ pub const KIND_NAMES: &[&str] = &[
     "Smooth",
     "Composite",
     "DenseDda",
+    "OctreeRayCast",
 ];
 
 /// Whether a slot is read or written by the pass.
@@ -251,6 +261,7 @@ impl PassKind {
             PassKind::Smooth { .. } => "Smooth",
             PassKind::Composite => "Composite",
             PassKind::DenseDda { .. } => "DenseDda",
+            PassKind::OctreeRayCast { .. } => "OctreeRayCast",
         }
     }
 
@@ -274,6 +285,9 @@ impl PassKind {
             PassKind::DenseDda {
                 max_steps: default_dense_max_steps(),
             },
+            PassKind::OctreeRayCast {
+                max_steps: default_dense_max_steps(),
+            },
         ]
     }
 
@@ -288,6 +302,7 @@ impl PassKind {
             PassKind::Smooth { .. } => "smooth.wgsl",
             PassKind::Composite => "composite.wgsl",
             PassKind::DenseDda { .. } => "dense_dda.wgsl",
+            PassKind::OctreeRayCast { .. } => "octree_ray_cast.wgsl",
         }
     }
 
@@ -365,7 +380,9 @@ impl PassKind {
             PassKind::EmptySpacePrepass => EMPTY_SPACE,
             PassKind::RayMarchFilter { .. } => FILTER,
             PassKind::Billboards { .. } => BILLBOARDS,
-            PassKind::Triangles | PassKind::DenseDda { .. } => &GBUFFER_WRITES,
+            PassKind::Triangles | PassKind::DenseDda { .. } | PassKind::OctreeRayCast { .. } => {
+                &GBUFFER_WRITES
+            }
             PassKind::Smooth { .. } => SMOOTH,
             PassKind::Composite => COMPOSITE,
         }
@@ -375,7 +392,9 @@ impl PassKind {
     pub fn parameter_problems(&self) -> Vec<String> {
         let mut out = Vec::new();
         match *self {
-            PassKind::RayMarchFilter { max_steps: 0 } | PassKind::DenseDda { max_steps: 0 } => {
+            PassKind::RayMarchFilter { max_steps: 0 }
+            | PassKind::DenseDda { max_steps: 0 }
+            | PassKind::OctreeRayCast { max_steps: 0 } => {
                 out.push("max_steps must be at least 1".to_string());
             }
             PassKind::Billboards { size_scale, .. }

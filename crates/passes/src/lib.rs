@@ -14,6 +14,7 @@ pub mod empty_space;
 pub mod frame;
 pub mod gpu_scene;
 pub mod measure;
+pub mod octree_ray_cast;
 pub mod ray_march_filter;
 pub mod scene;
 pub mod shaders;
@@ -81,6 +82,7 @@ fn is_implemented(kind: &PassKind) -> bool {
             | PassKind::Billboards { .. }
             | PassKind::Triangles
             | PassKind::DenseDda { .. }
+            | PassKind::OctreeRayCast { .. }
     )
 }
 
@@ -109,6 +111,9 @@ pub fn create_pass(
             ctx, scene, pipeline, pass,
         )?)),
         PassKind::DenseDda { .. } => Ok(Box::new(dense_dda::DenseDda::new(
+            ctx, scene, pipeline, pass,
+        )?)),
+        PassKind::OctreeRayCast { .. } => Ok(Box::new(octree_ray_cast::OctreeRayCast::new(
             ctx, scene, pipeline, pass,
         )?)),
     }

@@ -30,6 +30,10 @@ const FILES: &[(&str, &str)] = &[
         "dense_dda.wgsl",
         include_str!("../../../shaders/dense_dda.wgsl"),
     ),
+    (
+        "octree_ray_cast.wgsl",
+        include_str!("../../../shaders/octree_ray_cast.wgsl"),
+    ),
     ("smooth.wgsl", include_str!("../../../shaders/smooth.wgsl")),
     (
         "composite.wgsl",

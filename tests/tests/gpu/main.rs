@@ -6,6 +6,7 @@ mod billboards;
 mod dense_dda;
 mod embed;
 mod empty_space;
+mod octree_ray_cast;
 mod pipeline;
 mod ray_march_filter;
 mod smooth_composite;

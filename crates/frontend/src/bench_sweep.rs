@@ -1,0 +1,379 @@
+//! Speed–accuracy knob sweeps of `ssbvb bench --sweep`: each knob of the default SSBVB
+//! pipeline (`assets/pipelines/ssbvb.ron`) changed alone, the frame timed and compared
+//! with the CPU reference (coverage, depth, and the shaded composite as PSNR).
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use glam::DAffine3;
+use serde::Serialize;
+use ssbvb_passes::{GpuScene, LodPolicy, Profiling, Renderer, Scene, VoxelObject};
+use ssbvb_voxel::asset::VoxelAsset;
+use ssbvb_voxel::camera::Camera;
+use ssbvb_voxel::reference::ReferenceImage;
+
+use crate::render_cmd::assets_dir;
+
+/// What one measured configuration gave.
+pub(crate) struct Measured {
+    /// Wall ms of each timed frame, in order.
+    pub times: Vec<f64>,
+    pub passes: Vec<ssbvb_passes::PassTiming>,
+    pub fill: Option<u32>,
+    pub acc: ssbvb_voxel::accuracy::AccuracyReport,
+    pub gpu_memory: u64,
+    /// PSNR (dB) of the composite output against the reference colours over the pixels
+    /// both cover, and that pixel count; only when asked for.
+    pub psnr: Option<(f64, usize)>,
+}
+
+/// Everything [`measure`] needs besides the pipeline.
+pub(crate) struct Setup<'a> {
+    pub ctx: &'a ssbvb_gpu::GpuContext,
+    pub asset: &'a Arc<VoxelAsset>,
+    pub lod: LodPolicy,
+    /// The level the reference was rendered at (the one the renderer picks).
+    pub level: u32,
+    pub size: (u32, u32),
+    pub camera: &'a Camera,
+    pub reference: &'a ReferenceImage,
+    pub warmup: usize,
+    pub frames: usize,
+}
+
+/// The source text of a bundled pipeline file.
+pub(crate) fn pipeline_source(file: &str) -> Result<(String, String)> {
+    let path = assets_dir().join("pipelines").join(file);
+    let src =
+        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    Ok((src, path.display().to_string()))
+}
+
+/// Renders `warmup` + `frames` frames (median over the timed ones is the caller's), one
+/// profiled frame, and compares the G-buffer (and optionally the composite) with the
+/// reference.
+pub(crate) fn measure(s: &Setup, src: &str, label: &str, with_psnr: bool) -> Result<Measured> {
+    let ctx = s.ctx;
+    let pipeline = ssbvb_graph::resolve_str(src, label).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let scene = Scene {
+        objects: vec![VoxelObject {
+            asset: s.asset.clone(),
+            instances: vec![DAffine3::IDENTITY],
+            lod: s.lod,
+        }],
+        ..Default::default()
+    };
+    let mut gpu_scene = GpuScene::new(ctx, scene)?;
+    let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, s.size)?;
+    for _ in 0..s.warmup {
+        renderer.render(ctx, &mut gpu_scene, s.camera, Profiling::Off)?;
+    }
+    ctx.wait_idle()?;
+    let mut times = Vec::new();
+    for _ in 0..s.frames.max(1) {
+        let t0 = Instant::now();
+        renderer.render(ctx, &mut gpu_scene, s.camera, Profiling::Off)?;
+        ctx.wait_idle()?;
+        times.push(t0.elapsed().as_secs_f64() * 1e3);
+    }
+    let profiling = if ctx.report().is_software {
+        Profiling::TimestampsAndWall
+    } else {
+        Profiling::Timestamps
+    };
+    let stats = renderer.render(ctx, &mut gpu_scene, s.camera, profiling)?;
+    let fill = renderer.fill_count(ctx)?;
+    let hits = ssbvb_passes::measure::gbuffer_hits(ctx, &renderer)?;
+    let acc = ssbvb_voxel::accuracy::compare(s.reference, &hits, &[2.0 / (1u64 << s.level) as f64])
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let psnr = if with_psnr {
+        let out = ctx.read_texture(
+            &renderer.output().texture,
+            ssbvb_gpu::wgpu::TextureAspect::All,
+        )?;
+        let gpu = crate::render_cmd::to_rgba8(&out)?;
+        let reference = s.reference.to_rgba8();
+        if gpu.len() != reference.len() || hits.len() * 4 != gpu.len() {
+            bail!(
+                "output {} bytes, reference {} bytes, {} pixels",
+                gpu.len(),
+                reference.len(),
+                hits.len()
+            );
+        }
+        // Only pixels both cover: background colours differ by design.
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        for (i, (h, r)) in hits.iter().zip(&s.reference.hits).enumerate() {
+            if h.is_some() && r.is_some() {
+                a.extend_from_slice(&gpu[i * 4..i * 4 + 4]);
+                b.extend_from_slice(&reference[i * 4..i * 4 + 4]);
+            }
+        }
+        let n = a.len() / 4;
+        ssbvb_voxel::accuracy::psnr_rgba8(&a, &b).map(|p| (p, n))
+    } else {
+        None
+    };
+    Ok(Measured {
+        times,
+        passes: stats.passes,
+        fill,
+        acc,
+        gpu_memory: gpu_scene.total_memory(),
+        psnr,
+    })
+}
+
+/// Replaces the value of parameter `param` of the single pass of kind `kind`
+/// (`kind: Kind(.., param: value, ..)`) with `value`.
+pub(crate) fn set_kind_param(src: &str, kind: &str, param: &str, value: &str) -> Result<String> {
+    let needle = format!("kind: {kind}(");
+    let mut found = src.match_indices(&needle);
+    let Some((start, _)) = found.next() else {
+        bail!("no pass of kind `{kind}(..)` in the pipeline");
+    };
+    if found.next().is_some() {
+        bail!("more than one pass of kind `{kind}` in the pipeline");
+    }
+    let open = start + needle.len();
+    let close = open
+        + src[open..]
+            .find(')')
+            .with_context(|| format!("unclosed `{kind}(`"))?;
+    let args = &src[open..close];
+    let key = format!("{param}:");
+    let k = args
+        .find(&key)
+        .with_context(|| format!("`{kind}` has no parameter `{param}`"))?;
+    let v_start = k + key.len();
+    let v_end = args[v_start..]
+        .find(',')
+        .map_or(args.len(), |e| v_start + e);
+    Ok(format!(
+        "{} {value}{}",
+        &src[..open + v_start],
+        &src[open + v_end..]
+    ))
+}
+
+/// Sweep sizes.
+pub(crate) struct SweepConfig {
+    pub size: (u32, u32),
+    /// Level of the fixed-level knobs, and the finest level the LOD-bias sweep may pick.
+    pub level: u32,
+    pub warmup: usize,
+    pub frames: usize,
+    pub max_steps: &'static [u32],
+    pub size_scale: &'static [f64],
+    pub max_i: &'static [f64],
+    pub lod_bias: &'static [i32],
+}
+
+/// One sweep point.
+#[derive(Debug, Serialize)]
+pub(crate) struct SweepRow {
+    /// `max_steps`, `size_scale`, `max_i` or `lod_bias`.
+    pub knob: &'static str,
+    pub value: f64,
+    /// Whether this is the value of the default pipeline.
+    pub is_default: bool,
+    pub level: u32,
+    pub width: u32,
+    pub height: u32,
+    pub frames: usize,
+    pub frame_ms_median: f64,
+    pub fill_count: Option<u32>,
+    pub coverage_iou: f64,
+    pub depth_error_voxels_median: f64,
+    /// PSNR (dB) of the composite against the reference over the pixels both cover;
+    /// `None` (null) when identical (infinite) or when no pixel is covered by both.
+    pub psnr_db: Option<f64>,
+    pub psnr_pixels: usize,
+}
+
+fn reference_at(
+    asset: &VoxelAsset,
+    level: u32,
+    camera: &Camera,
+    size: (u32, u32),
+) -> ReferenceImage {
+    let inst = [ssbvb_voxel::reference::Instance {
+        lod: &asset.lods[level as usize],
+        object_to_world: DAffine3::IDENTITY,
+    }];
+    ssbvb_voxel::reference::render(&inst, camera, size.0, size.1, &Default::default())
+}
+
+/// Runs every knob sweep; `log` prints a line per point.
+pub(crate) fn run_sweeps(
+    ctx: &ssbvb_gpu::GpuContext,
+    asset: &Arc<VoxelAsset>,
+    camera: &Camera,
+    cfg: &SweepConfig,
+    log: bool,
+) -> Result<Vec<SweepRow>> {
+    let (base, label) = pipeline_source("ssbvb.ron")?;
+    let size = cfg.size;
+    let fixed_ref = reference_at(asset, cfg.level, camera, size);
+    let mut points: Vec<(&'static str, f64, bool, String)> = Vec::new();
+    for &v in cfg.max_steps {
+        let src = set_kind_param(&base, "RayMarchFilter", "max_steps", &v.to_string())?;
+        points.push(("max_steps", v as f64, v == 1024, src));
+    }
+    for &v in cfg.size_scale {
+        let src = set_kind_param(&base, "Billboards", "size_scale", &format!("{v:?}"))?;
+        points.push(("size_scale", v, v == 1.0, src));
+    }
+    for &v in cfg.max_i {
+        let src = set_kind_param(&base, "Smooth", "max_i", &format!("{v:?}"))?;
+        points.push(("max_i", v, v == 1.0, src));
+    }
+    let mut rows = Vec::new();
+    let to_row = |knob: &'static str,
+                  value: f64,
+                  is_default: bool,
+                  level: u32,
+                  m: Measured|
+     -> SweepRow {
+        let mut t = m.times.clone();
+        let row = SweepRow {
+            knob,
+            value,
+            is_default,
+            level,
+            width: size.0,
+            height: size.1,
+            frames: m.times.len(),
+            frame_ms_median: crate::bench_cmd::median(&mut t),
+            fill_count: m.fill,
+            coverage_iou: m.acc.coverage_iou,
+            depth_error_voxels_median: m.acc.depth_error_voxels.median,
+            psnr_db: m.psnr.map(|p| p.0).filter(|p| p.is_finite()),
+            psnr_pixels: m.psnr.map_or(0, |p| p.1),
+        };
+        if log {
+            eprintln!(
+                "sweep {knob:<10} = {value:<6} L{level}: {:.2} ms, IoU {:.4}, depth err {:.3}, PSNR {}",
+                row.frame_ms_median,
+                row.coverage_iou,
+                row.depth_error_voxels_median,
+                row.psnr_db.map_or("-".into(), |p| format!("{p:.2} dB"))
+            );
+        }
+        row
+    };
+    let fixed = Setup {
+        ctx,
+        asset,
+        lod: LodPolicy::Fixed(cfg.level),
+        level: cfg.level,
+        size,
+        camera,
+        reference: &fixed_ref,
+        warmup: cfg.warmup,
+        frames: cfg.frames,
+    };
+    for (knob, value, is_default, src) in points {
+        let m = measure(&fixed, &src, &label, true)
+            .with_context(|| format!("sweep {knob} = {value}"))?;
+        rows.push(to_row(knob, value, is_default, cfg.level, m));
+    }
+    let max_level = asset.lods.len() as u32 - 1;
+    for &bias in cfg.lod_bias {
+        let lod = LodPolicy::Auto { bias };
+        let level = ssbvb_passes::gpu_scene::choose_level(
+            lod,
+            &DAffine3::IDENTITY,
+            camera,
+            size,
+            max_level,
+        );
+        let reference = reference_at(asset, level, camera, size);
+        let setup = Setup {
+            lod,
+            level,
+            reference: &reference,
+            ..fixed
+        };
+        let m = measure(&setup, &base, &label, true)
+            .with_context(|| format!("sweep lod_bias = {bias}"))?;
+        rows.push(to_row("lod_bias", bias as f64, bias == 0, level, m));
+    }
+    Ok(rows)
+}
+
+/// `sweeps.csv`.
+pub(crate) fn csv(rows: &[SweepRow]) -> String {
+    let mut s = String::from(
+        "knob,value,is_default,level,width,height,frames,frame_ms_median,fill_count,coverage_iou,depth_error_voxels_median,psnr_db,psnr_pixels\n",
+    );
+    for r in rows {
+        s.push_str(&format!(
+            "{},{},{},{},{},{},{},{:.4},{},{:.6},{:.6},{},{}\n",
+            r.knob,
+            r.value,
+            r.is_default,
+            r.level,
+            r.width,
+            r.height,
+            r.frames,
+            r.frame_ms_median,
+            r.fill_count.map_or(String::new(), |f| f.to_string()),
+            r.coverage_iou,
+            r.depth_error_voxels_median,
+            r.psnr_db.map_or(String::new(), |p| format!("{p:.4}")),
+            r.psnr_pixels
+        ));
+    }
+    s
+}
+
+/// The Markdown section of the sweeps.
+pub(crate) fn markdown(rows: &[SweepRow]) -> String {
+    if rows.is_empty() {
+        return String::new();
+    }
+    let mut s = String::from(
+        "\n## Knob sweeps (default SSBVB pipeline, one knob changed at a time)\n\n\
+         PSNR: composite output (sRGB RGBA8) vs the CPU reference colours over the pixels both cover.\n\n\
+         | knob | value | level | size | frame ms (median) | fill | IoU | depth err (vox) | PSNR dB |\n|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        s.push_str(&format!(
+            "| {} | {}{} | {} | {}x{} | {:.2} | {} | {:.4} | {:.3} | {} |\n",
+            r.knob,
+            r.value,
+            if r.is_default { " (default)" } else { "" },
+            r.level,
+            r.width,
+            r.height,
+            r.frame_ms_median,
+            r.fill_count.map_or("-".into(), |f| f.to_string()),
+            r.coverage_iou,
+            r.depth_error_voxels_median,
+            r.psnr_db.map_or("-".into(), |p| format!("{p:.2}"))
+        ));
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn set_kind_param_rewrites_one_parameter() {
+        let src = "(kind: Billboards(mode: Flat, size_scale: 1.0),)\n(kind: Smooth(max_i: 1.0, min_dist: 0.5))";
+        assert_eq!(
+            set_kind_param(src, "Billboards", "size_scale", "1.3").unwrap(),
+            "(kind: Billboards(mode: Flat, size_scale: 1.3),)\n(kind: Smooth(max_i: 1.0, min_dist: 0.5))"
+        );
+        assert_eq!(
+            set_kind_param(src, "Smooth", "max_i", "3.0").unwrap(),
+            "(kind: Billboards(mode: Flat, size_scale: 1.0),)\n(kind: Smooth(max_i: 3.0, min_dist: 0.5))"
+        );
+        assert!(set_kind_param(src, "Smooth", "nope", "1").is_err());
+        assert!(set_kind_param(src, "RayMarchFilter", "max_steps", "1").is_err());
+    }
+}
