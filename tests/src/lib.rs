@@ -160,18 +160,7 @@ pub fn reference_of(scene: &Scene, camera: &Camera, size: (u32, u32)) -> Referen
     reference::render(&instances, camera, size.0, size.1, &scene.light)
 }
 
-/// IEEE half → f32 (G-buffer normals are `Rgba16Float`).
-pub fn f16_to_f32(h: u16) -> f32 {
-    let s = if h >> 15 == 1 { -1.0 } else { 1.0 };
-    let e = ((h >> 10) & 0x1f) as i32;
-    let m = (h & 0x3ff) as f32;
-    match e {
-        0 => s * m * 2f32.powi(-24),
-        31 if m == 0.0 => s * f32::INFINITY,
-        31 => f32::NAN,
-        _ => s * (1.0 + m / 1024.0) * 2f32.powi(e - 15),
-    }
-}
+pub use ssbvb_passes::measure::f16_to_f32;
 
 /// Texels of a live `Rgba16Float` texture as `[f32; 4]`.
 pub fn read_half4(frame: &Frame, name: &str) -> Vec<[f32; 4]> {

@@ -65,17 +65,7 @@ pub(crate) struct GBuffer {
     pub stencil: Vec<u8>,
 }
 
-fn f16_to_f32(h: u16) -> f32 {
-    let sign = if h >> 15 == 1 { -1.0 } else { 1.0 };
-    let e = ((h >> 10) & 0x1f) as i32;
-    let m = (h & 0x3ff) as f32;
-    sign * match e {
-        0 => m * 2f32.powi(-24),
-        31 if m == 0.0 => f32::INFINITY,
-        31 => f32::NAN,
-        _ => (1.0 + m / 1024.0) * 2f32.powi(e - 15),
-    }
-}
+use ssbvb_tests::f16_to_f32;
 
 fn read_vec4(tex: &wgpu::Texture) -> Vec<[f32; 4]> {
     let data = ctx().read_texture(tex, wgpu::TextureAspect::All).unwrap();
