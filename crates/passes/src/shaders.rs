@@ -34,6 +34,10 @@ const FILES: &[(&str, &str)] = &[
         "octree_ray_cast.wgsl",
         include_str!("../../../shaders/octree_ray_cast.wgsl"),
     ),
+    (
+        "ray_cast.inc.wgsl",
+        include_str!("../../../shaders/ray_cast.inc.wgsl"),
+    ),
     ("smooth.wgsl", include_str!("../../../shaders/smooth.wgsl")),
     (
         "composite.wgsl",

@@ -1,0 +1,42 @@
+// Shared by the ray-casting baselines (dense_dda.wgsl, octree_ray_cast.wgsl): the
+// G-buffer output with exact depth, the hit record, a fullscreen triangle, and the
+// per-plane crossing helpers that follow the CPU reference's conventions.
+// Needs common.inc.wgsl before it.
+
+struct GBufferDepth {
+    @location(0) albedo: vec4<f32>,
+    @location(1) normal: vec4<f32>,
+    @location(2) position: vec4<f32>,
+    @builtin(frag_depth) depth: f32,
+}
+
+struct Hit {
+    hit: bool,
+    t: f32,
+    id: u32,
+    face: u32,
+}
+
+@vertex
+fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let uv = vec2(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4(uv * 2.0 - 1.0, 0.0, 1.0);
+}
+
+fn ndc_depth(p: vec3<f32>) -> f32 {
+    let clip = frame.view_proj * vec4(p, 1.0);
+    if !(clip.w > 0.0) {
+        return 1.0;
+    }
+    return clamp(clip.z / clip.w, 0.0, 1.0);
+}
+
+// Time at which the (mirrored) ray crosses plane k of an axis: origin o, |direction| d.
+fn plane_t(k: i32, s: f32, o: f32, d: f32) -> f32 {
+    return ((-1.0 + f32(k) * s) - o) / d;
+}
+
+// Face index (VoxelSlot.face convention) of entering along axis a with direction sign.
+fn entered_face(a: u32, d: vec3<f32>) -> u32 {
+    return select(a + 3u, a, d[a] > 0.0);
+}
