@@ -126,30 +126,3 @@ fn trace(inst: Instance, dir_world: vec3<f32>, t_best: f32) -> Hit {
     }
     return out;
 }
-
-@fragment
-fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
-    let dir = pixel_ray(frag.xy);
-    var best = Hit(false, 1e30, 0u, 0u);
-    var best_inst = 0u;
-    let count = u32(frame.misc.w);
-    for (var i = 0u; i < count; i++) {
-        let h = trace(instances[i], dir, best.t);
-        if h.hit {
-            best = h;
-            best_inst = i;
-        }
-    }
-    if !best.hit {
-        discard;
-    }
-    let inst = instances[best_inst];
-    let voxel = voxels[lods[inst.lod].voxel_offset + best.id];
-    let p = dir * best.t;
-    var out: GBufferDepth;
-    out.albedo = vec4(voxel_color(voxel).rgb, 1.0);
-    out.normal = vec4(face_normal_world(inst, best.face), 1.0);
-    out.position = vec4(p, dot(p, frame.cam_forward.xyz));
-    out.depth = ndc_depth(p);
-    return out;
-}

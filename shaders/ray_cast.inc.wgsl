@@ -1,7 +1,9 @@
 // Shared by the ray-casting baselines (dense_dda.wgsl, octree_ray_cast.wgsl): the
 // G-buffer output with exact depth, the hit record, a fullscreen triangle, and the
 // per-plane crossing helpers that follow the CPU reference's conventions.
-// Needs common.inc.wgsl before it.
+// Needs common.inc.wgsl before it, and the including file must define
+// `fn trace(inst: Instance, dir_world: vec3<f32>, t_best: f32) -> Hit` (the technique);
+// `fs_main` below keeps the nearest hit over all visible instances.
 
 struct GBufferDepth {
     @location(0) albedo: vec4<f32>,
@@ -39,4 +41,31 @@ fn plane_t(k: i32, s: f32, o: f32, d: f32) -> f32 {
 // Face index (VoxelSlot.face convention) of entering along axis a with direction sign.
 fn entered_face(a: u32, d: vec3<f32>) -> u32 {
     return select(a + 3u, a, d[a] > 0.0);
+}
+
+@fragment
+fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
+    let dir = pixel_ray(frag.xy);
+    var best = Hit(false, 1e30, 0u, 0u);
+    var best_inst = 0u;
+    let count = u32(frame.misc.w);
+    for (var i = 0u; i < count; i++) {
+        let h = trace(instances[i], dir, best.t);
+        if h.hit {
+            best = h;
+            best_inst = i;
+        }
+    }
+    if !best.hit {
+        discard;
+    }
+    let inst = instances[best_inst];
+    let voxel = voxels[lods[inst.lod].voxel_offset + best.id];
+    let p = dir * best.t;
+    var out: GBufferDepth;
+    out.albedo = vec4(voxel_color(voxel).rgb, 1.0);
+    out.normal = vec4(face_normal_world(inst, best.face), 1.0);
+    out.position = vec4(p, dot(p, frame.cam_forward.xyz));
+    out.depth = ndc_depth(p);
+    return out;
 }
