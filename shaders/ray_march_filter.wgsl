@@ -381,7 +381,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let k = u32(e.w) - 1u;
-    let dir = pixel_ray(vec2<f32>(px) + vec2(0.5));
+    // The filter may run at a fraction of the screen (`entry` declared ScreenScaled): the
+    // prepass rasterized this texel's centre, which is this point of the full screen.
+    let dir = pixel_ray((vec2<f32>(px) + vec2(0.5)) * frame.screen.xy / vec2<f32>(size));
 
     let inst = instances[k];
     let lod = lods[inst.lod];

@@ -1,6 +1,6 @@
-//! PNG plots of `ssbvb bench` (plotters, bitmap backend). No text is drawn (plotters'
-//! font features need system fonts): titles are the file names, and the axes, ranges,
-//! grid spacing and series colours are written to the report (JSON and Markdown).
+//! PNG plots of `ssbvb bench` (plotters, bitmap backend, text in an embedded font): title,
+//! labelled axes and a legend in the image; the same description (axes, ranges, grid
+//! spacing, series colours) also goes into the report (JSON and Markdown).
 
 use std::path::Path;
 
@@ -30,7 +30,7 @@ pub(crate) struct Series {
     pub points: Vec<(f64, f64)>,
 }
 
-/// What a written plot shows (the image itself has no text).
+/// What a written plot shows.
 #[derive(Debug, Serialize)]
 pub(crate) struct PlotInfo {
     pub file: String,
@@ -40,7 +40,7 @@ pub(crate) struct PlotInfo {
     /// Axis ranges as drawn (the plot frame's edges).
     pub x_range: [f64; 2],
     pub y_range: [f64; 2],
-    /// Spacing of the grey grid lines (at multiples of it).
+    /// Spacing of the labelled grid lines (at multiples of it).
     pub x_grid: f64,
     pub y_grid: f64,
     /// `(series, colour)`; the first point of each series is a square, the rest circles.
@@ -96,7 +96,27 @@ fn axis(v: impl Iterator<Item = f64> + Clone, from_zero: bool) -> ([f64; 2], f64
     ([clean(lo), clean(hi)], clean(step))
 }
 
-/// Draws `series` into `dir/file` and describes it.
+/// Registers the plot font once: Hack, embedded by `epaint_default_fonts` (no system
+/// fonts are needed, so CI machines draw the same text).
+fn register_font() -> Result<()> {
+    static RESULT: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    let ok = *RESULT.get_or_init(|| {
+        plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            epaint_default_fonts::HACK_REGULAR,
+        )
+        .is_ok()
+    });
+    if ok {
+        Ok(())
+    } else {
+        Err(anyhow!("the embedded plot font could not be loaded"))
+    }
+}
+
+/// Draws `series` into `dir/file` (title, axis labels and a legend included) and
+/// describes it.
 pub(crate) fn plot(
     dir: &Path,
     file: &str,
@@ -104,6 +124,7 @@ pub(crate) fn plot(
     (x_axis, y_axis): (&str, &str),
     series: &[Series],
 ) -> Result<PlotInfo> {
+    register_font()?;
     let pts = || series.iter().flat_map(|s| s.points.iter().copied());
     let (xr, xs) = axis(pts().map(|p| p.0), false);
     let (yr, ys) = axis(pts().map(|p| p.1), true);
@@ -113,42 +134,33 @@ pub(crate) fn plot(
         let root = BitMapBackend::with_buffer(&mut rgb, (WIDTH, HEIGHT)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(&e))?;
         let mut chart = ChartBuilder::on(&root)
-            .margin(24)
+            .caption(title, ("sans-serif", 20))
+            .margin(16)
+            .x_label_area_size(44)
+            .y_label_area_size(72)
             .build_cartesian_2d(xr[0]..xr[1], yr[0]..yr[1])
             .map_err(|e| err(&e))?;
-        let grid = RGBColor(215, 215, 215);
-        let mut lines = Vec::new();
-        let mut x = xr[0];
-        while x <= xr[1] + xs * 1e-6 {
-            lines.push(vec![(x, yr[0]), (x, yr[1])]);
-            x += xs;
-        }
-        let mut y = yr[0];
-        while y <= yr[1] + ys * 1e-6 {
-            lines.push(vec![(xr[0], y), (xr[1], y)]);
-            y += ys;
-        }
+        // One label per grid step of `axis` (1-2-5 steps).
+        let steps = |r: [f64; 2], s: f64| ((r[1] - r[0]) / s).round() as usize + 1;
         chart
-            .draw_series(lines.into_iter().map(|l| PathElement::new(l, grid)))
-            .map_err(|e| err(&e))?;
-        // The frame.
-        chart
-            .draw_series(std::iter::once(PathElement::new(
-                vec![
-                    (xr[0], yr[0]),
-                    (xr[1], yr[0]),
-                    (xr[1], yr[1]),
-                    (xr[0], yr[1]),
-                    (xr[0], yr[0]),
-                ],
-                BLACK.stroke_width(2),
-            )))
+            .configure_mesh()
+            .x_labels(steps(xr, xs))
+            .y_labels(steps(yr, ys))
+            .x_desc(x_axis)
+            .y_desc(y_axis)
+            .label_style(("sans-serif", 13))
+            .axis_desc_style(("sans-serif", 15))
+            .light_line_style(TRANSPARENT)
+            .bold_line_style(RGBColor(205, 205, 205))
+            .draw()
             .map_err(|e| err(&e))?;
         for (i, s) in series.iter().enumerate() {
             let c = PALETTE[i % PALETTE.len()].1;
             chart
                 .draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2)))
-                .map_err(|e| err(&e))?;
+                .map_err(|e| err(&e))?
+                .label(s.name.clone())
+                .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 16, y + 5)], c.filled()));
             chart
                 .draw_series(
                     s.points.first().map(|&p| {
@@ -165,6 +177,14 @@ pub(crate) fn plot(
                 )
                 .map_err(|e| err(&e))?;
         }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .label_font(("sans-serif", 12))
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(120, 120, 120))
+            .draw()
+            .map_err(|e| err(&e))?;
         root.present().map_err(|e| err(&e))?;
     }
     let rgba: Vec<u8> = rgb
@@ -191,9 +211,7 @@ pub(crate) fn plot(
 
 /// The Markdown section describing the plots.
 pub(crate) fn markdown(plots: &[PlotInfo]) -> String {
-    let mut s = String::from(
-        "\n## Plots\n\nThe PNGs carry no text; each series' first point is a square.\n",
-    );
+    let mut s = String::from("\n## Plots\n\nEach series' first point is a square.\n");
     for p in plots {
         s.push_str(&format!(
             "\n### {} (`{}`)\n\nx: {} from {} to {} (grid every {}); y: {} from {} to {} (grid every {}).\n\n",

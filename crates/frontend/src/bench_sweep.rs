@@ -24,7 +24,7 @@ pub(crate) struct Measured {
     pub acc: ssbvb_voxel::accuracy::AccuracyReport,
     pub gpu_memory: u64,
     /// PSNR (dB) of the composite output against the reference colours over the pixels
-    /// both cover, and that pixel count; only when asked for.
+    /// either covers, and that pixel count; only when asked for.
     pub psnr: Option<(f64, usize)>,
 }
 
@@ -102,10 +102,12 @@ pub(crate) fn measure(s: &Setup, src: &str, label: &str, with_psnr: bool) -> Res
                 hits.len()
             );
         }
-        // Only pixels both cover: background colours differ by design.
+        // Pixels either covers: a hole or an extra pixel is an error (object colour
+        // against background); pixels neither covers are skipped, as the backgrounds
+        // differ by design.
         let (mut a, mut b) = (Vec::new(), Vec::new());
         for (i, (h, r)) in hits.iter().zip(&s.reference.hits).enumerate() {
-            if h.is_some() && r.is_some() {
+            if h.is_some() || r.is_some() {
                 a.extend_from_slice(&gpu[i * 4..i * 4 + 4]);
                 b.extend_from_slice(&reference[i * 4..i * 4 + 4]);
             }
@@ -157,6 +159,64 @@ pub(crate) fn set_kind_param(src: &str, kind: &str, param: &str, value: &str) ->
     ))
 }
 
+/// Replaces the value of `field` (`size`, `count`, ...) in the declaration of resource
+/// `resource` (`"name": Kind(.., field: value, ..)`, on one line) with `value`.
+pub(crate) fn set_resource_field(
+    src: &str,
+    resource: &str,
+    field: &str,
+    value: &str,
+) -> Result<String> {
+    let key = format!("\"{resource}\":");
+    let start = src
+        .find(&key)
+        .with_context(|| format!("no resource `{resource}` in the pipeline"))?;
+    let line_end = src[start..].find('\n').map_or(src.len(), |e| start + e);
+    let decl = &src[start..line_end];
+    let f = decl
+        .find(&format!("{field}:"))
+        .with_context(|| format!("resource `{resource}` has no `{field}` on its line"))?;
+    let v_start = start + f + field.len() + 1;
+    // The value ends at the first `,` or unmatched `)` outside parentheses.
+    let mut depth = 0i32;
+    let mut v_end = line_end;
+    for (i, c) in src[v_start..line_end].char_indices() {
+        match c {
+            '(' => depth += 1,
+            ')' if depth == 0 => {
+                v_end = v_start + i;
+                break;
+            }
+            ')' => depth -= 1,
+            ',' if depth == 0 => {
+                v_end = v_start + i;
+                break;
+            }
+            _ => {}
+        }
+    }
+    Ok(format!("{} {value}{}", &src[..v_start], &src[v_end..]))
+}
+
+/// The default SSBVB pipeline with the empty-space prepass and the ray-march filter at
+/// `scale` of the screen per axis (their textures and the SSBVB shrink with it); the
+/// billboards, smoothing and composite stay at full resolution.
+pub(crate) fn with_filter_scale(src: &str, scale: f64) -> Result<String> {
+    if scale == 1.0 {
+        return Ok(src.to_owned());
+    }
+    let mut s = src.to_owned();
+    for r in ["entry", "prepass_depth"] {
+        s = set_resource_field(&s, r, "size", &format!("ScreenScaled({scale:?})"))?;
+    }
+    set_resource_field(
+        &s,
+        "ssbvb",
+        "count",
+        &format!("ScreenPixelsScaled({scale:?})"),
+    )
+}
+
 /// Sweep sizes.
 pub(crate) struct SweepConfig {
     pub size: (u32, u32),
@@ -167,13 +227,16 @@ pub(crate) struct SweepConfig {
     pub max_steps: &'static [u32],
     pub size_scale: &'static [f64],
     pub max_i: &'static [f64],
+    pub min_dist: &'static [f64],
+    /// Fractions of the screen the empty-space prepass and the ray-march filter run at.
+    pub resolution_scale: &'static [f64],
     pub lod_bias: &'static [i32],
 }
 
 /// One sweep point.
 #[derive(Debug, Serialize)]
 pub(crate) struct SweepRow {
-    /// `max_steps`, `size_scale`, `max_i` or `lod_bias`.
+    /// `max_steps`, `size_scale`, `max_i`, `min_dist`, `resolution_scale` or `lod_bias`.
     pub knob: &'static str,
     pub value: f64,
     /// Whether this is the value of the default pipeline.
@@ -186,8 +249,8 @@ pub(crate) struct SweepRow {
     pub fill_count: Option<u32>,
     pub coverage_iou: f64,
     pub depth_error_voxels_median: f64,
-    /// PSNR (dB) of the composite against the reference over the pixels both cover;
-    /// `None` (null) when identical (infinite) or when no pixel is covered by both.
+    /// PSNR (dB) of the composite against the reference over the pixels either covers;
+    /// `None` (null) when identical (infinite) or when neither covers any pixel.
     pub psnr_db: Option<f64>,
     pub psnr_pixels: usize,
 }
@@ -228,6 +291,14 @@ pub(crate) fn run_sweeps(
     for &v in cfg.max_i {
         let src = set_kind_param(&base, "Smooth", "max_i", &format!("{v:?}"))?;
         points.push(("max_i", v, v == 1.0, src));
+    }
+    for &v in cfg.min_dist {
+        let src = set_kind_param(&base, "Smooth", "min_dist", &format!("{v:?}"))?;
+        points.push(("min_dist", v, v == 0.5, src));
+    }
+    for &v in cfg.resolution_scale {
+        let src = with_filter_scale(&base, v)?;
+        points.push(("resolution_scale", v, v == 1.0, src));
     }
     let mut rows = Vec::new();
     let to_row = |knob: &'static str,
@@ -336,7 +407,7 @@ pub(crate) fn markdown(rows: &[SweepRow]) -> String {
     }
     let mut s = String::from(
         "\n## Knob sweeps (default SSBVB pipeline, one knob changed at a time)\n\n\
-         PSNR: composite output (sRGB RGBA8) vs the CPU reference colours over the pixels both cover.\n\n\
+         PSNR: composite output (sRGB RGBA8) vs the CPU reference colours over the pixels either covers (a hole or an extra pixel counts as object against background).\n\n\
          | knob | value | level | size | frame ms (median) | fill | IoU | depth err (vox) | PSNR dB |\n|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
@@ -375,5 +446,35 @@ mod tests {
         );
         assert!(set_kind_param(src, "Smooth", "nope", "1").is_err());
         assert!(set_kind_param(src, "RayMarchFilter", "max_steps", "1").is_err());
+    }
+
+    #[test]
+    fn set_resource_field_rewrites_one_declaration() {
+        let src = "  \"entry\": Texture(format: Rgba32Float, size: Screen),\n  \"ssbvb\": Buffer(layout: VoxelSlot, count: ScreenPixels),\n  \"x\": Texture(format: R8Unorm, size: Fixed(2, 3)),\n";
+        let out = set_resource_field(src, "entry", "size", "ScreenScaled(0.5)").unwrap();
+        assert!(out.contains("\"entry\": Texture(format: Rgba32Float, size: ScreenScaled(0.5)),"));
+        let out = set_resource_field(&out, "x", "size", "Screen").unwrap();
+        assert!(
+            out.contains("\"x\": Texture(format: R8Unorm, size: Screen),"),
+            "{out}"
+        );
+        let out = set_resource_field(&out, "ssbvb", "count", "Fixed(7)").unwrap();
+        assert!(out.contains("count: Fixed(7)),"), "{out}");
+        assert!(set_resource_field(src, "nope", "size", "Screen").is_err());
+        assert!(set_resource_field(src, "ssbvb", "size", "Screen").is_err());
+    }
+
+    #[test]
+    fn filter_scale_pipeline_resolves_with_scaled_resources() {
+        let (base, label) = pipeline_source("ssbvb.ron").unwrap();
+        let src = with_filter_scale(&base, 0.5).unwrap();
+        let p = ssbvb_graph::resolve_str(&src, &label).unwrap();
+        let entry = p.resource("entry").unwrap();
+        match &p.resources[entry].desc {
+            ssbvb_graph::ResourceDesc::Texture { size, .. } => {
+                assert_eq!(size.resolve((640, 480)), (320, 240))
+            }
+            _ => panic!("entry is a texture"),
+        }
     }
 }

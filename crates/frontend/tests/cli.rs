@@ -154,12 +154,25 @@ fn render_json_and_bench_quick() {
         "{stdout}"
     );
     let csv = std::fs::read_to_string(dir.path().join("bench/bench.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     let rows: Vec<&str> = csv.lines().skip(1).collect();
     assert_eq!(rows.len(), 8, "{csv}");
     for r in rows {
-        let iou: f64 = r.split(',').nth(12).unwrap().parse().unwrap();
-        assert!(iou >= 0.97, "{r}");
+        let r: Vec<&str> = r.split(',').collect();
+        let iou: f64 = r[col("coverage_iou")].parse().unwrap();
+        assert!(iou >= 0.97, "{r:?}");
+        // The SSBVB draws one billboard per covered pixel (up to silhouette rays).
+        if r[col("technique")].starts_with("ssbvb") {
+            let fill: f64 = r[col("fill_count")].parse().unwrap();
+            let covered: f64 = r[col("covered_pixels")].parse().unwrap();
+            assert!((fill / covered - 1.0).abs() < 0.01, "{r:?}");
+        }
     }
+    assert!(
+        stdout.contains("## Fastest technique per cell: bunny.obj"),
+        "{stdout}"
+    );
 }
 
 #[test]
@@ -186,12 +199,31 @@ fn bench_quick_sweep_writes_sweeps_and_plots() {
         .skip(1)
         .map(|l| l.split(',').collect())
         .collect();
-    // Four knobs, three values each, at 160x120.
-    assert_eq!(rows.len(), 12, "{csv}");
-    for knob in ["max_steps", "size_scale", "max_i", "lod_bias"] {
+    // Six knobs (the quick preset's values), at 160x120.
+    assert_eq!(rows.len(), 17, "{csv}");
+    for (knob, values) in [
+        ("max_steps", 3),
+        ("size_scale", 3),
+        ("max_i", 3),
+        ("min_dist", 3),
+        ("resolution_scale", 2),
+        ("lod_bias", 3),
+    ] {
         let n = rows.iter().filter(|r| r[col("knob")] == knob).count();
-        assert_eq!(n, 3, "{knob}: {csv}");
+        assert_eq!(n, values, "{knob}: {csv}");
     }
+    // The filter at half resolution still finds most of the bunny (its cells span about
+    // 2 px here), and finds fewer slots than at full resolution.
+    let scale = |v: &str| {
+        rows.iter()
+            .find(|r| r[col("knob")] == "resolution_scale" && r[col("value")] == v)
+            .unwrap()
+    };
+    let (half, full) = (scale("0.5"), scale("1"));
+    let iou: f64 = half[col("coverage_iou")].parse().unwrap();
+    assert!(iou >= 0.8, "{csv}");
+    let fill = |r: &Vec<&str>| r[col("fill_count")].parse::<u64>().unwrap();
+    assert!(fill(half) * 3 < fill(full), "{csv}");
     for r in &rows {
         assert_eq!((r[col("width")], r[col("height")]), ("160", "120"), "{csv}");
         let ms: f64 = r[col("frame_ms_median")].parse().unwrap();
@@ -212,7 +244,7 @@ fn bench_quick_sweep_writes_sweeps_and_plots() {
         &std::fs::read_to_string(dir.path().join("bench/bench.json")).unwrap(),
     )
     .unwrap();
-    assert_eq!(json["sweeps"].as_array().unwrap().len(), 12);
+    assert_eq!(json["sweeps"].as_array().unwrap().len(), 17);
     for png in ["time_vs_level.png", "trade_max_steps.png"] {
         let bytes = std::fs::read(dir.path().join("bench").join(png)).unwrap();
         assert!(bytes.starts_with(b"\x89PNG"), "{png}");

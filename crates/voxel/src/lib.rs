@@ -15,6 +15,7 @@ pub mod camera;
 pub mod load;
 pub mod model;
 pub mod prepare;
+pub mod procedural;
 pub mod progress;
 pub mod proxy;
 pub mod reference;

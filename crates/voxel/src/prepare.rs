@@ -20,7 +20,7 @@ use crate::progress::Progress;
 use crate::proxy::build_proxy;
 use crate::svo::{LevelVoxels, build_lod_chain, morton_decode, octree_bytes};
 use crate::voxelize::{
-    VoxelFill, VoxelizeError, VoxelizeReport, voxelize_mesh, voxelize_voxels_with,
+    VoxelFill, VoxelSet, VoxelizeError, VoxelizeReport, voxelize_mesh, voxelize_voxels_with,
 };
 
 /// Highest level [`prepare_asset`] accepts unless [`PrepareOptions::max_level`] raises it
@@ -173,6 +173,23 @@ pub fn prepare_asset_with(
         Model::Voxels(voxels) => voxelize_voxels_with(voxels, level, options.voxel_fill, progress)?,
     };
     stages.voxelize_s = start.elapsed().as_secs_f64();
+    Ok(prepare_from_set(set, start, stages, progress))
+}
+
+/// Prepares an already voxelized set (e.g. a procedural one, see
+/// [`crate::procedural`]): every coarser level down to 0 and, per level, the point cloud,
+/// the sparse lookup and the proxy mesh.
+pub fn prepare_voxel_set(set: VoxelSet, progress: &dyn Progress) -> (VoxelAsset, PrepareStats) {
+    prepare_from_set(set, Instant::now(), StageTimes::default(), progress)
+}
+
+fn prepare_from_set(
+    set: VoxelSet,
+    start: Instant,
+    mut stages: StageTimes,
+    progress: &dyn Progress,
+) -> (VoxelAsset, PrepareStats) {
+    let level = set.voxels.level;
     let object_space = set.object_space;
     let report = set.report;
 
@@ -240,7 +257,7 @@ pub fn prepare_asset_with(
         stages,
         levels,
     };
-    Ok((asset, stats))
+    (asset, stats)
 }
 
 /// Packs a level's voxels (Morton order is kept: voxel id = index).

@@ -782,7 +782,7 @@ fn fill_gradient_normals(voxels: &mut LevelVoxels, missing: &[usize]) {
 
 /// Minus the occupancy-weighted sum of the 26 neighbour offsets (each divided by its
 /// length): points from the occupied side of a cell towards the empty side.
-fn gradient_26(mut occupied: impl FnMut([i64; 3]) -> bool) -> [f64; 3] {
+pub(crate) fn gradient_26(mut occupied: impl FnMut([i64; 3]) -> bool) -> [f64; 3] {
     let mut g = [0.0f64; 3];
     for dz in -1i64..=1 {
         for dy in -1i64..=1 {

@@ -58,7 +58,19 @@ struct FilterRun {
 }
 
 fn run_filter(scene: &Scene, camera: &Camera, size: (u32, u32), max_steps: u32) -> FilterRun {
-    let frame = render(&prefilter_pipeline(max_steps), scene.clone(), camera, size);
+    run_filter_with(&prefilter_pipeline(max_steps), scene, camera, size, size)
+}
+
+/// Renders `pipeline` at `size`; its filter runs on a `grid` of texels (the screen, or a
+/// fraction of it), in whose numbering the hits are returned.
+fn run_filter_with(
+    pipeline: &str,
+    scene: &Scene,
+    camera: &Camera,
+    size: (u32, u32),
+    grid: (u32, u32),
+) -> FilterRun {
+    let frame = render(pipeline, scene.clone(), camera, size);
     let c = ctx();
     let fill = ray_march_filter::fill_count(c, &frame.renderer).unwrap();
     let args = ray_march_filter::draw_args(c, &frame.renderer).unwrap();
@@ -67,7 +79,7 @@ fn run_filter(scene: &Scene, camera: &Camera, size: (u32, u32), max_steps: u32) 
         (6, 0, 0)
     );
     let slots = ray_march_filter::read_slots(c, &frame.renderer).unwrap();
-    let pixels = (size.0 * size.1) as usize;
+    let pixels = (grid.0 * grid.1) as usize;
     assert!(fill as usize <= pixels, "fill {fill} > {pixels} pixels");
     assert_eq!(slots.len(), fill as usize);
     for e in entries(&frame) {
@@ -257,6 +269,48 @@ fn bunny_matches_the_reference_from_several_views() {
             r.normal_error_deg
         );
     }
+}
+
+/// The prepass and filter at half the screen per axis (`ScreenScaled(0.5)`, the bench's
+/// `resolution_scale` knob): each filter texel casts the ray through its own centre, so
+/// its hits are exactly those of the reference at half the size (same tolerances as at
+/// full size), and the SSBVB holds a quarter of the slots.
+#[test]
+fn filter_at_half_resolution_matches_the_reference_at_half_size() {
+    let scene = bunny(6);
+    let camera = Camera::new(DVec3::new(1.6, 1.1, 2.4), DVec3::ZERO);
+    let scaled: String = prefilter_pipeline(1024)
+        .lines()
+        .map(|l| {
+            let t = l.trim_start();
+            if t.starts_with("\"entry\"") || t.starts_with("\"prepass_depth\"") {
+                assert!(l.contains("size: Screen)"), "{l}");
+                l.replace("size: Screen)", "size: ScreenScaled(0.5))")
+            } else if t.starts_with("\"ssbvb\"") {
+                assert!(l.contains("count: ScreenPixels)"), "{l}");
+                l.replace("count: ScreenPixels)", "count: ScreenPixelsScaled(0.5))")
+            } else {
+                l.to_owned()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let half = (SIZE.0 / 2, SIZE.1 / 2);
+    let run = run_filter_with(&scaled, &scene, &camera, SIZE, half);
+    let reference = reference_of(&scene, &camera, half);
+    diff_png("bunny6_half_filter", half, &reference, &run.hits);
+    let report = accuracy::compare(&reference, &run.hits, &cell_sizes(&scene)).unwrap();
+    eprintln!("half-resolution filter: {report:?}");
+    assert_eq!(run.fill as usize, report.covered_gpu);
+    assert!(report.covered_reference > 300, "{report:?}");
+    let differing = (report.covered_reference - report.covered_both)
+        + (report.covered_gpu - report.covered_both);
+    assert!(
+        differing <= 3,
+        "{differing} pixels differ in coverage: {report:?}"
+    );
+    assert!(report.same_voxel_rate >= 0.99, "{report:?}");
+    assert!(report.depth_error_voxels.median <= 0.5, "{report:?}");
 }
 
 #[test]
