@@ -1,11 +1,12 @@
 //! The instanced cube rasterization baseline (`assets/pipelines/cube_raster.ron`) against
-//! the CPU reference. Rasterizing the cubes' front faces covers exactly the pixels whose
-//! centre ray hits a voxel (up to f32 ties on cube edges), and the fragment's ray–face
-//! intersection gives the reference's depth, so coverage IoU must be ≥ 0.99, the
-//! same-voxel rate high and the median depth error tiny — with one object at several
-//! LODs, with two objects at different levels, and merged vs unmerged cube lists must give
-//! (nearly) the same G-buffer. Every render fails on a wgpu validation error
-//! (`ssbvb_tests::render`).
+//! the CPU reference. Rasterizing the cubes' front faces covers the pixels whose centre
+//! ray hits a voxel (up to the rasterizer's sub-pixel snapping at cube edges), and the
+//! fragment's ray–face intersection gives the reference's depth, so coverage IoU must be
+//! ≥ 0.995, the same-voxel rate ≥ 0.99 and the depth error tiny (see [`assert_accurate`]):
+//! on the bunny at several LODs, on every shared model, with two objects at different
+//! levels (one rotated and scaled), and far from the world origin. Merged and unmerged
+//! cube lists must give the same G-buffer, and merged lists must cover every model's
+//! voxels exactly. Every render fails on a wgpu validation error (`ssbvb_tests::render`).
 //!
 //! The G-buffer holds no cell id: the shown voxel is recovered from the written position
 //! and face normal (half a cell inside the face), which is also how the shader picks the
@@ -135,20 +136,24 @@ fn compare(scene: &Scene, cam: &Camera, pipeline: &str, what: &str) -> AccuracyR
     r
 }
 
-/// Tolerances, measured on lavapipe (bunny LOD 5–7 from three cameras, and the two-object
-/// scene), then given a margin: IoU ≥ 0.9997 measured → 0.999 (coverage differs only at
-/// f32 edge ties); same-voxel ≥ 0.9969 → 0.995 (such a tie picks the neighbouring face);
-/// depth error median ≤ 6.9e-6 and p95 ≤ 2.4e-5 voxels → 1e-4 and 1e-3 (the same ray–plane
-/// intersection as the reference, in f32); normal error median and p95 0.00° → 0.1° and 1°
-/// (exact face normals, stored as f16).
+/// Tolerances, measured on lavapipe (bunny LOD 5–7 and every shared model, three cameras
+/// each, the two-object scene and the far-away bunny), then given a margin:
+/// - coverage IoU, measured ≥ 0.9986 → 0.995, and same-voxel rate, measured ≥ 0.9963 →
+///   0.99: the rasterizer snaps vertices to its sub-pixel grid (8 bits on lavapipe), so a
+///   pixel centre within ~1/512 px of a projected cube edge may land on the other side of
+///   it than the exact f64 ray (more often in the axis-aligned view, whose pixel rays run
+///   along grid planes);
+/// - depth error median, measured ≤ 6.9e-6 voxels → 1e-4, and p95, ≤ 2.4e-5 → 1e-3: the
+///   same ray–plane intersection as the reference, in f32;
+/// - normal error median and p95, measured 0.00° → 0.1° and 1°: exact face normals in f16.
 fn assert_accurate(r: &AccuracyReport, what: &str) {
     assert!(
         r.covered_reference > 200,
         "{what}: only {} px",
         r.covered_reference
     );
-    assert!(r.coverage_iou >= 0.999, "{what}: {r:?}");
-    assert!(r.same_voxel_rate >= 0.995, "{what}: {r:?}");
+    assert!(r.coverage_iou >= 0.995, "{what}: {r:?}");
+    assert!(r.same_voxel_rate >= 0.99, "{what}: {r:?}");
     assert!(r.depth_error_voxels.median <= 1e-4, "{what}: {r:?}");
     assert!(r.depth_error_voxels.p95 <= 1e-3, "{what}: {r:?}");
     assert!(r.normal_error_deg.median <= 0.1, "{what}: {r:?}");
@@ -264,4 +269,88 @@ fn merged_and_unmerged_cubes_give_the_same_gbuffer() {
             "camera {ci}: position differs by {max_pos}"
         );
     }
+}
+
+/// The shared models (as in `all_models.rs`) at their levels.
+const MODELS: &[(&str, u32)] = &[
+    ("stanford-bunny.obj", 6),
+    ("teapot.obj", 6),
+    ("cow.obj", 6),
+    ("igea.ply", 6),
+    ("chr_knight.vox", 5),
+    ("T-Rex.vox", 6),
+    ("monu1.vox", 6),
+];
+
+#[test]
+fn cube_lists_cover_every_shared_model_exactly() {
+    // CPU only: at every LOD of every model, merged cubes lie inside the voxel set and
+    // their volumes add up to the voxel count, so (being disjoint by construction, see
+    // the unit tests) they cover it exactly.
+    for &(file, level) in MODELS {
+        let asset = ssbvb_tests::model_asset(file, level);
+        for lod in &asset.lods {
+            let merged = CubeList::from_lod(lod, true).unwrap();
+            let unmerged = CubeList::from_lod(lod, false).unwrap();
+            assert_eq!(unmerged.len(), lod.point_cloud.voxels.len());
+            let mut volume = 0u64;
+            for c in &merged.cubes {
+                let (min, s) = (c.min(), c.size());
+                volume += u64::from(s).pow(3);
+                for z in 0..s {
+                    for y in 0..s {
+                        for x in 0..s {
+                            let cell = [min[0] + x, min[1] + y, min[2] + z];
+                            assert!(lod.lookup.get(cell).is_some(), "{file} L{}", lod.level);
+                        }
+                    }
+                }
+            }
+            assert_eq!(volume, merged.voxel_count as u64, "{file} L{}", lod.level);
+            assert_eq!(merged.voxel_count, lod.point_cloud.voxels.len());
+            if lod.level >= 4 {
+                eprintln!(
+                    "{file} L{}: {} voxels; cubes merged {} ({} B), unmerged {} ({} B); sizes {:?}",
+                    lod.level,
+                    merged.voxel_count,
+                    merged.len(),
+                    merged.bytes(),
+                    unmerged.len(),
+                    unmerged.bytes(),
+                    merged.size_histogram()
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn cube_raster_matches_the_reference_on_every_shared_model() {
+    for &(file, level) in MODELS {
+        let asset = ssbvb_tests::model_asset(file, level);
+        for (ci, cam) in cameras().iter().enumerate() {
+            let scene = ssbvb_tests::single_object_scene(asset.clone(), level);
+            let what = format!("{file} L{level} camera {ci}");
+            let r = compare(&scene, cam, CUBES, &what);
+            assert_accurate(&r, &what);
+        }
+    }
+}
+
+#[test]
+fn cube_raster_is_accurate_far_from_the_world_origin() {
+    // Camera-relative transforms keep f32 precision for an object at 1e7 world units.
+    let asset = ssbvb_tests::model_asset("stanford-bunny.obj", 6);
+    let at = DVec3::new(1e7, -3e6, 2e6);
+    let scene = Scene {
+        objects: vec![VoxelObject {
+            asset,
+            instances: vec![DAffine3::from_translation(at)],
+            lod: LodPolicy::Fixed(6),
+        }],
+        ..Default::default()
+    };
+    let cam = Camera::new(at + DVec3::new(1.8, 1.1, 2.4), at);
+    let r = compare(&scene, &cam, CUBES, "bunny L6 at 1e7");
+    assert_accurate(&r, "bunny L6 at 1e7");
 }
