@@ -2,14 +2,17 @@
 // Instanced cube rasterization (baseline; seed 002, §3.3.1): one instanced draw per
 // visible instance draws its LOD level's cubes (`cubes`, group 1: one per voxel, or one
 // per completely full octree node when merged; ssbvb_voxel::cube_list). No vertex buffer:
-// the 36 vertices of a cube (6 faces × 2 triangles) come from `vertex_index`, and the pass
-// starts each draw at vertex 36 × v, so `vertex_index / 36` is the visible instance `v`
-// (index into `instances`) and `instance_index` the cube.
+// the 18 vertices of a cube come from `vertex_index` — at most three faces of a box can
+// face a viewer, one per axis, so each axis gets two triangles on its camera side — and
+// the pass starts each draw at vertex 18 × v, so `vertex_index / 18` is the visible
+// instance `v` (index into `instances`) and `instance_index` the cube.
 //
-// Faces follow VoxelSlot.face: 0..2 = -X/-Y/-Z side, 3..5 = +X/+Y/+Z side. A face whose
-// outer side does not see the camera (camera position in object space, exact for any
-// affine transform, mirrors included) collapses to a point, so the rasterizer drops it:
-// only front faces shade and coplanar opposite faces of adjacent cubes never fight.
+// Faces follow VoxelSlot.face: 0..2 = -X/-Y/-Z side, 3..5 = +X/+Y/+Z side. Per axis the
+// face whose outer side sees the camera (camera position in object space: exact for any
+// affine transform, mirrors included) is drawn; when the camera lies between the cube's
+// two planes of that axis, neither face sees it and the triangles collapse to a point,
+// which the rasterizer drops. Only front faces shade, and coplanar opposite faces of
+// adjacent cubes never fight.
 //
 // Fragment: the pixel's ray (the same `pixel_ray` and object-space ray as the ray casters,
 // so depth and cell agree with the CPU reference up to f32 rounding) meets the face's
@@ -61,33 +64,33 @@ const QUAD = array<vec2<u32>, 6>(
 
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ci: u32) -> VertexOut {
-    let visible = vi / 36u;
-    let corner = vi % 36u;
-    let face = corner / 6u;
+    let visible = vi / 18u;
+    let corner = vi % 18u;
+    let a = corner / 6u;
     let inst = instances[visible];
     let c = cubes[ci];
     let size = 1u << cube_log2_size(c);
-    let a = face % 3u;
-    let side = face >= 3u;
     let s = cell_size(inst.level);
-    // Cell coordinates of the corner: the face's plane on axis a, the quad on the others.
-    let q = QUAD[corner % 6u];
-    var cell = cube_min(c);
-    cell[a] += select(0u, size, side);
-    cell[(a + 1u) % 3u] += q.x * size;
-    cell[(a + 2u) % 3u] += q.y * size;
-    let p_obj = vec3<f32>(cell) * s - 1.0;
+    let lo = cube_min(c);
+    let cam = inst.camera_object.xyz[a];
+    let side = cam > f32(lo[a] + size) * s - 1.0;
+    let facing = side || cam < f32(lo[a]) * s - 1.0;
     var out: VertexOut;
     out.cube = ci;
-    out.face = face;
+    out.face = a + select(0u, 3u, side);
     out.visible = visible;
-    let cam = inst.camera_object.xyz;
-    let facing = select(cam[a] < p_obj[a], cam[a] > p_obj[a], side);
     if !facing {
         // Degenerate: every vertex of the face at one point, so nothing is rasterized.
         out.clip = vec4(0.0, 0.0, 0.0, 1.0);
         return out;
     }
+    // Cell coordinates of the corner: the face's plane on axis a, the quad on the others.
+    let q = QUAD[corner % 6u];
+    var cell = lo;
+    cell[a] += select(0u, size, side);
+    cell[(a + 1u) % 3u] += q.x * size;
+    cell[(a + 2u) % 3u] += q.y * size;
+    let p_obj = vec3<f32>(cell) * s - 1.0;
     out.clip = frame.view_proj * (inst.object_to_world * vec4(p_obj, 1.0));
     return out;
 }

@@ -5,8 +5,9 @@
 //! `Greater` depth test and stencil = voxel as the billboards; see [`crate::triangles`]).
 //! For every visible instance it issues ONE instanced draw of its LOD level's cubes — one
 //! per voxel, or with `merge_full_nodes` one per completely full octree node
-//! ([`CubeList`]) — 36 vertices per cube generated from `vertex_index`, the cube read from
-//! a storage buffer by `instance_index`. The draw starts at vertex `36 × v`, which tells
+//! ([`CubeList`]) — 18 vertices per cube generated from `vertex_index` (the three faces
+//! that can face the camera), the cube read from a storage buffer by `instance_index`.
+//! The draw starts at vertex `18 × v`, which tells
 //! the shader the visible instance `v` without any per-draw buffer. The fragment shader
 //! writes the voxel under the pixel (colour from the LOD's sparse lookup), the face
 //! normal, the exact ray–face position and linear depth, so its accuracy compares with
@@ -39,8 +40,9 @@ use crate::gpu_scene::GpuScene;
 use crate::triangles::{begin_gbuffer_pass, gbuffer_depth_stencil, gbuffer_targets};
 use crate::{PassError, PassNode, shaders};
 
-/// Vertices per cube (6 faces × 2 triangles).
-const CUBE_VERTICES: u32 = 36;
+/// Vertices per cube: two triangles on the camera side of each axis (at most three faces
+/// of a box face the camera).
+const CUBE_VERTICES: u32 = 18;
 
 /// The cubes of one (object, level) on the GPU.
 struct LevelCubes {
@@ -235,8 +237,8 @@ mod tests {
     fn shader_declares_the_cubes_as_the_voxel_crate_packs_them() {
         let src = crate::shaders::source("cube_raster.wgsl").unwrap();
         assert!(src.contains("var<storage, read> cubes: array<Cube>"));
-        assert!(src.contains("vi / 36u"));
-        assert_eq!(super::CUBE_VERTICES, 36);
+        assert!(src.contains("vi / 18u"));
+        assert_eq!(super::CUBE_VERTICES, 18);
         assert_eq!(
             std::mem::size_of::<ssbvb_voxel::cube_list::Cube>(),
             ssbvb_voxel::cube_list::CUBE_BYTES
