@@ -195,6 +195,13 @@ fn cube_raster_draws_two_objects_at_different_levels() {
                         DVec3::new(1.1, 0.0, 0.0),
                     ),
                     DAffine3::from_translation(DVec3::new(0.0, 0.0, -2.5)),
+                    // Mirrored (negative determinant): faces are chosen from the camera's
+                    // object-space position, not from the winding.
+                    DAffine3::from_scale_rotation_translation(
+                        DVec3::new(-0.7, 0.7, 0.7),
+                        glam::DQuat::from_rotation_y(-0.4),
+                        DVec3::new(0.0, 1.4, -1.0),
+                    ),
                 ],
                 lod: LodPolicy::Fixed(4),
             },
@@ -202,12 +209,12 @@ fn cube_raster_draws_two_objects_at_different_levels() {
         ..Default::default()
     };
     let cam = Camera::new(DVec3::new(0.4, 1.2, 4.5), DVec3::new(0.0, 0.0, -0.5));
-    let r = compare(&scene, &cam, CUBES, "bunny L6 + 2 knights L4");
+    let r = compare(&scene, &cam, CUBES, "bunny L6 + 3 knights L4");
     assert_accurate(&r, "two objects");
     // Every instance shows up.
     let f = ssbvb_tests::render(CUBES, scene.clone(), &cam, SIZE);
     let gpu = hits(&f, &scene, &cam, "two objects");
-    for i in 0..3 {
+    for i in 0..4 {
         let px = gpu.iter().flatten().filter(|h| h.instance == i).count();
         assert!(px > 100, "instance {i}: {px} px");
     }
