@@ -66,6 +66,14 @@ pub enum PassKind {
         #[serde(default = "default_dense_max_steps")]
         max_steps: u32,
     },
+    /// Baseline (seed 002, §3.3.1): instanced rasterization of one cube per voxel of each
+    /// visible instance's LOD — or, with `merge_full_nodes`, one cube per completely full
+    /// octree node — writing the same G-buffer as the billboards (stencil = voxel).
+    CubeRaster {
+        /// Merge every completely full octree node into one cube of its size.
+        #[serde(default = "yes")]
+        merge_full_nodes: bool,
+    },
 }
 
 fn default_max_steps() -> u32 {
@@ -73,6 +81,9 @@ fn default_max_steps() -> u32 {
 }
 fn default_dense_max_steps() -> u32 {
     4096
+}
+fn yes() -> bool {
+    true
 }
 fn one() -> f32 {
     1.0
@@ -101,6 +112,7 @@ pub const KIND_NAMES: &[&str] = &[
     "Composite",
     "DenseDda",
     "OctreeRayCast",
+    "CubeRaster",
 ];
 
 /// Whether a slot is read or written by the pass.
@@ -262,6 +274,7 @@ impl PassKind {
             PassKind::Composite => "Composite",
             PassKind::DenseDda { .. } => "DenseDda",
             PassKind::OctreeRayCast { .. } => "OctreeRayCast",
+            PassKind::CubeRaster { .. } => "CubeRaster",
         }
     }
 
@@ -288,6 +301,9 @@ impl PassKind {
             PassKind::OctreeRayCast {
                 max_steps: default_dense_max_steps(),
             },
+            PassKind::CubeRaster {
+                merge_full_nodes: yes(),
+            },
         ]
     }
 
@@ -303,6 +319,7 @@ impl PassKind {
             PassKind::Composite => "composite.wgsl",
             PassKind::DenseDda { .. } => "dense_dda.wgsl",
             PassKind::OctreeRayCast { .. } => "octree_ray_cast.wgsl",
+            PassKind::CubeRaster { .. } => "cube_raster.wgsl",
         }
     }
 
@@ -380,9 +397,10 @@ impl PassKind {
             PassKind::EmptySpacePrepass => EMPTY_SPACE,
             PassKind::RayMarchFilter { .. } => FILTER,
             PassKind::Billboards { .. } => BILLBOARDS,
-            PassKind::Triangles | PassKind::DenseDda { .. } | PassKind::OctreeRayCast { .. } => {
-                &GBUFFER_WRITES
-            }
+            PassKind::Triangles
+            | PassKind::DenseDda { .. }
+            | PassKind::OctreeRayCast { .. }
+            | PassKind::CubeRaster { .. } => &GBUFFER_WRITES,
             PassKind::Smooth { .. } => SMOOTH,
             PassKind::Composite => COMPOSITE,
         }

@@ -435,3 +435,20 @@ fn kept_resources_keep_their_writers_alive() {
         ],
     );
 }
+
+#[test]
+fn the_cube_raster_pipeline_resolves_and_merging_defaults_to_on() {
+    let src = include_str!("../../../assets/pipelines/cube_raster.ron");
+    let p = ok(src);
+    let names: Vec<_> = p.passes.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(names, ["triangles", "cube_raster", "smooth", "composite"]);
+    assert_eq!(
+        p.passes[1].kind,
+        ssbvb_graph::PassKind::CubeRaster {
+            merge_full_nodes: true
+        }
+    );
+    // With no parameter given (`CubeRaster()`) the kind merges full nodes.
+    let bare = ok(&src.replace("CubeRaster(merge_full_nodes: true)", "CubeRaster()"));
+    assert_eq!(bare.passes[1].kind, p.passes[1].kind);
+}

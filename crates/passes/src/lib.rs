@@ -8,6 +8,7 @@
 
 pub mod billboards;
 pub mod composite;
+pub mod cube_raster;
 pub mod dense_dda;
 pub mod embed;
 pub mod empty_space;
@@ -83,6 +84,7 @@ fn is_implemented(kind: &PassKind) -> bool {
             | PassKind::Triangles
             | PassKind::DenseDda { .. }
             | PassKind::OctreeRayCast { .. }
+            | PassKind::CubeRaster { .. }
     )
 }
 
@@ -114,6 +116,9 @@ pub fn create_pass(
             ctx, scene, pipeline, pass,
         )?)),
         PassKind::OctreeRayCast { .. } => Ok(Box::new(octree_ray_cast::OctreeRayCast::new(
+            ctx, scene, pipeline, pass,
+        )?)),
+        PassKind::CubeRaster { .. } => Ok(Box::new(cube_raster::CubeRaster::new(
             ctx, scene, pipeline, pass,
         )?)),
     }

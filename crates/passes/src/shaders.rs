@@ -35,6 +35,10 @@ const FILES: &[(&str, &str)] = &[
         include_str!("../../../shaders/octree_ray_cast.wgsl"),
     ),
     (
+        "cube_raster.wgsl",
+        include_str!("../../../shaders/cube_raster.wgsl"),
+    ),
+    (
         "ray_cast.inc.wgsl",
         include_str!("../../../shaders/ray_cast.inc.wgsl"),
     ),

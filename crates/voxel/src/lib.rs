@@ -6,12 +6,14 @@
 //! LOD ([`svo`]) → per LOD a packed point cloud ([`point_cloud`]) and a sparse lookup of
 //! 16³ pages ([`sparse_lookup`]) → a conservative proxy mesh ([`proxy`]). The exact CPU
 //! reference ray caster ([`reference`]) is the ground truth every GPU technique is
-//! measured against; [`cache`] stores a prepared asset on disk.
+//! measured against; [`cache`] stores a prepared asset on disk. [`cube_list`] builds the
+//! instance data of the cube rasterization baseline.
 
 pub mod accuracy;
 pub mod asset;
 pub mod cache;
 pub mod camera;
+pub mod cube_list;
 pub mod load;
 pub mod model;
 pub mod prepare;

@@ -3,6 +3,7 @@
 
 mod all_models;
 mod billboards;
+mod cube_raster;
 mod dense_dda;
 mod embed;
 mod empty_space;
