@@ -54,12 +54,18 @@ struct DrawArgs {
 
 // Most DDA steps per ray and instance (the pass parameter `max_steps`).
 override MAX_STEPS: u32 = 1024u;
+// `RayMarchFilter(unique_voxels: true)`: each voxel is appended once per frame.
+override UNIQUE_VOXELS: bool = false;
 
 // Output of the prepass: object-space entry point (xyz), instance index + 1 (w).
 @group(1) @binding(0) var entry: texture_2d<f32>;
 // Compacted hits: entries 0 .. billboard_draw.instance_count are valid.
 @group(1) @binding(1) var<storage, read_write> ssbvb: array<VoxelSlot>;
 @group(1) @binding(2) var<storage, read_write> billboard_draw: DrawArgs;
+// Pass-private (UNIQUE_VOXELS): one bit per voxel of each visible instance's level,
+// cleared every frame; instance k's bits start at word `claim_offsets[k]`.
+@group(2) @binding(0) var<storage, read_write> claimed_voxels: array<atomic<u32>>;
+@group(2) @binding(1) var<storage, read> claim_offsets: array<u32>;
 
 // Stands in for infinity: WGSL lets implementations assume no infinities at run time.
 const BIG: f32 = 3.0e38;
@@ -413,12 +419,22 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let hit_lod = lods[instances[best_inst].lod];
+    let voxel_id = hit_lod.voxel_offset + best.id;
+    if UNIQUE_VOXELS {
+        // Each visible instance owns a range of bits (instances of one object share voxel
+        // ids but are distinct billboards): the first pixel to set the bit appends.
+        let word = claim_offsets[best_inst] + (best.id >> 5u);
+        let bit = 1u << (best.id & 31u);
+        if (atomicOr(&claimed_voxels[word], bit) & bit) != 0u {
+            return;
+        }
+    }
     let idx = atomicAdd(&billboard_draw.instance_count, 1u);
     // The SSBVB holds one slot per pixel: the guard only matters for smaller buffers
     // (a pipeline may declare ScreenPixelsScaled), whose overflow is dropped.
     if idx < arrayLength(&ssbvb) {
         ssbvb[idx] = VoxelSlot(
-            voxels[hit_lod.voxel_offset + best.id],
+            voxels[voxel_id],
             best_inst,
             u32(px.y) * u32(size.x) + u32(px.x),
             best.t,

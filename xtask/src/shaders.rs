@@ -237,7 +237,10 @@ mod tests {
     #[test]
     fn registered_kinds_must_have_matching_entry_points_and_globals() {
         let dir = tempfile::tempdir().unwrap();
-        let kind = PassKind::RayMarchFilter { max_steps: 8 };
+        let kind = PassKind::RayMarchFilter {
+            max_steps: 8,
+            unique_voxels: false,
+        };
         // Missing file.
         let r = validate_dir(dir.path(), std::slice::from_ref(&kind)).unwrap();
         assert!(

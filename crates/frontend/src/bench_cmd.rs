@@ -87,6 +87,12 @@ const TECHNIQUES: &[Technique] = &[
         max_level: 16,
     },
     Technique {
+        name: "ssbvb-unique",
+        pipeline: "ssbvb.ron",
+        param: Some(("RayMarchFilter", "unique_voxels", "true")),
+        max_level: 16,
+    },
+    Technique {
         name: "dense-dda",
         pipeline: "dense_dda.ron",
         param: None,
@@ -96,6 +102,18 @@ const TECHNIQUES: &[Technique] = &[
         name: "octree",
         pipeline: "octree_ray_cast.ron",
         param: None,
+        max_level: 16,
+    },
+    Technique {
+        name: "cube-raster",
+        pipeline: "cube_raster.ron",
+        param: None,
+        max_level: 16,
+    },
+    Technique {
+        name: "cube-raster-array",
+        pipeline: "cube_raster.ron",
+        param: Some(("CubeRaster", "merge_full_nodes", "false")),
         max_level: 16,
     },
 ];
@@ -480,6 +498,17 @@ fn run_one(ctx: &ssbvb_gpu::GpuContext, t: &Technique, c: &Cell) -> Result<Row> 
         frames: c.frames,
     };
     let m = crate::bench_sweep::measure(&setup, &src, &label, false)?;
+    // The cube rasterizer's instance buffer comes on top of the scene's buffers (whose
+    // lookup it reads for voxel attributes).
+    let cube_bytes = match (t.pipeline, t.param) {
+        ("cube_raster.ron", p) => {
+            let merge = p.is_none();
+            ssbvb_voxel::cube_list::CubeList::from_lod(&c.asset.lods[c.level as usize], merge)
+                .map_err(|e| anyhow::anyhow!("{e}"))?
+                .bytes() as u64
+        }
+        _ => 0,
+    };
     let (fill, acc, mut times) = (m.fill, m.acc, m.times);
     let (min, max) = times
         .iter()
@@ -498,7 +527,7 @@ fn run_one(ctx: &ssbvb_gpu::GpuContext, t: &Technique, c: &Cell) -> Result<Row> 
         fill_count: fill,
         covered_pixels: acc.covered_reference,
         voxels: c.voxels,
-        gpu_memory_bytes: m.gpu_memory,
+        gpu_memory_bytes: m.gpu_memory + cube_bytes,
         coverage_iou: acc.coverage_iou,
         same_voxel_rate: fill.map(|_| acc.same_voxel_rate),
         depth_error_voxels_median: acc.depth_error_voxels.median,

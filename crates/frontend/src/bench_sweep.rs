@@ -128,7 +128,8 @@ pub(crate) fn measure(s: &Setup, src: &str, label: &str, with_psnr: bool) -> Res
 }
 
 /// Replaces the value of parameter `param` of the single pass of kind `kind`
-/// (`kind: Kind(.., param: value, ..)`) with `value`.
+/// (`kind: Kind(.., param: value, ..)`) with `value`, or adds it when the file leaves it
+/// at its default.
 pub(crate) fn set_kind_param(src: &str, kind: &str, param: &str, value: &str) -> Result<String> {
     let needle = format!("kind: {kind}(");
     let mut found = src.match_indices(&needle);
@@ -145,9 +146,15 @@ pub(crate) fn set_kind_param(src: &str, kind: &str, param: &str, value: &str) ->
             .with_context(|| format!("unclosed `{kind}(`"))?;
     let args = &src[open..close];
     let key = format!("{param}:");
-    let k = args
-        .find(&key)
-        .with_context(|| format!("`{kind}` has no parameter `{param}`"))?;
+    let Some(k) = args.find(&key) else {
+        // Not written in the file (it has its default): add it.
+        let sep = if args.trim().is_empty() { "" } else { ", " };
+        return Ok(format!(
+            "{}{sep}{param}: {value}{}",
+            &src[..close],
+            &src[close..]
+        ));
+    };
     let v_start = k + key.len();
     let v_end = args[v_start..]
         .find(',')
@@ -444,7 +451,20 @@ mod tests {
             set_kind_param(src, "Smooth", "max_i", "3.0").unwrap(),
             "(kind: Billboards(mode: Flat, size_scale: 1.0),)\n(kind: Smooth(max_i: 3.0, min_dist: 0.5))"
         );
-        assert!(set_kind_param(src, "Smooth", "nope", "1").is_err());
+        assert_eq!(
+            set_kind_param(src, "Smooth", "extra", "true").unwrap(),
+            "(kind: Billboards(mode: Flat, size_scale: 1.0),)\n(kind: Smooth(max_i: 1.0, min_dist: 0.5, extra: true))"
+        );
+        assert_eq!(
+            set_kind_param(
+                "kind: CubeRaster()",
+                "CubeRaster",
+                "merge_full_nodes",
+                "false"
+            )
+            .unwrap(),
+            "kind: CubeRaster(merge_full_nodes: false)"
+        );
         assert!(set_kind_param(src, "RayMarchFilter", "max_steps", "1").is_err());
     }
 

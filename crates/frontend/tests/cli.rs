@@ -157,16 +157,23 @@ fn render_json_and_bench_quick() {
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     let rows: Vec<&str> = csv.lines().skip(1).collect();
-    assert_eq!(rows.len(), 8, "{csv}");
+    // 7 techniques x 2 levels.
+    assert_eq!(rows.len(), 14, "{csv}");
     for r in rows {
         let r: Vec<&str> = r.split(',').collect();
         let iou: f64 = r[col("coverage_iou")].parse().unwrap();
         assert!(iou >= 0.97, "{r:?}");
-        // The SSBVB draws one billboard per covered pixel (up to silhouette rays).
-        if r[col("technique")].starts_with("ssbvb") {
+        // The SSBVB draws one billboard per covered pixel (up to silhouette rays), or with
+        // unique_voxels one per visible voxel (fewer: cells span more than a pixel here).
+        let technique = r[col("technique")];
+        if technique.starts_with("ssbvb") {
             let fill: f64 = r[col("fill_count")].parse().unwrap();
             let covered: f64 = r[col("covered_pixels")].parse().unwrap();
-            assert!((fill / covered - 1.0).abs() < 0.01, "{r:?}");
+            if technique == "ssbvb-unique" {
+                assert!(fill < covered * 0.9 && fill > 0.0, "{r:?}");
+            } else {
+                assert!((fill / covered - 1.0).abs() < 0.01, "{r:?}");
+            }
         }
     }
     assert!(

@@ -23,6 +23,12 @@ pub enum PassKind {
         /// Most DDA steps per ray (cells, pages and empty blocks each count one).
         #[serde(default = "default_max_steps")]
         max_steps: u32,
+        /// Append each hit voxel once per frame (the first pixel to reach it claims it)
+        /// instead of once per covered pixel. Same image; far fewer billboards when voxels
+        /// span many pixels (a level finer than the screen needs is then not required).
+        /// Off by default: the paper's SSBVB holds one entry per covered pixel.
+        #[serde(default)]
+        unique_voxels: bool,
     },
     /// Draws one billboard per SSBVB entry (vertex pulling) into the G-buffer with
     /// stencil = voxel.
@@ -284,6 +290,7 @@ impl PassKind {
             PassKind::EmptySpacePrepass,
             PassKind::RayMarchFilter {
                 max_steps: default_max_steps(),
+                unique_voxels: false,
             },
             PassKind::Billboards {
                 mode: BillboardMode::Flat,
@@ -410,7 +417,7 @@ impl PassKind {
     pub fn parameter_problems(&self) -> Vec<String> {
         let mut out = Vec::new();
         match *self {
-            PassKind::RayMarchFilter { max_steps: 0 }
+            PassKind::RayMarchFilter { max_steps: 0, .. }
             | PassKind::DenseDda { max_steps: 0 }
             | PassKind::OctreeRayCast { max_steps: 0 } => {
                 out.push("max_steps must be at least 1".to_string());

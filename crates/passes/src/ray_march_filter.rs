@@ -17,6 +17,16 @@
 //!
 //! Two dispatches in one compute pass: `clear_draw` (one thread) resets the draw to
 //! `{6, 0, 0, 0}`, then `main` over `ceil(w / 8) × ceil(h / 8)` workgroups of 8 × 8.
+//!
+//! With `unique_voxels` each (visible instance, voxel) is appended once: the pass keeps a
+//! bitset with one bit per voxel of each visible instance's level (cleared every frame,
+//! grown when needed) and the first pixel to set a bit appends. The billboards then
+//! cover the same pixels with the same fragments (duplicates drew identical ones), but a
+//! voxel spanning n pixels is drawn once instead of n times — n² fragments fewer.
+//!
+//! The filter reads `entry`'s own size: a prepass and filter declared at a fraction of
+//! the screen (`ScreenScaled`) cast one ray per texel centre, through the matching point
+//! of the full screen.
 
 use bytemuck::{Pod, Zeroable};
 use ssbvb_gpu::{GpuContext, wgpu};
@@ -75,6 +85,51 @@ pub struct RayMarchFilter {
     clear: wgpu::ComputePipeline,
     main: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
+    claim_layout: wgpu::BindGroupLayout,
+    unique_voxels: bool,
+    /// `unique_voxels`: the claim bitset and the per-instance word offsets (capacities
+    /// in words / instances grow as needed).
+    claims: Option<Claims>,
+}
+
+struct Claims {
+    bits: wgpu::Buffer,
+    offsets: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+}
+
+impl Claims {
+    fn new(ctx: &GpuContext, layout: &wgpu::BindGroupLayout, words: u64, instances: u64) -> Self {
+        let buffer = |label, size: u64, usage| {
+            ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(16),
+                usage: wgpu::BufferUsages::STORAGE | usage,
+                mapped_at_creation: false,
+            })
+        };
+        let bits = buffer("claimed voxels", words * 4, wgpu::BufferUsages::COPY_DST);
+        let offsets = buffer("claim offsets", instances * 4, wgpu::BufferUsages::COPY_DST);
+        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("ray_march_filter claims"),
+            layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: bits.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: offsets.as_entire_binding(),
+                },
+            ],
+        });
+        Self {
+            bits,
+            offsets,
+            bind_group,
+        }
+    }
 }
 
 impl RayMarchFilter {
@@ -85,7 +140,11 @@ impl RayMarchFilter {
         _pipeline: &ResolvedPipeline,
         pass: &ScheduledPass,
     ) -> Result<Self, PassError> {
-        let PassKind::RayMarchFilter { max_steps } = pass.kind else {
+        let PassKind::RayMarchFilter {
+            max_steps,
+            unique_voxels,
+        } = pass.kind
+        else {
             return Err(PassError::Shader(format!(
                 "pass `{}` is not a RayMarchFilter",
                 pass.name
@@ -125,12 +184,27 @@ impl RayMarchFilter {
                     storage(2),
                 ],
             });
+            let read_only = wgpu::BindGroupLayoutEntry {
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: true },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                ..storage(1)
+            };
+            let claim_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("ray_march_filter claims"),
+                entries: &[storage(0), read_only],
+            });
             let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("ray_march_filter"),
-                bind_group_layouts: &[Some(&scene.layout), Some(&layout)],
+                bind_group_layouts: &[Some(&scene.layout), Some(&layout), Some(&claim_layout)],
                 immediate_size: 0,
             });
-            let constants = [("MAX_STEPS", f64::from(max_steps))];
+            let constants = [
+                ("MAX_STEPS", f64::from(max_steps)),
+                ("UNIQUE_VOXELS", if unique_voxels { 1.0 } else { 0.0 }),
+            ];
             let make = |entry: &str| {
                 d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some(entry),
@@ -144,13 +218,18 @@ impl RayMarchFilter {
                     cache: None,
                 })
             };
-            (make("clear_draw"), make("main"), layout)
+            (make("clear_draw"), make("main"), layout, claim_layout)
         })?;
-        let (clear, main, layout) = built;
+        let (clear, main, layout, claim_layout) = built;
+        // Without unique_voxels the shader never touches the claims: bind minimal buffers.
+        let claims = Some(Claims::new(ctx, &claim_layout, 4, 4));
         Ok(Self {
             clear,
             main,
             layout,
+            claim_layout,
+            unique_voxels,
+            claims,
         })
     }
 }
@@ -182,18 +261,80 @@ impl PassNode for RayMarchFilter {
                     },
                 ],
             });
-        let (w, h) = rec.screen;
+        if self.unique_voxels {
+            self.prepare_claims(rec, encoder)?;
+        }
+        let claims = self.claims.as_ref().expect("claims exist");
+        let entry = &rec.texture("entry").texture;
+        let (w, h) = (entry.width(), entry.height());
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(&rec.pass.name),
             timestamp_writes: rec.compute_timestamps(),
         });
         pass.set_bind_group(0, &rec.scene.bind_group, &[]);
         pass.set_bind_group(1, &bind_group, &[]);
+        pass.set_bind_group(2, &claims.bind_group, &[]);
         pass.set_pipeline(&self.clear);
         pass.dispatch_workgroups(1, 1, 1);
         // wgpu orders the two dispatches (the draw arguments are written, then counted).
         pass.set_pipeline(&self.main);
         pass.dispatch_workgroups(w.div_ceil(WORKGROUP), h.div_ceil(WORKGROUP), 1);
+        Ok(())
+    }
+}
+
+impl RayMarchFilter {
+    /// Lays out one bit range per visible instance (its level's voxel count, rounded up
+    /// to words), grows the buffers when needed, uploads the offsets and records the
+    /// clear of the used words.
+    fn prepare_claims(
+        &mut self,
+        rec: &Recorder<'_>,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), PassError> {
+        let scene = rec.scene;
+        let mut offsets = Vec::with_capacity(scene.visible.len());
+        let mut words = 0u64;
+        for v in &scene.visible {
+            offsets.push(words as u32);
+            let n = scene.scene.objects[v.object].asset.lods[v.level as usize]
+                .point_cloud
+                .voxels
+                .len() as u64;
+            words += n.div_ceil(32);
+        }
+        let words = words.max(1);
+        let max = rec.gpu.device.limits().max_storage_buffer_binding_size;
+        if words * 4 > max {
+            return Err(PassError::TooLarge(format!(
+                "unique_voxels needs {} bytes of claim bits for {} visible instances; the \
+                 device binds at most {max}: use coarser levels or turn unique_voxels off",
+                words * 4,
+                offsets.len()
+            )));
+        }
+        let instances = offsets.len().max(1) as u64;
+        let fits = self
+            .claims
+            .as_ref()
+            .is_some_and(|c| c.bits.size() >= words * 4 && c.offsets.size() >= instances * 4);
+        if !fits {
+            // Grow by half again, so that a camera move does not reallocate every frame.
+            let cap = |n: u64| n + n / 2;
+            self.claims = Some(Claims::new(
+                rec.gpu,
+                &self.claim_layout,
+                cap(words),
+                cap(instances),
+            ));
+        }
+        let claims = self.claims.as_ref().expect("claims exist");
+        if !offsets.is_empty() {
+            rec.gpu
+                .queue
+                .write_buffer(&claims.offsets, 0, bytemuck::cast_slice(&offsets));
+        }
+        encoder.clear_buffer(&claims.bits, 0, Some(words * 4));
         Ok(())
     }
 }
