@@ -369,15 +369,25 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                         frames: m.frames,
                         voxels,
                     };
-                    let row = run_one(&ctx, t, &cell).with_context(|| {
-                        format!(
-                            "{} on {} level {level} {}x{}",
-                            t.name,
-                            model.name(),
-                            size.0,
-                            size.1
-                        )
-                    })?;
+                    let what = format!(
+                        "{} on {} level {level} {}x{}",
+                        t.name,
+                        model.name(),
+                        size.0,
+                        size.1
+                    );
+                    let row = match run_one(&ctx, t, &cell) {
+                        Ok(row) => row,
+                        // What the device cannot hold is a result, not a failure of the run.
+                        Err(e) if too_large(&e) => {
+                            if !args.json {
+                                eprintln!("skipped {what}: {e:#}");
+                            }
+                            skipped.push(format!("{what}: {e:#}"));
+                            continue;
+                        }
+                        Err(e) => return Err(e.context(what)),
+                    };
                     if !args.json {
                         eprintln!(
                             "{:<13} {} L{level} {}x{}: {:.2} ms median, IoU {:.4}",
@@ -444,6 +454,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Whether `e` says the scene does not fit the device's limits.
+fn too_large(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        matches!(
+            c.downcast_ref::<ssbvb_passes::PassError>(),
+            Some(ssbvb_passes::PassError::TooLarge(_))
+        )
+    })
 }
 
 /// The fastest technique per (model, size, level) with more than one technique measured.

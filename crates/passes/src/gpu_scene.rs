@@ -192,20 +192,31 @@ pub struct GpuScene {
     pub screen: (u32, u32),
 }
 
-fn storage(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+fn storage(ctx: &GpuContext, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer, PassError> {
+    // One binding each: refuse clearly what the device cannot bind (lavapipe binds at most
+    // 128 MiB, so e.g. the bunny's page pool at level 10 does not fit there).
+    let max = ctx.device.limits().max_storage_buffer_binding_size;
+    if bytes.len() as u64 > max {
+        return Err(PassError::TooLarge(format!(
+            "the scene's {label} take {} bytes; this device binds at most {max} bytes per \
+             storage buffer: use a coarser level or fewer objects",
+            bytes.len()
+        )));
+    }
     // Empty bindings are invalid: keep at least 16 bytes.
     let mut data = bytes.to_vec();
     if data.len() < 16 {
         data.resize(16, 0);
     }
-    ctx.device
+    Ok(ctx
+        .device
         .create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(label),
             contents: &data,
             usage: wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::COPY_DST
                 | wgpu::BufferUsages::COPY_SRC,
-        })
+        }))
 }
 
 fn mat(m: DMat4) -> [[f32; 4]; 4] {
@@ -310,11 +321,11 @@ impl GpuScene {
         });
         let total_instances: usize = scene.objects.iter().map(|o| o.instances.len()).sum();
         let instance_buffer = Self::instance_buffer(ctx, total_instances.max(1));
-        let lod_buffer = storage(ctx, "lods", bytemuck::cast_slice(&lods));
-        let voxel_buffer = storage(ctx, "voxels", bytemuck::cast_slice(&voxels));
-        let page_table_buffer = storage(ctx, "page_tables", bytemuck::cast_slice(&page_tables));
-        let page_buffer = storage(ctx, "pages", bytemuck::cast_slice(&pages));
-        let coarse_buffer = storage(ctx, "coarse", bytemuck::cast_slice(&coarse));
+        let lod_buffer = storage(ctx, "lods", bytemuck::cast_slice(&lods))?;
+        let voxel_buffer = storage(ctx, "voxels", bytemuck::cast_slice(&voxels))?;
+        let page_table_buffer = storage(ctx, "page_tables", bytemuck::cast_slice(&page_tables))?;
+        let page_buffer = storage(ctx, "pages", bytemuck::cast_slice(&pages))?;
+        let coarse_buffer = storage(ctx, "coarse", bytemuck::cast_slice(&coarse))?;
         let proxy_vertices = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("proxy vertices"),
             contents: bytemuck::cast_slice(if proxy_v.is_empty() {
