@@ -153,6 +153,8 @@ struct Viewer {
     rig: CameraRig,
     initial_camera: Camera,
     input: CameraInput,
+    /// Last cursor position in physical pixels.
+    cursor: Option<(f64, f64)>,
     stats: Stats,
     overlay: OverlayState,
     error: Option<String>,
@@ -209,6 +211,7 @@ impl Viewer {
             rig: CameraRig::new(loaded.camera),
             initial_camera: loaded.camera,
             input: CameraInput::default(),
+            cursor: None,
             stats,
             overlay: OverlayState::default(),
             error: None,
@@ -225,9 +228,13 @@ impl Viewer {
 
     fn event(&mut self, options: &Options, event: &WindowEvent) -> Result<Flow> {
         let _ = self.egui_state.on_window_event(&self.window, event);
-        let egui_wants_keys = self.egui_ctx.egui_wants_keyboard_input();
-        let over_overlay =
-            self.egui_ctx.is_pointer_over_egui() || self.egui_ctx.egui_is_using_pointer();
+        if let WindowEvent::CursorMoved { position, .. } = event {
+            self.cursor = Some((position.x, position.y));
+        }
+        // Only typing goes to egui exclusively: a clicked button also holds egui's focus,
+        // and that must not take WASD and Tab away from the camera.
+        let egui_wants_keys = self.egui_ctx.text_edit_focused();
+        let over_overlay = self.over_overlay();
         match event {
             WindowEvent::CloseRequested => {
                 // Without --frames, --screenshot is the frame on screen when closing.
@@ -262,13 +269,34 @@ impl Viewer {
                 self.input
                     .cursor_moved(position.x, position.y, &mut self.rig, h);
             }
-            WindowEvent::CursorLeft { .. } => self.input.cursor_left(),
+            WindowEvent::CursorLeft { .. } => {
+                self.cursor = None;
+                self.input.cursor_left();
+            }
             WindowEvent::MouseWheel { delta, .. } if !over_overlay => {
                 self.input.wheel(*delta, &mut self.rig);
             }
             _ => {}
         }
         Ok(Flow::Continue)
+    }
+
+    /// Whether the cursor is on the overlay (or egui is dragging something). Tested
+    /// against the overlay's areas from the last frame with the cursor's position now:
+    /// egui's own pointer state only moves when a frame runs, and on a slow adapter a
+    /// press can arrive before the frame that saw the cursor leave the overlay.
+    fn over_overlay(&self) -> bool {
+        if self.egui_ctx.egui_is_using_pointer() {
+            return true;
+        }
+        let Some((x, y)) = self.cursor else {
+            return false;
+        };
+        let ppp = f64::from(self.egui_ctx.pixels_per_point());
+        let pos = egui::pos2((x / ppp) as f32, (y / ppp) as f32);
+        self.egui_ctx
+            .layer_id_at(pos)
+            .is_some_and(|l| l.order != egui::Order::Background)
     }
 
     /// Follows the window's size: reconfigures the surface and, when the size changed,

@@ -113,6 +113,7 @@ pub fn draw(ctx: &egui::Context, view: &OverlayView<'_>, state: &mut OverlayStat
     egui::Window::new("ssbvb view")
         .default_pos([8.0, 8.0])
         .default_width(330.0)
+        .default_height((view.size.1 as f32 - 24.0).max(100.0))
         .default_open(open)
         .vscroll(true)
         .show(ctx, |ui| {
