@@ -160,6 +160,8 @@ struct Viewer {
     error: Option<String>,
     status: Option<String>,
     frame: u64,
+    /// Frame number of the last renderer rebuild (timings are sampled from there).
+    sample_base: u64,
     last_frame: Instant,
     last_poll: Instant,
     needs_rebuild: bool,
@@ -217,6 +219,7 @@ impl Viewer {
             error: None,
             status: None,
             frame: 0,
+            sample_base: 0,
             last_frame: Instant::now(),
             last_poll: Instant::now(),
             needs_rebuild: false,
@@ -236,14 +239,7 @@ impl Viewer {
         let egui_wants_keys = self.egui_ctx.text_edit_focused();
         let over_overlay = self.over_overlay();
         match event {
-            WindowEvent::CloseRequested => {
-                // Without --frames, --screenshot is the frame on screen when closing.
-                if let (Some(path), false) = (&options.screenshot, self.screenshot_written) {
-                    self.screenshot_next = Some(path.clone());
-                    self.frame(options)?;
-                }
-                return Ok(Flow::Exit);
-            }
+            WindowEvent::CloseRequested => return self.quit(options),
             WindowEvent::Resized(_) => self.sync_size()?,
             WindowEvent::RedrawRequested => return self.frame(options),
             WindowEvent::KeyboardInput { event, .. } => {
@@ -256,7 +252,7 @@ impl Viewer {
                         KeyCode::F12 if pressed => {
                             self.screenshot_next = Some(capture::default_path());
                         }
-                        KeyCode::Escape if pressed => return Ok(Flow::Exit),
+                        KeyCode::Escape if pressed => return self.quit(options),
                         _ => {}
                     }
                 }
@@ -279,6 +275,16 @@ impl Viewer {
             _ => {}
         }
         Ok(Flow::Continue)
+    }
+
+    /// The user closes the viewer. Without --frames, --screenshot is the frame on screen
+    /// at that moment: draw it once more into the screenshot.
+    fn quit(&mut self, options: &Options) -> Result<Flow> {
+        if let (Some(path), false) = (&options.screenshot, self.screenshot_written) {
+            self.screenshot_next = Some(path.clone());
+            self.frame(options)?;
+        }
+        Ok(Flow::Exit)
     }
 
     /// Whether the cursor is on the overlay (or egui is dragging something). Tested
@@ -335,6 +341,7 @@ impl Viewer {
                 self.renderer = r;
                 self.error = None;
                 self.stats.reset_pipeline();
+                self.sample_base = self.frame;
                 true
             }
             Err(e) => {
@@ -448,7 +455,9 @@ impl Viewer {
 
         // The scene.
         let camera = self.rig.camera();
-        let profiling = self.stats.profiling(self.frame);
+        // Counted from the last rebuild, so a new pipeline is measured at its first frame.
+        let sample_frame = self.frame - self.sample_base;
+        let profiling = self.stats.profiling(sample_frame);
         match self
             .renderer
             .render(&self.gpu.ctx, &mut self.scene, &camera, profiling)
@@ -456,7 +465,7 @@ impl Viewer {
             Ok(s) => self.stats.record(&s, profiling),
             Err(e) => self.error = Some(format!("frame: {e}")),
         }
-        if Stats::samples_fill(self.frame) {
+        if Stats::samples_fill(sample_frame) {
             self.sample_fill();
         }
 

@@ -93,6 +93,8 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         .clone()
         .or(pipeline)
         .unwrap_or_else(|| assets_dir().join("pipelines/ssbvb.ron"));
+    // Canonical, so the overlay shows a plain path and the technique list can mark it.
+    let pipeline_path = pipeline_path.canonicalize().unwrap_or(pipeline_path);
     let watcher = ssbvb_graph::PipelineWatcher::new(&pipeline_path)
         .map_err(|e| anyhow!("{}", e.to_string().trim_end()))?;
 

@@ -195,16 +195,17 @@ fn performance(ui: &mut egui::Ui, view: &OverlayView<'_>) {
                 } else {
                     String::new()
                 };
-                ui.label(format!(
-                    "SSBVB fill: {f} billboards / {c} covered pixels{pct}"
-                ));
+                // One short line: a wrapping line would move the controls below it.
+                ui.label(format!("SSBVB fill: {f} / {c} px{pct}"))
             }
-            _ => {
-                ui.label("SSBVB fill: (sampled every 30 frames)");
-            }
+            _ => ui.label("SSBVB fill: not sampled yet"),
         }
+        .on_hover_text(format!(
+            "Billboards the ray-march filter emitted vs pixels the frame covered \
+             (GPU readbacks every {SLOW_SAMPLE_EVERY} frames)"
+        ));
     } else {
-        ui.weak("SSBVB fill: no ray-march filter in this pipeline");
+        ui.weak("SSBVB fill: no ray-march filter");
     }
     ui.label(format!("Visible instances: {}", s.visible_instances));
 }
