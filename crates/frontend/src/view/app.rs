@@ -524,21 +524,26 @@ impl Viewer {
             }
         }
         let free: Vec<egui::TextureId> = textures.free.drain().collect();
-        let result = self.present(options, full.shapes, full.pixels_per_point, actions);
+        let result = self.present(options, full.shapes, full.pixels_per_point);
         for id in &free {
             self.egui_renderer.free_texture(id);
+        }
+        // After presenting (a rebuild must not change what this frame drew), and also
+        // when the surface skipped this frame: a click is not lost.
+        if result.is_ok() {
+            for a in actions {
+                self.apply(a);
+            }
         }
         result
     }
 
-    /// Draws the frame and the overlay onto the surface (and the screenshot target), then
-    /// applies the overlay's actions.
+    /// Draws the frame and the overlay onto the surface (and the screenshot target).
     fn present(
         &mut self,
         options: &Options,
         shapes: Vec<egui::epaint::ClippedShape>,
         pixels_per_point: f32,
-        actions: Vec<Action>,
     ) -> Result<Flow> {
         let (surface_texture, suboptimal) = match self.gpu.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t) => (t, false),
@@ -629,9 +634,6 @@ impl Viewer {
                 Err(e) if options.screenshot.as_ref() == Some(&path) => return Err(e),
                 Err(e) => self.error = Some(format!("{e:#}")),
             }
-        }
-        for a in actions {
-            self.apply(a);
         }
         self.stats.presented(Instant::now());
         self.frame += 1;
