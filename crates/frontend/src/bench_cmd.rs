@@ -257,7 +257,8 @@ struct Row {
     voxels: usize,
     gpu_memory_bytes: u64,
     coverage_iou: f64,
-    /// `None` for techniques that keep no voxel ids (no SSBVB).
+    /// `None` for techniques that keep no per-pixel voxel ids (all but the per-pixel
+    /// SSBVB).
     same_voxel_rate: Option<f64>,
     depth_error_voxels_median: f64,
     normal_error_deg_median: f64,
@@ -557,7 +558,11 @@ fn run_one(ctx: &ssbvb_gpu::GpuContext, t: &Technique, c: &Cell) -> Result<Row> 
         voxels: c.voxels,
         gpu_memory_bytes: m.gpu_memory + cube_bytes,
         coverage_iou: acc.coverage_iou,
-        same_voxel_rate: fill.map(|_| acc.same_voxel_rate),
+        // Voxel ids per pixel come from the slot each pixel's ray filled: not available
+        // with unique_voxels (one slot per voxel, not per pixel).
+        same_voxel_rate: fill
+            .filter(|_| t.name != "ssbvb-unique")
+            .map(|_| acc.same_voxel_rate),
         depth_error_voxels_median: acc.depth_error_voxels.median,
         normal_error_deg_median: acc.normal_error_deg.median,
     })

@@ -7,6 +7,7 @@ mod pipeline_cmd;
 mod progress;
 mod render_cmd;
 mod scene_file;
+mod view;
 mod voxelize_cmd;
 
 use std::process::ExitCode;
@@ -34,6 +35,9 @@ enum Command {
     Bench(bench_cmd::BenchArgs),
     /// Voxelize a model: every LOD, sparse lookup pages, proxy meshes; cached on disk.
     Voxelize(voxelize_cmd::VoxelizeArgs),
+    /// Open a window on a scene or model: orbit/fly camera, overlay with per-pass timings,
+    /// knobs, LOD and technique switch, hot reload of the pipeline file (needs a display).
+    View(view::ViewArgs),
     /// Print the GPU adapter ssbvb would use (set SSBVB_ADAPTER / WGPU_BACKEND to choose).
     Adapter,
 }
@@ -45,6 +49,7 @@ fn main() -> ExitCode {
         Command::Adapter => adapter(),
         Command::Bench(a) => bench_cmd::run(&a).map(|_| ExitCode::SUCCESS),
         Command::Render(a) => render_cmd::run(&a).map(|_| ExitCode::SUCCESS),
+        Command::View(a) => view::run(&a).map(|_| ExitCode::SUCCESS),
         Command::Voxelize(a) => voxelize_cmd::run(&a).map(|_| ExitCode::SUCCESS),
     };
     match result {

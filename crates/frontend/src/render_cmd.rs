@@ -107,39 +107,69 @@ struct ObjectReport {
     total: u64,
 }
 
-/// Runs `ssbvb render`.
-pub fn run(args: &RenderArgs) -> Result<()> {
-    let progress = BarProgress::new(!args.json && std::io::stderr().is_terminal());
-    let default_scene = assets_dir().join("scenes/default.ron");
-    let input = args.input.clone().unwrap_or(default_scene);
+/// A scene or a single model, ready to upload.
+pub struct LoadedInput {
+    /// What to draw.
+    pub scene: Scene,
+    /// The scene's camera (the default camera for a model).
+    pub camera: Camera,
+    /// The scene's pipeline file (`None` for a model).
+    pub pipeline: Option<PathBuf>,
+    /// One line per asset about the cache.
+    pub notes: Vec<String>,
+}
+
+/// Loads a scene file (`.ron`) or prepares a model file at `level` (default 8), placed at
+/// the origin with its finest level, as `ssbvb render` and `ssbvb view` accept them.
+pub fn load_input(
+    input: &Path,
+    level: Option<u32>,
+    progress: &dyn ssbvb_voxel::progress::Progress,
+) -> Result<LoadedInput> {
     let is_scene = input
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("ron"));
-    let (scene, mut camera, scene_pipeline, notes) = if is_scene {
-        if args.level.is_some() {
+    if is_scene {
+        if level.is_some() {
             bail!("--level applies to a model file; a scene names each object's level");
         }
-        let s = scene_file::load(&input, &progress)?;
-        (s.scene, s.camera, Some(s.pipeline), s.notes)
-    } else {
-        let level = args.level.unwrap_or(8);
-        let (asset, outcome) = ssbvb_voxel::cache::load_or_prepare(&input, level, None, &progress)
-            .with_context(|| format!("preparing {}", input.display()))?;
-        let scene = Scene {
+        let s = scene_file::load(input, progress)?;
+        return Ok(LoadedInput {
+            scene: s.scene,
+            camera: s.camera,
+            pipeline: Some(s.pipeline),
+            notes: s.notes,
+        });
+    }
+    let level = level.unwrap_or(8);
+    let (asset, outcome) = ssbvb_voxel::cache::load_or_prepare(input, level, None, progress)
+        .with_context(|| format!("preparing {}", input.display()))?;
+    Ok(LoadedInput {
+        scene: Scene {
             objects: vec![VoxelObject {
                 asset: Arc::new(asset),
                 instances: vec![DAffine3::IDENTITY],
                 lod: LodPolicy::Fixed(level),
             }],
             ..Default::default()
-        };
-        (
-            scene,
-            Camera::default(),
-            None,
-            vec![format!("{}: {outcome}", input.display())],
-        )
-    };
+        },
+        camera: Camera::default(),
+        pipeline: None,
+        notes: vec![format!("{}: {outcome}", input.display())],
+    })
+}
+
+/// Runs `ssbvb render`.
+pub fn run(args: &RenderArgs) -> Result<()> {
+    let progress = BarProgress::new(!args.json && std::io::stderr().is_terminal());
+    let default_scene = assets_dir().join("scenes/default.ron");
+    let input = args.input.clone().unwrap_or(default_scene);
+    let LoadedInput {
+        scene,
+        mut camera,
+        pipeline: scene_pipeline,
+        notes,
+    } = load_input(&input, args.level, &progress)?;
     progress.finish();
     if let Some(p) = args.camera_pos {
         camera.position = p;

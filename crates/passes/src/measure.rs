@@ -37,7 +37,9 @@ fn read(
 /// Per pixel of the last frame (row-major, row 0 at the top): the hit the G-buffer shows
 /// (`gbuffer_albedo` alpha > 0), its distance from the eye (from `gbuffer_position`), its
 /// normal (`gbuffer_normal`, Rgba16Float or Rgba32Float) and, with a filter, the voxel cell
-/// of its SSBVB slot (else `[u32::MAX; 3]`, which never counts as the same voxel).
+/// of the SSBVB slot its pixel's ray filled (else `[u32::MAX; 3]`, which never counts as
+/// the same voxel; meaningful only for a filter at screen resolution without
+/// `unique_voxels`, whose slots are one per covered pixel).
 /// Instance 0 is assumed (single-object scenes).
 pub fn gbuffer_hits(ctx: &GpuContext, r: &Renderer) -> Result<Vec<Option<GpuHit>>, PassError> {
     let albedo = read(ctx, r, "gbuffer_albedo")?;

@@ -1,0 +1,647 @@
+//! The window and its frame loop (winit's `ApplicationHandler`): creates the window and
+//! device on `resumed`, routes events to egui and the camera, and per frame: hot reload,
+//! render, overlay, blit + egui onto the surface, screenshots, and the `--frames` limit.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, anyhow};
+use ssbvb_gpu::wgpu;
+use ssbvb_graph::{PassKind, PipelineWatcher, ReloadOutcome, ResolvedPipeline};
+use ssbvb_passes::{GpuScene, Renderer, Scene};
+use ssbvb_voxel::camera::Camera;
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, WindowEvent};
+use winit::event_loop::ActiveEventLoop;
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+use super::blit::Blit;
+use super::camera_control::CameraRig;
+use super::input::CameraInput;
+use super::overlay::{self, Action, ObjectLod, OverlayState, OverlayView};
+use super::stats::Stats;
+use super::surface::WindowGpu;
+use super::{capture, knobs};
+
+/// How often the pipeline file is checked for changes.
+const RELOAD_POLL: Duration = Duration::from_millis(300);
+
+/// Options from the command line.
+pub struct Options {
+    /// Window title.
+    pub title: String,
+    /// Initial window size in pixels.
+    pub size: (u32, u32),
+    /// Exit after this many presented frames.
+    pub frames: Option<u64>,
+    /// Write a PNG of the last frame here.
+    pub screenshot: Option<PathBuf>,
+    /// Pipeline files for the technique switch.
+    pub techniques: Vec<PathBuf>,
+}
+
+/// What is loaded before the window exists.
+pub struct Loaded {
+    /// The scene (uploaded once the device exists).
+    pub scene: Scene,
+    /// The scene's camera.
+    pub camera: Camera,
+    /// The pipeline file, resolved once.
+    pub watcher: PipelineWatcher,
+}
+
+/// The application: waiting for `resumed`, then running, or failed.
+pub struct App {
+    options: Options,
+    loaded: Option<Loaded>,
+    viewer: Option<Viewer>,
+    error: Option<anyhow::Error>,
+}
+
+impl App {
+    /// An app that opens its window when the event loop starts.
+    pub fn new(options: Options, loaded: Loaded) -> Self {
+        Self {
+            options,
+            loaded: Some(loaded),
+            viewer: None,
+            error: None,
+        }
+    }
+
+    /// The error that ended the event loop, if any.
+    pub fn into_result(self) -> Result<()> {
+        match self.error {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
+        if self.error.is_none() {
+            self.error = Some(e);
+        }
+        // Release GPU objects while the window (and its display connection) still exists.
+        self.viewer = None;
+        event_loop.exit();
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        let Some(loaded) = self.loaded.take() else {
+            return;
+        };
+        match Viewer::new(event_loop, &self.options, loaded) {
+            Ok(v) => {
+                v.window.request_redraw();
+                self.viewer = Some(v);
+            }
+            Err(e) => self.fail(event_loop, e),
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let Some(viewer) = self.viewer.as_mut() else {
+            return;
+        };
+        let outcome = viewer.event(&self.options, &event);
+        match outcome {
+            Ok(Flow::Continue) => {}
+            Ok(Flow::Exit) => {
+                self.viewer = None;
+                event_loop.exit();
+            }
+            Err(e) => self.fail(event_loop, e),
+        }
+    }
+
+    fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {
+        // Redraw continuously: the overlay's timings are live.
+        if let Some(v) = &self.viewer {
+            v.window.request_redraw();
+        }
+    }
+
+    fn exiting(&mut self, _event_loop: &ActiveEventLoop) {
+        self.viewer = None;
+    }
+}
+
+/// Whether the loop goes on.
+enum Flow {
+    Continue,
+    Exit,
+}
+
+/// Everything that exists once the window is open.
+struct Viewer {
+    window: Arc<Window>,
+    gpu: WindowGpu,
+    blit: Blit,
+    egui_ctx: egui::Context,
+    egui_state: egui_winit::State,
+    egui_renderer: egui_wgpu::Renderer,
+    scene: GpuScene,
+    renderer: Renderer,
+    watcher: PipelineWatcher,
+    /// Knob edits by pass name, applied over the file's pipeline.
+    knob_edits: BTreeMap<String, PassKind>,
+    rig: CameraRig,
+    initial_camera: Camera,
+    input: CameraInput,
+    /// Last cursor position in physical pixels.
+    cursor: Option<(f64, f64)>,
+    stats: Stats,
+    overlay: OverlayState,
+    error: Option<String>,
+    status: Option<String>,
+    frame: u64,
+    /// Frame number of the last renderer rebuild (timings are sampled from there).
+    sample_base: u64,
+    last_frame: Instant,
+    last_poll: Instant,
+    needs_rebuild: bool,
+    screenshot_next: Option<PathBuf>,
+    screenshot_written: bool,
+}
+
+impl Viewer {
+    fn new(event_loop: &ActiveEventLoop, options: &Options, loaded: Loaded) -> Result<Self> {
+        let attributes = Window::default_attributes()
+            .with_title(options.title.clone())
+            .with_inner_size(winit::dpi::PhysicalSize::new(
+                options.size.0,
+                options.size.1,
+            ));
+        let window = Arc::new(event_loop.create_window(attributes).map_err(|e| {
+            anyhow!(super::display::no_display_message(&format!(
+                "cannot create a window: {e}"
+            )))
+        })?);
+        let gpu = WindowGpu::new(window.clone(), event_loop.owned_display_handle())?;
+        let ctx = &gpu.ctx;
+        let blit = Blit::new(ctx, gpu.config.format)?;
+        let scene = GpuScene::new(ctx, loaded.scene).context("uploading the scene")?;
+        let renderer = Renderer::new(ctx, &scene, loaded.watcher.current().clone(), gpu.size())
+            .with_context(|| format!("building {}", loaded.watcher.path().display()))?;
+        let egui_ctx = egui::Context::default();
+        let egui_state = egui_winit::State::new(
+            egui_ctx.clone(),
+            egui::ViewportId::ROOT,
+            window.as_ref(),
+            Some(window.scale_factor() as f32),
+            window.theme(),
+            Some(ctx.device.limits().max_texture_dimension_2d as usize),
+        );
+        let egui_renderer =
+            egui_wgpu::Renderer::new(&ctx.device, gpu.config.format, Default::default());
+        let stats = Stats::new(ctx.report());
+        Ok(Self {
+            window,
+            blit,
+            egui_ctx,
+            egui_state,
+            egui_renderer,
+            scene,
+            renderer,
+            watcher: loaded.watcher,
+            knob_edits: BTreeMap::new(),
+            rig: CameraRig::new(loaded.camera),
+            initial_camera: loaded.camera,
+            input: CameraInput::default(),
+            cursor: None,
+            stats,
+            overlay: OverlayState::default(),
+            error: None,
+            status: None,
+            frame: 0,
+            sample_base: 0,
+            last_frame: Instant::now(),
+            last_poll: Instant::now(),
+            needs_rebuild: false,
+            screenshot_next: None,
+            screenshot_written: false,
+            gpu,
+        })
+    }
+
+    fn event(&mut self, options: &Options, event: &WindowEvent) -> Result<Flow> {
+        let _ = self.egui_state.on_window_event(&self.window, event);
+        if let WindowEvent::CursorMoved { position, .. } = event {
+            self.cursor = Some((position.x, position.y));
+        }
+        // Only typing goes to egui exclusively: a clicked button also holds egui's focus,
+        // and that must not take WASD and Tab away from the camera.
+        let egui_wants_keys = self.egui_ctx.text_edit_focused();
+        let over_overlay = self.over_overlay();
+        match event {
+            WindowEvent::CloseRequested => return self.quit(options),
+            WindowEvent::Resized(_) => self.sync_size()?,
+            WindowEvent::RedrawRequested => return self.frame(options),
+            WindowEvent::KeyboardInput { event, .. } => {
+                if let PhysicalKey::Code(code) = event.physical_key {
+                    self.input.key(code, event.state, egui_wants_keys);
+                    let pressed =
+                        event.state == ElementState::Pressed && !event.repeat && !egui_wants_keys;
+                    match code {
+                        KeyCode::Tab if pressed => self.rig.toggle(),
+                        KeyCode::F12 if pressed => {
+                            self.screenshot_next = Some(capture::default_path());
+                        }
+                        KeyCode::Escape if pressed => return self.quit(options),
+                        _ => {}
+                    }
+                }
+            }
+            WindowEvent::MouseInput { state, button, .. } => {
+                self.input.button(*button, *state, over_overlay);
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                let h = f64::from(self.gpu.size().1);
+                self.input
+                    .cursor_moved(position.x, position.y, &mut self.rig, h);
+            }
+            WindowEvent::CursorLeft { .. } => {
+                self.cursor = None;
+                self.input.cursor_left();
+            }
+            WindowEvent::MouseWheel { delta, .. } if !over_overlay => {
+                self.input.wheel(*delta, &mut self.rig);
+            }
+            _ => {}
+        }
+        Ok(Flow::Continue)
+    }
+
+    /// The user closes the viewer. Without --frames, --screenshot is the frame on screen
+    /// at that moment: draw it once more into the screenshot.
+    fn quit(&mut self, options: &Options) -> Result<Flow> {
+        if let (Some(path), false) = (&options.screenshot, self.screenshot_written) {
+            self.screenshot_next = Some(path.clone());
+            self.frame(options)?;
+        }
+        Ok(Flow::Exit)
+    }
+
+    /// Whether the cursor is on the overlay (or egui is dragging something). Tested
+    /// against the overlay's areas from the last frame with the cursor's position now:
+    /// egui's own pointer state only moves when a frame runs, and on a slow adapter a
+    /// press can arrive before the frame that saw the cursor leave the overlay.
+    fn over_overlay(&self) -> bool {
+        if self.egui_ctx.egui_is_using_pointer() {
+            return true;
+        }
+        let Some((x, y)) = self.cursor else {
+            return false;
+        };
+        let ppp = f64::from(self.egui_ctx.pixels_per_point());
+        let pos = egui::pos2((x / ppp) as f32, (y / ppp) as f32);
+        self.egui_ctx
+            .layer_id_at(pos)
+            .is_some_and(|l| l.order != egui::Order::Background)
+    }
+
+    /// Follows the window's size: reconfigures the surface and, when the size changed,
+    /// has the renderer rebuilt at the next frame (not per event: a drag-resize sends
+    /// many).
+    fn sync_size(&mut self) -> Result<()> {
+        let size = self.window.inner_size();
+        if size.width == 0 || size.height == 0 {
+            return Ok(());
+        }
+        self.gpu.resize(size.width, size.height)?;
+        if self.renderer.screen != self.gpu.size() {
+            self.needs_rebuild = true;
+        }
+        Ok(())
+    }
+
+    /// The file's pipeline with the knob edits applied.
+    fn effective_pipeline(&self) -> ResolvedPipeline {
+        let mut p = self.watcher.current().clone();
+        for (pass, kind) in &self.knob_edits {
+            if let Some(edited) = knobs::apply(&p, pass, kind) {
+                p = edited;
+            }
+        }
+        p
+    }
+
+    /// Rebuilds the renderer (new pipeline, knobs or size). On failure the old renderer
+    /// keeps drawing and the error is shown.
+    fn rebuild(&mut self) -> bool {
+        self.needs_rebuild = false;
+        let pipeline = self.effective_pipeline();
+        match Renderer::new(&self.gpu.ctx, &self.scene, pipeline, self.gpu.size()) {
+            Ok(r) => {
+                self.renderer = r;
+                self.error = None;
+                self.stats.reset_pipeline();
+                self.sample_base = self.frame;
+                true
+            }
+            Err(e) => {
+                self.error = Some(format!("cannot build the pipeline: {e}"));
+                false
+            }
+        }
+    }
+
+    fn poll_reload(&mut self) {
+        if self.last_poll.elapsed() < RELOAD_POLL {
+            return;
+        }
+        self.last_poll = Instant::now();
+        match self.watcher.poll() {
+            ReloadOutcome::Unchanged => {}
+            ReloadOutcome::Reloaded => {
+                // The file is the truth again: knob edits made for the old version go.
+                self.knob_edits.clear();
+                self.overlay.reset();
+                if self.rebuild() {
+                    self.status = Some(format!("reloaded {}", self.watcher.path().display()));
+                }
+            }
+            ReloadOutcome::Failed(errors) => {
+                self.error = Some(errors.to_string().trim_end().to_string());
+            }
+        }
+    }
+
+    fn apply(&mut self, action: Action) {
+        match action {
+            Action::SetKnob { pass, kind } => {
+                self.knob_edits.insert(pass, kind);
+                self.rebuild();
+            }
+            Action::ResetKnobs => {
+                self.knob_edits.clear();
+                self.rebuild();
+            }
+            Action::Technique(path) => match PipelineWatcher::new(&path) {
+                Ok(w) => {
+                    let old = std::mem::replace(&mut self.watcher, w);
+                    let edits = std::mem::take(&mut self.knob_edits);
+                    if self.rebuild() {
+                        self.overlay.reset();
+                        self.status = Some(format!("switched to {}", path.display()));
+                    } else {
+                        self.watcher = old;
+                        self.knob_edits = edits;
+                    }
+                }
+                Err(e) => self.error = Some(e.to_string().trim_end().to_string()),
+            },
+            Action::Lod { object, policy } => {
+                if let Some(o) = self.scene.scene.objects.get_mut(object) {
+                    o.lod = policy;
+                }
+            }
+            Action::CameraMode(m) => self.rig.set_mode(m),
+            Action::FlySpeed(s) => self.rig.fly_speed = s,
+            Action::ResetCamera => {
+                let speed = self.rig.fly_speed;
+                self.rig = CameraRig::new(self.initial_camera);
+                self.rig.fly_speed = speed;
+            }
+            Action::Screenshot => self.screenshot_next = Some(capture::default_path()),
+        }
+    }
+
+    /// Fill count and covered pixels of the last frame (GPU readbacks: sampled rarely).
+    fn sample_fill(&mut self) {
+        let ctx = &self.gpu.ctx;
+        match self.renderer.fill_count(ctx) {
+            Ok(Some(fill)) => {
+                self.stats.fill = Some(fill);
+                self.stats.covered = ctx
+                    .read_texture(&self.renderer.output().texture, wgpu::TextureAspect::All)
+                    .ok()
+                    .map(|t| {
+                        let bpp =
+                            (t.bytes.len() / (t.width as usize * t.height as usize).max(1)).max(1);
+                        // Alpha is the last channel of the 8-bit RGBA/BGRA outputs.
+                        t.bytes.chunks(bpp).filter(|p| p[bpp - 1] > 0).count()
+                    });
+            }
+            Ok(None) => {
+                self.stats.fill = None;
+                self.stats.covered = None;
+            }
+            Err(e) => self.error = Some(format!("fill count: {e}")),
+        }
+    }
+
+    fn frame(&mut self, options: &Options) -> Result<Flow> {
+        let now = Instant::now();
+        let dt = (now - self.last_frame).as_secs_f64().min(0.25);
+        self.last_frame = now;
+        self.input.update(&mut self.rig, dt);
+        self.poll_reload();
+        if self.needs_rebuild {
+            self.rebuild();
+        }
+
+        // Automation: the last frame of --frames is the one --screenshot shows.
+        if let (Some(limit), Some(path)) = (options.frames, &options.screenshot) {
+            if self.frame + 1 >= limit && !self.screenshot_written {
+                self.screenshot_next = Some(path.clone());
+            }
+        }
+
+        // The scene.
+        let camera = self.rig.camera();
+        // Counted from the last rebuild, so a new pipeline is measured at its first frame.
+        let sample_frame = self.frame - self.sample_base;
+        let profiling = self.stats.profiling(sample_frame);
+        match self
+            .renderer
+            .render(&self.gpu.ctx, &mut self.scene, &camera, profiling)
+        {
+            Ok(s) => self.stats.record(&s, profiling),
+            Err(e) => self.error = Some(format!("frame: {e}")),
+        }
+        if Stats::samples_fill(sample_frame) {
+            self.sample_fill();
+        }
+
+        // The overlay.
+        let raw_input = self.egui_state.take_egui_input(&self.window);
+        let objects: Vec<ObjectLod> = self
+            .scene
+            .scene
+            .objects
+            .iter()
+            .enumerate()
+            .map(|(i, o)| {
+                let drawn = self.scene.visible.iter().filter(|v| v.object == i);
+                ObjectLod {
+                    policy: o.lod,
+                    max_level: o.asset.lods.len().saturating_sub(1) as u32,
+                    drawn: drawn
+                        .map(|v| (v.level, v.level))
+                        .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1))),
+                }
+            })
+            .collect();
+        let view = OverlayView {
+            adapter: self.gpu.ctx.report(),
+            stats: &self.stats,
+            pipeline_file: self.watcher.path(),
+            pipeline: &self.renderer.pipeline,
+            knobs_edited: !self.knob_edits.is_empty(),
+            techniques: &options.techniques,
+            objects: &objects,
+            camera_mode: self.rig.mode,
+            fly_speed: self.rig.fly_speed,
+            error: self.error.as_deref(),
+            status: self.status.as_deref(),
+            size: self.gpu.size(),
+        };
+        let overlay_state = &mut self.overlay;
+        let mut actions = Vec::new();
+        let mut full = self.egui_ctx.run_pass(raw_input, |ctx| {
+            actions = overlay::draw(ctx, &view, overlay_state);
+        });
+        self.egui_state
+            .handle_platform_output(&self.window, full.platform_output);
+
+        // egui's texture changes are applied whether or not this frame is presented
+        // (epaint insists: a dropped delta would lose the font atlas).
+        let mut textures = std::mem::take(&mut full.textures_delta);
+        for (id, deltas) in textures.set.drain() {
+            for delta in &deltas {
+                self.egui_renderer.update_texture(
+                    &self.gpu.ctx.device,
+                    &self.gpu.ctx.queue,
+                    id,
+                    delta,
+                );
+            }
+        }
+        let free: Vec<egui::TextureId> = textures.free.drain().collect();
+        let result = self.present(options, full.shapes, full.pixels_per_point);
+        for id in &free {
+            self.egui_renderer.free_texture(id);
+        }
+        // After presenting (a rebuild must not change what this frame drew), and also
+        // when the surface skipped this frame: a click is not lost.
+        if result.is_ok() {
+            for a in actions {
+                self.apply(a);
+            }
+        }
+        result
+    }
+
+    /// Draws the frame and the overlay onto the surface (and the screenshot target).
+    fn present(
+        &mut self,
+        options: &Options,
+        shapes: Vec<egui::epaint::ClippedShape>,
+        pixels_per_point: f32,
+    ) -> Result<Flow> {
+        let (surface_texture, suboptimal) = match self.gpu.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t) => (t, false),
+            wgpu::CurrentSurfaceTexture::Suboptimal(t) => (t, true),
+            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+                return Ok(Flow::Continue);
+            }
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                self.sync_size()?;
+                return Ok(Flow::Continue);
+            }
+            wgpu::CurrentSurfaceTexture::Validation => {
+                return Err(anyhow!("the window surface reported a validation error"));
+            }
+        };
+        let ctx = &self.gpu.ctx;
+        let paint_jobs = self.egui_ctx.tessellate(shapes, pixels_per_point);
+        let (w, h) = self.gpu.size();
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [w, h],
+            pixels_per_point,
+        };
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("view present"),
+            });
+        self.blit
+            .copy_frame(ctx, &mut encoder, &self.renderer.output().texture);
+        let callbacks = self.egui_renderer.update_buffers(
+            &ctx.device,
+            &ctx.queue,
+            &mut encoder,
+            &paint_jobs,
+            &screen,
+        );
+        let surface_view = surface_texture.texture.create_view(&Default::default());
+        let shot = self
+            .screenshot_next
+            .take()
+            .map(|path| (path, capture::target(ctx, self.gpu.config.format, (w, h))));
+        let shot_view = shot
+            .as_ref()
+            .map(|(_, t)| t.create_view(&Default::default()));
+        for target in std::iter::once(&surface_view).chain(shot_view.as_ref()) {
+            self.blit.draw(&mut encoder, target);
+            let mut pass = encoder
+                .begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("egui"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: target,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    ..Default::default()
+                })
+                .forget_lifetime();
+            self.egui_renderer.render(&mut pass, &paint_jobs, &screen);
+        }
+        ctx.queue
+            .submit(callbacks.into_iter().chain([encoder.finish()]));
+        self.window.pre_present_notify();
+        ctx.queue.present(surface_texture);
+        if suboptimal {
+            self.sync_size()?;
+        }
+        let ctx = &self.gpu.ctx;
+        let errors = ctx.take_uncaptured_errors();
+        if !errors.is_empty() {
+            return Err(anyhow!(
+                "wgpu error while presenting: {}",
+                errors.join("; ")
+            ));
+        }
+        if let Some((path, texture)) = shot {
+            match capture::write(ctx, &texture, &path) {
+                Ok(()) => {
+                    self.status = Some(format!("wrote {}", path.display()));
+                    if options.screenshot.as_ref() == Some(&path) {
+                        self.screenshot_written = true;
+                    }
+                }
+                // An automation screenshot that fails is a failed run; an F12 one is not.
+                Err(e) if options.screenshot.as_ref() == Some(&path) => return Err(e),
+                Err(e) => self.error = Some(format!("{e:#}")),
+            }
+        }
+        self.stats.presented(Instant::now());
+        self.frame += 1;
+
+        // Automation: exit after the last frame (its screenshot was taken above).
+        if options.frames.is_some_and(|limit| self.frame >= limit) {
+            return Ok(Flow::Exit);
+        }
+        Ok(Flow::Continue)
+    }
+}

@@ -1,0 +1,135 @@
+//! `ssbvb view`: an interactive window on a scene or model.
+//!
+//! The renderer draws into its own output texture exactly as `ssbvb render` does; the
+//! viewer copies that onto the window surface ([`blit`]) and draws the egui overlay
+//! ([`overlay`]) on top. Modules, one job each:
+//!
+//! - [`display`]: is there a display at all (and the message when not);
+//! - [`surface`]: instance, adapter and device that can present to the window;
+//! - [`app`]: the winit event loop and the frame;
+//! - [`camera_control`]: orbit and fly camera math (pure, unit-tested); [`input`]: which
+//!   mouse and keyboard events drive it;
+//! - [`overlay`]: the egui panel; [`knobs`]: generic editing of pass parameters;
+//!   [`techniques`]: the pipeline files to switch between; [`stats`]: timings;
+//! - [`blit`]: output texture → surface; [`capture`]: screenshots.
+//!
+//! Hot reload is `ssbvb_graph::PipelineWatcher`: an edit that does not resolve keeps the
+//! last good pipeline rendering and shows the errors in the overlay.
+
+mod app;
+mod blit;
+mod camera_control;
+mod capture;
+mod display;
+mod input;
+mod knobs;
+mod overlay;
+mod stats;
+mod surface;
+mod techniques;
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+use anyhow::{Result, anyhow};
+use clap::Args;
+use winit::event_loop::EventLoop;
+
+use crate::pipeline_cmd::parse_size;
+use crate::progress::BarProgress;
+use crate::render_cmd::{LoadedInput, assets_dir, load_input};
+
+/// Arguments of `ssbvb view`.
+#[derive(Args, Debug)]
+pub struct ViewArgs {
+    /// A scene file (.ron) or a model file (.obj, .ply, .gltf, .glb, .vox, .raw); default:
+    /// the bundled default scene.
+    pub input: Option<PathBuf>,
+    /// Voxelization level for a model file (2^level cells per axis).
+    #[arg(long)]
+    pub level: Option<u32>,
+    /// Pipeline file (default: the scene's, or assets/pipelines/ssbvb.ron). Watched: edits
+    /// are reloaded while the viewer runs.
+    #[arg(long)]
+    pub pipeline: Option<PathBuf>,
+    /// Window size in pixels.
+    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Exit after this many frames (automation).
+    #[arg(long)]
+    pub frames: Option<u64>,
+    /// Write a PNG of the last frame as the window shows it, overlay included (with
+    /// --frames: the last of them; otherwise the frame on screen when the window closes).
+    #[arg(long)]
+    pub screenshot: Option<PathBuf>,
+}
+
+/// Runs `ssbvb view`.
+pub fn run(args: &ViewArgs) -> Result<()> {
+    display::check_display_env().map_err(anyhow::Error::msg)?;
+    if args.frames == Some(0) {
+        return Err(anyhow!("--frames must be at least 1"));
+    }
+    // Before any voxelization: fail fast when the display cannot be opened.
+    let event_loop = create_event_loop()?;
+
+    let progress = BarProgress::new(std::io::stderr().is_terminal());
+    let input = args
+        .input
+        .clone()
+        .unwrap_or_else(|| assets_dir().join("scenes/default.ron"));
+    let LoadedInput {
+        scene,
+        camera,
+        pipeline,
+        notes,
+    } = load_input(&input, args.level, &progress)?;
+    progress.finish();
+    for n in &notes {
+        eprintln!("asset: {n}");
+    }
+    let pipeline_path = args
+        .pipeline
+        .clone()
+        .or(pipeline)
+        .unwrap_or_else(|| assets_dir().join("pipelines/ssbvb.ron"));
+    // Canonical, so the overlay shows a plain path and the technique list can mark it.
+    let pipeline_path = pipeline_path.canonicalize().unwrap_or(pipeline_path);
+    let watcher = ssbvb_graph::PipelineWatcher::new(&pipeline_path)
+        .map_err(|e| anyhow!("{}", e.to_string().trim_end()))?;
+
+    let options = app::Options {
+        title: format!("ssbvb view — {}", input.display()),
+        size: args.size,
+        frames: args.frames,
+        screenshot: args.screenshot.clone(),
+        techniques: techniques::list(&assets_dir().join("pipelines")),
+    };
+    let mut app = app::App::new(
+        options,
+        app::Loaded {
+            scene,
+            camera,
+            watcher,
+        },
+    );
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| anyhow!("the window's event loop failed: {e}"))?;
+    app.into_result()
+}
+
+/// The event loop, or the no-display error (winit panics on some broken X servers:
+/// that becomes the same error instead of a crash).
+fn create_event_loop() -> Result<EventLoop<()>> {
+    let created = std::panic::catch_unwind(EventLoop::new);
+    match created {
+        Ok(Ok(l)) => Ok(l),
+        Ok(Err(e)) => Err(anyhow!(display::no_display_message(&format!(
+            "cannot connect to the window system: {e}"
+        )))),
+        Err(_) => Err(anyhow!(display::no_display_message(
+            "the window system could not be initialized"
+        ))),
+    }
+}

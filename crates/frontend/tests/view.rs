@@ -1,0 +1,131 @@
+//! `ssbvb view` as users run it: without a display it says so and points to `ssbvb
+//! render`; under a virtual X display (Xvfb) it opens a window, renders the default scene
+//! and writes a screenshot of what the window shows.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn ssbvb_env(c: &mut Command) {
+    c.current_dir(root());
+    c.env(
+        "WGPU_BACKEND",
+        std::env::var("WGPU_BACKEND").unwrap_or_else(|_| "vulkan".into()),
+    );
+}
+
+#[test]
+fn view_without_a_display_says_so_and_points_to_render() {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_ssbvb"));
+    ssbvb_env(&mut c);
+    let out = c
+        .args(["view", "--frames", "1"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("WAYLAND_SOCKET")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("ssbvb view needs a display")
+            && stderr.contains("DISPLAY and WAYLAND_DISPLAY are unset")
+            && stderr.contains("use `ssbvb render` to write an image instead"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+fn xvfb_run() -> PathBuf {
+    let found = std::env::var_os("PATH").and_then(|p| {
+        std::env::split_paths(&p)
+            .map(|d| d.join("xvfb-run"))
+            .find(|f| f.is_file())
+    });
+    found.unwrap_or_else(|| {
+        panic!(
+            "xvfb-run not found: the `ssbvb view` test needs a virtual X display. Install Xvfb \
+             (Debian/Ubuntu: `apt-get install -y xvfb libxkbcommon-x11-0 libx11-xcb1 \
+             libxcursor1 libxi6 libxrandr2`; `cargo xtask test` does it when run as root)"
+        )
+    })
+}
+
+fn read_png(path: &Path) -> image::RgbaImage {
+    image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgba8()
+}
+
+#[test]
+fn view_under_xvfb_shows_the_scene_and_writes_a_screenshot() {
+    let xvfb = xvfb_run();
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("view.png");
+    let mut c = Command::new(xvfb);
+    ssbvb_env(&mut c);
+    let out = c
+        .args(["-a", "-s", "-screen 0 1280x800x24"])
+        .arg(env!("CARGO_BIN_EXE_ssbvb"))
+        .args(["view", "--size", "320x240", "--frames", "5", "--screenshot"])
+        .arg(&shot)
+        .output()
+        .unwrap();
+    let log =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "ssbvb view failed under Xvfb:\n{log}");
+    let img = read_png(&shot);
+    assert_eq!(img.dimensions(), (320, 240), "the window's size");
+    let first = *img.get_pixel(0, 0);
+    assert!(img.pixels().any(|p| *p != first), "uniform screenshot");
+
+    // The same view rendered offline: where it drew the scene, the window shows the same
+    // colours (away from the overlay's title bar at the top).
+    let reference = dir.path().join("render.png");
+    let mut c = Command::new(env!("CARGO_BIN_EXE_ssbvb"));
+    ssbvb_env(&mut c);
+    let out = c
+        .args(["render", "--size", "320x240", "-o"])
+        .arg(&reference)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let reference = read_png(&reference);
+    let (mut scene, mut same) = (0usize, 0usize);
+    for (x, y, r) in reference.enumerate_pixels() {
+        if y < 60 || r[3] == 0 {
+            continue;
+        }
+        scene += 1;
+        let v = img.get_pixel(x, y);
+        if (0..3).all(|c| (i32::from(v[c]) - i32::from(r[c])).abs() <= 3) {
+            same += 1;
+        }
+    }
+    assert!(
+        scene > 5000,
+        "the reference render covers only {scene} pixels"
+    );
+    assert!(
+        same as f64 >= 0.97 * scene as f64,
+        "only {same} of {scene} scene pixels of the window match `ssbvb render`"
+    );
+    // And the scene is not the background: the bunny and the ground differ from the
+    // empty top-right corner.
+    let corner = *img.get_pixel(319, 60);
+    let differing = img
+        .enumerate_pixels()
+        .filter(|(_, y, p)| *y >= 60 && **p != corner)
+        .count();
+    assert!(
+        differing > 5000,
+        "only {differing} pixels differ from the background"
+    );
+}
