@@ -262,6 +262,10 @@ struct Row {
     same_voxel_rate: Option<f64>,
     depth_error_voxels_median: f64,
     normal_error_deg_median: f64,
+    /// PSNR (dB) of the composite over the pixels either covers (`None`: identical).
+    psnr_db: Option<f64>,
+    /// Mean SSIM of the composite (see `bench_sweep::Measured::ssim`).
+    ssim: Option<f64>,
 }
 
 #[derive(Debug, Serialize)]
@@ -526,7 +530,7 @@ fn run_one(ctx: &ssbvb_gpu::GpuContext, t: &Technique, c: &Cell) -> Result<Row> 
         warmup: c.warmup,
         frames: c.frames,
     };
-    let m = crate::bench_sweep::measure(&setup, &src, &label, false)?;
+    let m = crate::bench_sweep::measure(&setup, &src, &label, true)?;
     // The cube rasterizer's instance buffer comes on top of the scene's buffers (whose
     // lookup it reads for voxel attributes).
     let cube_bytes = match (t.pipeline, t.param) {
@@ -565,15 +569,17 @@ fn run_one(ctx: &ssbvb_gpu::GpuContext, t: &Technique, c: &Cell) -> Result<Row> 
             .map(|_| acc.same_voxel_rate),
         depth_error_voxels_median: acc.depth_error_voxels.median,
         normal_error_deg_median: acc.normal_error_deg.median,
+        psnr_db: m.psnr.map(|p| p.0).filter(|p| p.is_finite()),
+        ssim: m.ssim,
     })
 }
 
 fn markdown(r: &Report) -> String {
     let mut s = format!("adapter: {}\ntiming: {}\n\n", r.adapter, r.timing);
-    s.push_str("| technique | model | level | size | frame ms (median [min, max]) | fill / covered | voxels | GPU MiB | IoU | same voxel | depth err (vox) |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+    s.push_str("| technique | model | level | size | frame ms (median [min, max]) | fill / covered | voxels | GPU MiB | IoU | same voxel | depth err (vox) | PSNR dB | SSIM |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for x in &r.rows {
         s.push_str(&format!(
-            "| {} | {} | {} | {}x{} | {:.2} [{:.2}, {:.2}] | {} | {} | {:.1} | {:.4} | {} | {:.3} |\n",
+            "| {} | {} | {} | {}x{} | {:.2} [{:.2}, {:.2}] | {} | {} | {:.1} | {:.4} | {} | {:.3} | {} | {} |\n",
             x.technique,
             x.model,
             x.level,
@@ -591,7 +597,9 @@ fn markdown(r: &Report) -> String {
             x.gpu_memory_bytes as f64 / (1 << 20) as f64,
             x.coverage_iou,
             x.same_voxel_rate.map_or("-".into(), |v| format!("{v:.4}")),
-            x.depth_error_voxels_median
+            x.depth_error_voxels_median,
+            x.psnr_db.map_or("-".into(), |p| format!("{p:.2}")),
+            x.ssim.map_or("-".into(), |v| format!("{v:.4}"))
         ));
     }
     for k in &r.skipped {
@@ -795,11 +803,11 @@ fn write_plots(dir: &Path, rows: &[Row], sweeps: &[SweepRow]) -> Result<Vec<Plot
 fn write_outputs(dir: &Path, r: &Report) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let mut csv = String::from(
-        "technique,model,level,width,height,frames,frame_ms_median,frame_ms_min,frame_ms_max,fill_count,covered_pixels,voxels,gpu_memory_bytes,coverage_iou,same_voxel_rate,depth_error_voxels_median,normal_error_deg_median\n",
+        "technique,model,level,width,height,frames,frame_ms_median,frame_ms_min,frame_ms_max,fill_count,covered_pixels,voxels,gpu_memory_bytes,coverage_iou,same_voxel_rate,depth_error_voxels_median,normal_error_deg_median,psnr_db,ssim\n",
     );
     for x in &r.rows {
         csv.push_str(&format!(
-            "{},{},{},{},{},{},{:.4},{:.4},{:.4},{},{},{},{},{:.6},{},{:.6},{:.4}\n",
+            "{},{},{},{},{},{},{:.4},{:.4},{:.4},{},{},{},{},{:.6},{},{:.6},{:.4},{},{}\n",
             x.technique,
             x.model,
             x.level,
@@ -817,7 +825,9 @@ fn write_outputs(dir: &Path, r: &Report) -> Result<()> {
             x.same_voxel_rate
                 .map_or(String::new(), |v| format!("{v:.6}")),
             x.depth_error_voxels_median,
-            x.normal_error_deg_median
+            x.normal_error_deg_median,
+            x.psnr_db.map_or(String::new(), |p| format!("{p:.4}")),
+            x.ssim.map_or(String::new(), |v| format!("{v:.5}"))
         ));
     }
     let mut files = vec![

@@ -22,6 +22,12 @@ const PALETTE: &[(&str, RGBColor)] = &[
     ("olive", RGBColor(188, 189, 34)),
     ("cyan", RGBColor(23, 190, 207)),
     ("grey", RGBColor(127, 127, 127)),
+    ("navy", RGBColor(0, 0, 128)),
+    ("dark orange", RGBColor(166, 86, 0)),
+    ("lime", RGBColor(120, 220, 40)),
+    ("maroon", RGBColor(110, 0, 20)),
+    ("black", RGBColor(0, 0, 0)),
+    ("gold", RGBColor(230, 190, 0)),
 ];
 
 /// One line of points, drawn in order.

@@ -26,6 +26,10 @@ pub(crate) struct Measured {
     /// PSNR (dB) of the composite output against the reference colours over the pixels
     /// either covers, and that pixel count; only when asked for.
     pub psnr: Option<(f64, usize)>,
+    /// Mean SSIM (8×8 windows, RGB, `image-compare`) of the composite against the
+    /// reference over the whole image, with pixels neither covers set to black in both
+    /// (their backgrounds differ by design); only when asked for.
+    pub ssim: Option<f64>,
 }
 
 /// Everything [`measure`] needs besides the pipeline.
@@ -87,7 +91,7 @@ pub(crate) fn measure(s: &Setup, src: &str, label: &str, with_psnr: bool) -> Res
     let hits = ssbvb_passes::measure::gbuffer_hits(ctx, &renderer)?;
     let acc = ssbvb_voxel::accuracy::compare(s.reference, &hits, &[2.0 / (1u64 << s.level) as f64])
         .map_err(|e| anyhow::anyhow!("{e}"))?;
-    let psnr = if with_psnr {
+    let (psnr, ssim) = if with_psnr {
         let out = ctx.read_texture(
             &renderer.output().texture,
             ssbvb_gpu::wgpu::TextureAspect::All,
@@ -113,9 +117,33 @@ pub(crate) fn measure(s: &Setup, src: &str, label: &str, with_psnr: bool) -> Res
             }
         }
         let n = a.len() / 4;
-        ssbvb_voxel::accuracy::psnr_rgba8(&a, &b).map(|p| (p, n))
+        let rgb = |img: &[u8], covered_only: bool| {
+            let mut px = Vec::with_capacity(hits.len() * 3);
+            for (i, (h, r)) in hits.iter().zip(&s.reference.hits).enumerate() {
+                if covered_only && h.is_none() && r.is_none() {
+                    px.extend_from_slice(&[0, 0, 0]);
+                } else {
+                    px.extend_from_slice(&img[i * 4..i * 4 + 3]);
+                }
+            }
+            image::RgbImage::from_raw(s.size.0, s.size.1, px)
+        };
+        let ssim = match (rgb(&gpu, true), rgb(&reference, true)) {
+            (Some(x), Some(y)) => image_compare::rgb_similarity_structure(
+                &image_compare::Algorithm::MSSIMSimple,
+                &x,
+                &y,
+            )
+            .ok()
+            .map(|sim| sim.score),
+            _ => None,
+        };
+        (
+            ssbvb_voxel::accuracy::psnr_rgba8(&a, &b).map(|p| (p, n)),
+            ssim,
+        )
     } else {
-        None
+        (None, None)
     };
     Ok(Measured {
         times,
@@ -124,6 +152,7 @@ pub(crate) fn measure(s: &Setup, src: &str, label: &str, with_psnr: bool) -> Res
         acc,
         gpu_memory: gpu_scene.total_memory(),
         psnr,
+        ssim,
     })
 }
 
@@ -260,6 +289,8 @@ pub(crate) struct SweepRow {
     /// `None` (null) when identical (infinite) or when neither covers any pixel.
     pub psnr_db: Option<f64>,
     pub psnr_pixels: usize,
+    /// Mean SSIM of the composite against the reference (see `Measured::ssim`).
+    pub ssim: Option<f64>,
 }
 
 fn reference_at(
@@ -329,6 +360,7 @@ pub(crate) fn run_sweeps(
             depth_error_voxels_median: m.acc.depth_error_voxels.median,
             psnr_db: m.psnr.map(|p| p.0).filter(|p| p.is_finite()),
             psnr_pixels: m.psnr.map_or(0, |p| p.1),
+            ssim: m.ssim,
         };
         if log {
             eprintln!(
@@ -384,11 +416,11 @@ pub(crate) fn run_sweeps(
 /// `sweeps.csv`.
 pub(crate) fn csv(rows: &[SweepRow]) -> String {
     let mut s = String::from(
-        "knob,value,is_default,level,width,height,frames,frame_ms_median,fill_count,coverage_iou,depth_error_voxels_median,psnr_db,psnr_pixels\n",
+        "knob,value,is_default,level,width,height,frames,frame_ms_median,fill_count,coverage_iou,depth_error_voxels_median,psnr_db,psnr_pixels,ssim\n",
     );
     for r in rows {
         s.push_str(&format!(
-            "{},{},{},{},{},{},{},{:.4},{},{:.6},{:.6},{},{}\n",
+            "{},{},{},{},{},{},{},{:.4},{},{:.6},{:.6},{},{},{}\n",
             r.knob,
             r.value,
             r.is_default,
@@ -401,7 +433,8 @@ pub(crate) fn csv(rows: &[SweepRow]) -> String {
             r.coverage_iou,
             r.depth_error_voxels_median,
             r.psnr_db.map_or(String::new(), |p| format!("{p:.4}")),
-            r.psnr_pixels
+            r.psnr_pixels,
+            r.ssim.map_or(String::new(), |v| format!("{v:.5}"))
         ));
     }
     s
@@ -415,11 +448,11 @@ pub(crate) fn markdown(rows: &[SweepRow]) -> String {
     let mut s = String::from(
         "\n## Knob sweeps (default SSBVB pipeline, one knob changed at a time)\n\n\
          PSNR: composite output (sRGB RGBA8) vs the CPU reference colours over the pixels either covers (a hole or an extra pixel counts as object against background).\n\n\
-         | knob | value | level | size | frame ms (median) | fill | IoU | depth err (vox) | PSNR dB |\n|---|---|---|---|---|---|---|---|---|\n",
+         | knob | value | level | size | frame ms (median) | fill | IoU | depth err (vox) | PSNR dB | SSIM |\n|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         s.push_str(&format!(
-            "| {} | {}{} | {} | {}x{} | {:.2} | {} | {:.4} | {:.3} | {} |\n",
+            "| {} | {}{} | {} | {}x{} | {:.2} | {} | {:.4} | {:.3} | {} | {} |\n",
             r.knob,
             r.value,
             if r.is_default { " (default)" } else { "" },
@@ -430,7 +463,8 @@ pub(crate) fn markdown(rows: &[SweepRow]) -> String {
             r.fill_count.map_or("-".into(), |f| f.to_string()),
             r.coverage_iou,
             r.depth_error_voxels_median,
-            r.psnr_db.map_or("-".into(), |p| format!("{p:.2}"))
+            r.psnr_db.map_or("-".into(), |p| format!("{p:.2}")),
+            r.ssim.map_or("-".into(), |v| format!("{v:.4}"))
         ));
     }
     s

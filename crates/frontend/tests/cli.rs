@@ -247,6 +247,14 @@ fn bench_quick_sweep_writes_sweeps_and_plots() {
     assert!(iou >= 0.97, "{csv}");
     let psnr: f64 = default[col("psnr_db")].parse().unwrap();
     assert!(psnr > 15.0, "{csv}");
+    // SSIM falls when the march is cut short (holes in the bunny).
+    let ssim = |r: &Vec<&str>| r[col("ssim")].parse::<f64>().unwrap();
+    let short = rows
+        .iter()
+        .find(|r| r[col("knob")] == "max_steps" && r[col("value")] == "8")
+        .unwrap();
+    assert!(ssim(default) > 0.9 && ssim(default) <= 1.0, "{csv}");
+    assert!(ssim(short) < ssim(default) - 0.05, "{csv}");
     let json: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(dir.path().join("bench/bench.json")).unwrap(),
     )
