@@ -94,6 +94,8 @@ struct Report {
     frame_wall_ms: f64,
     ssbvb_fill_count: Option<u32>,
     covered_pixels: Option<usize>,
+    /// Pixels showing a voxel (GPU: stencil = voxel), what the fill count compares with.
+    voxel_pixels: Option<usize>,
     visible_instances: usize,
     gpu_memory_bytes: Vec<ObjectReport>,
     asset_notes: Vec<String>,
@@ -224,6 +226,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             frame_wall_ms: start.elapsed().as_secs_f64() * 1e3,
             ssbvb_fill_count: None,
             covered_pixels: Some(img.coverage()),
+            voxel_pixels: Some(img.coverage()),
             visible_instances: instances.len(),
             gpu_memory_bytes: Vec::new(),
             asset_notes: notes,
@@ -266,6 +269,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             frame_wall_ms: stats.frame_wall_ms,
             ssbvb_fill_count: fill,
             covered_pixels: Some(rgba.chunks(4).filter(|p| p[3] > 0).count()),
+            voxel_pixels: ssbvb_passes::measure::voxel_pixels(&ctx, &renderer)?,
             visible_instances: stats.visible_instances,
             gpu_memory_bytes: gpu_scene
                 .memory
@@ -336,6 +340,9 @@ fn print_report(r: &Report) {
     }
     if let Some(c) = r.covered_pixels {
         println!("covered pixels: {c}");
+    }
+    if let Some(c) = r.voxel_pixels {
+        println!("pixels showing a voxel: {c}");
     }
     println!("visible instances: {}", r.visible_instances);
     for o in &r.gpu_memory_bytes {

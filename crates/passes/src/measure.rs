@@ -76,3 +76,19 @@ pub fn gbuffer_hits(ctx: &GpuContext, r: &Renderer) -> Result<Vec<Option<GpuHit>
         })
         .collect())
 }
+
+/// Pixels of the last frame that show a voxel: stencil = voxel in the pipeline's
+/// `depth_stencil` resource (triangle objects and background excluded) — what the SSBVB
+/// fill count is compared with. `None` when the pipeline has no live `depth_stencil`.
+pub fn voxel_pixels(ctx: &GpuContext, r: &Renderer) -> Result<Option<usize>, PassError> {
+    let Some(i) = r.resource("depth_stencil") else {
+        return Ok(None);
+    };
+    let t = &r.resources.texture(i).texture;
+    if !t.format().is_depth_stencil_format() {
+        return Ok(None);
+    }
+    let stencil = ctx.read_texture(t, wgpu::TextureAspect::StencilOnly)?;
+    let voxel = crate::billboards::STENCIL_VOXEL as u8;
+    Ok(Some(stencil.bytes.iter().filter(|&&s| s == voxel).count()))
+}

@@ -418,15 +418,9 @@ impl Viewer {
         match self.renderer.fill_count(ctx) {
             Ok(Some(fill)) => {
                 self.stats.fill = Some(fill);
-                self.stats.covered = ctx
-                    .read_texture(&self.renderer.output().texture, wgpu::TextureAspect::All)
-                    .ok()
-                    .map(|t| {
-                        let bpp =
-                            (t.bytes.len() / (t.width as usize * t.height as usize).max(1)).max(1);
-                        // Alpha is the last channel of the 8-bit RGBA/BGRA outputs.
-                        t.bytes.chunks(bpp).filter(|p| p[bpp - 1] > 0).count()
-                    });
+                // Pixels showing a voxel (stencil), not the triangles' or background.
+                self.stats.covered =
+                    ssbvb_passes::measure::voxel_pixels(ctx, &self.renderer).unwrap_or(None);
             }
             Ok(None) => {
                 self.stats.fill = None;

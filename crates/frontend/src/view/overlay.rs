@@ -196,12 +196,12 @@ fn performance(ui: &mut egui::Ui, view: &OverlayView<'_>) {
                     String::new()
                 };
                 // One short line: a wrapping line would move the controls below it.
-                ui.label(format!("SSBVB fill: {f} / {c} px{pct}"))
+                ui.label(format!("SSBVB fill: {f} / {c} voxel px{pct}"))
             }
             _ => ui.label("SSBVB fill: not sampled yet"),
         }
         .on_hover_text(format!(
-            "Billboards the ray-march filter emitted vs pixels the frame covered \
+            "Billboards the ray-march filter emitted vs pixels showing a voxel (stencil) \
              (GPU readbacks every {SLOW_SAMPLE_EVERY} frames)"
         ));
     } else {

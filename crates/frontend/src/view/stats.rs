@@ -35,7 +35,7 @@ pub struct Stats {
     pub passes: Vec<PassTiming>,
     /// Last sampled SSBVB fill count (`None`: no filter pass, or not sampled yet).
     pub fill: Option<u32>,
-    /// Pixels the frame covered when the fill count was sampled.
+    /// Pixels showing a voxel when the fill count was sampled.
     pub covered: Option<usize>,
     /// Instances drawn in the last frame.
     pub visible_instances: usize,
