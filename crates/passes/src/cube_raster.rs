@@ -37,7 +37,9 @@ use ssbvb_voxel::cube_list::CubeList;
 use crate::billboards::STENCIL_VOXEL;
 use crate::frame::Recorder;
 use crate::gpu_scene::GpuScene;
-use crate::triangles::{begin_gbuffer_pass, gbuffer_depth_stencil, gbuffer_targets};
+use crate::triangles::{
+    begin_gbuffer_pass, gbuffer_depth_stencil, gbuffer_pipeline, gbuffer_targets,
+};
 use crate::{PassError, PassNode, shaders};
 
 /// Vertices per cube: two triangles on the camera side of each axis (at most three faces
@@ -103,37 +105,18 @@ impl CubeRaster {
                     count: None,
                 }],
             });
-            let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("cube_raster"),
-                bind_group_layouts: &[Some(&scene.layout), Some(&layout)],
-                immediate_size: 0,
-            });
-            let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("cube_raster"),
-                layout: Some(&pl),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &targets,
-                }),
-                // Faces that do not see the camera are collapsed in the vertex shader
-                // (winding-independent, so mirrored transforms work too).
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: Some(depth_stencil),
-                multisample: Default::default(),
-                multiview_mask: None,
-                cache: None,
-            });
+            // No culling: faces that do not see the camera are collapsed in the vertex
+            // shader (winding-independent, so mirrored transforms work too).
+            let pipeline = gbuffer_pipeline(
+                d,
+                "cube_raster",
+                &module,
+                &scene.layout,
+                &layout,
+                &[],
+                &targets,
+                depth_stencil,
+            );
             (pipeline, layout)
         })?;
         Ok(Self {

@@ -36,7 +36,9 @@ use ssbvb_voxel::svo::{Svo, SvoNode};
 use crate::billboards::STENCIL_VOXEL;
 use crate::frame::Recorder;
 use crate::gpu_scene::GpuScene;
-use crate::triangles::{begin_gbuffer_pass, gbuffer_depth_stencil, gbuffer_targets};
+use crate::triangles::{
+    begin_gbuffer_pass, gbuffer_depth_stencil, gbuffer_pipeline, gbuffer_targets,
+};
 use crate::{PassError, PassNode, shaders};
 
 /// The finest level the traversal supports (the WGSL stack depth).
@@ -90,36 +92,16 @@ impl OctreeRayCast {
                 label: Some("octree_ray_cast"),
                 entries: &[storage_entry(0), storage_entry(1)],
             });
-            let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("octree_ray_cast"),
-                bind_group_layouts: &[Some(&scene.layout), Some(&layout)],
-                immediate_size: 0,
-            });
-            let constants = [("MAX_STEPS", f64::from(max_steps))];
-            let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("octree_ray_cast"),
-                layout: Some(&pl),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &constants,
-                        ..Default::default()
-                    },
-                    targets: &targets,
-                }),
-                primitive: Default::default(),
-                depth_stencil: Some(depth_stencil),
-                multisample: Default::default(),
-                multiview_mask: None,
-                cache: None,
-            });
+            let pipeline = gbuffer_pipeline(
+                d,
+                "octree_ray_cast",
+                &module,
+                &scene.layout,
+                &layout,
+                &[("MAX_STEPS", f64::from(max_steps))],
+                &targets,
+                depth_stencil,
+            );
             (pipeline, layout)
         })?;
         Ok(Self {

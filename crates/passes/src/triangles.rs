@@ -64,6 +64,52 @@ pub(crate) fn gbuffer_depth_stencil(
     }
 }
 
+/// The render pipeline of a G-buffer writer that pulls its own vertices (`vs_main`, no
+/// vertex buffers, no culling) and writes the G-buffer in `fs_main`: group 0 the scene,
+/// group 1 `pass_layout`; `constants` are the fragment stage's overrides.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn gbuffer_pipeline(
+    d: &wgpu::Device,
+    label: &str,
+    module: &wgpu::ShaderModule,
+    scene_layout: &wgpu::BindGroupLayout,
+    pass_layout: &wgpu::BindGroupLayout,
+    constants: &[(&str, f64)],
+    targets: &[Option<wgpu::ColorTargetState>],
+    depth_stencil: wgpu::DepthStencilState,
+) -> wgpu::RenderPipeline {
+    let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &[Some(scene_layout), Some(pass_layout)],
+        immediate_size: 0,
+    });
+    d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(&pl),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some("fs_main"),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants,
+                ..Default::default()
+            },
+            targets,
+        }),
+        // Default: triangle list, no culling.
+        primitive: Default::default(),
+        depth_stencil: Some(depth_stencil),
+        multisample: Default::default(),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 /// Begins a render pass on the G-buffer slots of `rec.pass` (clearing the slots this pass
 /// writes first in the frame) with `stencil` as the stencil reference.
 pub(crate) fn begin_gbuffer_pass<'e>(
