@@ -64,8 +64,8 @@ override UNIQUE_VOXELS: bool = false;
 @group(1) @binding(2) var<storage, read_write> billboard_draw: DrawArgs;
 // Pass-private (UNIQUE_VOXELS): one bit per voxel of each visible instance's level,
 // cleared every frame; instance k's bits start at word `claim_offsets[k]`.
-@group(2) @binding(0) var<storage, read_write> claimed_voxels: array<atomic<u32>>;
-@group(2) @binding(1) var<storage, read> claim_offsets: array<u32>;
+@group(1) @binding(3) var<storage, read_write> claimed_voxels: array<atomic<u32>>;
+@group(1) @binding(4) var<storage, read> claim_offsets: array<u32>;
 
 // Stands in for infinity: WGSL lets implementations assume no infinities at run time.
 const BIG: f32 = 3.0e38;

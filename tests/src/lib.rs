@@ -1,5 +1,5 @@
 //! Harness of the cross-crate GPU tests: one shared device per test binary, assets from
-//! the shared models (prepared once per process), renders of a pipeline with readback of
+//! the repository's test models (prepared once per process), renders of a pipeline with readback of
 //! any live resource, and the CPU reference of the same view.
 
 use std::collections::HashMap;
@@ -26,18 +26,14 @@ pub fn ctx() -> &'static GpuContext {
     })
 }
 
-/// `shared/models` beside the repository (fails the test when it is missing).
+/// The repository's test models, `assets/models` (fails the test when it is missing).
 pub fn models_dir() -> PathBuf {
-    let p = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/models"));
-    assert!(
-        p.is_dir(),
-        "shared models folder {} is missing: CI clones the repository with shared/ beside it",
-        p.display()
-    );
+    let p = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/models"));
+    assert!(p.is_dir(), "test models folder {} is missing", p.display());
     p
 }
 
-/// The asset of a shared model file at `level`, prepared once per process.
+/// The asset of a test model file (`assets/models`) at `level`, prepared once per process.
 pub fn model_asset(file: &str, level: u32) -> Arc<VoxelAsset> {
     type AssetCache = Mutex<HashMap<(String, u32), Arc<VoxelAsset>>>;
     static CACHE: OnceLock<AssetCache> = OnceLock::new();

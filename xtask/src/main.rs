@@ -1,6 +1,8 @@
 //! Project tasks: `cargo xtask validate-shaders [--dir DIR]`, `cargo xtask test [ARGS]`.
 
+mod layout_check;
 mod shaders;
+mod standalone;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -9,7 +11,8 @@ use anyhow::{Context, Result, bail};
 
 const USAGE: &str = "usage:
   cargo xtask validate-shaders [--dir DIR]   parse and validate every .wgsl under shaders/ (or DIR)
-  cargo xtask test [CARGO TEST ARGS]         make sure a GPU adapter exists, check formatting, validate
+  cargo xtask test [CARGO TEST ARGS]         make sure a GPU adapter exists, check formatting, check that
+                                             no tracked file refers outside the repository, validate
                                              shaders, run clippy (-D warnings) and all workspace tests";
 
 fn main() -> ExitCode {
@@ -49,7 +52,7 @@ fn validate_shaders(args: &[String]) -> Result<bool> {
         [flag, dir] if flag == "--dir" => PathBuf::from(dir),
         _ => bail!("validate-shaders takes only `--dir DIR`\n{USAGE}"),
     };
-    let report = shaders::validate_dir(&dir, &ssbvb_passes::registered_kinds())?;
+    let report = shaders::validate_dir(&dir, &shaders::registered())?;
     for line in &report.errors {
         eprintln!("{line}");
     }
@@ -168,6 +171,9 @@ fn test(extra: &[String]) -> Result<bool> {
     };
     if !run(&["fmt", "--all", "--check"])? {
         eprintln!("xtask: formatting differs; run `cargo fmt --all`");
+        return Ok(false);
+    }
+    if !standalone::check(&root)? {
         return Ok(false);
     }
     if !validate_shaders(&[])? {

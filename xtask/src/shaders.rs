@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use ssbvb_graph::{PassKind, PassStage};
+use ssbvb_passes::bindings::OwnBinding;
 
 /// Outcome of validating a folder of shaders.
 #[derive(Debug, Default)]
@@ -105,8 +106,19 @@ pub fn check_kind(file: &str, module: &naga::Module, kind: &PassKind) -> Vec<Str
     errors
 }
 
+/// A registered pass kind (default parameters), its WGSL file and its own bindings.
+pub type Registered = (PassKind, &'static str, &'static [OwnBinding]);
+
+/// Every registered pass kind.
+pub fn registered() -> Vec<Registered> {
+    ssbvb_passes::registered_kinds()
+        .into_iter()
+        .filter_map(|k| ssbvb_passes::registry::registration(&k).map(|r| (k, r.shader, r.own)))
+        .collect()
+}
+
 /// Validates every `.wgsl` under `dir`, then checks each registered kind's file.
-pub fn validate_dir(dir: &Path, kinds: &[PassKind]) -> Result<Report> {
+pub fn validate_dir(dir: &Path, kinds: &[Registered]) -> Result<Report> {
     let mut files = Vec::new();
     wgsl_files(dir, &mut files)?;
     files.sort();
@@ -167,16 +179,43 @@ pub fn validate_dir(dir: &Path, kinds: &[PassKind]) -> Result<Report> {
             Err(e) => report.errors.extend(e),
         }
     }
-    for kind in kinds {
+    let layouts = ssbvb_passes::wgsl_layout::shared_structs();
+    let mut mirrored = std::collections::BTreeSet::new();
+    let mut names: Vec<_> = modules.keys().cloned().collect();
+    names.sort();
+    for file in &names {
+        let (name, m) = &modules[file];
+        let (errors, found) = crate::layout_check::check_structs(name, m, &layouts);
+        report.errors.extend(errors);
+        mirrored.extend(found);
+    }
+    // Only when the project's shaders are checked (a test folder holds a few files).
+    if kinds.len() == ssbvb_passes::REGISTRY.len() {
+        for l in &layouts {
+            if !mirrored.contains(l.wgsl) {
+                report.errors.push(format!(
+                    "{}: Rust `{}` mirrors WGSL struct `{}`, which no shader declares",
+                    dir.display(),
+                    l.rust,
+                    l.wgsl
+                ));
+            }
+        }
+    }
+    for (kind, shader, own) in kinds {
         report.kinds_checked += 1;
-        match modules.get(kind.shader_file()) {
-            Some((name, m)) => report.errors.extend(check_kind(name, m, kind)),
-            None if files.iter().any(|f| f.ends_with(kind.shader_file())) => {} // already reported
+        match modules.get(*shader) {
+            Some((name, m)) => {
+                report.errors.extend(check_kind(name, m, kind));
+                report
+                    .errors
+                    .extend(crate::layout_check::check_bindings(name, m, kind, own));
+            }
+            None if files.iter().any(|f| f.ends_with(shader)) => {} // already reported
             None => report.errors.push(format!(
-                "{}: pass kind {} is registered but its shader {} is missing",
+                "{}: pass kind {} is registered but its shader {shader} is missing",
                 dir.display(),
                 kind.name(),
-                kind.shader_file()
             )),
         }
     }
@@ -242,7 +281,8 @@ mod tests {
             unique_voxels: false,
         };
         // Missing file.
-        let r = validate_dir(dir.path(), std::slice::from_ref(&kind)).unwrap();
+        let kinds = [(kind.clone(), "ray_march_filter.wgsl", &[][..])];
+        let r = validate_dir(dir.path(), &kinds).unwrap();
         assert!(
             r.errors[0].contains("ray_march_filter.wgsl is missing"),
             "{:#?}",
@@ -251,23 +291,25 @@ mod tests {
         // Wrong: an entry point missing and a slot global misnamed.
         std::fs::write(
             dir.path().join("ray_march_filter.wgsl"),
-            "@group(0) @binding(0) var entry_point: texture_2d<f32>;\n\
-             @group(0) @binding(1) var<storage, read_write> ssbvb: array<u32>;\n\
-             @group(0) @binding(2) var<storage, read_write> billboard_draw: array<u32>;\n\
+            "@group(1) @binding(0) var entry_point: texture_2d<f32>;\n\
+             @group(1) @binding(1) var<storage, read_write> ssbvb: array<u32>;\n\
+             @group(1) @binding(2) var<storage, read_write> billboard_draw: array<u32>;\n\
              @compute @workgroup_size(1) fn main() { _ = textureDimensions(entry_point); ssbvb[0] = 1u; billboard_draw[0] = 1u; }\n",
         )
         .unwrap();
-        let r = validate_dir(dir.path(), std::slice::from_ref(&kind)).unwrap();
+        let r = validate_dir(dir.path(), &kinds).unwrap();
         let text = r.errors.join("\n");
         assert!(text.contains("entry point `clear_draw`"), "{text}");
         assert!(text.contains("slot `entry`"), "{text}");
-        assert_eq!(r.errors.len(), 2, "{text}");
+        // The misnamed global is also undeclared in group 1.
+        assert!(text.contains("global `entry_point`"), "{text}");
+        assert_eq!(r.errors.len(), 3, "{text}");
     }
 
     #[test]
     fn the_project_shaders_validate() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
-        let r = validate_dir(&dir, &ssbvb_passes::registered_kinds()).unwrap();
+        let r = validate_dir(&dir, &registered()).unwrap();
         assert!(r.files > 0);
         assert!(r.errors.is_empty(), "{:#?}", r.errors);
     }

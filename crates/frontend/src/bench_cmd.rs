@@ -329,7 +329,14 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             .collect::<Result<_>>()?,
     };
     let camera = m.camera;
-    let ctx = ssbvb_gpu::GpuContext::new_headless(&Default::default())?;
+    let pipelines = techniques
+        .iter()
+        .map(|t| {
+            let (src, label) = crate::bench_sweep::pipeline_source(t.pipeline)?;
+            ssbvb_graph::resolve_str(&src, &label).map_err(|e| anyhow::anyhow!("{e}"))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let ctx = crate::adapter_cmd::headless_context(&pipelines.iter().collect::<Vec<_>>())?;
     let software = ctx.report().is_software;
     let mut rows = Vec::new();
     let mut skipped = Vec::new();

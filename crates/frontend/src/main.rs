@@ -1,8 +1,10 @@
 //! The `ssbvb` command-line tool.
 
+mod adapter_cmd;
 mod bench_cmd;
 mod bench_plot;
 mod bench_sweep;
+mod bundled;
 mod pipeline_cmd;
 mod progress;
 mod render_cmd;
@@ -38,15 +40,19 @@ enum Command {
     /// Open a window on a scene or model: orbit/fly camera, overlay with per-pass timings,
     /// knobs, LOD and technique switch, hot reload of the pipeline file (needs a display).
     View(view::ViewArgs),
-    /// Print the GPU adapter ssbvb would use (set SSBVB_ADAPTER / WGPU_BACKEND to choose).
-    Adapter,
+    /// List every GPU adapter with what it lacks for a pipeline, and the one ssbvb would
+    /// use (set SSBVB_ADAPTER / WGPU_BACKEND to choose).
+    Adapter(adapter_cmd::AdapterArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if !matches!(cli.command, Command::View(_)) {
+        quiet_window_system_probe();
+    }
     let result = match cli.command {
         Command::Pipeline(c) => pipeline_cmd::run(&c),
-        Command::Adapter => adapter(),
+        Command::Adapter(a) => adapter_cmd::run(&a),
         Command::Bench(a) => bench_cmd::run(&a).map(|_| ExitCode::SUCCESS),
         Command::Render(a) => render_cmd::run(&a).map(|_| ExitCode::SUCCESS),
         Command::View(a) => view::run(&a).map(|_| ExitCode::SUCCESS),
@@ -61,8 +67,40 @@ fn main() -> ExitCode {
     }
 }
 
-fn adapter() -> anyhow::Result<ExitCode> {
-    let ctx = ssbvb_gpu::GpuContext::new_headless(&Default::default())?;
-    println!("{}", ctx.report());
-    Ok(ExitCode::SUCCESS)
+/// Commands that open no window still load Mesa's Vulkan window-system code, which asks
+/// libwayland for `XDG_RUNTIME_DIR` and prints `error: XDG_RUNTIME_DIR is invalid or not set`
+/// per device when it is unset (headless machines, containers). Point it at a private empty
+/// folder instead: no Wayland socket is found there, silently, and nothing else reads it.
+fn quiet_window_system_probe() {
+    if !cfg!(target_os = "linux") {
+        return;
+    }
+    let valid = std::env::var_os("XDG_RUNTIME_DIR")
+        .filter(|d| !d.is_empty())
+        .is_some_and(|d| std::path::Path::new(&d).is_dir());
+    if valid {
+        return;
+    }
+    // One folder per user (not per process: nothing accumulates in the temp folder).
+    #[cfg(unix)]
+    let user = {
+        use std::os::unix::fs::MetadataExt;
+        std::fs::metadata("/proc/self")
+            .map(|m| m.uid())
+            .unwrap_or(0)
+    };
+    #[cfg(not(unix))]
+    let user = 0;
+    let dir = std::env::temp_dir().join(format!("ssbvb-xdg-runtime-{user}"));
+    if std::fs::create_dir_all(&dir).is_err() {
+        return;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700));
+    }
+    // SAFETY: called first thing in `main`, before any other thread exists, so nothing
+    // reads the environment concurrently.
+    unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
 }

@@ -71,15 +71,7 @@ pub fn parse_vec3(s: &str) -> Result<DVec3, String> {
     }
 }
 
-/// The bundled asset folder: `assets/` of the working directory if it has the default
-/// scene, else the one this binary was built from.
-pub fn assets_dir() -> PathBuf {
-    let here = PathBuf::from("assets");
-    if here.join("scenes/default.ron").is_file() {
-        return here;
-    }
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets")
-}
+pub use crate::bundled::assets_dir;
 
 #[derive(Serialize)]
 struct Report {
@@ -87,6 +79,9 @@ struct Report {
     mode: &'static str,
     adapter: Option<String>,
     adapter_is_software: Option<bool>,
+    /// Format substitutions taken because the adapter lacks a pipeline format
+    /// (`wanted -> used (resource)`).
+    fallbacks: Vec<String>,
     size: [u32; 2],
     camera: Camera,
     pipeline: Option<String>,
@@ -219,6 +214,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             mode: "reference",
             adapter: None,
             adapter_is_software: None,
+            fallbacks: Vec::new(),
             size: [w, h],
             camera,
             pipeline: None,
@@ -237,9 +233,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             .clone()
             .or(scene_pipeline)
             .unwrap_or_else(|| assets_dir().join("pipelines/ssbvb.ron"));
-        let pipeline =
-            ssbvb_graph::resolve_file(&pipeline_path).map_err(|e| anyhow::anyhow!("{e}"))?;
-        let ctx = ssbvb_gpu::GpuContext::new_headless(&Default::default())?;
+        let pipeline = crate::adapter_cmd::resolve(&pipeline_path)?;
+        let ctx = crate::adapter_cmd::headless_context(&[&pipeline])?;
         let mut gpu_scene = GpuScene::new(&ctx, scene)?;
         let mut renderer = Renderer::new(&ctx, &gpu_scene, pipeline, args.size)?;
         let profiling = if ctx.report().is_software {
@@ -262,6 +257,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             mode: "gpu",
             adapter: Some(ctx.report().to_string()),
             adapter_is_software: Some(ctx.report().is_software),
+            fallbacks: ctx.report().fallbacks.clone(),
             size: [w, h],
             camera,
             pipeline: Some(pipeline_path.display().to_string()),
@@ -315,6 +311,9 @@ fn print_report(r: &Report) {
     );
     if let Some(a) = &r.adapter {
         println!("adapter: {a}");
+        for f in &r.fallbacks {
+            println!("format fallback: {f}");
+        }
     }
     if let Some(p) = &r.pipeline {
         println!("pipeline: {p}");

@@ -27,9 +27,10 @@ use ssbvb_voxel::shading::Light;
 #[derive(Debug, Deserialize)]
 #[serde(rename = "Scene", deny_unknown_fields)]
 pub struct SceneFile {
-    /// Pipeline file (relative to the scene file).
-    #[serde(default = "default_pipeline")]
-    pub pipeline: String,
+    /// Pipeline file (relative to the scene file); absent: the bundled default pipeline,
+    /// wherever the scene file lives.
+    #[serde(default)]
+    pub pipeline: Option<String>,
     /// The camera.
     #[serde(default)]
     pub camera: CameraDesc,
@@ -42,10 +43,6 @@ pub struct SceneFile {
     /// Triangle objects.
     #[serde(default)]
     pub triangles: Vec<TriangleDesc>,
-}
-
-fn default_pipeline() -> String {
-    "../pipelines/ssbvb.ron".to_string()
 }
 
 /// A pinhole camera as written in a scene.
@@ -262,7 +259,10 @@ pub fn load(path: &Path, progress: &dyn ssbvb_voxel::progress::Progress) -> Resu
     Ok(LoadedScene {
         scene,
         camera: file.camera.camera(),
-        pipeline: dir.join(&file.pipeline),
+        pipeline: match &file.pipeline {
+            Some(p) => dir.join(p),
+            None => crate::bundled::assets_dir().join(crate::bundled::DEFAULT_PIPELINE),
+        },
         notes,
     })
 }

@@ -265,3 +265,107 @@ fn bench_quick_sweep_writes_sweeps_and_plots() {
         assert!(bytes.starts_with(b"\x89PNG"), "{png}");
     }
 }
+
+/// A copy of the binary outside the source tree (its assets forced to the embedded copy)
+/// renders the default scene, quietly on a headless machine (no window-system probe lines),
+/// and a scene without `pipeline:` in any folder uses the default pipeline.
+#[test]
+fn relocated_binary_renders_the_bundled_scene_quietly() {
+    let dir = tempfile::tempdir().unwrap();
+    let bin = dir.path().join("bin/ssbvb");
+    std::fs::create_dir_all(bin.parent().unwrap()).unwrap();
+    std::fs::copy(env!("CARGO_BIN_EXE_ssbvb"), &bin).unwrap();
+    let cache = dir.path().join("cache");
+    let run = |args: &[&str]| {
+        let out = Command::new(&bin)
+            .current_dir(dir.path())
+            .env("SSBVB_ASSETS_DIR", "bundled")
+            .env("SSBVB_CACHE_DIR", &cache)
+            .env(
+                "WGPU_BACKEND",
+                std::env::var("WGPU_BACKEND").unwrap_or_else(|_| "vulkan".into()),
+            )
+            .env_remove("XDG_RUNTIME_DIR")
+            .args(args)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(out.status.success(), "{args:?}: {stderr}");
+        assert!(
+            !stderr.contains("XDG_RUNTIME_DIR") && !stderr.contains("error"),
+            "{args:?} printed to stderr: {stderr}"
+        );
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).expect("one JSON object")
+    };
+    let json = run(&["render", "--size", "64x48", "--json", "-o", "default.png"]);
+    let pipeline = json["pipeline"].as_str().unwrap();
+    assert!(
+        pipeline.starts_with(&cache.display().to_string()) && pipeline.contains("bundled-assets"),
+        "{pipeline}"
+    );
+    assert!(json["ssbvb_fill_count"].as_u64().unwrap() > 50, "{json}");
+    assert!(dir.path().join("default.png").is_file());
+
+    let elsewhere = dir.path().join("some/other/folder");
+    std::fs::create_dir_all(&elsewhere).unwrap();
+    let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/models/bunny.obj");
+    std::fs::write(
+        elsewhere.join("scene.ron"),
+        format!(
+            "Scene(objects: [(model: {:?}, level: 4, lod: Fixed(4))])",
+            bunny.canonicalize().unwrap()
+        ),
+    )
+    .unwrap();
+    let json = run(&[
+        "render",
+        "some/other/folder/scene.ron",
+        "--size",
+        "32x24",
+        "--json",
+        "-o",
+        "other.png",
+    ]);
+    assert!(
+        json["pipeline"]
+            .as_str()
+            .unwrap()
+            .ends_with("pipelines/ssbvb.ron"),
+        "{json}"
+    );
+}
+
+/// `ssbvb adapter` gives every adapter a verdict; a forced backend that cannot run the
+/// pipeline gets one clear error with the fix, never a validation error.
+#[test]
+fn adapters_are_checked_before_use() {
+    let out = ssbvb().arg("adapter").output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("[Vulkan, Cpu]: fits"), "{stdout}");
+    assert!(stdout.contains("chosen: "), "{stdout}");
+    let out = ssbvb()
+        .env("WGPU_BACKEND", "gl")
+        .args(["render", "--size", "32x24", "-o"])
+        .arg(tempfile::tempdir().unwrap().path().join("x.png"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(!stderr.contains("validation"), "{stderr}");
+    assert!(
+        stderr.contains("mesa-vulkan-drivers libvulkan1"),
+        "{stderr}"
+    );
+    // Mesa's GL driver, where present, is named with what it lacks.
+    if stderr.contains("[Gl]") {
+        assert!(
+            stderr.contains("Rgba32Float as render attachment"),
+            "{stderr}"
+        );
+    }
+}

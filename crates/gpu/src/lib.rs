@@ -5,7 +5,8 @@
 //!   `SSBVB_ADAPTER` (a name substring, or `software` / `hardware`) and wgpu's own
 //!   `WGPU_BACKEND`. It enables timestamp queries and `Depth32FloatStencil8` when the
 //!   adapter has them, and asks for the adapter's full limits (the defaults are WebGPU's
-//!   minimums).
+//!   minimums). Given the pipeline's [`Requirements`], it skips adapters that lack a
+//!   capability the pipeline needs (logging why) and names what is missing when none fits.
 //! - Validation errors become Rust errors: [`GpuContext::validated`] wraps work in error
 //!   scopes, and errors outside any scope are collected ([`GpuContext::take_uncaptured_errors`])
 //!   instead of wgpu's default panic, so tests can fail on them with a message.
@@ -13,10 +14,12 @@
 //!   CPU, and writes PNGs atomically.
 
 pub mod readback;
+pub mod requirements;
 pub mod shader_source;
 
 use std::sync::{Arc, Mutex};
 
+pub use requirements::{Requirements, Verdict};
 pub use wgpu;
 
 /// Errors of the GPU layer.
@@ -47,6 +50,14 @@ pub enum GpuError {
         kind: &'static str,
         /// wgpu's message.
         message: String,
+    },
+    /// Adapters exist, but none has what the pipeline needs.
+    #[error("no adapter can run this pipeline ({details}); {hint}")]
+    NoSuitableAdapter {
+        /// Each adapter seen (name, backend) with what it lacks.
+        details: String,
+        /// What to install or set.
+        hint: String,
     },
     /// Waiting for the device or mapping a buffer failed.
     #[error("GPU readback of {label} failed: {message}")]
@@ -81,6 +92,9 @@ pub struct AdapterReport {
     pub is_software: bool,
     /// Whether GPU timestamp queries are enabled (inside passes as well).
     pub timestamps: bool,
+    /// Format substitutions taken because the adapter lacks the pipeline's format:
+    /// `wanted -> used (who)`.
+    pub fallbacks: Vec<String>,
 }
 
 impl std::fmt::Display for AdapterReport {
@@ -110,6 +124,23 @@ impl std::fmt::Display for AdapterReport {
 pub struct ContextOptions {
     /// Adapter preference; `None` reads `SSBVB_ADAPTER` from the environment.
     pub adapter: Option<AdapterChoice>,
+    /// What the pipeline needs; adapters lacking any of it are skipped. `None`: any adapter.
+    pub requirements: Option<Requirements>,
+}
+
+/// One adapter and whether it can run a pipeline (`ssbvb adapter` lists these).
+#[derive(Debug, Clone)]
+pub struct AdapterVerdict {
+    /// Name.
+    pub name: String,
+    /// Backend.
+    pub backend: String,
+    /// Device type.
+    pub device_type: String,
+    /// Whether the adapter choice (`SSBVB_ADAPTER`) allows it.
+    pub allowed: bool,
+    /// What it lacks and which fallbacks it would take.
+    pub verdict: Verdict,
 }
 
 /// Which adapter to prefer.
@@ -126,6 +157,19 @@ pub enum AdapterChoice {
 }
 
 impl AdapterChoice {
+    /// Whether this choice allows the adapter.
+    pub fn allows(&self, info: &wgpu::AdapterInfo) -> bool {
+        match self {
+            AdapterChoice::Auto => true,
+            AdapterChoice::Hardware => !is_software(info),
+            AdapterChoice::Software => is_software(info),
+            AdapterChoice::Named(n) => info
+                .name
+                .to_ascii_lowercase()
+                .contains(&n.to_ascii_lowercase()),
+        }
+    }
+
     /// Parses `SSBVB_ADAPTER`-style text: `auto`, `hardware`, `software`, or a name.
     pub fn parse(s: &str) -> Self {
         match s.trim().to_ascii_lowercase().as_str() {
@@ -159,13 +203,32 @@ impl std::fmt::Debug for GpuContext {
     }
 }
 
-/// Hint printed when no adapter exists.
+/// Hint printed when no adapter exists or none fits.
 pub const NO_ADAPTER_HINT: &str = "install a Vulkan driver (on Debian/Ubuntu without a GPU: \
-     `apt-get install -y mesa-vulkan-drivers libvulkan1` for lavapipe), or run `cargo xtask test`, \
-     which installs it when it can";
+     `sudo apt-get install -y mesa-vulkan-drivers libvulkan1` for Mesa's lavapipe), or run \
+     `cargo xtask test`, which installs it when it can";
 
-/// Rank of an adapter for `Auto`: lower is better.
-fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
+/// The instance headless commands use: every native backend (narrowed by
+/// `WGPU_BACKEND`), validation on (off with `WGPU_VALIDATION=0`), and no window-system
+/// display, so commands that open no window do not probe X11 or Wayland.
+fn headless_instance() -> (wgpu::Instance, wgpu::Backends) {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends =
+        wgpu::Backends::VULKAN | wgpu::Backends::GL | wgpu::Backends::METAL | wgpu::Backends::DX12;
+    desc.flags = wgpu::InstanceFlags::VALIDATION | wgpu::InstanceFlags::DEBUG;
+    let all = desc.backends;
+    let mut desc = desc.with_env();
+    // `WGPU_BACKEND=` (set but empty) means no preference, not no backend.
+    if desc.backends.is_empty() {
+        desc.backends = all;
+    }
+    let backends = desc.backends;
+    (wgpu::Instance::new(desc), backends)
+}
+
+/// Rank of an adapter for `Auto`: lower is better. Public for the viewer, which ranks the
+/// adapters that can present to its window the same way.
+pub fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
     let ty = match info.device_type {
         wgpu::DeviceType::DiscreteGpu => 0,
         wgpu::DeviceType::IntegratedGpu => 1,
@@ -191,40 +254,21 @@ fn is_software(info: &wgpu::AdapterInfo) -> bool {
 }
 
 impl GpuContext {
-    /// Creates a headless context on the preferred adapter (see the crate docs).
+    /// Creates a headless context on the preferred adapter that has what
+    /// `options.requirements` asks (see the crate docs).
     pub fn new_headless(options: &ContextOptions) -> Result<Self, GpuError> {
         let choice = options.adapter.clone().unwrap_or_else(|| {
             AdapterChoice::parse(&std::env::var("SSBVB_ADAPTER").unwrap_or_default())
         });
-        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-        desc.backends = wgpu::Backends::VULKAN
-            | wgpu::Backends::GL
-            | wgpu::Backends::METAL
-            | wgpu::Backends::DX12;
-        // Validation on unless WGPU_VALIDATION=0; WGPU_BACKEND narrows the backends.
-        desc.flags = wgpu::InstanceFlags::VALIDATION | wgpu::InstanceFlags::DEBUG;
-        let desc = desc.with_env();
-        let backends = desc.backends;
-        let instance = wgpu::Instance::new(desc);
+        let (instance, backends) = headless_instance();
         let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
         let seen: Vec<String> = adapters
             .iter()
             .map(|a| format!("{} [{:?}]", a.get_info().name, a.get_info().backend))
             .collect();
-        adapters.retain(|a| {
-            let info = a.get_info();
-            match &choice {
-                AdapterChoice::Auto => true,
-                AdapterChoice::Hardware => !is_software(&info),
-                AdapterChoice::Software => is_software(&info),
-                AdapterChoice::Named(n) => info
-                    .name
-                    .to_ascii_lowercase()
-                    .contains(&n.to_ascii_lowercase()),
-            }
-        });
+        adapters.retain(|a| choice.allows(&a.get_info()));
         adapters.sort_by_key(|a| rank(&a.get_info()));
-        let Some(adapter) = adapters.into_iter().next() else {
+        if adapters.is_empty() {
             return Err(GpuError::NoAdapter {
                 tried: format!(
                     "backends {backends:?}, choice {choice:?}, adapters seen: {}",
@@ -236,14 +280,64 @@ impl GpuContext {
                 ),
                 hint: NO_ADAPTER_HINT.to_string(),
             });
+        }
+        let Some(req) = &options.requirements else {
+            return Self::from_adapter(instance, adapters.swap_remove(0), Vec::new());
         };
-        Self::from_adapter(instance, adapter)
+        let mut refused = Vec::new();
+        for adapter in adapters {
+            let info = adapter.get_info();
+            let verdict = req.check(&adapter);
+            if verdict.fits() {
+                return Self::from_adapter(instance, adapter, verdict.fallback_notes());
+            }
+            log::info!(
+                "adapter {} [{:?}] skipped: {}",
+                info.name,
+                info.backend,
+                verdict.missing.join("; ")
+            );
+            refused.push(format!(
+                "{} [{:?}] lacks: {}",
+                info.name,
+                info.backend,
+                verdict.missing.join("; ")
+            ));
+        }
+        Err(GpuError::NoSuitableAdapter {
+            details: refused.join(" | "),
+            hint: NO_ADAPTER_HINT.to_string(),
+        })
+    }
+
+    /// Every adapter the headless instance sees, best first, each with its verdict on
+    /// `requirements` and whether `SSBVB_ADAPTER` allows it.
+    pub fn list_adapters(requirements: &Requirements) -> Vec<AdapterVerdict> {
+        let choice = AdapterChoice::parse(&std::env::var("SSBVB_ADAPTER").unwrap_or_default());
+        let (instance, backends) = headless_instance();
+        let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
+        adapters.sort_by_key(|a| rank(&a.get_info()));
+        adapters
+            .iter()
+            .map(|a| {
+                let info = a.get_info();
+                AdapterVerdict {
+                    name: info.name.clone(),
+                    backend: format!("{:?}", info.backend),
+                    device_type: format!("{:?}", info.device_type),
+                    allowed: choice.allows(&info),
+                    verdict: requirements.check(a),
+                }
+            })
+            .collect()
     }
 
     /// Creates the device on a chosen adapter with the features ssbvb uses when present.
+    /// `fallbacks` lists the format substitutions the requirements check chose.
     pub fn from_adapter(
         instance: wgpu::Instance,
         adapter: wgpu::Adapter,
+        fallbacks: Vec<String>,
     ) -> Result<Self, GpuError> {
         let info = adapter.get_info();
         let wanted = wgpu::Features::TIMESTAMP_QUERY
@@ -283,6 +377,7 @@ impl GpuContext {
                 .to_string(),
             is_software: is_software(&info),
             timestamps,
+            fallbacks,
         };
         Ok(Self {
             instance,
@@ -316,6 +411,7 @@ impl GpuContext {
             timestamps: features.contains(
                 wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
             ),
+            fallbacks: Vec::new(),
         };
         Self {
             instance,

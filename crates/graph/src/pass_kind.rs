@@ -3,8 +3,8 @@
 //! A kind declares every resource it touches as a [`SlotDesc`]: name, read or write, and
 //! what class of resource (attachment, sampled texture, storage buffer, …) with which
 //! formats or layout. Slot names that are shader globals equal the WGSL global names, so
-//! `cargo xtask validate-shaders` checks bindings by name through naga reflection. Adding a
-//! pass is one variant here, one module in `ssbvb-passes` and one WGSL file.
+//! `cargo xtask validate-shaders` checks bindings by name through naga reflection. The
+//! implementations, with their WGSL file names, are registered in `ssbvb-passes`.
 
 use serde::{Deserialize, Serialize};
 
@@ -312,22 +312,6 @@ impl PassKind {
                 merge_full_nodes: yes(),
             },
         ]
-    }
-
-    /// The WGSL file (under `shaders/`) that implements the kind; same name as the
-    /// `ssbvb-passes` module.
-    pub fn shader_file(&self) -> &'static str {
-        match self {
-            PassKind::EmptySpacePrepass => "empty_space.wgsl",
-            PassKind::RayMarchFilter { .. } => "ray_march_filter.wgsl",
-            PassKind::Billboards { .. } => "billboards.wgsl",
-            PassKind::Triangles => "triangles.wgsl",
-            PassKind::Smooth { .. } => "smooth.wgsl",
-            PassKind::Composite => "composite.wgsl",
-            PassKind::DenseDda { .. } => "dense_dda.wgsl",
-            PassKind::OctreeRayCast { .. } => "octree_ray_cast.wgsl",
-            PassKind::CubeRaster { .. } => "cube_raster.wgsl",
-        }
     }
 
     /// Render or compute.

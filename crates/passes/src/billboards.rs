@@ -48,6 +48,7 @@
 use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_graph::{BillboardMode, PassKind, ResolvedPipeline, ScheduledPass};
 
+use crate::bindings::PassBindings;
 use crate::frame::Recorder;
 use crate::gpu_scene::GpuScene;
 use crate::triangles::{begin_gbuffer_pass, gbuffer_depth_stencil, gbuffer_targets};
@@ -119,7 +120,7 @@ impl BillboardOptions {
 /// The billboards pass.
 pub struct Billboards {
     pipeline: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
+    bindings: PassBindings,
 }
 
 impl Billboards {
@@ -156,25 +157,10 @@ impl Billboards {
         }
         let d = &ctx.device;
         let module = ctx.shader("billboards.wgsl", &shaders::source("billboards.wgsl")?)?;
-        let layout =
-            d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("billboards ssbvb"),
-                entries: &[wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: true },
-                        has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(
-                            std::mem::size_of::<VoxelSlot>() as u64
-                        ),
-                    },
-                    count: None,
-                }],
-            });
+        let bindings = PassBindings::new(ctx, pipeline, pass, &[]);
         let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("billboards"),
-            bind_group_layouts: &[Some(&scene.layout), Some(&layout)],
+            bind_group_layouts: &[Some(&scene.layout), Some(&bindings.layout)],
             immediate_size: 0,
         });
         let constants = [
@@ -217,7 +203,7 @@ impl Billboards {
             multiview_mask: None,
             cache: None,
         });
-        Ok(Self { pipeline, layout })
+        Ok(Self { pipeline, bindings })
     }
 }
 
@@ -227,17 +213,7 @@ impl PassNode for Billboards {
         encoder: &mut wgpu::CommandEncoder,
         rec: &mut Recorder<'_>,
     ) -> Result<(), PassError> {
-        let bg = rec
-            .gpu
-            .device
-            .create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("billboards ssbvb"),
-                layout: &self.layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: rec.buffer("ssbvb").as_entire_binding(),
-                }],
-            });
+        let bg = self.bindings.bind_group(rec, &[])?;
         let draw = rec.buffer("billboard_draw");
         let mut pass = begin_gbuffer_pass(encoder, rec, STENCIL_VOXEL);
         pass.set_pipeline(&self.pipeline);

@@ -4,6 +4,7 @@
 use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_graph::{ResolvedPipeline, ScheduledPass};
 
+use crate::bindings::PassBindings;
 use crate::frame::{Recorder, slot_format};
 use crate::gpu_scene::GpuScene;
 use crate::{PassError, PassNode, shaders};
@@ -11,7 +12,7 @@ use crate::{PassError, PassNode, shaders};
 /// The composite pass.
 pub struct Composite {
     pipeline: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
+    bindings: PassBindings,
 }
 
 impl Composite {
@@ -25,23 +26,10 @@ impl Composite {
     ) -> Result<Self, PassError> {
         let d = &ctx.device;
         let module = ctx.shader("composite.wgsl", &shaders::source("composite.wgsl")?)?;
-        let tex = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
-        };
-        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("composite"),
-            entries: &[tex(0), tex(1), tex(2)],
-        });
+        let bindings = PassBindings::new(ctx, pipeline, pass, &[]);
         let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("composite"),
-            bind_group_layouts: &[Some(&scene.layout), Some(&layout)],
+            bind_group_layouts: &[Some(&scene.layout), Some(&bindings.layout)],
             immediate_size: 0,
         });
         let out = slot_format(ctx, pipeline, pass, "color");
@@ -74,7 +62,7 @@ impl Composite {
             multiview_mask: None,
             cache: None,
         });
-        Ok(Self { pipeline, layout })
+        Ok(Self { pipeline, bindings })
     }
 }
 
@@ -84,28 +72,7 @@ impl PassNode for Composite {
         encoder: &mut wgpu::CommandEncoder,
         rec: &mut Recorder<'_>,
     ) -> Result<(), PassError> {
-        let view = |slot: &str| wgpu::BindingResource::TextureView(&rec.texture(slot).view);
-        let bg = rec
-            .gpu
-            .device
-            .create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("composite"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: view("albedo"),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: view("normal"),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: view("position"),
-                    },
-                ],
-            });
+        let bg = self.bindings.bind_group(rec, &[])?;
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(&rec.pass.name),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {

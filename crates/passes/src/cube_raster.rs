@@ -35,6 +35,7 @@ use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::cube_list::CubeList;
 
 use crate::billboards::STENCIL_VOXEL;
+use crate::bindings::{OwnBinding, OwnKind, PassBindings};
 use crate::frame::Recorder;
 use crate::gpu_scene::GpuScene;
 use crate::triangles::{
@@ -54,10 +55,16 @@ struct LevelCubes {
     count: u32,
 }
 
+/// What the cube pass binds itself: the cube list of the instance being drawn.
+pub const OWN: &[OwnBinding] = &[OwnBinding {
+    name: "cubes",
+    kind: OwnKind::StorageRead,
+}];
+
 /// The compiled cube pass and its cache of uploaded cube lists.
 pub struct CubeRaster {
     pipeline: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
+    bindings: PassBindings,
     merge_full_nodes: bool,
     /// (object, level) → its cubes.
     levels: HashMap<(usize, u32), LevelCubes>,
@@ -91,20 +98,8 @@ impl CubeRaster {
         let targets = gbuffer_targets(ctx, pipeline, pass);
         let depth_stencil = gbuffer_depth_stencil(ctx, pipeline, pass);
         let label = format!("pass `{}`: cube_raster pipeline", pass.name);
-        let (pipeline, layout) = ctx.validated(&label, |d| {
-            let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("cube_raster cubes"),
-                entries: &[wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: true },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                }],
-            });
+        let (pipeline, bindings) = ctx.validated(&label, |d| {
+            let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
             // No culling: faces that do not see the camera are collapsed in the vertex
             // shader (winding-independent, so mirrored transforms work too).
             let pipeline = gbuffer_pipeline(
@@ -112,16 +107,16 @@ impl CubeRaster {
                 "cube_raster",
                 &module,
                 &scene.layout,
-                &layout,
+                &bindings.layout,
                 &[],
                 &targets,
                 depth_stencil,
             );
-            (pipeline, layout)
+            (pipeline, bindings)
         })?;
         Ok(Self {
             pipeline,
-            layout,
+            bindings,
             merge_full_nodes,
             levels: HashMap::new(),
         })
@@ -164,15 +159,12 @@ impl CubeRaster {
                 contents: bytemuck::cast_slice(&list.cubes),
                 usage: wgpu::BufferUsages::STORAGE,
             });
-            d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("cube_raster cubes"),
-                layout: &self.layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: buffer.as_entire_binding(),
-                }],
-            })
-        })?;
+            self.bindings.own_bind_group(
+                d,
+                "cube_raster cubes",
+                &[("cubes", buffer.as_entire_binding())],
+            )
+        })??;
         Ok(LevelCubes {
             bind_group: Some(bind_group),
             count,

@@ -28,6 +28,7 @@ use ssbvb_graph::{PassKind, ResolvedPipeline, ScheduledPass};
 use ssbvb_voxel::asset::{EMPTY_PAGE, PAGE_CELLS, PAGE_SIZE, SparseLookup};
 
 use crate::billboards::STENCIL_VOXEL;
+use crate::bindings::{OwnBinding, OwnKind, PassBindings};
 use crate::frame::Recorder;
 use crate::gpu_scene::GpuScene;
 use crate::triangles::{
@@ -38,10 +39,16 @@ use crate::{PassError, PassNode, shaders};
 /// The finest level a dense texture is built for (256³ `u32` = 64 MiB).
 pub const MAX_DENSE_LEVEL: u32 = 8;
 
+/// What the dense-DDA pass binds itself: the dense texture of the visible level.
+pub const OWN: &[OwnBinding] = &[OwnBinding {
+    name: "dense",
+    kind: OwnKind::Texture3dUint,
+}];
+
 /// The compiled dense-DDA pass and its cache of dense textures.
 pub struct DenseDda {
     pipeline: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
+    bindings: PassBindings,
     /// `(object, level)` → dense texture view.
     textures: HashMap<(usize, u32), wgpu::TextureView>,
 }
@@ -65,35 +72,23 @@ impl DenseDda {
         let targets = gbuffer_targets(ctx, pipeline, pass);
         let depth_stencil = gbuffer_depth_stencil(ctx, pipeline, pass);
         let label = format!("pass `{}`: dense_dda pipeline", pass.name);
-        let (pipeline, layout) = ctx.validated(&label, |d| {
-            let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("dense_dda"),
-                entries: &[wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Uint,
-                        view_dimension: wgpu::TextureViewDimension::D3,
-                        multisampled: false,
-                    },
-                    count: None,
-                }],
-            });
+        let (pipeline, bindings) = ctx.validated(&label, |d| {
+            let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
             let pipeline = gbuffer_pipeline(
                 d,
                 "dense_dda",
                 &module,
                 &scene.layout,
-                &layout,
+                &bindings.layout,
                 &[("MAX_STEPS", f64::from(max_steps))],
                 &targets,
                 depth_stencil,
             );
-            (pipeline, layout)
+            (pipeline, bindings)
         })?;
         Ok(Self {
             pipeline,
-            layout,
+            bindings,
             textures: HashMap::new(),
         })
     }
@@ -210,18 +205,11 @@ impl PassNode for DenseDda {
                         e.insert(dense_texture(rec.gpu, &lod.lookup)?)
                     }
                 };
-                Some(
-                    rec.gpu
-                        .device
-                        .create_bind_group(&wgpu::BindGroupDescriptor {
-                            label: Some("dense_dda"),
-                            layout: &self.layout,
-                            entries: &[wgpu::BindGroupEntry {
-                                binding: 0,
-                                resource: wgpu::BindingResource::TextureView(view),
-                            }],
-                        }),
-                )
+                Some(self.bindings.own_bind_group(
+                    &rec.gpu.device,
+                    "dense_dda",
+                    &[("dense", wgpu::BindingResource::TextureView(view))],
+                )?)
             }
             None => None,
         };
@@ -240,9 +228,9 @@ impl PassNode for DenseDda {
 #[cfg(test)]
 mod tests {
     #[test]
-    fn shader_declares_the_dense_texture_and_max_steps() {
+    fn shader_declares_max_steps_and_the_voxel_stencil() {
+        // Bindings and struct layouts are checked by `cargo xtask validate-shaders`.
         let src = crate::shaders::source("dense_dda.wgsl").unwrap();
-        assert!(src.contains("var dense: texture_3d<u32>"));
         assert!(src.contains("override MAX_STEPS: u32"));
         assert!(src.contains("const STENCIL_VOXEL: u32 = 1u;"));
         assert_eq!(crate::billboards::STENCIL_VOXEL, 1);

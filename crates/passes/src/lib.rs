@@ -4,9 +4,11 @@
 //!
 //! Bindings: group 0 is the scene (frame constants, visible instances, every LOD's point
 //! cloud, page tables, page pools and coarse occupancy; `shaders/common.inc.wgsl`); group 1
-//! holds the pass's graph resources, bound by slot name.
+//! holds the pass's graph resources and its own resources, laid out from the pass's
+//! declaration ([`bindings`]).
 
 pub mod billboards;
+pub mod bindings;
 pub mod composite;
 pub mod cube_raster;
 pub mod dense_dda;
@@ -17,13 +19,16 @@ pub mod gpu_scene;
 pub mod measure;
 pub mod octree_ray_cast;
 pub mod ray_march_filter;
+pub mod registry;
 pub mod scene;
 pub mod shaders;
 pub mod smooth;
 pub mod triangles;
+pub mod wgsl_layout;
 
 pub use frame::{FrameStats, PassTiming, Profiling, Recorder, Renderer};
 pub use gpu_scene::{GpuScene, ObjectMemory};
+pub use registry::{REGISTRY, Registration, pipeline_requirements};
 pub use scene::{LodPolicy, Scene, TriangleObject, VoxelObject};
 
 use ssbvb_gpu::{GpuContext, GpuError, wgpu};
@@ -64,62 +69,30 @@ pub trait PassNode {
     ) -> Result<(), PassError>;
 }
 
-/// Pass kinds implemented by this crate (their WGSL must exist and match their slots;
-/// `cargo xtask validate-shaders` checks it).
+/// Pass kinds implemented by this crate, with default parameters (their WGSL must exist
+/// and match their slots; `cargo xtask validate-shaders` checks it).
 pub fn registered_kinds() -> Vec<PassKind> {
     PassKind::all_defaults()
         .into_iter()
-        .filter(is_implemented)
+        .filter(|k| registry::registration(k).is_some())
         .collect()
 }
 
-fn is_implemented(kind: &PassKind) -> bool {
-    matches!(
-        kind,
-        PassKind::EmptySpacePrepass
-            | PassKind::RayMarchFilter { .. }
-            | PassKind::Smooth { .. }
-            | PassKind::Composite
-            | PassKind::Billboards { .. }
-            | PassKind::Triangles
-            | PassKind::DenseDda { .. }
-            | PassKind::OctreeRayCast { .. }
-            | PassKind::CubeRaster { .. }
-    )
-}
-
-/// Builds the pass object of a scheduled pass.
+/// Builds the pass object of a scheduled pass through its [`registry::REGISTRY`] entry.
 pub fn create_pass(
     ctx: &GpuContext,
     scene: &GpuScene,
     pipeline: &ResolvedPipeline,
     pass: &ScheduledPass,
 ) -> Result<Box<dyn PassNode>, PassError> {
-    match pass.kind {
-        PassKind::EmptySpacePrepass => Ok(Box::new(empty_space::EmptySpace::new(
-            ctx, scene, pipeline, pass,
-        )?)),
-        PassKind::RayMarchFilter { .. } => Ok(Box::new(ray_march_filter::RayMarchFilter::new(
-            ctx, scene, pipeline, pass,
-        )?)),
-        PassKind::Billboards { .. } => Ok(Box::new(billboards::Billboards::new(
-            ctx, scene, pipeline, pass,
-        )?)),
-        PassKind::Triangles => Ok(Box::new(triangles::Triangles::new(
-            ctx, scene, pipeline, pass,
-        )?)),
-        PassKind::Smooth { .. } => Ok(Box::new(smooth::Smooth::new(ctx, scene, pipeline, pass)?)),
-        PassKind::Composite => Ok(Box::new(composite::Composite::new(
-            ctx, scene, pipeline, pass,
-        )?)),
-        PassKind::DenseDda { .. } => Ok(Box::new(dense_dda::DenseDda::new(
-            ctx, scene, pipeline, pass,
-        )?)),
-        PassKind::OctreeRayCast { .. } => Ok(Box::new(octree_ray_cast::OctreeRayCast::new(
-            ctx, scene, pipeline, pass,
-        )?)),
-        PassKind::CubeRaster { .. } => Ok(Box::new(cube_raster::CubeRaster::new(
-            ctx, scene, pipeline, pass,
-        )?)),
-    }
+    let reg = registry::registration(&pass.kind).ok_or_else(|| PassError::NotImplemented {
+        pass: pass.name.clone(),
+        kind: pass.kind.name(),
+    })?;
+    (reg.create)(&registry::PassInit {
+        ctx,
+        scene,
+        pipeline,
+        pass,
+    })
 }

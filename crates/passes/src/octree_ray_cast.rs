@@ -34,6 +34,7 @@ use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::svo::{Svo, SvoNode};
 
 use crate::billboards::STENCIL_VOXEL;
+use crate::bindings::{OwnBinding, OwnKind, PassBindings};
 use crate::frame::Recorder;
 use crate::gpu_scene::GpuScene;
 use crate::triangles::{
@@ -47,23 +48,22 @@ pub const MAX_OCTREE_LEVEL: u32 = 16;
 /// The compiled octree pass and its cache of uploaded octrees.
 pub struct OctreeRayCast {
     pipeline: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
+    bindings: PassBindings,
     /// Object → bind group of its octree buffers (which it keeps alive).
     octrees: HashMap<usize, wgpu::BindGroup>,
 }
 
-fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::FRAGMENT,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: true },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
+/// What the octree pass binds itself: the uploaded octree of the visible object.
+pub const OWN: &[OwnBinding] = &[
+    OwnBinding {
+        name: "svo_nodes",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "svo_level_offsets",
+        kind: OwnKind::StorageRead,
+    },
+];
 
 impl OctreeRayCast {
     /// Compiles the pipeline for the formats bound to `pass`; `max_steps` becomes the WGSL
@@ -87,26 +87,23 @@ impl OctreeRayCast {
         let targets = gbuffer_targets(ctx, pipeline, pass);
         let depth_stencil = gbuffer_depth_stencil(ctx, pipeline, pass);
         let label = format!("pass `{}`: octree_ray_cast pipeline", pass.name);
-        let (pipeline, layout) = ctx.validated(&label, |d| {
-            let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("octree_ray_cast"),
-                entries: &[storage_entry(0), storage_entry(1)],
-            });
+        let (pipeline, bindings) = ctx.validated(&label, |d| {
+            let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
             let pipeline = gbuffer_pipeline(
                 d,
                 "octree_ray_cast",
                 &module,
                 &scene.layout,
-                &layout,
+                &bindings.layout,
                 &[("MAX_STEPS", f64::from(max_steps))],
                 &targets,
                 depth_stencil,
             );
-            (pipeline, layout)
+            (pipeline, bindings)
         })?;
         Ok(Self {
             pipeline,
-            layout,
+            bindings,
             octrees: HashMap::new(),
         })
     }
@@ -168,21 +165,15 @@ impl OctreeRayCast {
                 contents: bytemuck::cast_slice(&offsets),
                 usage: wgpu::BufferUsages::STORAGE,
             });
-            d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("octree_ray_cast"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: node_buffer.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: offset_buffer.as_entire_binding(),
-                    },
+            self.bindings.own_bind_group(
+                d,
+                "octree_ray_cast",
+                &[
+                    ("svo_nodes", node_buffer.as_entire_binding()),
+                    ("svo_level_offsets", offset_buffer.as_entire_binding()),
                 ],
-            })
-        })?;
+            )
+        })??;
         Ok(bind_group)
     }
 }
@@ -217,16 +208,10 @@ impl PassNode for OctreeRayCast {
 mod tests {
     #[test]
     fn shader_declares_the_octree_and_max_steps() {
+        // Bindings and the SvoNode layout are checked by `cargo xtask validate-shaders`.
         let src = crate::shaders::source("octree_ray_cast.wgsl").unwrap();
-        assert!(src.contains("var<storage, read> svo_nodes: array<SvoNode>"));
-        assert!(src.contains("var<storage, read> svo_level_offsets: array<u32>"));
         assert!(src.contains("override MAX_STEPS: u32"));
         assert!(src.contains("const STACK_DEPTH: u32 = 16u;"));
         assert_eq!(super::MAX_OCTREE_LEVEL, 16);
-        assert_eq!(
-            std::mem::size_of::<ssbvb_voxel::svo::SvoNode>(),
-            8,
-            "SvoNode must match the WGSL struct"
-        );
     }
 }

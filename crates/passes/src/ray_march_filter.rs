@@ -33,6 +33,7 @@ use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_graph::{PassKind, ResolvedPipeline, ScheduledPass};
 use ssbvb_voxel::asset::PackedVoxel;
 
+use crate::bindings::{OwnBinding, OwnKind, PassBindings};
 use crate::frame::{Recorder, Renderer};
 use crate::gpu_scene::GpuScene;
 use crate::{PassError, PassNode, shaders};
@@ -84,22 +85,33 @@ pub struct DrawArgs {
 pub struct RayMarchFilter {
     clear: wgpu::ComputePipeline,
     main: wgpu::ComputePipeline,
-    layout: wgpu::BindGroupLayout,
-    claim_layout: wgpu::BindGroupLayout,
+    bindings: PassBindings,
     unique_voxels: bool,
     /// `unique_voxels`: the claim bitset and the per-instance word offsets (capacities
     /// in words / instances grow as needed).
     claims: Option<Claims>,
 }
 
+/// What the filter binds itself (`unique_voxels`): the claim bitset and the first word of
+/// each visible instance's bits.
+pub const OWN: &[OwnBinding] = &[
+    OwnBinding {
+        name: "claimed_voxels",
+        kind: OwnKind::StorageReadWrite,
+    },
+    OwnBinding {
+        name: "claim_offsets",
+        kind: OwnKind::StorageRead,
+    },
+];
+
 struct Claims {
     bits: wgpu::Buffer,
     offsets: wgpu::Buffer,
-    bind_group: wgpu::BindGroup,
 }
 
 impl Claims {
-    fn new(ctx: &GpuContext, layout: &wgpu::BindGroupLayout, words: u64, instances: u64) -> Self {
+    fn new(ctx: &GpuContext, words: u64, instances: u64) -> Self {
         let buffer = |label, size: u64, usage| {
             ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -110,25 +122,7 @@ impl Claims {
         };
         let bits = buffer("claimed voxels", words * 4, wgpu::BufferUsages::COPY_DST);
         let offsets = buffer("claim offsets", instances * 4, wgpu::BufferUsages::COPY_DST);
-        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("ray_march_filter claims"),
-            layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: bits.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: offsets.as_entire_binding(),
-                },
-            ],
-        });
-        Self {
-            bits,
-            offsets,
-            bind_group,
-        }
+        Self { bits, offsets }
     }
 }
 
@@ -137,7 +131,7 @@ impl RayMarchFilter {
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
-        _pipeline: &ResolvedPipeline,
+        pipeline: &ResolvedPipeline,
         pass: &ScheduledPass,
     ) -> Result<Self, PassError> {
         let PassKind::RayMarchFilter {
@@ -156,49 +150,10 @@ impl RayMarchFilter {
         )?;
         let label = format!("pass `{}`: ray_march_filter pipelines", pass.name);
         let built = ctx.validated(&label, |d| {
-            let storage = |binding| wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: false },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            };
-            let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("ray_march_filter"),
-                entries: &[
-                    wgpu::BindGroupLayoutEntry {
-                        binding: 0,
-                        visibility: wgpu::ShaderStages::COMPUTE,
-                        ty: wgpu::BindingType::Texture {
-                            // Rgba32Float is not filterable everywhere; textureLoad only.
-                            sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                            view_dimension: wgpu::TextureViewDimension::D2,
-                            multisampled: false,
-                        },
-                        count: None,
-                    },
-                    storage(1),
-                    storage(2),
-                ],
-            });
-            let read_only = wgpu::BindGroupLayoutEntry {
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: true },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                ..storage(1)
-            };
-            let claim_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("ray_march_filter claims"),
-                entries: &[storage(0), read_only],
-            });
+            let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
             let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("ray_march_filter"),
-                bind_group_layouts: &[Some(&scene.layout), Some(&layout), Some(&claim_layout)],
+                bind_group_layouts: &[Some(&scene.layout), Some(&bindings.layout)],
                 immediate_size: 0,
             });
             let constants = [
@@ -218,16 +173,15 @@ impl RayMarchFilter {
                     cache: None,
                 })
             };
-            (make("clear_draw"), make("main"), layout, claim_layout)
+            (make("clear_draw"), make("main"), bindings)
         })?;
-        let (clear, main, layout, claim_layout) = built;
+        let (clear, main, bindings) = built;
         // Without unique_voxels the shader never touches the claims: bind minimal buffers.
-        let claims = Some(Claims::new(ctx, &claim_layout, 4, 4));
+        let claims = Some(Claims::new(ctx, 4, 4));
         Ok(Self {
             clear,
             main,
-            layout,
-            claim_layout,
+            bindings,
             unique_voxels,
             claims,
         })
@@ -240,31 +194,17 @@ impl PassNode for RayMarchFilter {
         encoder: &mut wgpu::CommandEncoder,
         rec: &mut Recorder<'_>,
     ) -> Result<(), PassError> {
-        let bind_group = rec
-            .gpu
-            .device
-            .create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("ray_march_filter"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(&rec.texture("entry").view),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: rec.buffer("ssbvb").as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: rec.buffer("billboard_draw").as_entire_binding(),
-                    },
-                ],
-            });
         if self.unique_voxels {
             self.prepare_claims(rec, encoder)?;
         }
         let claims = self.claims.as_ref().expect("claims exist");
+        let bind_group = self.bindings.bind_group(
+            rec,
+            &[
+                ("claimed_voxels", claims.bits.as_entire_binding()),
+                ("claim_offsets", claims.offsets.as_entire_binding()),
+            ],
+        )?;
         let entry = &rec.texture("entry").texture;
         let (w, h) = (entry.width(), entry.height());
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -273,7 +213,6 @@ impl PassNode for RayMarchFilter {
         });
         pass.set_bind_group(0, &rec.scene.bind_group, &[]);
         pass.set_bind_group(1, &bind_group, &[]);
-        pass.set_bind_group(2, &claims.bind_group, &[]);
         pass.set_pipeline(&self.clear);
         pass.dispatch_workgroups(1, 1, 1);
         // wgpu orders the two dispatches (the draw arguments are written, then counted).
@@ -321,12 +260,7 @@ impl RayMarchFilter {
         if !fits {
             // Grow by half again, so that a camera move does not reallocate every frame.
             let cap = |n: u64| n + n / 2;
-            self.claims = Some(Claims::new(
-                rec.gpu,
-                &self.claim_layout,
-                cap(words),
-                cap(instances),
-            ));
+            self.claims = Some(Claims::new(rec.gpu, cap(words), cap(instances)));
         }
         let claims = self.claims.as_ref().expect("claims exist");
         if !offsets.is_empty() {

@@ -4,6 +4,7 @@
 use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_graph::{PassKind, ResolvedPipeline, ScheduledPass};
 
+use crate::bindings::{OwnBinding, OwnKind, PassBindings};
 use crate::frame::{Recorder, slot_format};
 use crate::gpu_scene::GpuScene;
 use crate::{PassError, PassNode, shaders};
@@ -21,11 +22,17 @@ pub fn smoothing_offset(dist: f32, max_i: f32, min_dist: f32) -> f32 {
     (max_i / (x * x)).clamp(0.0, max_i)
 }
 
+/// What the smoothing pass binds itself: the linear sampler of the normals.
+pub const OWN: &[OwnBinding] = &[OwnBinding {
+    name: "normal_sampler",
+    kind: OwnKind::Sampler(wgpu::SamplerBindingType::Filtering),
+}];
+
 /// The smoothing pass.
 pub struct Smooth {
     smooth: wgpu::RenderPipeline,
     copy: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
+    bindings: PassBindings,
     sampler: wgpu::Sampler,
 }
 
@@ -42,41 +49,10 @@ impl Smooth {
         };
         let d = &ctx.device;
         let module = ctx.shader("smooth.wgsl", &shaders::source("smooth.wgsl")?)?;
-        let normal_format = slot_format(ctx, pipeline, pass, "gbuffer_normal");
-        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("smooth"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Depth,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
-            ],
-        });
+        let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
         let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("smooth"),
-            bind_group_layouts: &[Some(&scene.layout), Some(&layout)],
+            bind_group_layouts: &[Some(&scene.layout), Some(&bindings.layout)],
             immediate_size: 0,
         });
         let ds_format = slot_format(ctx, pipeline, pass, "depth_stencil");
@@ -125,7 +101,6 @@ impl Smooth {
                 cache: None,
             })
         };
-        let _ = normal_format;
         let smooth = make("fs_smooth", wgpu::CompareFunction::Equal);
         let copy = make("fs_main", wgpu::CompareFunction::NotEqual);
         let sampler = d.create_sampler(&wgpu::SamplerDescriptor {
@@ -137,7 +112,7 @@ impl Smooth {
         Ok(Self {
             smooth,
             copy,
-            layout,
+            bindings,
             sampler,
         })
     }
@@ -153,33 +128,13 @@ impl PassNode for Smooth {
         rec: &mut Recorder<'_>,
     ) -> Result<(), PassError> {
         let ds = rec.texture("depth_stencil");
-        let depth_view = ds
-            .depth_view
-            .as_ref()
-            .expect("depth-stencil texture has a depth view");
-        let bg = rec
-            .gpu
-            .device
-            .create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("smooth"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(
-                            &rec.texture("gbuffer_normal").view,
-                        ),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(depth_view),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: wgpu::BindingResource::Sampler(&self.sampler),
-                    },
-                ],
-            });
+        let bg = self.bindings.bind_group(
+            rec,
+            &[(
+                "normal_sampler",
+                wgpu::BindingResource::Sampler(&self.sampler),
+            )],
+        )?;
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(&rec.pass.name),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {

@@ -1,4 +1,4 @@
-//! Integration tests of the model loaders: the shared real models, hand-written fixtures
+//! Integration tests of the model loaders: the real test models (`assets/models`), hand-written fixtures
 //! of every format, malformed inputs (with file and line/offset in the message), and
 //! deterministic plus property-based mutation of inputs (no panic, ever).
 
@@ -17,25 +17,21 @@ use ssbvb_voxel::model::{Mesh, Model, VoxelModel};
 // ---------------------------------------------------------------------------------------
 // Helpers
 
-/// The shared test models. CI clones the repository with `shared/` beside it; a missing
-/// folder is a failure, never a silent skip.
+/// The repository's test models (`assets/models`); a missing folder is a failure, never a
+/// silent skip.
 fn models_dir() -> PathBuf {
-    let dir = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/models"
-    ));
+    let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/models"));
     assert!(
         dir.is_dir(),
-        "the shared test models are missing: expected them in {} (the repository must be checked \
-         out with `shared/` beside it)",
+        "the test models are missing: expected them in {}",
         dir.display()
     );
     dir
 }
 
-fn shared(name: &str) -> PathBuf {
+fn model(name: &str) -> PathBuf {
     let p = models_dir().join(name);
-    assert!(p.is_file(), "shared model {} is missing", p.display());
+    assert!(p.is_file(), "test model {} is missing", p.display());
     p
 }
 
@@ -170,12 +166,12 @@ fn mutate_and_parse(bytes: &[u8], format: Format, name: &str, truncations: usize
 }
 
 // ---------------------------------------------------------------------------------------
-// The shared real models
+// The real test models
 
 #[test]
 fn bunny_obj_loads_with_exact_counts() {
     let t = Instant::now();
-    let m = load_mesh(&shared("stanford-bunny.obj")).unwrap();
+    let m = load_mesh(&model("bunny.obj")).unwrap();
     eprintln!("bunny: {:?}", t.elapsed());
     assert_eq!(m.triangles.len(), 69_451);
     // The file has 35,947 vertices, 1,113 of which no face uses; de-indexing keeps the
@@ -194,7 +190,7 @@ fn bunny_obj_loads_with_exact_counts() {
 #[test]
 fn teapot_and_cow_obj_load() {
     for (name, faces) in [("teapot.obj", 6_320), ("cow.obj", 5_804)] {
-        let m = mesh_of(load_model(&shared(name)).unwrap());
+        let m = mesh_of(load_model(&model(name)).unwrap());
         assert_mesh_invariants(&m);
         assert!(
             m.triangles.len() >= faces,
@@ -204,12 +200,12 @@ fn teapot_and_cow_obj_load() {
     }
 }
 
-/// Differential test: our OBJ reader against `tobj` on the shared models (same triangles,
+/// Differential test: our OBJ reader against `tobj` on the test models (same triangles,
 /// same corner positions).
 #[test]
 fn obj_reader_agrees_with_tobj() {
-    for name in ["stanford-bunny.obj", "teapot.obj", "cow.obj"] {
-        let path = shared(name);
+    for name in ["bunny.obj", "teapot.obj", "cow.obj"] {
+        let path = model(name);
         let ours = load_mesh(&path).unwrap();
         let options = tobj::LoadOptions {
             triangulate: true,
@@ -246,7 +242,7 @@ fn obj_reader_agrees_with_tobj() {
 #[test]
 fn igea_ply_tristrips_load() {
     let t = Instant::now();
-    let m = load_mesh(&shared("igea.ply")).unwrap();
+    let m = load_mesh(&model("igea.ply")).unwrap();
     eprintln!("igea: {:?}, {} triangles", t.elapsed(), m.triangles.len());
     assert_eq!(m.positions.len(), 134_345);
     assert_mesh_invariants(&m);
@@ -282,7 +278,7 @@ fn igea_ply_tristrips_load() {
 #[test]
 fn vox_reader_agrees_with_dot_vox() {
     for name in ["chr_knight.vox", "T-Rex.vox", "monu1.vox"] {
-        let path = shared(name);
+        let path = model(name);
         let data = dot_vox::load(path.to_str().unwrap()).unwrap();
         for (k, model) in data.models.iter().enumerate() {
             let ours = load_vox_model(&path, k).unwrap();
@@ -321,8 +317,8 @@ fn vox_reader_agrees_with_dot_vox() {
 #[test]
 fn vox_shared_models_load_whole() {
     // T-Rex: 8 animation frames, no scene graph: all frames at their own origin.
-    let trex = voxels_of(load_model(&shared("T-Rex.vox")).unwrap());
-    let frame0 = load_vox_model(&shared("T-Rex.vox"), 0).unwrap();
+    let trex = voxels_of(load_model(&model("T-Rex.vox")).unwrap());
+    let frame0 = load_vox_model(&model("T-Rex.vox"), 0).unwrap();
     assert!(trex.voxels.len() >= frame0.voxels.len());
     let (lo, hi) = voxel_bounds(&trex);
     assert!(
@@ -331,7 +327,7 @@ fn vox_shared_models_load_whole() {
     );
 
     for name in ["chr_knight.vox", "monu1.vox"] {
-        let v = voxels_of(load_model(&shared(name)).unwrap());
+        let v = voxels_of(load_model(&model(name)).unwrap());
         assert_eq!(v.voxels.len(), v.colors.len());
         let (lo, hi) = voxel_bounds(&v);
         assert!(
@@ -339,7 +335,7 @@ fn vox_shared_models_load_whole() {
             "{name} bounds {lo:?} {hi:?}"
         );
         // Y-up: the Z extent of MagicaVoxel becomes the Y extent.
-        let data = dot_vox::load(shared(name).to_str().unwrap()).unwrap();
+        let data = dot_vox::load(model(name).to_str().unwrap()).unwrap();
         let size = data.models[0].size;
         assert!(hi[1] - lo[1] < size.z as i32 && hi[2] - lo[2] < size.y as i32);
         let mut unique = v.voxels.clone();
@@ -385,11 +381,11 @@ fn truncated_and_flipped_real_models_never_panic() {
         ("cow.obj", Format::Obj, 60, 60),
         ("igea.ply", Format::Ply, 12, 12),
     ] {
-        let bytes = std::fs::read(shared(name)).unwrap();
+        let bytes = std::fs::read(model(name)).unwrap();
         mutate_and_parse(&bytes, format, name, truncations, flips);
     }
     // The PLY header and the first vertices, cut and flipped densely.
-    let igea = std::fs::read(shared("igea.ply")).unwrap();
+    let igea = std::fs::read(model("igea.ply")).unwrap();
     let mut head = igea[..4096].to_vec();
     // Keep it consistent: declare as many vertices as the 4096 bytes can hold, no strips.
     let text = String::from_utf8_lossy(&head[..200]).into_owned();

@@ -1,4 +1,4 @@
-//! End-to-end preparation of the real models in `shared/models`: load → voxelize → LOD
+//! End-to-end preparation of the real models in `assets/models`: load → voxelize → LOD
 //! chain → point clouds, lookups, proxies → cache round trip.
 
 use std::path::PathBuf;
@@ -13,7 +13,7 @@ use ssbvb_voxel::svo::{Svo, morton_encode};
 use ssbvb_voxel::voxelize::{mesh_object_space, voxel_model_object_space};
 
 const MODELS: [&str; 7] = [
-    "stanford-bunny.obj",
+    "bunny.obj",
     "teapot.obj",
     "cow.obj",
     "igea.ply",
@@ -22,16 +22,13 @@ const MODELS: [&str; 7] = [
     "monu1.vox",
 ];
 
-/// The shared models folder. Its absence is a failure: these tests are the only ones that
-/// run the whole preparation on real data.
+/// The repository's test models (`assets/models`). Their absence is a failure: these tests
+/// are the only ones that run the whole preparation on real data.
 fn models_dir() -> PathBuf {
-    let dir = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/models"
-    ));
+    let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/models"));
     assert!(
         dir.is_dir(),
-        "shared models folder missing: {}",
+        "test models folder missing: {}",
         dir.display()
     );
     dir
@@ -108,7 +105,7 @@ fn every_shared_model_prepares_at_level_7() {
     let dir = models_dir();
     for name in MODELS {
         let path = dir.join(name);
-        assert!(path.is_file(), "shared model missing: {}", path.display());
+        assert!(path.is_file(), "test model missing: {}", path.display());
         let model = load_model(&path).unwrap_or_else(|e| panic!("{e}"));
         let (asset, stats) =
             prepare_asset(&model, 7, &NoProgress).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -132,7 +129,7 @@ fn every_shared_model_prepares_at_level_7() {
 
 #[test]
 fn bunny_surface_is_where_the_mesh_is() {
-    let path = models_dir().join("stanford-bunny.obj");
+    let path = models_dir().join("bunny.obj");
     let Model::Mesh(mesh) = load_model(&path).unwrap() else {
         panic!("bunny is a mesh")
     };

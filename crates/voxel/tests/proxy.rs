@@ -250,7 +250,7 @@ fn every_ray_that_hits_a_voxel_crosses_the_proxy_first() {
     }
 }
 
-/// The shared test models: every model, prepared at level 6 (the bunny also at 7): each
+/// The test models (`assets/models`): every model, prepared at level 6 (the bunny also at 7): each
 /// level's proxy (as `prepare_asset` stored it) is closed and encloses every voxel, and
 /// reference rays that hit a voxel cross it first.
 #[test]
@@ -259,11 +259,8 @@ fn shared_models_proxies_enclose_every_voxel() {
     use ssbvb_voxel::prepare::prepare_asset;
     use ssbvb_voxel::progress::NoProgress;
 
-    let dir = std::path::Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/models"
-    ));
-    assert!(dir.is_dir(), "shared models missing at {}", dir.display());
+    let dir = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/models"));
+    assert!(dir.is_dir(), "test models missing at {}", dir.display());
     let mut names: Vec<_> = std::fs::read_dir(dir)
         .unwrap()
         .filter_map(|e| e.ok())
@@ -278,7 +275,7 @@ fn shared_models_proxies_enclose_every_voxel() {
     names.sort();
     assert!(
         names.len() >= 5,
-        "expected the shared models, found {names:?}"
+        "expected the test models, found {names:?}"
     );
     for path in names {
         let name = path.file_name().unwrap().to_string_lossy().to_string();

@@ -1,4 +1,4 @@
-//! Every shared model through the whole SSBVB pipeline, against the CPU reference, from
+//! Every test model (`assets/models`) through the whole SSBVB pipeline, against the CPU reference, from
 //! several cameras: coverage IoU, same voxel, depth error in voxels, normal error.
 //!
 //! Tolerances: RayBox billboards intersect the voxel box exactly, so coverage IoU must be
@@ -17,7 +17,7 @@ const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
 const SIZE: (u32, u32) = (120, 90);
 
 const MODELS: &[(&str, u32)] = &[
-    ("stanford-bunny.obj", 6),
+    ("bunny.obj", 6),
     ("teapot.obj", 6),
     ("cow.obj", 6),
     ("igea.ply", 6),

@@ -405,7 +405,7 @@ pub(crate) const SIZE: (u32, u32) = (160, 120);
 /// Level 6 (64 cells over 2 world units): at distance ~3 with a 45° field of view and 120
 /// rows a cell spans ~1.5 pixels.
 pub(crate) const LEVEL: u32 = 6;
-pub(crate) const BUNNY: &str = "stanford-bunny.obj";
+pub(crate) const BUNNY: &str = "bunny.obj";
 pub(crate) const VOX: &str = "chr_knight.vox";
 
 pub(crate) fn cameras() -> Vec<(&'static str, Camera)> {

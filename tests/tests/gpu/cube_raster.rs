@@ -3,7 +3,7 @@
 //! ray hits a voxel (up to the rasterizer's sub-pixel snapping at cube edges), and the
 //! fragment's ray–face intersection gives the reference's depth, so coverage IoU must be
 //! ≥ 0.995, the same-voxel rate ≥ 0.99 and the depth error tiny (see [`assert_accurate`]):
-//! on the bunny at several LODs, on every shared model, with two objects at different
+//! on the bunny at several LODs, on every test model, with two objects at different
 //! levels (one rotated and scaled), and far from the world origin. Merged and unmerged
 //! cube lists must give the same G-buffer, and merged lists must cover every model's
 //! voxels exactly. Every render fails on a wgpu validation error (`ssbvb_tests::render`).
@@ -136,7 +136,7 @@ fn compare(scene: &Scene, cam: &Camera, pipeline: &str, what: &str) -> AccuracyR
     r
 }
 
-/// Tolerances, measured on lavapipe (bunny LOD 5–7 and every shared model, three cameras
+/// Tolerances, measured on lavapipe (bunny LOD 5–7 and every test model, three cameras
 /// each, the two-object scene and the far-away bunny), then given a margin:
 /// - coverage IoU, measured ≥ 0.9986 → 0.995, and same-voxel rate, measured ≥ 0.9963 →
 ///   0.99: the rasterizer snaps vertices to its sub-pixel grid (8 bits on lavapipe), so a
@@ -162,7 +162,7 @@ fn assert_accurate(r: &AccuracyReport, what: &str) {
 
 #[test]
 fn cube_raster_matches_the_reference_on_the_bunny_at_several_lods() {
-    let asset = ssbvb_tests::model_asset("stanford-bunny.obj", 7);
+    let asset = ssbvb_tests::model_asset("bunny.obj", 7);
     for level in [5, 6, 7] {
         for (ci, cam) in cameras().iter().enumerate() {
             let scene = ssbvb_tests::single_object_scene(asset.clone(), level);
@@ -175,7 +175,7 @@ fn cube_raster_matches_the_reference_on_the_bunny_at_several_lods() {
 
 #[test]
 fn cube_raster_draws_two_objects_at_different_levels() {
-    let bunny = ssbvb_tests::model_asset("stanford-bunny.obj", 6);
+    let bunny = ssbvb_tests::model_asset("bunny.obj", 6);
     let knight = ssbvb_tests::model_asset("chr_knight.vox", 5);
     let scene = Scene {
         objects: vec![
@@ -224,7 +224,7 @@ fn cube_raster_draws_two_objects_at_different_levels() {
 fn merged_and_unmerged_cubes_give_the_same_gbuffer() {
     // Level 7 of the bunny has full 2³ nodes where the shell is thick; the merged list is
     // smaller, the image must not change.
-    let asset = ssbvb_tests::model_asset("stanford-bunny.obj", 7);
+    let asset = ssbvb_tests::model_asset("bunny.obj", 7);
     let level = 7;
     let merged = CubeList::from_lod(&asset.lods[level as usize], true).unwrap();
     let unmerged = CubeList::from_lod(&asset.lods[level as usize], false).unwrap();
@@ -278,9 +278,9 @@ fn merged_and_unmerged_cubes_give_the_same_gbuffer() {
     }
 }
 
-/// The shared models (as in `all_models.rs`) at their levels.
+/// The test models (as in `all_models.rs`) at their levels.
 const MODELS: &[(&str, u32)] = &[
-    ("stanford-bunny.obj", 6),
+    ("bunny.obj", 6),
     ("teapot.obj", 6),
     ("cow.obj", 6),
     ("igea.ply", 6),
@@ -347,7 +347,7 @@ fn cube_raster_matches_the_reference_on_every_shared_model() {
 #[test]
 fn cube_raster_is_accurate_far_from_the_world_origin() {
     // Camera-relative transforms keep f32 precision for an object at 1e7 world units.
-    let asset = ssbvb_tests::model_asset("stanford-bunny.obj", 6);
+    let asset = ssbvb_tests::model_asset("bunny.obj", 6);
     let at = DVec3::new(1e7, -3e6, 2e6);
     let scene = Scene {
         objects: vec![VoxelObject {

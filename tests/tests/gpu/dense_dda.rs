@@ -27,7 +27,7 @@ fn cameras() -> Vec<Camera> {
 
 #[test]
 fn dense_dda_matches_the_reference() {
-    for (file, level) in [("stanford-bunny.obj", 6), ("chr_knight.vox", 5)] {
+    for (file, level) in [("bunny.obj", 6), ("chr_knight.vox", 5)] {
         let asset = ssbvb_tests::model_asset(file, level);
         let cell = 2.0 / (1u64 << level) as f64;
         for (ci, cam) in cameras().iter().enumerate() {
@@ -102,7 +102,7 @@ fn one_voxel_lod(level: u32) -> LodLevel {
 #[test]
 fn dense_dda_refuses_levels_above_8() {
     // The bunny's levels 0..=6, then single-voxel levels 7..=9 (cheap to build).
-    let mut asset = (*ssbvb_tests::model_asset("stanford-bunny.obj", 6)).clone();
+    let mut asset = (*ssbvb_tests::model_asset("bunny.obj", 6)).clone();
     for level in 7..=MAX_DENSE_LEVEL + 1 {
         asset.lods.push(one_voxel_lod(level));
     }

@@ -85,8 +85,7 @@ fn voxel_layer_composes_onto_the_callers_frame() {
             | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC,
     );
-    let scene =
-        ssbvb_tests::single_object_scene(ssbvb_tests::model_asset("stanford-bunny.obj", 6), 6);
+    let scene = ssbvb_tests::single_object_scene(ssbvb_tests::model_asset("bunny.obj", 6), 6);
     let cam = Camera::new(DVec3::new(1.8, 1.0, 2.4), DVec3::ZERO);
     let reference = ssbvb_tests::reference_of(&scene, &cam, SIZE);
     let mut layer = VoxelLayer::new(
@@ -147,8 +146,7 @@ fn voxel_layer_composes_onto_the_callers_frame() {
 #[test]
 fn imported_targets_of_the_wrong_size_or_format_are_refused() {
     let c = ssbvb_tests::ctx();
-    let scene =
-        ssbvb_tests::single_object_scene(ssbvb_tests::model_asset("stanford-bunny.obj", 6), 6);
+    let scene = ssbvb_tests::single_object_scene(ssbvb_tests::model_asset("bunny.obj", 6), 6);
     let color = target(
         c,
         wgpu::TextureFormat::Rgba8Unorm,

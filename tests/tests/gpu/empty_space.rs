@@ -127,7 +127,7 @@ fn distance_to_ray(camera: &Camera, size: (u32, u32), x: u32, y: u32, p: DVec3) 
 #[test]
 fn entry_covers_every_reference_hit_and_lies_on_the_proxy_and_the_ray() {
     let level = 6;
-    let scene = single_object_scene(model_asset("stanford-bunny.obj", level), level);
+    let scene = single_object_scene(model_asset("bunny.obj", level), level);
     let size = (160, 120);
     let asset = scene.objects[0].asset.clone();
     let lookup = &asset.lods[level as usize].lookup;

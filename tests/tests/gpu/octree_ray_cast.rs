@@ -79,7 +79,7 @@ fn check(file: &str, asset_level: u32, level: u32) {
 
 #[test]
 fn octree_ray_cast_matches_the_reference() {
-    for (file, level) in [("stanford-bunny.obj", 6), ("chr_knight.vox", 5)] {
+    for (file, level) in [("bunny.obj", 6), ("chr_knight.vox", 5)] {
         check(file, level, level);
     }
 }
@@ -87,12 +87,12 @@ fn octree_ray_cast_matches_the_reference() {
 #[test]
 fn octree_ray_cast_matches_the_reference_at_a_coarser_lod() {
     // The level-6 bunny rendered at LOD 4: the hits are inner nodes of the octree.
-    check("stanford-bunny.obj", 6, 4);
+    check("bunny.obj", 6, 4);
 }
 
 #[test]
 fn octree_ray_cast_refuses_two_visible_objects() {
-    let asset = ssbvb_tests::model_asset("stanford-bunny.obj", 6);
+    let asset = ssbvb_tests::model_asset("bunny.obj", 6);
     let object = |x: f64| VoxelObject {
         asset: asset.clone(),
         instances: vec![DAffine3::from_translation(DVec3::new(x, 0.0, 0.0))],

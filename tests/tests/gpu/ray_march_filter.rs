@@ -230,7 +230,7 @@ fn check_against_reference(
 }
 
 fn bunny(level: u32) -> Scene {
-    single_object_scene(model_asset("stanford-bunny.obj", level), level)
+    single_object_scene(model_asset("bunny.obj", level), level)
 }
 
 #[test]
@@ -416,7 +416,7 @@ fn slot_image(run: &FilterRun, pixels: usize) -> Vec<Option<PixelSlot>> {
 fn many_instances_resolve_like_separate_objects_and_the_reference() {
     // A 3 × 3 grid of rotated, scaled copies whose boxes overlap (so a pixel's nearest
     // proxy is often not the instance that holds its nearest voxel).
-    let asset = model_asset("stanford-bunny.obj", 5);
+    let asset = model_asset("bunny.obj", 5);
     let mut xfs = Vec::new();
     for j in 0..3 {
         for i in 0..3 {

@@ -10,10 +10,8 @@ const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
 const SIZE: (u32, u32) = (160, 120);
 
 fn scene(level: u32) -> ssbvb_passes::Scene {
-    let mut s = ssbvb_tests::single_object_scene(
-        ssbvb_tests::model_asset("stanford-bunny.obj", level),
-        level,
-    );
+    let mut s =
+        ssbvb_tests::single_object_scene(ssbvb_tests::model_asset("bunny.obj", level), level);
     s.triangles.push(TriangleObject::ground_plane(
         DVec3::new(0.0, -0.6, 0.0),
         3.0,

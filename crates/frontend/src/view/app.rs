@@ -182,7 +182,12 @@ impl Viewer {
                 "cannot create a window: {e}"
             )))
         })?);
-        let gpu = WindowGpu::new(window.clone(), event_loop.owned_display_handle())?;
+        let requirements = crate::adapter_cmd::requirements_of(&[loaded.watcher.current()]);
+        let gpu = WindowGpu::new(
+            window.clone(),
+            event_loop.owned_display_handle(),
+            &requirements,
+        )?;
         let ctx = &gpu.ctx;
         let blit = Blit::new(ctx, gpu.config.format)?;
         let scene = GpuScene::new(ctx, loaded.scene).context("uploading the scene")?;

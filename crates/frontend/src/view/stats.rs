@@ -125,6 +125,7 @@ mod tests {
             driver: String::new(),
             is_software,
             timestamps,
+            fallbacks: Vec::new(),
         }
     }
 

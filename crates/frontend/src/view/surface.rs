@@ -6,7 +6,7 @@
 use std::sync::Arc;
 
 use anyhow::{Context, Result, anyhow};
-use ssbvb_gpu::{AdapterChoice, GpuContext, wgpu};
+use ssbvb_gpu::{AdapterChoice, GpuContext, Requirements, wgpu};
 use winit::window::Window;
 
 /// A device and the window's surface.
@@ -19,47 +19,14 @@ pub struct WindowGpu {
     pub config: wgpu::SurfaceConfiguration,
 }
 
-/// Preference order among adapters that can present: real GPUs first, software last;
-/// Vulkan before the others and GL last (as `GpuContext::new_headless` does).
-fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
-    let ty = match info.device_type {
-        wgpu::DeviceType::DiscreteGpu => 0,
-        wgpu::DeviceType::IntegratedGpu => 1,
-        wgpu::DeviceType::VirtualGpu => 2,
-        wgpu::DeviceType::Other => 3,
-        wgpu::DeviceType::Cpu => 4,
-    };
-    let backend = match info.backend {
-        wgpu::Backend::Vulkan => 0,
-        wgpu::Backend::Metal | wgpu::Backend::Dx12 => 1,
-        wgpu::Backend::Gl => 3,
-        _ => 2,
-    };
-    (ty, backend)
-}
-
-fn matches_choice(info: &wgpu::AdapterInfo, choice: &AdapterChoice) -> bool {
-    let software = info.device_type == wgpu::DeviceType::Cpu
-        || ["llvmpipe", "lavapipe", "swiftshader", "warp", "software"]
-            .iter()
-            .any(|s| info.name.to_ascii_lowercase().contains(s));
-    match choice {
-        AdapterChoice::Auto => true,
-        AdapterChoice::Hardware => !software,
-        AdapterChoice::Software => software,
-        AdapterChoice::Named(n) => info
-            .name
-            .to_ascii_lowercase()
-            .contains(&n.to_ascii_lowercase()),
-    }
-}
-
 impl WindowGpu {
-    /// Creates the surface of `window` and a device that can present to it. `display` is
-    /// the event loop's display connection (GL on Wayland needs it at instance creation).
+    /// Creates the surface of `window` and a device that can present to it and has what
+    /// `requirements` (the pipeline's) asks. `display` is the event loop's display
+    /// connection (GL on Wayland needs it at instance creation).
     pub fn new(
         window: Arc<Window>,
         display: winit::event_loop::OwnedDisplayHandle,
+        requirements: &Requirements,
     ) -> Result<Self> {
         let mut desc = wgpu::InstanceDescriptor::new_with_display_handle(Box::new(display));
         desc.backends = wgpu::Backends::VULKAN
@@ -83,22 +50,48 @@ impl WindowGpu {
             .iter()
             .map(|a| format!("{} [{:?}]", a.get_info().name, a.get_info().backend))
             .collect();
-        adapters
-            .retain(|a| a.is_surface_supported(&surface) && matches_choice(&a.get_info(), &choice));
-        adapters.sort_by_key(|a| rank(&a.get_info()));
-        let adapter = adapters.into_iter().next().ok_or_else(|| {
+        adapters.retain(|a| a.is_surface_supported(&surface) && choice.allows(&a.get_info()));
+        adapters.sort_by_key(|a| ssbvb_gpu::rank(&a.get_info()));
+        let mut refused = Vec::new();
+        let mut chosen = None;
+        for a in adapters {
+            let verdict = requirements.check(&a);
+            let info = a.get_info();
+            if verdict.fits() {
+                chosen = Some((a, verdict));
+                break;
+            }
+            log::info!(
+                "adapter {} [{:?}] skipped: {}",
+                info.name,
+                info.backend,
+                verdict.missing.join("; ")
+            );
+            refused.push(format!(
+                "{} [{:?}] lacks: {}",
+                info.name,
+                info.backend,
+                verdict.missing.join("; ")
+            ));
+        }
+        let (adapter, verdict) = chosen.ok_or_else(|| {
             anyhow!(
-                "no GPU adapter can present to the window (backends {backends:?}, \
-                 SSBVB_ADAPTER {choice:?}, adapters seen: {}); {}",
+                "no GPU adapter can present to the window and run the pipeline (backends \
+                 {backends:?}, SSBVB_ADAPTER {choice:?}, adapters seen: {}{}); {}",
                 if seen.is_empty() {
                     "none".into()
                 } else {
                     seen.join(", ")
                 },
+                if refused.is_empty() {
+                    String::new()
+                } else {
+                    format!("; {}", refused.join(" | "))
+                },
                 ssbvb_gpu::NO_ADAPTER_HINT
             )
         })?;
-        let ctx = GpuContext::from_adapter(instance, adapter)?;
+        let ctx = GpuContext::from_adapter(instance, adapter, verdict.fallback_notes())?;
         let caps = surface.get_capabilities(&ctx.adapter);
         // An sRGB format when there is one (hardware encoding); the blit shader and egui
         // encode themselves otherwise.

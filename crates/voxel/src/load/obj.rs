@@ -5,7 +5,7 @@
 //! re-implement the parser anyway), it panics on some malformed inputs (an MTL `Kd` with
 //! fewer than three numbers hits an `unwrap`; `f 1/0/1` overflows `vt * 2 + 1` in debug
 //! builds), and de-indexing needs the corner triples it does not expose. The test suite
-//! cross-checks this reader against `tobj` on the shared models.
+//! cross-checks this reader against `tobj` on the test models.
 //!
 //! Supported: `v x y z [w]` and the common `v x y z r g b [a]` vertex-colour extension,
 //! `vt`, `vn`, `f`/`fo` with `v`, `v/vt`, `v//vn`, `v/vt/vn` corners and negative

@@ -3,7 +3,7 @@
 //! Hand-written rather than `dot_vox` because `dot_vox` 5 recurses once per nested chunk
 //! (a small crafted file overflows the stack, which no error handling can catch), drops
 //! scene-graph node ids (it assumes they equal the chunk order), and reports no byte
-//! offsets. The test suite cross-checks this reader against `dot_vox` on the shared
+//! offsets. The test suite cross-checks this reader against `dot_vox` on the test
 //! models.
 //!
 //! # Placement (what MagicaVoxel does)
