@@ -1,6 +1,6 @@
 //#include "common.inc.wgsl"
 
-// empty_space: the empty-space prepass (ARCHITECTURE.md, "The SSBVB algorithm", step 2).
+// empty_space: the empty-space prepass (docs/architecture.md, "A frame", step 1).
 //
 // Rasterizes the proxy mesh of every visible instance (vertex buffer: object-space
 // `vec4<f32>` positions; `instance_index` = index into `instances`) into

@@ -1,6 +1,6 @@
 //#include "common.inc.wgsl"
 
-// ray_march_filter: the voxel filter (ARCHITECTURE.md, "The SSBVB algorithm", step 3).
+// ray_march_filter: the voxel filter (docs/architecture.md, "A frame", step 2).
 //
 // One thread per pixel. From the empty-space prepass's entry point it marches the sparse
 // lookup of the pixel's instance with a hierarchical voxel DDA to the first voxel, and

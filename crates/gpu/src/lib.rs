@@ -226,6 +226,31 @@ fn headless_instance() -> (wgpu::Instance, wgpu::Backends) {
     (wgpu::Instance::new(desc), backends)
 }
 
+/// The first of `adapters` (best first) that has what `req` asks, with its verdict; else
+/// one line per adapter saying what it lacks. Skipped adapters are logged at info level.
+pub fn first_fitting(
+    adapters: Vec<wgpu::Adapter>,
+    req: &Requirements,
+) -> Result<(wgpu::Adapter, Verdict), Vec<String>> {
+    let mut refused = Vec::new();
+    for adapter in adapters {
+        let verdict = req.check(&adapter);
+        if verdict.fits() {
+            return Ok((adapter, verdict));
+        }
+        let info = adapter.get_info();
+        let line = format!(
+            "{} [{:?}] lacks: {}",
+            info.name,
+            info.backend,
+            verdict.missing.join("; ")
+        );
+        log::info!("adapter skipped: {line}");
+        refused.push(line);
+    }
+    Err(refused)
+}
+
 /// Rank of an adapter for `Auto`: lower is better. Public for the viewer, which ranks the
 /// adapters that can present to its window the same way.
 pub fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
@@ -284,30 +309,15 @@ impl GpuContext {
         let Some(req) = &options.requirements else {
             return Self::from_adapter(instance, adapters.swap_remove(0), Vec::new());
         };
-        let mut refused = Vec::new();
-        for adapter in adapters {
-            let info = adapter.get_info();
-            let verdict = req.check(&adapter);
-            if verdict.fits() {
-                return Self::from_adapter(instance, adapter, verdict.fallback_notes());
+        match first_fitting(adapters, req) {
+            Ok((adapter, verdict)) => {
+                Self::from_adapter(instance, adapter, verdict.fallback_notes())
             }
-            log::info!(
-                "adapter {} [{:?}] skipped: {}",
-                info.name,
-                info.backend,
-                verdict.missing.join("; ")
-            );
-            refused.push(format!(
-                "{} [{:?}] lacks: {}",
-                info.name,
-                info.backend,
-                verdict.missing.join("; ")
-            ));
+            Err(refused) => Err(GpuError::NoSuitableAdapter {
+                details: refused.join(" | "),
+                hint: NO_ADAPTER_HINT.to_string(),
+            }),
         }
-        Err(GpuError::NoSuitableAdapter {
-            details: refused.join(" | "),
-            hint: NO_ADAPTER_HINT.to_string(),
-        })
     }
 
     /// Every adapter the headless instance sees, best first, each with its verdict on

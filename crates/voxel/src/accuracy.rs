@@ -1,4 +1,4 @@
-//! Accuracy of a GPU technique against the CPU reference (`ARCHITECTURE.md`, "Accuracy:
+//! Accuracy of a GPU technique against the CPU reference (`docs/architecture.md`, "Accuracy:
 //! the CPU reference").
 //!
 //! A technique reports, per pixel, the voxel it shows ([`GpuHit`]: instance, cell, ray

@@ -1,6 +1,6 @@
 //! `ssbvb-voxel`: everything the renderer consumes, built on the CPU (no wgpu here).
 //!
-//! Pipeline of the preparation stage (see `ARCHITECTURE.md`, "Preparation"):
+//! Pipeline of the preparation stage (see `docs/architecture.md`, "Preparation"):
 //! load a model ([`load`]) → fit it into object space [-1, 1]³ ([`model::ObjectSpace`]) →
 //! voxelize it on a 2^L grid ([`voxelize`]) → sparse voxel octree whose every level is a
 //! LOD ([`svo`]) → per LOD a packed point cloud ([`point_cloud`]) and a sparse lookup of

@@ -1,4 +1,4 @@
-//! Conservative proxy meshes (`ARCHITECTURE.md`, "The SSBVB algorithm", step 6).
+//! Conservative proxy meshes (`docs/architecture.md`, "Preparation").
 //!
 //! The empty-space prepass rasterizes the proxy to find where each pixel's ray enters the
 //! object. A proxy that misses any part of any voxel makes holes, so the proxy here is the

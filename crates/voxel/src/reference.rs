@@ -1,5 +1,5 @@
 //! The exact CPU reference ray caster: the ground truth every GPU technique is measured
-//! against (`ARCHITECTURE.md`, "Accuracy: the CPU reference").
+//! against (`docs/architecture.md`, "Accuracy: the CPU reference").
 //!
 //! For every pixel centre ([`Camera::ray`]) the world ray is taken into each instance's
 //! object space in f64 and traced through the instance's sparse lookup with an exact voxel

@@ -52,45 +52,24 @@ impl WindowGpu {
             .collect();
         adapters.retain(|a| a.is_surface_supported(&surface) && choice.allows(&a.get_info()));
         adapters.sort_by_key(|a| ssbvb_gpu::rank(&a.get_info()));
-        let mut refused = Vec::new();
-        let mut chosen = None;
-        for a in adapters {
-            let verdict = requirements.check(&a);
-            let info = a.get_info();
-            if verdict.fits() {
-                chosen = Some((a, verdict));
-                break;
-            }
-            log::info!(
-                "adapter {} [{:?}] skipped: {}",
-                info.name,
-                info.backend,
-                verdict.missing.join("; ")
-            );
-            refused.push(format!(
-                "{} [{:?}] lacks: {}",
-                info.name,
-                info.backend,
-                verdict.missing.join("; ")
-            ));
-        }
-        let (adapter, verdict) = chosen.ok_or_else(|| {
-            anyhow!(
-                "no GPU adapter can present to the window and run the pipeline (backends \
+        let (adapter, verdict) =
+            ssbvb_gpu::first_fitting(adapters, requirements).map_err(|refused| {
+                anyhow!(
+                    "no GPU adapter can present to the window and run the pipeline (backends \
                  {backends:?}, SSBVB_ADAPTER {choice:?}, adapters seen: {}{}); {}",
-                if seen.is_empty() {
-                    "none".into()
-                } else {
-                    seen.join(", ")
-                },
-                if refused.is_empty() {
-                    String::new()
-                } else {
-                    format!("; {}", refused.join(" | "))
-                },
-                ssbvb_gpu::NO_ADAPTER_HINT
-            )
-        })?;
+                    if seen.is_empty() {
+                        "none".into()
+                    } else {
+                        seen.join(", ")
+                    },
+                    if refused.is_empty() {
+                        String::new()
+                    } else {
+                        format!("; {}", refused.join(" | "))
+                    },
+                    ssbvb_gpu::NO_ADAPTER_HINT
+                )
+            })?;
         let ctx = GpuContext::from_adapter(instance, adapter, verdict.fallback_notes())?;
         let caps = surface.get_capabilities(&ctx.adapter);
         // An sRGB format when there is one (hardware encoding); the blit shader and egui
