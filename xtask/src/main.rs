@@ -13,7 +13,8 @@ const USAGE: &str = "usage:
   cargo xtask validate-shaders [--dir DIR]   parse and validate every .wgsl under shaders/ (or DIR)
   cargo xtask test [CARGO TEST ARGS]         make sure a GPU adapter exists, check formatting, check that
                                              no tracked file refers outside the repository, validate
-                                             shaders, run clippy (-D warnings) and all workspace tests";
+                                             shaders, run clippy (-D warnings), build the docs (warnings
+                                             denied) and run all workspace tests";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -188,6 +189,19 @@ fn test(extra: &[String]) -> Result<bool> {
         "-D",
         "warnings",
     ])? {
+        return Ok(false);
+    }
+    // Docs that cannot rot: broken intra-doc links and malformed docs fail the run.
+    eprintln!("xtask: cargo doc --workspace --no-deps (RUSTDOCFLAGS=-D warnings)");
+    let doc_ok = Command::new(&cargo)
+        .current_dir(&root)
+        .args(["doc", "--workspace", "--no-deps", "--quiet"])
+        .env("RUSTDOCFLAGS", "-D warnings")
+        .status()
+        .context("running cargo doc")?
+        .success();
+    if !doc_ok {
+        eprintln!("xtask: the documentation has warnings; see above");
         return Ok(false);
     }
     let mut cmd = Command::new(&cargo);

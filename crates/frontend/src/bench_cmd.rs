@@ -44,7 +44,7 @@ pub struct BenchArgs {
     pub json: bool,
     /// Also sweep the knobs of the default SSBVB pipeline one at a time (ray-march
     /// max_steps, billboard size_scale, smoothing max_i, LOD bias) and write sweeps.csv
-    /// and trade_<knob>.png; always on with `--preset full`.
+    /// and `trade_<knob>.png`; always on with `--preset full`.
     #[arg(long)]
     pub sweep: bool,
     /// Levels to run instead of the preset's (comma-separated, e.g. `3,4,5`).
@@ -697,7 +697,7 @@ fn sweep_config(preset: Preset) -> SweepConfig {
     }
 }
 
-/// time_vs_level.png, time_vs_resolution.png (main matrix) and trade_<knob>.png (sweeps).
+/// time_vs_level.png, time_vs_resolution.png (main matrix) and `trade_<knob>.png` (sweeps).
 fn write_plots(dir: &Path, rows: &[Row], sweeps: &[SweepRow]) -> Result<Vec<PlotInfo>> {
     use std::collections::BTreeMap;
     let mut plots = Vec::new();

@@ -3,9 +3,9 @@
 //! Pipeline of the preparation stage (see `docs/architecture.md`, "Preparation"):
 //! load a model ([`load`]) → fit it into object space [-1, 1]³ ([`model::ObjectSpace`]) →
 //! voxelize it on a 2^L grid ([`voxelize`]) → sparse voxel octree whose every level is a
-//! LOD ([`svo`]) → per LOD a packed point cloud ([`point_cloud`]) and a sparse lookup of
-//! 16³ pages ([`sparse_lookup`]) → a conservative proxy mesh ([`proxy`]). The exact CPU
-//! reference ray caster ([`reference`]) is the ground truth every GPU technique is
+//! LOD ([`svo`]) → per LOD a packed point cloud ([`asset::PointCloud`]) and a sparse lookup
+//! of 16³ pages ([`asset::SparseLookup`]) → a conservative proxy mesh ([`proxy`]). The exact CPU
+//! reference ray caster ([`mod@reference`]) is the ground truth every GPU technique is
 //! measured against; [`cache`] stores a prepared asset on disk. [`cube_list`] builds the
 //! instance data of the cube rasterization baseline.
 
