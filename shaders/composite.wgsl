@@ -1,4 +1,5 @@
 //#include "common.inc.wgsl"
+//#include "fullscreen.inc.wgsl"
 // Deferred composite: directional + ambient Blinn-Phong, the same formula as the CPU
 // reference (ssbvb-voxel shading::shade); pixels where nothing was drawn
 // are left alone (transparent black when the output is cleared).
@@ -11,20 +12,6 @@ override ENCODE_SRGB: bool = false;
 @group(1) @binding(1) var normal: texture_2d<f32>;
 // Camera-relative world position (xyz) and linear view depth (w).
 @group(1) @binding(2) var position: texture_2d<f32>;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4(uv * 2.0 - 1.0, 0.0, 1.0);
-}
-
-fn linear_to_srgb(x: f32) -> f32 {
-    let c = clamp(x, 0.0, 1.0);
-    if c <= 0.0031308 {
-        return c * 12.92;
-    }
-    return 1.055 * pow(c, 1.0 / 2.4) - 0.055;
-}
 
 @fragment
 fn fs_main(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {

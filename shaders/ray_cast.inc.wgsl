@@ -1,9 +1,11 @@
 // Shared by the ray-casting baselines (dense_dda.wgsl, octree_ray_cast.wgsl): the
-// G-buffer output with exact depth, the hit record, a fullscreen triangle, and the
+// G-buffer output with exact depth, the hit record, the fullscreen triangle, and the
 // per-plane crossing helpers that follow the CPU reference's conventions.
 // Needs common.inc.wgsl before it, and the including file must define
 // `fn trace(inst: Instance, dir_world: vec3<f32>, t_best: f32) -> Hit` (the technique);
 // `fs_main` below keeps the nearest hit over all visible instances.
+
+//#include "fullscreen.inc.wgsl"
 
 struct GBufferDepth {
     @location(0) albedo: vec4<f32>,
@@ -17,12 +19,6 @@ struct Hit {
     t: f32,
     id: u32,
     face: u32,
-}
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4(uv * 2.0 - 1.0, 0.0, 1.0);
 }
 
 fn ndc_depth(p: vec3<f32>) -> f32 {

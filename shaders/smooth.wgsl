@@ -1,4 +1,5 @@
 //#include "common.inc.wgsl"
+//#include "fullscreen.inc.wgsl"
 // Gaussian smoothing of voxel normals (the paper's step 5): a 3x3 Gaussian whose sample
 // offset I follows Eq. 1, I = max(0, min(MaxI / (Dist - MinDist)^2, MaxI)), with Dist the
 // distance from the camera reconstructed per pixel from depth with the inverse
@@ -17,12 +18,6 @@ override MIN_DIST: f32 = 0.5;
 @group(1) @binding(2) var normal_sampler: sampler;
 
 // Fullscreen triangle.
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4(uv * 2.0 - 1.0, 0.0, 1.0);
-}
-
 // Eq. 1 made total: at Dist = MinDist the quotient is infinite and below it the parabola
 // turns back up, so for every Dist <= MinDist (and NaN) the offset is MaxI, which is also
 // the limit of Eq. 1 from above. The result is always finite and in [0, MaxI].

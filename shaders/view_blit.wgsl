@@ -5,6 +5,8 @@
 // on resize), so pixels are copied 1:1 without filtering. Where the frame drew nothing
 // (alpha 0) a background colour shows through.
 
+//#include "fullscreen.inc.wgsl"
+
 // 1: the surface format is not sRGB, so encode linear -> sRGB here (sRGB surfaces encode in
 // hardware, and reading the Rgba8UnormSrgb source decodes in hardware).
 override ENCODE_SRGB: bool = false;
@@ -13,20 +15,6 @@ override ENCODE_SRGB: bool = false;
 const BACKGROUND: vec3<f32> = vec3<f32>(0.018, 0.022, 0.03);
 
 @group(0) @binding(0) var frame_color: texture_2d<f32>;
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4(uv * 2.0 - 1.0, 0.0, 1.0);
-}
-
-fn linear_to_srgb(x: f32) -> f32 {
-    let c = clamp(x, 0.0, 1.0);
-    if c <= 0.0031308 {
-        return c * 12.92;
-    }
-    return 1.055 * pow(c, 1.0 / 2.4) - 0.055;
-}
 
 @fragment
 fn fs_main(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {

@@ -50,12 +50,12 @@ use ssbvb_graph::{BillboardMode, PassKind, ResolvedPipeline, ScheduledPass};
 
 use crate::bindings::PassBindings;
 use crate::frame::Recorder;
+use crate::gbuffer::{begin_gbuffer_pass, gbuffer_depth_stencil, gbuffer_targets};
 use crate::gpu_scene::GpuScene;
-use crate::triangles::{begin_gbuffer_pass, gbuffer_depth_stencil, gbuffer_targets};
+use crate::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
 use crate::{PassError, PassNode, shaders};
 
-/// Stencil value of voxel pixels (`STENCIL_VOXEL` in common.inc.wgsl).
-pub const STENCIL_VOXEL: u32 = 1;
+pub use crate::gbuffer::STENCIL_VOXEL;
 
 /// Back-face culling threshold used by pipelines: below -1 no billboard is culled (see the
 /// module docs for why culling only removes visible voxels).
@@ -158,11 +158,7 @@ impl Billboards {
         let d = &ctx.device;
         let module = ctx.shader("billboards.wgsl", &shaders::source("billboards.wgsl")?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, &[]);
-        let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("billboards"),
-            bind_group_layouts: &[Some(&scene.layout), Some(&bindings.layout)],
-            immediate_size: 0,
-        });
+        let layout = pipeline_layout(d, "billboards", scene, Some(&bindings));
         let constants = [
             ("SIZE_SCALE", options.size_scale as f64),
             ("CULL_COS", options.cull_cos as f64),
@@ -172,37 +168,16 @@ impl Billboards {
             ),
         ];
         let targets = gbuffer_targets(ctx, pipeline, pass);
-        let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(&pass.name),
-            layout: Some(&pl),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &constants,
-                    ..Default::default()
-                },
-                buffers: &[],
+        // Quads face the camera; culling by the voxel normal happens in the vertex shader.
+        let pipeline = render_pipeline(
+            d,
+            &RenderSpec {
+                fs_entry: options.fragment_entry(),
+                constants: &constants,
+                depth_stencil: Some(gbuffer_depth_stencil(ctx, pipeline, pass)),
+                ..RenderSpec::new(&pass.name, &module, &layout, &targets)
             },
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some(options.fragment_entry()),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &constants,
-                    ..Default::default()
-                },
-                targets: &targets,
-            }),
-            // Quads face the camera; culling by the voxel normal happens in the vertex shader.
-            primitive: wgpu::PrimitiveState {
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(gbuffer_depth_stencil(ctx, pipeline, pass)),
-            multisample: Default::default(),
-            multiview_mask: None,
-            cache: None,
-        });
+        );
         Ok(Self { pipeline, bindings })
     }
 }

@@ -7,6 +7,7 @@ use ssbvb_graph::{ResolvedPipeline, ScheduledPass};
 use crate::bindings::PassBindings;
 use crate::frame::{Recorder, slot_format};
 use crate::gpu_scene::GpuScene;
+use crate::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
 use crate::{PassError, PassNode, shaders};
 
 /// The composite pass.
@@ -27,41 +28,21 @@ impl Composite {
         let d = &ctx.device;
         let module = ctx.shader("composite.wgsl", &shaders::source("composite.wgsl")?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, &[]);
-        let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("composite"),
-            bind_group_layouts: &[Some(&scene.layout), Some(&bindings.layout)],
-            immediate_size: 0,
-        });
+        let layout = pipeline_layout(d, "composite", scene, Some(&bindings));
         let out = slot_format(ctx, pipeline, pass, "color");
         let encode = matches!(
             out,
             wgpu::TextureFormat::Rgba8Unorm | wgpu::TextureFormat::Bgra8Unorm
         );
         let constants = [("ENCODE_SRGB", if encode { 1.0 } else { 0.0 })];
-        let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("composite"),
-            layout: Some(&pl),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
+        let targets = [Some(out.into())];
+        let pipeline = render_pipeline(
+            d,
+            &RenderSpec {
+                constants: &constants,
+                ..RenderSpec::new("composite", &module, &layout, &targets)
             },
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &constants,
-                    ..Default::default()
-                },
-                targets: &[Some(out.into())],
-            }),
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            multiview_mask: None,
-            cache: None,
-        });
+        );
         Ok(Self { pipeline, bindings })
     }
 }
@@ -75,15 +56,7 @@ impl PassNode for Composite {
         let bg = self.bindings.bind_group(rec, &[])?;
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(&rec.pass.name),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &rec.texture("color").view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: rec.load_op("color", wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
+            color_attachments: &[rec.color_attachment("color")],
             timestamp_writes: rec.render_timestamps(),
             ..Default::default()
         });

@@ -34,14 +34,11 @@ use ssbvb_graph::{PassKind, ResolvedPipeline, ScheduledPass};
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::cube_list::CubeList;
 
-use crate::billboards::STENCIL_VOXEL;
-use crate::bindings::{OwnBinding, OwnKind, PassBindings};
+use crate::bindings::{OwnBinding, OwnKind};
 use crate::frame::Recorder;
+use crate::gbuffer::{PulledPipeline, STENCIL_VOXEL, begin_gbuffer_pass};
 use crate::gpu_scene::GpuScene;
-use crate::triangles::{
-    begin_gbuffer_pass, gbuffer_depth_stencil, gbuffer_pipeline, gbuffer_targets,
-};
-use crate::{PassError, PassNode, shaders};
+use crate::{PassError, PassNode};
 
 /// Vertices per cube: two triangles on the camera side of each axis (at most three faces
 /// of a box face the camera).
@@ -63,8 +60,7 @@ pub const OWN: &[OwnBinding] = &[OwnBinding {
 
 /// The compiled cube pass and its cache of uploaded cube lists.
 pub struct CubeRaster {
-    pipeline: wgpu::RenderPipeline,
-    bindings: PassBindings,
+    pipeline: PulledPipeline,
     merge_full_nodes: bool,
     /// (object, level) → its cubes.
     levels: HashMap<(usize, u32), LevelCubes>,
@@ -94,29 +90,18 @@ impl CubeRaster {
                 pass.name
             )));
         };
-        let module = ctx.shader("cube_raster.wgsl", &shaders::source("cube_raster.wgsl")?)?;
-        let targets = gbuffer_targets(ctx, pipeline, pass);
-        let depth_stencil = gbuffer_depth_stencil(ctx, pipeline, pass);
-        let label = format!("pass `{}`: cube_raster pipeline", pass.name);
-        let (pipeline, bindings) = ctx.validated(&label, |d| {
-            let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
-            // No culling: faces that do not see the camera are collapsed in the vertex
-            // shader (winding-independent, so mirrored transforms work too).
-            let pipeline = gbuffer_pipeline(
-                d,
-                "cube_raster",
-                &module,
-                &scene.layout,
-                &bindings.layout,
-                &[],
-                &targets,
-                depth_stencil,
-            );
-            (pipeline, bindings)
-        })?;
+        // No culling: faces that do not see the camera are collapsed in the vertex shader
+        // (winding-independent, so mirrored transforms work too).
         Ok(Self {
-            pipeline,
-            bindings,
+            pipeline: PulledPipeline::new(
+                ctx,
+                scene,
+                pipeline,
+                pass,
+                "cube_raster.wgsl",
+                OWN,
+                &[],
+            )?,
             merge_full_nodes,
             levels: HashMap::new(),
         })
@@ -159,7 +144,7 @@ impl CubeRaster {
                 contents: bytemuck::cast_slice(&list.cubes),
                 usage: wgpu::BufferUsages::STORAGE,
             });
-            self.bindings.own_bind_group(
+            self.pipeline.bindings.own_bind_group(
                 d,
                 "cube_raster cubes",
                 &[("cubes", buffer.as_entire_binding())],
@@ -192,7 +177,7 @@ impl PassNode for CubeRaster {
             .ok_or_else(|| PassError::TooLarge("CubeRaster: too many visible instances".into()))?;
         // Always begin the pass, so its clears happen even when nothing is visible.
         let mut pass = begin_gbuffer_pass(encoder, rec, STENCIL_VOXEL);
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(&self.pipeline.pipeline);
         pass.set_bind_group(0, &rec.scene.bind_group, &[]);
         for (i, v) in (0..visible).zip(&rec.scene.visible) {
             let cubes = &self.levels[&(v.object, v.level)];

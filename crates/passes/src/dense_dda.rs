@@ -27,14 +27,11 @@ use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_graph::{PassKind, ResolvedPipeline, ScheduledPass};
 use ssbvb_voxel::asset::{EMPTY_PAGE, PAGE_CELLS, PAGE_SIZE, SparseLookup};
 
-use crate::billboards::STENCIL_VOXEL;
-use crate::bindings::{OwnBinding, OwnKind, PassBindings};
+use crate::bindings::{OwnBinding, OwnKind};
 use crate::frame::Recorder;
+use crate::gbuffer::PulledPipeline;
 use crate::gpu_scene::GpuScene;
-use crate::triangles::{
-    begin_gbuffer_pass, gbuffer_depth_stencil, gbuffer_pipeline, gbuffer_targets,
-};
-use crate::{PassError, PassNode, shaders};
+use crate::{PassError, PassNode};
 
 /// The finest level a dense texture is built for (256³ `u32` = 64 MiB).
 pub const MAX_DENSE_LEVEL: u32 = 8;
@@ -47,8 +44,7 @@ pub const OWN: &[OwnBinding] = &[OwnBinding {
 
 /// The compiled dense-DDA pass and its cache of dense textures.
 pub struct DenseDda {
-    pipeline: wgpu::RenderPipeline,
-    bindings: PassBindings,
+    pipeline: PulledPipeline,
     /// `(object, level)` → dense texture view.
     textures: HashMap<(usize, u32), wgpu::TextureView>,
 }
@@ -68,27 +64,16 @@ impl DenseDda {
                 pass.name
             )));
         };
-        let module = ctx.shader("dense_dda.wgsl", &shaders::source("dense_dda.wgsl")?)?;
-        let targets = gbuffer_targets(ctx, pipeline, pass);
-        let depth_stencil = gbuffer_depth_stencil(ctx, pipeline, pass);
-        let label = format!("pass `{}`: dense_dda pipeline", pass.name);
-        let (pipeline, bindings) = ctx.validated(&label, |d| {
-            let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
-            let pipeline = gbuffer_pipeline(
-                d,
-                "dense_dda",
-                &module,
-                &scene.layout,
-                &bindings.layout,
-                &[("MAX_STEPS", f64::from(max_steps))],
-                &targets,
-                depth_stencil,
-            );
-            (pipeline, bindings)
-        })?;
         Ok(Self {
-            pipeline,
-            bindings,
+            pipeline: PulledPipeline::new(
+                ctx,
+                scene,
+                pipeline,
+                pass,
+                "dense_dda.wgsl",
+                OWN,
+                &[("MAX_STEPS", f64::from(max_steps))],
+            )?,
             textures: HashMap::new(),
         })
     }
@@ -205,7 +190,7 @@ impl PassNode for DenseDda {
                         e.insert(dense_texture(rec.gpu, &lod.lookup)?)
                     }
                 };
-                Some(self.bindings.own_bind_group(
+                Some(self.pipeline.bindings.own_bind_group(
                     &rec.gpu.device,
                     "dense_dda",
                     &[("dense", wgpu::BindingResource::TextureView(view))],
@@ -213,14 +198,8 @@ impl PassNode for DenseDda {
             }
             None => None,
         };
-        // Always begin the pass, so its clears happen even when nothing is visible.
-        let mut pass = begin_gbuffer_pass(encoder, rec, STENCIL_VOXEL);
-        if let Some(bg) = &bind_group {
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &rec.scene.bind_group, &[]);
-            pass.set_bind_group(1, bg, &[]);
-            pass.draw(0..3, 0..1);
-        }
+        self.pipeline
+            .record_fullscreen(encoder, rec, bind_group.as_ref());
         Ok(())
     }
 }
@@ -233,6 +212,6 @@ mod tests {
         let src = crate::shaders::source("dense_dda.wgsl").unwrap();
         assert!(src.contains("override MAX_STEPS: u32"));
         assert!(src.contains("const STENCIL_VOXEL: u32 = 1u;"));
-        assert_eq!(crate::billboards::STENCIL_VOXEL, 1);
+        assert_eq!(crate::gbuffer::STENCIL_VOXEL, 1);
     }
 }

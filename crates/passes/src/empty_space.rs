@@ -29,6 +29,7 @@ use ssbvb_graph::{ResolvedPipeline, ScheduledPass};
 
 use crate::frame::{Recorder, slot_format};
 use crate::gpu_scene::GpuScene;
+use crate::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
 use crate::{PassError, PassNode, shaders};
 
 /// The compiled prepass.
@@ -51,11 +52,8 @@ impl EmptySpace {
         let depth_format = slot_format(ctx, pipeline, pass, "prepass_depth");
         let label = format!("pass `{}`: empty_space pipelines", pass.name);
         let (front, back, fill) = ctx.validated(&label, |d| {
-            let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("empty_space"),
-                bind_group_layouts: &[Some(&scene.layout)],
-                immediate_size: 0,
-            });
+            let layout = pipeline_layout(d, "empty_space", scene, None);
+            let targets = [Some(entry_format.into())];
             let proxy_vertex = [Some(wgpu::VertexBufferLayout {
                 array_stride: 16,
                 step_mode: wgpu::VertexStepMode::Vertex,
@@ -68,38 +66,23 @@ impl EmptySpace {
                         cull: Option<wgpu::Face>,
                         compare: wgpu::CompareFunction,
                         write: bool| {
-                d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(label),
-                    layout: Some(&layout),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some(vs),
-                        compilation_options: Default::default(),
+                render_pipeline(
+                    d,
+                    &RenderSpec {
+                        vs_entry: vs,
+                        fs_entry: fs,
                         buffers,
-                    },
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some(fs),
-                        compilation_options: Default::default(),
-                        targets: &[Some(entry_format.into())],
-                    }),
-                    primitive: wgpu::PrimitiveState {
-                        topology: wgpu::PrimitiveTopology::TriangleList,
-                        front_face: wgpu::FrontFace::Ccw,
                         cull_mode: cull,
-                        ..Default::default()
+                        depth_stencil: Some(wgpu::DepthStencilState {
+                            format: depth_format,
+                            depth_write_enabled: Some(write),
+                            depth_compare: Some(compare),
+                            stencil: Default::default(),
+                            bias: Default::default(),
+                        }),
+                        ..RenderSpec::new(label, &module, &layout, &targets)
                     },
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: depth_format,
-                        depth_write_enabled: Some(write),
-                        depth_compare: Some(compare),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    multisample: Default::default(),
-                    multiview_mask: None,
-                    cache: None,
-                })
+                )
             };
             use wgpu::CompareFunction::{Greater, GreaterEqual};
             (
@@ -145,16 +128,8 @@ impl PassNode for EmptySpace {
         let scene = rec.scene;
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(&rec.pass.name),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &rec.texture("entry").view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    // w = 0: no instance.
-                    load: rec.load_op("entry", wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
+            // Cleared to w = 0: no instance.
+            color_attachments: &[rec.color_attachment("entry")],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &rec.texture("prepass_depth").view,
                 depth_ops: Some(wgpu::Operations {

@@ -262,6 +262,20 @@ impl<'a> Recorder<'a> {
         }
     }
 
+    /// The colour attachment of `slot`: cleared to transparent black by its first writer
+    /// of the frame, loaded by later ones, stored.
+    pub fn color_attachment(&self, slot: &str) -> Option<wgpu::RenderPassColorAttachment<'a>> {
+        Some(wgpu::RenderPassColorAttachment {
+            view: &self.texture(slot).view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: self.load_op(slot, wgpu::Color::TRANSPARENT),
+                store: wgpu::StoreOp::Store,
+            },
+        })
+    }
+
     /// Timestamp writes for a render pass.
     pub fn render_timestamps(&self) -> Option<wgpu::RenderPassTimestampWrites<'a>> {
         self.timestamps

@@ -89,6 +89,6 @@ pub fn voxel_pixels(ctx: &GpuContext, r: &Renderer) -> Result<Option<usize>, Pas
         return Ok(None);
     }
     let stencil = ctx.read_texture(t, wgpu::TextureAspect::StencilOnly)?;
-    let voxel = crate::billboards::STENCIL_VOXEL as u8;
+    let voxel = crate::gbuffer::STENCIL_VOXEL as u8;
     Ok(Some(stencil.bytes.iter().filter(|&&s| s == voxel).count()))
 }

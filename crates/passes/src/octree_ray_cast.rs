@@ -33,22 +33,18 @@ use ssbvb_graph::{PassKind, ResolvedPipeline, ScheduledPass};
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::svo::{Svo, SvoNode};
 
-use crate::billboards::STENCIL_VOXEL;
-use crate::bindings::{OwnBinding, OwnKind, PassBindings};
+use crate::bindings::{OwnBinding, OwnKind};
 use crate::frame::Recorder;
+use crate::gbuffer::PulledPipeline;
 use crate::gpu_scene::GpuScene;
-use crate::triangles::{
-    begin_gbuffer_pass, gbuffer_depth_stencil, gbuffer_pipeline, gbuffer_targets,
-};
-use crate::{PassError, PassNode, shaders};
+use crate::{PassError, PassNode};
 
 /// The finest level the traversal supports (the WGSL stack depth).
 pub const MAX_OCTREE_LEVEL: u32 = 16;
 
 /// The compiled octree pass and its cache of uploaded octrees.
 pub struct OctreeRayCast {
-    pipeline: wgpu::RenderPipeline,
-    bindings: PassBindings,
+    pipeline: PulledPipeline,
     /// Object → bind group of its octree buffers (which it keeps alive).
     octrees: HashMap<usize, wgpu::BindGroup>,
 }
@@ -80,30 +76,16 @@ impl OctreeRayCast {
                 pass.name
             )));
         };
-        let module = ctx.shader(
-            "octree_ray_cast.wgsl",
-            &shaders::source("octree_ray_cast.wgsl")?,
-        )?;
-        let targets = gbuffer_targets(ctx, pipeline, pass);
-        let depth_stencil = gbuffer_depth_stencil(ctx, pipeline, pass);
-        let label = format!("pass `{}`: octree_ray_cast pipeline", pass.name);
-        let (pipeline, bindings) = ctx.validated(&label, |d| {
-            let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
-            let pipeline = gbuffer_pipeline(
-                d,
-                "octree_ray_cast",
-                &module,
-                &scene.layout,
-                &bindings.layout,
-                &[("MAX_STEPS", f64::from(max_steps))],
-                &targets,
-                depth_stencil,
-            );
-            (pipeline, bindings)
-        })?;
         Ok(Self {
-            pipeline,
-            bindings,
+            pipeline: PulledPipeline::new(
+                ctx,
+                scene,
+                pipeline,
+                pass,
+                "octree_ray_cast.wgsl",
+                OWN,
+                &[("MAX_STEPS", f64::from(max_steps))],
+            )?,
             octrees: HashMap::new(),
         })
     }
@@ -165,7 +147,7 @@ impl OctreeRayCast {
                 contents: bytemuck::cast_slice(&offsets),
                 usage: wgpu::BufferUsages::STORAGE,
             });
-            self.bindings.own_bind_group(
+            self.pipeline.bindings.own_bind_group(
                 d,
                 "octree_ray_cast",
                 &[
@@ -192,14 +174,7 @@ impl PassNode for OctreeRayCast {
             }
         }
         let bind_group = chosen.and_then(|o| self.octrees.get(&o));
-        // Always begin the pass, so its clears happen even when nothing is visible.
-        let mut pass = begin_gbuffer_pass(encoder, rec, STENCIL_VOXEL);
-        if let Some(bg) = bind_group {
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &rec.scene.bind_group, &[]);
-            pass.set_bind_group(1, bg, &[]);
-            pass.draw(0..3, 0..1);
-        }
+        self.pipeline.record_fullscreen(encoder, rec, bind_group);
         Ok(())
     }
 }

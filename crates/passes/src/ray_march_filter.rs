@@ -36,6 +36,7 @@ use ssbvb_voxel::asset::PackedVoxel;
 use crate::bindings::{OwnBinding, OwnKind, PassBindings};
 use crate::frame::{Recorder, Renderer};
 use crate::gpu_scene::GpuScene;
+use crate::pipelines::pipeline_layout;
 use crate::{PassError, PassNode, shaders};
 
 /// Workgroup edge of `main` (`@workgroup_size(8, 8)`).
@@ -151,11 +152,7 @@ impl RayMarchFilter {
         let label = format!("pass `{}`: ray_march_filter pipelines", pass.name);
         let built = ctx.validated(&label, |d| {
             let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
-            let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("ray_march_filter"),
-                bind_group_layouts: &[Some(&scene.layout), Some(&bindings.layout)],
-                immediate_size: 0,
-            });
+            let pl = pipeline_layout(d, "ray_march_filter", scene, Some(&bindings));
             let constants = [
                 ("MAX_STEPS", f64::from(max_steps)),
                 ("UNIQUE_VOXELS", if unique_voxels { 1.0 } else { 0.0 }),

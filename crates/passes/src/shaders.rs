@@ -42,7 +42,15 @@ const FILES: &[(&str, &str)] = &[
         "ray_cast.inc.wgsl",
         include_str!("../../../shaders/ray_cast.inc.wgsl"),
     ),
+    (
+        "fullscreen.inc.wgsl",
+        include_str!("../../../shaders/fullscreen.inc.wgsl"),
+    ),
     ("smooth.wgsl", include_str!("../../../shaders/smooth.wgsl")),
+    (
+        "view_blit.wgsl",
+        include_str!("../../../shaders/view_blit.wgsl"),
+    ),
     (
         "composite.wgsl",
         include_str!("../../../shaders/composite.wgsl"),

@@ -6,7 +6,9 @@ use ssbvb_graph::{PassKind, ResolvedPipeline, ScheduledPass};
 
 use crate::bindings::{OwnBinding, OwnKind, PassBindings};
 use crate::frame::{Recorder, slot_format};
+use crate::gbuffer::STENCIL_VOXEL;
 use crate::gpu_scene::GpuScene;
+use crate::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
 use crate::{PassError, PassNode, shaders};
 
 /// Eq. 1 of the paper made total, exactly as `smooth.wgsl` computes it:
@@ -50,13 +52,11 @@ impl Smooth {
         let d = &ctx.device;
         let module = ctx.shader("smooth.wgsl", &shaders::source("smooth.wgsl")?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
-        let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("smooth"),
-            bind_group_layouts: &[Some(&scene.layout), Some(&bindings.layout)],
-            immediate_size: 0,
-        });
+        let layout = pipeline_layout(d, "smooth", scene, Some(&bindings));
         let ds_format = slot_format(ctx, pipeline, pass, "depth_stencil");
-        let out_format = slot_format(ctx, pipeline, pass, "smoothed_normal");
+        let targets = [Some(
+            slot_format(ctx, pipeline, pass, "smoothed_normal").into(),
+        )];
         let constants = [("MAX_I", max_i as f64), ("MIN_DIST", min_dist as f64)];
         let make = |entry: &str, compare: wgpu::CompareFunction| {
             let face = wgpu::StencilFaceState {
@@ -65,41 +65,26 @@ impl Smooth {
                 depth_fail_op: wgpu::StencilOperation::Keep,
                 pass_op: wgpu::StencilOperation::Keep,
             };
-            d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pl),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
+            render_pipeline(
+                d,
+                &RenderSpec {
+                    fs_entry: entry,
+                    constants: &constants,
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: ds_format,
+                        depth_write_enabled: Some(false),
+                        depth_compare: Some(wgpu::CompareFunction::Always),
+                        stencil: wgpu::StencilState {
+                            front: face,
+                            back: face,
+                            read_mask: 0xff,
+                            write_mask: 0,
+                        },
+                        bias: Default::default(),
+                    }),
+                    ..RenderSpec::new(entry, &module, &layout, &targets)
                 },
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(entry),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &constants,
-                        ..Default::default()
-                    },
-                    targets: &[Some(out_format.into())],
-                }),
-                primitive: Default::default(),
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: ds_format,
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::Always),
-                    stencil: wgpu::StencilState {
-                        front: face,
-                        back: face,
-                        read_mask: 0xff,
-                        write_mask: 0,
-                    },
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                multiview_mask: None,
-                cache: None,
-            })
+            )
         };
         let smooth = make("fs_smooth", wgpu::CompareFunction::Equal);
         let copy = make("fs_main", wgpu::CompareFunction::NotEqual);
@@ -118,9 +103,6 @@ impl Smooth {
     }
 }
 
-/// Stencil value of voxel pixels (`STENCIL_VOXEL` in common.inc.wgsl).
-pub const STENCIL_VOXEL: u32 = 1;
-
 impl PassNode for Smooth {
     fn record(
         &mut self,
@@ -137,15 +119,7 @@ impl PassNode for Smooth {
         )?;
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(&rec.pass.name),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &rec.texture("smoothed_normal").view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: rec.load_op("smoothed_normal", wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
+            color_attachments: &[rec.color_attachment("smoothed_normal")],
             // Read-only: the stencil selects pixels, the depth is sampled for Dist.
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &ds.view,

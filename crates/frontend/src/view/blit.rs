@@ -6,6 +6,7 @@
 //! shader when the surface format is not an sRGB one.
 
 use ssbvb_gpu::{GpuContext, wgpu};
+use ssbvb_passes::pipelines::{RenderSpec, render_pipeline};
 
 /// The blit pipeline for one surface format, with the copy of the frame it reads.
 pub struct Blit {
@@ -16,12 +17,10 @@ pub struct Blit {
 
 impl Blit {
     /// Compiles the blit for `target` (the surface format).
-    pub fn new(ctx: &GpuContext, target: wgpu::TextureFormat) -> Result<Self, ssbvb_gpu::GpuError> {
+    pub fn new(ctx: &GpuContext, target: wgpu::TextureFormat) -> anyhow::Result<Self> {
         let d = &ctx.device;
-        let module = ctx.shader(
-            "view_blit.wgsl",
-            include_str!("../../../../shaders/view_blit.wgsl"),
-        )?;
+        let source = ssbvb_passes::shaders::source("view_blit.wgsl")?;
+        let module = ctx.shader("view_blit.wgsl", &source)?;
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("view blit"),
             entries: &[wgpu::BindGroupLayoutEntry {
@@ -41,31 +40,15 @@ impl Blit {
             immediate_size: 0,
         });
         let constants = [("ENCODE_SRGB", if target.is_srgb() { 0.0 } else { 1.0 })];
+        let targets = [Some(target.into())];
         let pipeline = ctx.validated("view blit pipeline", |d| {
-            d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("view blit"),
-                layout: Some(&pl),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
+            render_pipeline(
+                d,
+                &RenderSpec {
+                    constants: &constants,
+                    ..RenderSpec::new("view blit", &module, &pl, &targets)
                 },
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &constants,
-                        ..Default::default()
-                    },
-                    targets: &[Some(target.into())],
-                }),
-                primitive: Default::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                multiview_mask: None,
-                cache: None,
-            })
+            )
         })?;
         Ok(Self {
             pipeline,
