@@ -276,10 +276,10 @@ mod tests {
     #[test]
     fn registered_kinds_must_have_matching_entry_points_and_globals() {
         let dir = tempfile::tempdir().unwrap();
-        let kind = PassKind::RayMarchFilter {
+        let kind = PassKind::RayMarchFilter(ssbvb_graph::RayMarchFilterParams {
             max_steps: 8,
             unique_voxels: false,
-        };
+        });
         // Missing file.
         let kinds = [(kind.clone(), "ray_march_filter.wgsl", &[][..])];
         let r = validate_dir(dir.path(), &kinds).unwrap();

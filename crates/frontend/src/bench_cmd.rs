@@ -10,6 +10,7 @@ use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use glam::{DAffine3, DVec3};
 use serde::Serialize;
+use ssbvb_graph::{BillboardMode, PassKind};
 use ssbvb_passes::LodPolicy;
 use ssbvb_voxel::camera::Camera;
 
@@ -67,8 +68,8 @@ struct Technique {
     name: &'static str,
     /// Bundled pipeline file.
     pipeline: &'static str,
-    /// A parameter changed from the file's: `(kind, parameter, value)`.
-    param: Option<(&'static str, &'static str, &'static str)>,
+    /// A parameter changed from the file's (returns whether it changed the kind).
+    edit: Option<fn(&mut PassKind) -> bool>,
     /// Highest level the technique supports.
     max_level: u32,
 }
@@ -77,43 +78,61 @@ const TECHNIQUES: &[Technique] = &[
     Technique {
         name: "ssbvb-flat",
         pipeline: "ssbvb.ron",
-        param: None,
+        edit: None,
         max_level: 16,
     },
     Technique {
         name: "ssbvb-raybox",
         pipeline: "ssbvb.ron",
-        param: Some(("Billboards", "mode", "RayBox")),
+        edit: Some(|k| match k {
+            PassKind::Billboards(b) => {
+                b.mode = BillboardMode::RayBox;
+                true
+            }
+            _ => false,
+        }),
         max_level: 16,
     },
     Technique {
         name: "ssbvb-unique",
         pipeline: "ssbvb.ron",
-        param: Some(("RayMarchFilter", "unique_voxels", "true")),
+        edit: Some(|k| match k {
+            PassKind::RayMarchFilter(f) => {
+                f.unique_voxels = true;
+                true
+            }
+            _ => false,
+        }),
         max_level: 16,
     },
     Technique {
         name: "dense-dda",
         pipeline: "dense_dda.ron",
-        param: None,
+        edit: None,
         max_level: 8,
     },
     Technique {
         name: "octree",
         pipeline: "octree_ray_cast.ron",
-        param: None,
+        edit: None,
         max_level: 16,
     },
     Technique {
         name: "cube-raster",
         pipeline: "cube_raster.ron",
-        param: None,
+        edit: None,
         max_level: 16,
     },
     Technique {
         name: "cube-raster-array",
         pipeline: "cube_raster.ron",
-        param: Some(("CubeRaster", "merge_full_nodes", "false")),
+        edit: Some(|k| match k {
+            PassKind::CubeRaster(c) => {
+                c.merge_full_nodes = false;
+                true
+            }
+            _ => false,
+        }),
         max_level: 16,
     },
 ];
@@ -331,10 +350,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let camera = m.camera;
     let pipelines = techniques
         .iter()
-        .map(|t| {
-            let (src, label) = crate::bench_sweep::pipeline_source(t.pipeline)?;
-            ssbvb_graph::resolve_str(&src, &label).map_err(|e| anyhow::anyhow!("{e}"))
-        })
+        .map(|t| crate::bench_sweep::bundled_pipeline(t.pipeline))
         .collect::<Result<Vec<_>>>()?;
     let ctx = crate::adapter_cmd::headless_context(&pipelines.iter().collect::<Vec<_>>())?;
     let software = ctx.report().is_software;
@@ -522,9 +538,9 @@ struct Cell<'a> {
 }
 
 fn run_one(ctx: &ssbvb_gpu::GpuContext, t: &Technique, c: &Cell) -> Result<Row> {
-    let (mut src, label) = crate::bench_sweep::pipeline_source(t.pipeline)?;
-    if let Some((kind, param, value)) = t.param {
-        src = crate::bench_sweep::set_kind_param(&src, kind, param, value)?;
+    let mut pipeline = crate::bench_sweep::bundled_pipeline(t.pipeline)?;
+    if let Some(edit) = t.edit {
+        pipeline = crate::bench_sweep::with_kind_edit(&pipeline, t.name, edit)?;
     }
     let setup = crate::bench_sweep::Setup {
         ctx,
@@ -537,18 +553,21 @@ fn run_one(ctx: &ssbvb_gpu::GpuContext, t: &Technique, c: &Cell) -> Result<Row> 
         warmup: c.warmup,
         frames: c.frames,
     };
-    let m = crate::bench_sweep::measure(&setup, &src, &label, true)?;
     // The cube rasterizer's instance buffer comes on top of the scene's buffers (whose
     // lookup it reads for voxel attributes).
-    let cube_bytes = match (t.pipeline, t.param) {
-        ("cube_raster.ron", p) => {
-            let merge = p.is_none();
+    let cube_merge = pipeline.passes.iter().find_map(|p| match &p.kind {
+        PassKind::CubeRaster(c) => Some(c.merge_full_nodes),
+        _ => None,
+    });
+    let cube_bytes = match cube_merge {
+        Some(merge) => {
             ssbvb_voxel::cube_list::CubeList::from_lod(&c.asset.lods[c.level as usize], merge)
                 .map_err(|e| anyhow::anyhow!("{e}"))?
                 .bytes() as u64
         }
-        _ => 0,
+        None => 0,
     };
+    let m = crate::bench_sweep::measure(&setup, pipeline, true)?;
     let (fill, acc, mut times) = (m.fill, m.acc, m.times);
     let (min, max) = times
         .iter()

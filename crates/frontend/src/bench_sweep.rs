@@ -8,6 +8,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use glam::DAffine3;
 use serde::Serialize;
+use ssbvb_graph::{CountDesc, PassKind, ResolvedPipeline, ResourceDesc, SizeDesc};
 use ssbvb_passes::{GpuScene, LodPolicy, Profiling, Renderer, Scene, VoxelObject};
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
@@ -47,19 +48,16 @@ pub(crate) struct Setup<'a> {
 }
 
 /// The source text of a bundled pipeline file.
-pub(crate) fn pipeline_source(file: &str) -> Result<(String, String)> {
+pub(crate) fn bundled_pipeline(file: &str) -> Result<ResolvedPipeline> {
     let path = assets_dir().join("pipelines").join(file);
-    let src =
-        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
-    Ok((src, path.display().to_string()))
+    ssbvb_graph::resolve_file(&path).map_err(|e| anyhow::anyhow!("{e}"))
 }
 
 /// Renders `warmup` + `frames` frames (median over the timed ones is the caller's), one
 /// profiled frame, and compares the G-buffer (and optionally the composite) with the
 /// reference.
-pub(crate) fn measure(s: &Setup, src: &str, label: &str, with_psnr: bool) -> Result<Measured> {
+pub(crate) fn measure(s: &Setup, pipeline: ResolvedPipeline, with_psnr: bool) -> Result<Measured> {
     let ctx = s.ctx;
-    let pipeline = ssbvb_graph::resolve_str(src, label).map_err(|e| anyhow::anyhow!("{e}"))?;
     let scene = Scene {
         objects: vec![VoxelObject {
             asset: s.asset.clone(),
@@ -156,101 +154,42 @@ pub(crate) fn measure(s: &Setup, src: &str, label: &str, with_psnr: bool) -> Res
     })
 }
 
-/// Replaces the value of parameter `param` of the single pass of kind `kind`
-/// (`kind: Kind(.., param: value, ..)`) with `value`, or adds it when the file leaves it
-/// at its default.
-pub(crate) fn set_kind_param(src: &str, kind: &str, param: &str, value: &str) -> Result<String> {
-    let needle = format!("kind: {kind}(");
-    let mut found = src.match_indices(&needle);
-    let Some((start, _)) = found.next() else {
-        bail!("no pass of kind `{kind}(..)` in the pipeline");
-    };
-    if found.next().is_some() {
-        bail!("more than one pass of kind `{kind}` in the pipeline");
+/// `base` with `edit` applied to its pass kinds; an error when `edit` changes none (the
+/// pipeline lacks the kind it edits) or the edited pipeline does not resolve.
+pub(crate) fn with_kind_edit(
+    base: &ResolvedPipeline,
+    what: &str,
+    edit: impl FnMut(&mut PassKind) -> bool,
+) -> Result<ResolvedPipeline> {
+    let mut changed = 0;
+    let p = base
+        .edited(|d| changed = d.edit_kinds(edit))
+        .map_err(|e| anyhow::anyhow!("{what}: {e}"))?;
+    if changed == 0 {
+        bail!("{what}: {} has no pass of the kind this edits", base.file);
     }
-    let open = start + needle.len();
-    let close = open
-        + src[open..]
-            .find(')')
-            .with_context(|| format!("unclosed `{kind}(`"))?;
-    let args = &src[open..close];
-    let key = format!("{param}:");
-    let Some(k) = args.find(&key) else {
-        // Not written in the file (it has its default): add it.
-        let sep = if args.trim().is_empty() { "" } else { ", " };
-        return Ok(format!(
-            "{}{sep}{param}: {value}{}",
-            &src[..close],
-            &src[close..]
-        ));
-    };
-    let v_start = k + key.len();
-    let v_end = args[v_start..]
-        .find(',')
-        .map_or(args.len(), |e| v_start + e);
-    Ok(format!(
-        "{} {value}{}",
-        &src[..open + v_start],
-        &src[open + v_end..]
-    ))
-}
-
-/// Replaces the value of `field` (`size`, `count`, ...) in the declaration of resource
-/// `resource` (`"name": Kind(.., field: value, ..)`, on one line) with `value`.
-pub(crate) fn set_resource_field(
-    src: &str,
-    resource: &str,
-    field: &str,
-    value: &str,
-) -> Result<String> {
-    let key = format!("\"{resource}\":");
-    let start = src
-        .find(&key)
-        .with_context(|| format!("no resource `{resource}` in the pipeline"))?;
-    let line_end = src[start..].find('\n').map_or(src.len(), |e| start + e);
-    let decl = &src[start..line_end];
-    let f = decl
-        .find(&format!("{field}:"))
-        .with_context(|| format!("resource `{resource}` has no `{field}` on its line"))?;
-    let v_start = start + f + field.len() + 1;
-    // The value ends at the first `,` or unmatched `)` outside parentheses.
-    let mut depth = 0i32;
-    let mut v_end = line_end;
-    for (i, c) in src[v_start..line_end].char_indices() {
-        match c {
-            '(' => depth += 1,
-            ')' if depth == 0 => {
-                v_end = v_start + i;
-                break;
-            }
-            ')' => depth -= 1,
-            ',' if depth == 0 => {
-                v_end = v_start + i;
-                break;
-            }
-            _ => {}
-        }
-    }
-    Ok(format!("{} {value}{}", &src[..v_start], &src[v_end..]))
+    Ok(p)
 }
 
 /// The default SSBVB pipeline with the empty-space prepass and the ray-march filter at
 /// `scale` of the screen per axis (their textures and the SSBVB shrink with it); the
 /// billboards, smoothing and composite stay at full resolution.
-pub(crate) fn with_filter_scale(src: &str, scale: f64) -> Result<String> {
+pub(crate) fn with_filter_scale(base: &ResolvedPipeline, scale: f64) -> Result<ResolvedPipeline> {
     if scale == 1.0 {
-        return Ok(src.to_owned());
+        return Ok(base.clone());
     }
-    let mut s = src.to_owned();
-    for r in ["entry", "prepass_depth"] {
-        s = set_resource_field(&s, r, "size", &format!("ScreenScaled({scale:?})"))?;
-    }
-    set_resource_field(
-        &s,
-        "ssbvb",
-        "count",
-        &format!("ScreenPixelsScaled({scale:?})"),
-    )
+    let scale = scale as f32;
+    base.edited(|d| {
+        for r in ["entry", "prepass_depth"] {
+            if let Some(ResourceDesc::Texture { size, .. }) = d.resource_mut(r) {
+                *size = SizeDesc::ScreenScaled(scale);
+            }
+        }
+        if let Some(ResourceDesc::Buffer { count, .. }) = d.resource_mut("ssbvb") {
+            *count = CountDesc::ScreenPixelsScaled(scale);
+        }
+    })
+    .map_err(|e| anyhow::anyhow!("resolution scale {scale}: {e}"))
 }
 
 /// Sweep sizes.
@@ -314,29 +253,57 @@ pub(crate) fn run_sweeps(
     cfg: &SweepConfig,
     log: bool,
 ) -> Result<Vec<SweepRow>> {
-    let (base, label) = pipeline_source("ssbvb.ron")?;
+    let base = bundled_pipeline("ssbvb.ron")?;
     let size = cfg.size;
     let fixed_ref = reference_at(asset, cfg.level, camera, size);
-    let mut points: Vec<(&'static str, f64, bool, String)> = Vec::new();
+    let mut points: Vec<(&'static str, f64, bool, ResolvedPipeline)> = Vec::new();
     for &v in cfg.max_steps {
-        let src = set_kind_param(&base, "RayMarchFilter", "max_steps", &v.to_string())?;
-        points.push(("max_steps", v as f64, v == 1024, src));
+        let p = with_kind_edit(&base, "max_steps", |k| match k {
+            PassKind::RayMarchFilter(f) => {
+                f.max_steps = v;
+                true
+            }
+            _ => false,
+        })?;
+        points.push(("max_steps", v as f64, v == 1024, p));
     }
     for &v in cfg.size_scale {
-        let src = set_kind_param(&base, "Billboards", "size_scale", &format!("{v:?}"))?;
-        points.push(("size_scale", v, v == 1.0, src));
+        let p = with_kind_edit(&base, "size_scale", |k| match k {
+            PassKind::Billboards(b) => {
+                b.size_scale = v as f32;
+                true
+            }
+            _ => false,
+        })?;
+        points.push(("size_scale", v, v == 1.0, p));
     }
     for &v in cfg.max_i {
-        let src = set_kind_param(&base, "Smooth", "max_i", &format!("{v:?}"))?;
-        points.push(("max_i", v, v == 1.0, src));
+        let p = with_kind_edit(&base, "max_i", |k| match k {
+            PassKind::Smooth(s) => {
+                s.max_i = v as f32;
+                true
+            }
+            _ => false,
+        })?;
+        points.push(("max_i", v, v == 1.0, p));
     }
     for &v in cfg.min_dist {
-        let src = set_kind_param(&base, "Smooth", "min_dist", &format!("{v:?}"))?;
-        points.push(("min_dist", v, v == 0.5, src));
+        let p = with_kind_edit(&base, "min_dist", |k| match k {
+            PassKind::Smooth(s) => {
+                s.min_dist = v as f32;
+                true
+            }
+            _ => false,
+        })?;
+        points.push(("min_dist", v, v == 0.5, p));
     }
     for &v in cfg.resolution_scale {
-        let src = with_filter_scale(&base, v)?;
-        points.push(("resolution_scale", v, v == 1.0, src));
+        points.push((
+            "resolution_scale",
+            v,
+            v == 1.0,
+            with_filter_scale(&base, v)?,
+        ));
     }
     let mut rows = Vec::new();
     let to_row = |knob: &'static str,
@@ -384,9 +351,9 @@ pub(crate) fn run_sweeps(
         warmup: cfg.warmup,
         frames: cfg.frames,
     };
-    for (knob, value, is_default, src) in points {
-        let m = measure(&fixed, &src, &label, true)
-            .with_context(|| format!("sweep {knob} = {value}"))?;
+    for (knob, value, is_default, pipeline) in points {
+        let m =
+            measure(&fixed, pipeline, true).with_context(|| format!("sweep {knob} = {value}"))?;
         rows.push(to_row(knob, value, is_default, cfg.level, m));
     }
     let max_level = asset.lods.len() as u32 - 1;
@@ -406,7 +373,7 @@ pub(crate) fn run_sweeps(
             reference: &reference,
             ..fixed
         };
-        let m = measure(&setup, &base, &label, true)
+        let m = measure(&setup, base.clone(), true)
             .with_context(|| format!("sweep lod_bias = {bias}"))?;
         rows.push(to_row("lod_bias", bias as f64, bias == 0, level, m));
     }
@@ -475,54 +442,27 @@ mod tests {
     use super::*;
 
     #[test]
-    fn set_kind_param_rewrites_one_parameter() {
-        let src = "(kind: Billboards(mode: Flat, size_scale: 1.0),)\n(kind: Smooth(max_i: 1.0, min_dist: 0.5))";
-        assert_eq!(
-            set_kind_param(src, "Billboards", "size_scale", "1.3").unwrap(),
-            "(kind: Billboards(mode: Flat, size_scale: 1.3),)\n(kind: Smooth(max_i: 1.0, min_dist: 0.5))"
-        );
-        assert_eq!(
-            set_kind_param(src, "Smooth", "max_i", "3.0").unwrap(),
-            "(kind: Billboards(mode: Flat, size_scale: 1.0),)\n(kind: Smooth(max_i: 3.0, min_dist: 0.5))"
-        );
-        assert_eq!(
-            set_kind_param(src, "Smooth", "extra", "true").unwrap(),
-            "(kind: Billboards(mode: Flat, size_scale: 1.0),)\n(kind: Smooth(max_i: 1.0, min_dist: 0.5, extra: true))"
-        );
-        assert_eq!(
-            set_kind_param(
-                "kind: CubeRaster()",
-                "CubeRaster",
-                "merge_full_nodes",
-                "false"
-            )
-            .unwrap(),
-            "kind: CubeRaster(merge_full_nodes: false)"
-        );
-        assert!(set_kind_param(src, "RayMarchFilter", "max_steps", "1").is_err());
-    }
-
-    #[test]
-    fn set_resource_field_rewrites_one_declaration() {
-        let src = "  \"entry\": Texture(format: Rgba32Float, size: Screen),\n  \"ssbvb\": Buffer(layout: VoxelSlot, count: ScreenPixels),\n  \"x\": Texture(format: R8Unorm, size: Fixed(2, 3)),\n";
-        let out = set_resource_field(src, "entry", "size", "ScreenScaled(0.5)").unwrap();
-        assert!(out.contains("\"entry\": Texture(format: Rgba32Float, size: ScreenScaled(0.5)),"));
-        let out = set_resource_field(&out, "x", "size", "Screen").unwrap();
+    fn kind_edits_need_a_pass_of_the_kind() {
+        let base = bundled_pipeline("dense_dda.ron").unwrap();
+        let err = with_kind_edit(&base, "max_steps", |k| match k {
+            PassKind::RayMarchFilter(f) => {
+                f.max_steps = 3;
+                true
+            }
+            _ => false,
+        })
+        .unwrap_err()
+        .to_string();
         assert!(
-            out.contains("\"x\": Texture(format: R8Unorm, size: Screen),"),
-            "{out}"
+            err.contains("max_steps") && err.contains("dense_dda.ron"),
+            "{err}"
         );
-        let out = set_resource_field(&out, "ssbvb", "count", "Fixed(7)").unwrap();
-        assert!(out.contains("count: Fixed(7)),"), "{out}");
-        assert!(set_resource_field(src, "nope", "size", "Screen").is_err());
-        assert!(set_resource_field(src, "ssbvb", "size", "Screen").is_err());
     }
 
     #[test]
     fn filter_scale_pipeline_resolves_with_scaled_resources() {
-        let (base, label) = pipeline_source("ssbvb.ron").unwrap();
-        let src = with_filter_scale(&base, 0.5).unwrap();
-        let p = ssbvb_graph::resolve_str(&src, &label).unwrap();
+        let base = bundled_pipeline("ssbvb.ron").unwrap();
+        let p = with_filter_scale(&base, 0.5).unwrap();
         let entry = p.resource("entry").unwrap();
         match &p.resources[entry].desc {
             ssbvb_graph::ResourceDesc::Texture { size, .. } => {

@@ -13,7 +13,9 @@
 //! The crate needs no GPU (it depends on `wgpu-types` only), so all of this is unit-tested
 //! on any machine. Executing a resolved pipeline is `ssbvb-passes`' job.
 
+pub mod edit;
 pub mod error;
+pub mod kinds;
 pub mod locate;
 pub mod pass_kind;
 pub mod resolve;
@@ -21,11 +23,16 @@ pub mod schema;
 pub mod watch;
 
 pub use error::{GraphError, Loc, PipelineErrors};
+pub use kinds::{
+    BillboardMode, BillboardsParams, CompositeKind, CubeRasterParams, DenseDdaParams,
+    EmptySpacePrepassKind, KIND_NAMES, OctreeRayCastParams, PassKind, RayMarchFilterParams,
+    SmoothParams, TrianglesKind,
+};
 pub use locate::Position;
-pub use pass_kind::{Access, BillboardMode, KIND_NAMES, PassKind, PassStage, SlotClass, SlotDesc};
+pub use pass_kind::{Access, KindSpec, OfKind, PassStage, SlotClass, SlotDesc};
 pub use resolve::{
     BoundSlot, Dependency, MemoryReport, PhysicalResource, ResolvedPipeline, ResolvedResource,
-    ResourceUsage, ScheduledPass, resolve_file, resolve_str,
+    ResourceUsage, ScheduledPass, resolve_desc, resolve_file, resolve_str,
 };
 pub use schema::{
     Binding, Bindings, BufferLayout, CountDesc, Format, PassDesc, PipelineDesc, ResourceDesc,

@@ -18,8 +18,9 @@ use petgraph::graph::{DiGraph, NodeIndex};
 use petgraph::visit::EdgeRef;
 
 use crate::error::{GraphError, Loc, PipelineErrors, suggest};
+use crate::kinds::{KIND_NAMES, PassKind};
 use crate::locate::Locator;
-use crate::pass_kind::{Access, KIND_NAMES, PassKind, SlotClass, SlotDesc};
+use crate::pass_kind::{Access, SlotClass, SlotDesc};
 use crate::schema::{BufferLayout, CountDesc, Format, PipelineDesc, ResourceDesc, SizeDesc};
 
 /// Largest fixed texture edge a pipeline may ask for.
@@ -301,15 +302,29 @@ pub fn resolve_file(path: &std::path::Path) -> Result<ResolvedPipeline, Pipeline
 /// Parses and resolves pipeline text; `file` names it in errors.
 pub fn resolve_str(src: &str, file: &str) -> Result<ResolvedPipeline, PipelineErrors> {
     let loc = Locator::new(src);
-    let fail = |errors: Vec<GraphError>| PipelineErrors {
+    let desc = parse(src, file, &loc).map_err(|errors| PipelineErrors {
         file: file.to_string(),
         errors,
-    };
-    let desc = parse(src, file, &loc).map_err(fail)?;
+    })?;
+    resolve_parsed(&desc, file, &loc)
+}
+
+/// Validates and resolves a pipeline description that has no text (built or edited in
+/// code, see [`ResolvedPipeline::edited`]): the same checks as [`resolve_str`], with errors
+/// that name the pass and resource but no line.
+pub fn resolve_desc(desc: &PipelineDesc, file: &str) -> Result<ResolvedPipeline, PipelineErrors> {
+    resolve_parsed(desc, file, &Locator::new(""))
+}
+
+fn resolve_parsed(
+    desc: &PipelineDesc,
+    file: &str,
+    loc: &Locator,
+) -> Result<ResolvedPipeline, PipelineErrors> {
     let mut ctx = Ctx {
         file,
-        loc: &loc,
-        desc: &desc,
+        loc,
+        desc,
         errors: Vec::new(),
     };
     let out = ctx.resolve();
@@ -319,7 +334,10 @@ pub fn resolve_str(src: &str, file: &str) -> Result<ResolvedPipeline, PipelineEr
         _ => {
             errors.sort_by_key(|e| e.loc().pos);
             errors.dedup();
-            Err(fail(errors))
+            Err(PipelineErrors {
+                file: file.to_string(),
+                errors,
+            })
         }
     }
 }
@@ -341,7 +359,10 @@ fn parse(src: &str, file: &str, loc: &Locator) -> Result<PipelineDesc, Vec<Graph
             });
         }
     }
-    match ron::Options::default().from_str::<PipelineDesc>(src) {
+    match ron::Options::default()
+        .with_default_extension(ron::extensions::Extensions::UNWRAP_VARIANT_NEWTYPES)
+        .from_str::<PipelineDesc>(src)
+    {
         Ok(d) if errors.is_empty() => Ok(d),
         Ok(_) => Err(errors),
         Err(e) => {

@@ -8,7 +8,7 @@ use std::fmt;
 use serde::de::{MapAccess, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize};
 
-use crate::pass_kind::PassKind;
+use crate::kinds::PassKind;
 
 /// A whole pipeline file: named resources, passes and the one output.
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]

@@ -444,9 +444,9 @@ fn the_cube_raster_pipeline_resolves_and_merging_defaults_to_on() {
     assert_eq!(names, ["triangles", "cube_raster", "smooth", "composite"]);
     assert_eq!(
         p.passes[1].kind,
-        ssbvb_graph::PassKind::CubeRaster {
+        ssbvb_graph::PassKind::CubeRaster(ssbvb_graph::CubeRasterParams {
             merge_full_nodes: true
-        }
+        })
     );
     // With no parameter given (`CubeRaster()`) the kind merges full nodes.
     let bare = ok(&src.replace("CubeRaster(merge_full_nodes: true)", "CubeRaster()"));

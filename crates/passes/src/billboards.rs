@@ -45,14 +45,14 @@
 //! everything facing away) 69–88 of 5,300–7,900, IoU 1.0 → 0.984–0.989; the fragments it
 //! saves are those holes.
 
-use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_graph::{BillboardMode, PassKind, ResolvedPipeline, ScheduledPass};
+use ssbvb_gpu::wgpu;
+use ssbvb_graph::{BillboardMode, BillboardsParams};
 
 use crate::bindings::PassBindings;
 use crate::frame::Recorder;
 use crate::gbuffer::{begin_gbuffer_pass, gbuffer_depth_stencil, gbuffer_targets};
-use crate::gpu_scene::GpuScene;
 use crate::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
+use crate::registry::{KindNeeds, PassImpl, PassInit};
 use crate::{PassError, PassNode, shaders};
 
 pub use crate::gbuffer::STENCIL_VOXEL;
@@ -95,17 +95,14 @@ pub struct BillboardOptions {
 }
 
 impl BillboardOptions {
-    /// The options of a `Billboards` pass kind (box footprint, culling at
-    /// [`DEFAULT_CULL_COS`]); `None` for another kind.
-    pub fn of_kind(kind: &PassKind) -> Option<Self> {
-        match *kind {
-            PassKind::Billboards { mode, size_scale } => Some(Self {
-                mode,
-                size_scale,
-                footprint: Footprint::Box,
-                cull_cos: DEFAULT_CULL_COS,
-            }),
-            _ => None,
+    /// The options of a `Billboards` pass kind's parameters (box footprint, culling at
+    /// [`DEFAULT_CULL_COS`]).
+    pub fn of_params(params: &BillboardsParams) -> Self {
+        Self {
+            mode: params.mode,
+            size_scale: params.size_scale,
+            footprint: Footprint::Box,
+            cull_cos: DEFAULT_CULL_COS,
         }
     }
 
@@ -124,31 +121,14 @@ pub struct Billboards {
 }
 
 impl Billboards {
-    /// Compiles the pipeline of a `Billboards` pass with the kind's parameters.
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        pipeline: &ResolvedPipeline,
-        pass: &ScheduledPass,
-    ) -> Result<Self, PassError> {
-        let options = BillboardOptions::of_kind(&pass.kind).ok_or_else(|| {
-            PassError::Shader(format!(
-                "pass `{}` of kind {} is not a billboards pass",
-                pass.name,
-                pass.kind.name()
-            ))
-        })?;
-        Self::with_options(ctx, scene, pipeline, pass, options)
-    }
-
     /// Compiles the pipeline with explicit options (for measurements of culling and size).
-    pub fn with_options(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        pipeline: &ResolvedPipeline,
-        pass: &ScheduledPass,
-        options: BillboardOptions,
-    ) -> Result<Self, PassError> {
+    pub fn with_options(init: &PassInit<'_>, options: BillboardOptions) -> Result<Self, PassError> {
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         if !(options.size_scale.is_finite() && options.size_scale > 0.0) {
             return Err(PassError::BadScene(format!(
                 "pass `{}`: size_scale must be positive, got {}",
@@ -182,6 +162,18 @@ impl Billboards {
     }
 }
 
+impl PassImpl for Billboards {
+    type Params = BillboardsParams;
+    const SHADER: &'static str = "billboards.wgsl";
+    // Drawn with the filter's indirect arguments.
+    const NEEDS: KindNeeds = KindNeeds::new(wgpu::DownlevelFlags::INDIRECT_EXECUTION, 1);
+
+    /// Compiles the pipeline of a `Billboards` pass with the kind's parameters.
+    fn new(init: &PassInit<'_>, params: &BillboardsParams) -> Result<Self, PassError> {
+        Self::with_options(init, BillboardOptions::of_params(params))
+    }
+}
+
 impl PassNode for Billboards {
     fn record(
         &mut self,
@@ -205,17 +197,15 @@ mod tests {
 
     #[test]
     fn options_follow_the_pass_kind() {
-        let kind = PassKind::Billboards {
+        let o = BillboardOptions::of_params(&BillboardsParams {
             mode: BillboardMode::RayBox,
             size_scale: 1.5,
-        };
-        let o = BillboardOptions::of_kind(&kind).unwrap();
+        });
         assert_eq!(o.mode, BillboardMode::RayBox);
         assert_eq!(o.size_scale, 1.5);
         assert_eq!(o.footprint, Footprint::Box);
         assert!(o.cull_cos < -1.0, "culling is off by default");
         assert_eq!(o.fragment_entry(), "fs_ray_box");
-        assert_eq!(BillboardOptions::of_kind(&PassKind::Triangles), None);
     }
 
     #[test]

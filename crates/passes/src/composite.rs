@@ -1,13 +1,13 @@
 //! `composite`: deferred Blinn-Phong (the CPU reference's formula) into the output colour
 //! (see `shaders/composite.wgsl`).
 
-use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_graph::{ResolvedPipeline, ScheduledPass};
+use ssbvb_gpu::wgpu;
+use ssbvb_graph::CompositeKind;
 
 use crate::bindings::PassBindings;
 use crate::frame::{Recorder, slot_format};
-use crate::gpu_scene::GpuScene;
 use crate::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
+use crate::registry::{PassImpl, PassInit};
 use crate::{PassError, PassNode, shaders};
 
 /// The composite pass.
@@ -16,15 +16,19 @@ pub struct Composite {
     bindings: PassBindings,
 }
 
-impl Composite {
+impl PassImpl for Composite {
+    type Params = CompositeKind;
+    const SHADER: &'static str = "composite.wgsl";
+
     /// Compiles the pipeline for the output's format (sRGB encoding in the shader for
     /// 8-bit non-sRGB targets).
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        pipeline: &ResolvedPipeline,
-        pass: &ScheduledPass,
-    ) -> Result<Self, PassError> {
+    fn new(init: &PassInit<'_>, _params: &CompositeKind) -> Result<Self, PassError> {
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         let d = &ctx.device;
         let module = ctx.shader("composite.wgsl", &shaders::source("composite.wgsl")?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, &[]);

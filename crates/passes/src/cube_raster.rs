@@ -30,14 +30,14 @@ use std::collections::HashMap;
 
 use ssbvb_gpu::wgpu::util::DeviceExt;
 use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_graph::{PassKind, ResolvedPipeline, ScheduledPass};
+use ssbvb_graph::CubeRasterParams;
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::cube_list::CubeList;
 
 use crate::bindings::{OwnBinding, OwnKind};
 use crate::frame::Recorder;
 use crate::gbuffer::{PulledPipeline, STENCIL_VOXEL, begin_gbuffer_pass};
-use crate::gpu_scene::GpuScene;
+use crate::registry::{KindNeeds, PassImpl, PassInit};
 use crate::{PassError, PassNode};
 
 /// Vertices per cube: two triangles on the camera side of each axis (at most three faces
@@ -77,36 +77,6 @@ pub fn cube_list_bytes(asset: &VoxelAsset, merge_full_nodes: bool) -> Result<u64
 }
 
 impl CubeRaster {
-    /// Compiles the pipeline for the formats bound to `pass`.
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        pipeline: &ResolvedPipeline,
-        pass: &ScheduledPass,
-    ) -> Result<Self, PassError> {
-        let PassKind::CubeRaster { merge_full_nodes } = pass.kind else {
-            return Err(PassError::Shader(format!(
-                "pass `{}` is not a CubeRaster",
-                pass.name
-            )));
-        };
-        // No culling: faces that do not see the camera are collapsed in the vertex shader
-        // (winding-independent, so mirrored transforms work too).
-        Ok(Self {
-            pipeline: PulledPipeline::new(
-                ctx,
-                scene,
-                pipeline,
-                pass,
-                "cube_raster.wgsl",
-                OWN,
-                &[],
-            )?,
-            merge_full_nodes,
-            levels: HashMap::new(),
-        })
-    }
-
     /// Builds and uploads the cubes of `asset`'s LOD `level`.
     fn upload(
         &self,
@@ -153,6 +123,39 @@ impl CubeRaster {
         Ok(LevelCubes {
             bind_group: Some(bind_group),
             count,
+        })
+    }
+}
+
+impl PassImpl for CubeRaster {
+    type Params = CubeRasterParams;
+    const SHADER: &'static str = "cube_raster.wgsl";
+    const OWN: &'static [OwnBinding] = OWN;
+    const NEEDS: KindNeeds = KindNeeds::new(wgpu::DownlevelFlags::empty(), 1);
+
+    /// Compiles the pipeline for the formats bound to `pass`.
+    fn new(init: &PassInit<'_>, params: &CubeRasterParams) -> Result<Self, PassError> {
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
+        let merge_full_nodes = params.merge_full_nodes;
+        // No culling: faces that do not see the camera are collapsed in the vertex shader
+        // (winding-independent, so mirrored transforms work too).
+        Ok(Self {
+            pipeline: PulledPipeline::new(
+                ctx,
+                scene,
+                pipeline,
+                pass,
+                "cube_raster.wgsl",
+                OWN,
+                &[],
+            )?,
+            merge_full_nodes,
+            levels: HashMap::new(),
         })
     }
 }

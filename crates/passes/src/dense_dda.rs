@@ -23,14 +23,16 @@
 
 use std::collections::HashMap;
 
+use ssbvb_gpu::requirements::max_texture_dimension_3d;
 use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_graph::{PassKind, ResolvedPipeline, ScheduledPass};
+use ssbvb_graph::DenseDdaParams;
 use ssbvb_voxel::asset::{EMPTY_PAGE, PAGE_CELLS, PAGE_SIZE, SparseLookup};
 
 use crate::bindings::{OwnBinding, OwnKind};
 use crate::frame::Recorder;
 use crate::gbuffer::PulledPipeline;
 use crate::gpu_scene::GpuScene;
+use crate::registry::{KindNeeds, PassImpl, PassInit};
 use crate::{PassError, PassNode};
 
 /// The finest level a dense texture is built for (256³ `u32` = 64 MiB).
@@ -50,34 +52,6 @@ pub struct DenseDda {
 }
 
 impl DenseDda {
-    /// Compiles the pipeline for the formats bound to `pass`; `max_steps` becomes the WGSL
-    /// override `MAX_STEPS`.
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        pipeline: &ResolvedPipeline,
-        pass: &ScheduledPass,
-    ) -> Result<Self, PassError> {
-        let PassKind::DenseDda { max_steps } = pass.kind else {
-            return Err(PassError::Shader(format!(
-                "pass `{}` is not a DenseDda",
-                pass.name
-            )));
-        };
-        Ok(Self {
-            pipeline: PulledPipeline::new(
-                ctx,
-                scene,
-                pipeline,
-                pass,
-                "dense_dda.wgsl",
-                OWN,
-                &[("MAX_STEPS", f64::from(max_steps))],
-            )?,
-            textures: HashMap::new(),
-        })
-    }
-
     /// The (object, level) every visible instance uses, or `None` when nothing is visible.
     fn chosen(scene: &GpuScene) -> Result<Option<(usize, u32)>, PassError> {
         let Some(first) = scene.visible.first() else {
@@ -172,6 +146,40 @@ fn dense_texture(ctx: &GpuContext, lookup: &SparseLookup) -> Result<wgpu::Textur
         }
     }
     Ok(texture.create_view(&Default::default()))
+}
+
+impl PassImpl for DenseDda {
+    type Params = DenseDdaParams;
+    const SHADER: &'static str = "dense_dda.wgsl";
+    const OWN: &'static [OwnBinding] = OWN;
+    const NEEDS: KindNeeds = KindNeeds {
+        limit: Some(max_texture_dimension_3d(1 << MAX_DENSE_LEVEL)),
+        ..KindNeeds::NONE
+    };
+
+    /// Compiles the pipeline for the formats bound to `pass`; `max_steps` becomes the WGSL
+    /// override `MAX_STEPS`.
+    fn new(init: &PassInit<'_>, params: &DenseDdaParams) -> Result<Self, PassError> {
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
+        let max_steps = params.max_steps;
+        Ok(Self {
+            pipeline: PulledPipeline::new(
+                ctx,
+                scene,
+                pipeline,
+                pass,
+                "dense_dda.wgsl",
+                OWN,
+                &[("MAX_STEPS", f64::from(max_steps))],
+            )?,
+            textures: HashMap::new(),
+        })
+    }
 }
 
 impl PassNode for DenseDda {

@@ -24,12 +24,12 @@
 //! The ray-march filter only uses the entry to choose where to start; it never trusts it
 //! for the hit itself (see `ray_march_filter`).
 
-use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_graph::{ResolvedPipeline, ScheduledPass};
+use ssbvb_gpu::wgpu;
+use ssbvb_graph::EmptySpacePrepassKind;
 
 use crate::frame::{Recorder, slot_format};
-use crate::gpu_scene::GpuScene;
 use crate::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
+use crate::registry::{PassImpl, PassInit};
 use crate::{PassError, PassNode, shaders};
 
 /// The compiled prepass.
@@ -39,14 +39,18 @@ pub struct EmptySpace {
     fill: wgpu::RenderPipeline,
 }
 
-impl EmptySpace {
+impl PassImpl for EmptySpace {
+    type Params = EmptySpacePrepassKind;
+    const SHADER: &'static str = "empty_space.wgsl";
+
     /// Compiles the three pipelines for `pass` (formats from the graph's resources).
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        pipeline: &ResolvedPipeline,
-        pass: &ScheduledPass,
-    ) -> Result<Self, PassError> {
+    fn new(init: &PassInit<'_>, _params: &EmptySpacePrepassKind) -> Result<Self, PassError> {
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         let module = ctx.shader("empty_space.wgsl", &shaders::source("empty_space.wgsl")?)?;
         let entry_format = slot_format(ctx, pipeline, pass, "entry");
         let depth_format = slot_format(ctx, pipeline, pass, "prepass_depth");

@@ -7,6 +7,7 @@
 //! holds the pass's graph resources and its own resources, laid out from the pass's
 //! declaration ([`bindings`]).
 
+pub mod adapter_needs;
 pub mod billboards;
 pub mod bindings;
 pub mod composite;
@@ -28,9 +29,10 @@ pub mod smooth;
 pub mod triangles;
 pub mod wgsl_layout;
 
+pub use adapter_needs::pipeline_requirements;
 pub use frame::{FrameStats, PassTiming, Profiling, Recorder, Renderer};
 pub use gpu_scene::{GpuScene, ObjectMemory};
-pub use registry::{REGISTRY, Registration, pipeline_requirements};
+pub use registry::{PassImpl, PassInit, REGISTRY, Registration};
 pub use scene::{LodPolicy, Scene, TriangleObject, VoxelObject};
 
 use ssbvb_gpu::{GpuContext, GpuError, wgpu};

@@ -29,7 +29,7 @@ use std::collections::HashMap;
 
 use ssbvb_gpu::wgpu::util::DeviceExt;
 use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_graph::{PassKind, ResolvedPipeline, ScheduledPass};
+use ssbvb_graph::OctreeRayCastParams;
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::svo::{Svo, SvoNode};
 
@@ -37,6 +37,7 @@ use crate::bindings::{OwnBinding, OwnKind};
 use crate::frame::Recorder;
 use crate::gbuffer::PulledPipeline;
 use crate::gpu_scene::GpuScene;
+use crate::registry::{KindNeeds, PassImpl, PassInit};
 use crate::{PassError, PassNode};
 
 /// The finest level the traversal supports (the WGSL stack depth).
@@ -62,34 +63,6 @@ pub const OWN: &[OwnBinding] = &[
 ];
 
 impl OctreeRayCast {
-    /// Compiles the pipeline for the formats bound to `pass`; `max_steps` becomes the WGSL
-    /// override `MAX_STEPS`.
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        pipeline: &ResolvedPipeline,
-        pass: &ScheduledPass,
-    ) -> Result<Self, PassError> {
-        let PassKind::OctreeRayCast { max_steps } = pass.kind else {
-            return Err(PassError::Shader(format!(
-                "pass `{}` is not an OctreeRayCast",
-                pass.name
-            )));
-        };
-        Ok(Self {
-            pipeline: PulledPipeline::new(
-                ctx,
-                scene,
-                pipeline,
-                pass,
-                "octree_ray_cast.wgsl",
-                OWN,
-                &[("MAX_STEPS", f64::from(max_steps))],
-            )?,
-            octrees: HashMap::new(),
-        })
-    }
-
     /// The object every visible instance belongs to, or `None` when nothing is visible.
     fn chosen(scene: &GpuScene) -> Result<Option<usize>, PassError> {
         let Some(first) = scene.visible.first() else {
@@ -157,6 +130,37 @@ impl OctreeRayCast {
             )
         })??;
         Ok(bind_group)
+    }
+}
+
+impl PassImpl for OctreeRayCast {
+    type Params = OctreeRayCastParams;
+    const SHADER: &'static str = "octree_ray_cast.wgsl";
+    const OWN: &'static [OwnBinding] = OWN;
+    const NEEDS: KindNeeds = KindNeeds::new(wgpu::DownlevelFlags::empty(), 2);
+
+    /// Compiles the pipeline for the formats bound to `pass`; `max_steps` becomes the WGSL
+    /// override `MAX_STEPS`.
+    fn new(init: &PassInit<'_>, params: &OctreeRayCastParams) -> Result<Self, PassError> {
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
+        let max_steps = params.max_steps;
+        Ok(Self {
+            pipeline: PulledPipeline::new(
+                ctx,
+                scene,
+                pipeline,
+                pass,
+                "octree_ray_cast.wgsl",
+                OWN,
+                &[("MAX_STEPS", f64::from(max_steps))],
+            )?,
+            octrees: HashMap::new(),
+        })
     }
 }
 

@@ -29,14 +29,15 @@
 //! of the full screen.
 
 use bytemuck::{Pod, Zeroable};
+use ssbvb_gpu::requirements::max_compute_invocations_per_workgroup;
 use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_graph::{PassKind, ResolvedPipeline, ScheduledPass};
+use ssbvb_graph::{PassKind, RayMarchFilterParams};
 use ssbvb_voxel::asset::PackedVoxel;
 
 use crate::bindings::{OwnBinding, OwnKind, PassBindings};
 use crate::frame::{Recorder, Renderer};
-use crate::gpu_scene::GpuScene;
 use crate::pipelines::pipeline_layout;
+use crate::registry::{KindNeeds, PassImpl, PassInit};
 use crate::{PassError, PassNode, shaders};
 
 /// Workgroup edge of `main` (`@workgroup_size(8, 8)`).
@@ -127,24 +128,28 @@ impl Claims {
     }
 }
 
-impl RayMarchFilter {
+impl PassImpl for RayMarchFilter {
+    type Params = RayMarchFilterParams;
+    const SHADER: &'static str = "ray_march_filter.wgsl";
+    const OWN: &'static [OwnBinding] = OWN;
+    // Its output is the billboards' indirect draw; 8×8 threads per workgroup.
+    const NEEDS: KindNeeds = KindNeeds {
+        limit: Some(max_compute_invocations_per_workgroup(64)),
+        ..KindNeeds::new(wgpu::DownlevelFlags::INDIRECT_EXECUTION, 4)
+    };
+
     /// Compiles both entry points; `max_steps` becomes the WGSL override `MAX_STEPS`.
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        pipeline: &ResolvedPipeline,
-        pass: &ScheduledPass,
-    ) -> Result<Self, PassError> {
-        let PassKind::RayMarchFilter {
+    fn new(init: &PassInit<'_>, params: &RayMarchFilterParams) -> Result<Self, PassError> {
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
+        let RayMarchFilterParams {
             max_steps,
             unique_voxels,
-        } = pass.kind
-        else {
-            return Err(PassError::Shader(format!(
-                "pass `{}` is not a RayMarchFilter",
-                pass.name
-            )));
-        };
+        } = *params;
         let module = ctx.shader(
             "ray_march_filter.wgsl",
             &shaders::source("ray_march_filter.wgsl")?,

@@ -1,14 +1,14 @@
 //! `smooth`: Gaussian smoothing of voxel normals with the paper's distance-dependent offset
 //! (Eq. 1), stencil-tested so only voxel pixels change (see `shaders/smooth.wgsl`).
 
-use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_graph::{PassKind, ResolvedPipeline, ScheduledPass};
+use ssbvb_gpu::wgpu;
+use ssbvb_graph::SmoothParams;
 
 use crate::bindings::{OwnBinding, OwnKind, PassBindings};
 use crate::frame::{Recorder, slot_format};
 use crate::gbuffer::STENCIL_VOXEL;
-use crate::gpu_scene::GpuScene;
 use crate::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
+use crate::registry::{KindNeeds, PassImpl, PassInit};
 use crate::{PassError, PassNode, shaders};
 
 /// Eq. 1 of the paper made total, exactly as `smooth.wgsl` computes it:
@@ -38,17 +38,22 @@ pub struct Smooth {
     sampler: wgpu::Sampler,
 }
 
-impl Smooth {
+impl PassImpl for Smooth {
+    type Params = SmoothParams;
+    const SHADER: &'static str = "smooth.wgsl";
+    const OWN: &'static [OwnBinding] = OWN;
+    // Samples the depth of the depth-stencil it stencil-tests against.
+    const NEEDS: KindNeeds = KindNeeds::new(wgpu::DownlevelFlags::READ_ONLY_DEPTH_STENCIL, 0);
+
     /// Compiles both pipelines (voxel pixels smoothed, all others copied).
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        pipeline: &ResolvedPipeline,
-        pass: &ScheduledPass,
-    ) -> Result<Self, PassError> {
-        let PassKind::Smooth { max_i, min_dist } = pass.kind else {
-            unreachable!("smooth pass of another kind")
-        };
+    fn new(init: &PassInit<'_>, params: &SmoothParams) -> Result<Self, PassError> {
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
+        let SmoothParams { max_i, min_dist } = *params;
         let d = &ctx.device;
         let module = ctx.shader("smooth.wgsl", &shaders::source("smooth.wgsl")?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, OWN);

@@ -1,16 +1,16 @@
 //! `triangles`: the scene's ordinary triangle meshes drawn into the G-buffer
 //! ([`crate::gbuffer`]) with stencil = triangle (see `shaders/triangles.wgsl`).
 
-use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_graph::{ResolvedPipeline, ScheduledPass};
+use ssbvb_gpu::wgpu;
+use ssbvb_graph::TrianglesKind;
 
 use crate::bindings::{OwnBinding, OwnKind, PassBindings};
 use crate::frame::Recorder;
 use crate::gbuffer::{
     STENCIL_TRIANGLE, begin_gbuffer_pass, gbuffer_depth_stencil, gbuffer_targets,
 };
-use crate::gpu_scene::GpuScene;
 use crate::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
+use crate::registry::{PassImpl, PassInit};
 use crate::{PassError, PassNode, shaders};
 
 /// What the triangles pass binds itself: the uniform of the mesh being drawn.
@@ -25,14 +25,19 @@ pub struct Triangles {
     bindings: PassBindings,
 }
 
-impl Triangles {
+impl PassImpl for Triangles {
+    type Params = TrianglesKind;
+    const SHADER: &'static str = "triangles.wgsl";
+    const OWN: &'static [OwnBinding] = OWN;
+
     /// Compiles the pipeline for the formats bound to `pass`.
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        pipeline: &ResolvedPipeline,
-        pass: &ScheduledPass,
-    ) -> Result<Self, PassError> {
+    fn new(init: &PassInit<'_>, _params: &TrianglesKind) -> Result<Self, PassError> {
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         let d = &ctx.device;
         let module = ctx.shader("triangles.wgsl", &shaders::source("triangles.wgsl")?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, OWN);

@@ -17,6 +17,7 @@ use ssbvb_passes::billboards::{
 use ssbvb_passes::frame::{FrameResources, Recorder};
 use ssbvb_passes::triangles::Triangles;
 use ssbvb_passes::{GpuScene, LodPolicy, PassNode, Scene, VoxelObject};
+use ssbvb_passes::{PassImpl, PassInit};
 use ssbvb_tests::{ctx, model_asset, reference_of, single_object_scene};
 use ssbvb_voxel::accuracy::{self, ErrorStats, GpuHit};
 use ssbvb_voxel::camera::Camera;
@@ -243,14 +244,33 @@ pub(crate) fn draw(
         let i = find("triangles");
         nodes.push((
             i,
-            Box::new(Triangles::new(c, &gpu, &pipeline, &pipeline.passes[i]).unwrap()),
+            Box::new(
+                <Triangles as PassImpl>::new(
+                    &PassInit {
+                        ctx: c,
+                        scene: &gpu,
+                        pipeline: &pipeline,
+                        pass: &pipeline.passes[i],
+                    },
+                    &ssbvb_graph::TrianglesKind,
+                )
+                .unwrap(),
+            ),
         ));
     }
     if let Some(o) = billboards {
         let i = find("billboards");
         let node = c
             .validated("billboards pipeline", |_| {
-                Billboards::with_options(c, &gpu, &pipeline, &pipeline.passes[i], o)
+                Billboards::with_options(
+                    &PassInit {
+                        ctx: c,
+                        scene: &gpu,
+                        pipeline: &pipeline,
+                        pass: &pipeline.passes[i],
+                    },
+                    o,
+                )
             })
             .unwrap()
             .unwrap();

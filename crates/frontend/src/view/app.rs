@@ -24,7 +24,7 @@ use super::input::CameraInput;
 use super::overlay::{self, Action, ObjectLod, OverlayState, OverlayView};
 use super::stats::Stats;
 use super::surface::WindowGpu;
-use super::{capture, knobs};
+use super::capture;
 
 /// How often the pipeline file is checked for changes.
 const RELOAD_POLL: Duration = Duration::from_millis(300);
@@ -329,7 +329,7 @@ impl Viewer {
     fn effective_pipeline(&self) -> ResolvedPipeline {
         let mut p = self.watcher.current().clone();
         for (pass, kind) in &self.knob_edits {
-            if let Some(edited) = knobs::apply(&p, pass, kind) {
+            if let Some(edited) = p.with_pass_kind(pass, kind) {
                 p = edited;
             }
         }

@@ -1,12 +1,12 @@
 //! Pass parameters ("knobs") as generic fields, so the overlay can edit any pass kind,
 //! including kinds added after this was written: a kind is turned into its serde form
 //! (`{"RayMarchFilter": {"max_steps": 1024}}`), its fields are edited as numbers, booleans
-//! or enum names, and the edited form is parsed back into a [`PassKind`]. Parameters never
-//! change a kind's slots, so an edited pass can replace the original in a resolved
-//! pipeline without resolving again.
+//! or enum names, and the edited form is parsed back into a [`PassKind`], which
+//! `ResolvedPipeline::with_pass_kind` puts in the pipeline (parameters never change a kind's
+//! slots, so nothing is resolved again).
 
 use serde_json::{Map, Value};
-use ssbvb_graph::{PassKind, ResolvedPipeline};
+use ssbvb_graph::PassKind;
 
 /// A kind's name and its parameter fields (empty for kinds without parameters).
 pub fn fields(kind: &PassKind) -> (String, Map<String, Value>) {
@@ -59,21 +59,6 @@ pub fn enum_choices(name: &str, fields: &Map<String, Value>, field: &str) -> Vec
         .collect()
 }
 
-/// `pipeline` with pass `pass` of kind `kind` (same variant; parameters differ). Also
-/// updates the pass description so reports show the edited values.
-pub fn apply(pipeline: &ResolvedPipeline, pass: &str, kind: &PassKind) -> Option<ResolvedPipeline> {
-    let mut p = pipeline.clone();
-    let scheduled = p.passes.iter_mut().find(|s| s.name == pass)?;
-    if std::mem::discriminant(&scheduled.kind) != std::mem::discriminant(kind) {
-        return None;
-    }
-    scheduled.kind = kind.clone();
-    if let Some(d) = p.desc.passes.iter_mut().find(|d| d.name == pass) {
-        d.kind = kind.clone();
-    }
-    Some(p)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -90,17 +75,21 @@ mod tests {
 
     #[test]
     fn numbers_are_edited_and_bad_values_rejected() {
-        let (name, mut f) = fields(&PassKind::RayMarchFilter {
-            max_steps: 1024,
-            unique_voxels: false,
-        });
+        let (name, mut f) = fields(&PassKind::RayMarchFilter(
+            ssbvb_graph::RayMarchFilterParams {
+                max_steps: 1024,
+                unique_voxels: false,
+            },
+        ));
         f.insert("max_steps".into(), Value::from(64));
         assert_eq!(
             with_fields(&name, f.clone()),
-            Ok(PassKind::RayMarchFilter {
-                max_steps: 64,
-                unique_voxels: false,
-            })
+            Ok(PassKind::RayMarchFilter(
+                ssbvb_graph::RayMarchFilterParams {
+                    max_steps: 64,
+                    unique_voxels: false,
+                }
+            ))
         );
         f.insert("max_steps".into(), Value::from(-1));
         assert!(with_fields(&name, f).is_err());
@@ -108,43 +97,12 @@ mod tests {
 
     #[test]
     fn enum_fields_list_their_choices() {
-        let kind = PassKind::Billboards {
+        let kind = PassKind::Billboards(ssbvb_graph::BillboardsParams {
             mode: BillboardMode::Flat,
             size_scale: 1.0,
-        };
+        });
         let (name, f) = fields(&kind);
         assert_eq!(enum_choices(&name, &f, "mode"), vec!["Flat", "RayBox"]);
         assert!(enum_choices(&name, &f, "size_scale").is_empty());
-    }
-
-    #[test]
-    fn apply_replaces_only_the_named_pass() {
-        let path = crate::render_cmd::assets_dir().join("pipelines/ssbvb.ron");
-        let p = ssbvb_graph::resolve_file(&path).expect("bundled pipeline resolves");
-        let edited = apply(
-            &p,
-            "filter",
-            &PassKind::RayMarchFilter {
-                max_steps: 7,
-                unique_voxels: false,
-            },
-        )
-        .unwrap();
-        let k = &edited
-            .passes
-            .iter()
-            .find(|s| s.name == "filter")
-            .unwrap()
-            .kind;
-        assert_eq!(
-            *k,
-            PassKind::RayMarchFilter {
-                max_steps: 7,
-                unique_voxels: false,
-            }
-        );
-        // Another variant for that pass is refused.
-        assert!(apply(&p, "filter", &PassKind::Composite).is_none());
-        assert!(apply(&p, "no such pass", &PassKind::Composite).is_none());
     }
 }
