@@ -23,12 +23,7 @@ impl PassImpl for Composite {
     /// Compiles the pipeline for the output's format (sRGB encoding in the shader for
     /// 8-bit non-sRGB targets).
     fn new(init: &PassInit<'_>, _params: &CompositeKind) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = init.parts();
         let d = &ctx.device;
         let module = ctx.shader("composite.wgsl", &shaders::source("composite.wgsl")?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, &[]);

@@ -135,25 +135,11 @@ impl PassImpl for CubeRaster {
 
     /// Compiles the pipeline for the formats bound to `pass`.
     fn new(init: &PassInit<'_>, params: &CubeRasterParams) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
         let merge_full_nodes = params.merge_full_nodes;
         // No culling: faces that do not see the camera are collapsed in the vertex shader
         // (winding-independent, so mirrored transforms work too).
         Ok(Self {
-            pipeline: PulledPipeline::new(
-                ctx,
-                scene,
-                pipeline,
-                pass,
-                "cube_raster.wgsl",
-                OWN,
-                &[],
-            )?,
+            pipeline: PulledPipeline::new::<Self>(init, &[])?,
             merge_full_nodes,
             levels: HashMap::new(),
         })

@@ -160,23 +160,9 @@ impl PassImpl for DenseDda {
     /// Compiles the pipeline for the formats bound to `pass`; `max_steps` becomes the WGSL
     /// override `MAX_STEPS`.
     fn new(init: &PassInit<'_>, params: &DenseDdaParams) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
         let max_steps = params.max_steps;
         Ok(Self {
-            pipeline: PulledPipeline::new(
-                ctx,
-                scene,
-                pipeline,
-                pass,
-                "dense_dda.wgsl",
-                OWN,
-                &[("MAX_STEPS", f64::from(max_steps))],
-            )?,
+            pipeline: PulledPipeline::new::<Self>(init, &[("MAX_STEPS", f64::from(max_steps))])?,
             textures: HashMap::new(),
         })
     }

@@ -18,10 +18,10 @@ use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_graph::{ResolvedPipeline, ScheduledPass};
 
 use crate::PassError;
-use crate::bindings::{OwnBinding, PassBindings};
+use crate::bindings::PassBindings;
 use crate::frame::{Recorder, slot_format};
-use crate::gpu_scene::GpuScene;
 use crate::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
+use crate::registry::{PassImpl, PassInit};
 use crate::shaders;
 
 /// Stencil value of voxel pixels (`STENCIL_VOXEL` in common.inc.wgsl).
@@ -108,16 +108,14 @@ pub(crate) struct PulledPipeline {
 }
 
 impl PulledPipeline {
-    /// Compiles `shader` for the formats bound to `pass`, with `constants` as WGSL overrides.
-    pub fn new(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        pipeline: &ResolvedPipeline,
-        pass: &ScheduledPass,
-        shader: &str,
-        own: &'static [OwnBinding],
+    /// Compiles pass `P`'s shader for the formats bound to `init.pass`, with `constants`
+    /// as WGSL overrides and `P`'s own bindings as group 1.
+    pub fn new<P: PassImpl>(
+        init: &PassInit<'_>,
         constants: &[(&str, f64)],
     ) -> Result<Self, PassError> {
+        let (ctx, scene, pipeline, pass) = init.parts();
+        let (shader, own) = (P::SHADER, P::OWN);
         let module = ctx.shader(shader, &shaders::source(shader)?)?;
         let targets = gbuffer_targets(ctx, pipeline, pass);
         let depth_stencil = gbuffer_depth_stencil(ctx, pipeline, pass);

@@ -140,12 +140,7 @@ impl PassImpl for RayMarchFilter {
 
     /// Compiles both entry points; `max_steps` becomes the WGSL override `MAX_STEPS`.
     fn new(init: &PassInit<'_>, params: &RayMarchFilterParams) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = init.parts();
         let RayMarchFilterParams {
             max_steps,
             unique_voxels,

@@ -47,12 +47,7 @@ impl PassImpl for Smooth {
 
     /// Compiles both pipelines (voxel pixels smoothed, all others copied).
     fn new(init: &PassInit<'_>, params: &SmoothParams) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = init.parts();
         let SmoothParams { max_i, min_dist } = *params;
         let d = &ctx.device;
         let module = ctx.shader("smooth.wgsl", &shaders::source("smooth.wgsl")?)?;

@@ -20,11 +20,11 @@ use winit::window::{Window, WindowId};
 
 use super::blit::Blit;
 use super::camera_control::CameraRig;
+use super::capture;
 use super::input::CameraInput;
 use super::overlay::{self, Action, ObjectLod, OverlayState, OverlayView};
 use super::stats::Stats;
 use super::surface::WindowGpu;
-use super::capture;
 
 /// How often the pipeline file is checked for changes.
 const RELOAD_POLL: Duration = Duration::from_millis(300);
