@@ -27,6 +27,7 @@ pub mod scene;
 pub mod shaders;
 pub mod smooth;
 pub mod triangles;
+pub mod visibility;
 pub mod wgsl_layout;
 
 pub use adapter_needs::pipeline_requirements;

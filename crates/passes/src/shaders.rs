@@ -48,6 +48,10 @@ const FILES: &[(&str, &str)] = &[
     ),
     ("smooth.wgsl", include_str!("../../../shaders/smooth.wgsl")),
     (
+        "sparse_march.inc.wgsl",
+        include_str!("../../../shaders/sparse_march.inc.wgsl"),
+    ),
+    (
         "view_blit.wgsl",
         include_str!("../../../shaders/view_blit.wgsl"),
     ),

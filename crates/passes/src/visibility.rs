@@ -1,0 +1,283 @@
+//! Which instances a frame draws and at which level: frustum culling against each
+//! instance's bounding sphere, the LOD choice, and the per-frame constants and instance
+//! records the GPU reads (`Frame`, `Instance` in `shaders/common.inc.wgsl`).
+
+use glam::{DAffine3, DMat4, DVec3};
+use ssbvb_voxel::camera::Camera;
+use ssbvb_voxel::shading::Light;
+
+use crate::gpu_scene::{FrameUniform, InstanceUniform, ProxyRange, VisibleInstance};
+use crate::scene::{LodPolicy, Scene};
+
+/// A matrix as WGSL's column-major `mat4x4<f32>`.
+pub(crate) fn mat(m: DMat4) -> [[f32; 4]; 4] {
+    m.as_mat4().to_cols_array_2d()
+}
+
+/// The frame constants for `camera` on a `screen`-sized target, lit by `light` (the
+/// visible-instance count is filled in by the caller).
+pub fn frame_uniform(camera: &Camera, screen: (u32, u32), light: &Light) -> FrameUniform {
+    let (w, h) = (screen.0.max(1) as f64, screen.1.max(1) as f64);
+    let aspect = w / h;
+    let rot = camera.view_rotation_matrix();
+    let view_proj = camera.projection(aspect) * rot;
+    let (right, up, forward) = camera.basis();
+    let tan_y = (camera.fov_y_deg.clamp(1e-9, 179.999).to_radians() * 0.5).tan();
+    let tan_x = tan_y * aspect;
+    let ld = DVec3::from(light.direction.map(|v| v as f64)).normalize_or(DVec3::Z);
+    FrameUniform {
+        view_proj: mat(view_proj),
+        inv_view_proj: mat(view_proj.inverse()),
+        view: mat(rot),
+        cam_right: (right * tan_x).as_vec3().extend(0.0).into(),
+        cam_up: (up * tan_y).as_vec3().extend(0.0).into(),
+        cam_forward: forward.as_vec3().extend(0.0).into(),
+        screen: [w as f32, h as f32, (1.0 / w) as f32, (1.0 / h) as f32],
+        light_dir: [ld.x as f32, ld.y as f32, ld.z as f32, light.ambient],
+        light_color: [
+            light.color[0],
+            light.color[1],
+            light.color[2],
+            light.specular,
+        ],
+        misc: [
+            light.shininess,
+            camera.near as f32,
+            if camera.is_infinite() {
+                0.0
+            } else {
+                camera.far as f32
+            },
+            0.0,
+        ],
+    }
+}
+
+/// The instances of `scene` inside the view frustum, in instance-buffer order, with the
+/// record of each for the GPU. `lod_base[object]` is the object's level 0 in the LOD table,
+/// `proxies[object][level]` its proxy mesh ranges.
+pub(crate) fn visible_instances(
+    scene: &Scene,
+    lod_base: &[u32],
+    proxies: &[Vec<ProxyRange>],
+    camera: &Camera,
+    screen: (u32, u32),
+) -> (Vec<VisibleInstance>, Vec<InstanceUniform>) {
+    let (w, h) = (screen.0.max(1) as f64, screen.1.max(1) as f64);
+    let aspect = w / h;
+    let eye = camera.position;
+    let (right, up, forward) = camera.basis();
+    let tan_y = (camera.fov_y_deg.clamp(1e-9, 179.999).to_radians() * 0.5).tan();
+    let tan_x = tan_y * aspect;
+    // Frustum planes in camera-relative world space (normals pointing inwards).
+    let planes = frustum_planes(right, up, forward, tan_x, tan_y);
+    let mut visible = Vec::new();
+    let mut uniforms = Vec::new();
+    let mut scene_index = 0u32;
+    for (oi, obj) in scene.objects.iter().enumerate() {
+        let max_level = obj.asset.lods.len() as u32 - 1;
+        for xf in &obj.instances {
+            let si = scene_index;
+            scene_index += 1;
+            if !xf.matrix3.determinant().is_finite()
+                || xf.matrix3.determinant() == 0.0
+                || !xf.translation.is_finite()
+            {
+                continue;
+            }
+            // Bounding sphere of the object box [-1, 1]^3.
+            let center = xf.translation - eye;
+            let radius = (xf.matrix3 * DVec3::ONE).length().max(
+                [
+                    DVec3::new(1.0, 1.0, -1.0),
+                    DVec3::new(1.0, -1.0, 1.0),
+                    DVec3::new(-1.0, 1.0, 1.0),
+                ]
+                .iter()
+                .map(|c| (xf.matrix3 * *c).length())
+                .fold(0.0, f64::max),
+            );
+            if planes.iter().any(|(n, d)| n.dot(center) + d < -radius) {
+                continue;
+            }
+            let level = choose_level(obj.lod, xf, camera, screen, max_level);
+            let lod_index = lod_base[oi] + level;
+            // Camera-relative object → world.
+            let rel = DAffine3 {
+                matrix3: xf.matrix3,
+                translation: center,
+            };
+            let inv = rel.inverse();
+            let cam_obj = inv.transform_point3(DVec3::ZERO);
+            let lod = &obj.asset.lods[level as usize];
+            let camera_inside = inside_resident_page(&lod.lookup, cam_obj);
+            let cell_world = 2.0 * scale_of(xf) / (1u64 << level) as f64;
+            uniforms.push(InstanceUniform {
+                object_to_world: mat(DMat4::from(rel)),
+                world_to_object: mat(DMat4::from(inv)),
+                camera_object: [
+                    cam_obj.x as f32,
+                    cam_obj.y as f32,
+                    cam_obj.z as f32,
+                    cell_world as f32,
+                ],
+                lod: lod_index,
+                level,
+                flags: camera_inside as u32,
+                scene_index: si,
+            });
+            visible.push(VisibleInstance {
+                scene_index: si,
+                object: oi,
+                level,
+                proxy: proxies[oi][level as usize],
+                camera_inside,
+            });
+        }
+    }
+    (visible, uniforms)
+}
+
+/// The LOD level of an instance for a camera and screen: fixed, or the level whose cell
+/// projects closest to one pixel (at the instance's nearest bounding-sphere point) plus the
+/// bias, clamped to `0..=max_level`.
+pub fn choose_level(
+    policy: LodPolicy,
+    xf: &DAffine3,
+    camera: &Camera,
+    screen: (u32, u32),
+    max_level: u32,
+) -> u32 {
+    match policy {
+        LodPolicy::Fixed(l) => l.min(max_level),
+        LodPolicy::Auto { bias } => {
+            // Cell size in world units at level L: 2 * scale / 2^L. Projected size in
+            // pixels at distance d: cell / (d * 2 tan(fov/2)) * height.
+            let h = screen.1.max(1) as f64;
+            let tan_y = (camera.fov_y_deg.clamp(1e-9, 179.999).to_radians() * 0.5).tan();
+            let scale = scale_of(xf);
+            let radius = scale * 3f64.sqrt();
+            let dist =
+                ((xf.translation - camera.position).length() - radius).max(camera.near.max(1e-9));
+            let ideal = (2.0 * scale * h / (dist * 2.0 * tan_y)).log2();
+            let l = if ideal.is_finite() {
+                ideal.round() as i64
+            } else {
+                max_level as i64
+            };
+            (l + bias as i64).clamp(0, max_level as i64) as u32
+        }
+    }
+}
+
+/// Uniform scale of an instance transform (cube root of |det|).
+fn scale_of(xf: &DAffine3) -> f64 {
+    xf.matrix3.determinant().abs().cbrt()
+}
+
+/// Whether an object-space point lies in a resident page of a lookup (then the proxy,
+/// the union of resident pages, contains it and the prepass draws back faces).
+fn inside_resident_page(lookup: &ssbvb_voxel::asset::SparseLookup, p: DVec3) -> bool {
+    // NaN-safe: a NaN coordinate is not inside.
+    if p.abs().max_element().partial_cmp(&1.0) != Some(std::cmp::Ordering::Less) {
+        return false;
+    }
+    let n = (1u64 << lookup.level) as f64;
+    let cell = ((p + 1.0) * 0.5 * n).floor();
+    let ps = ssbvb_voxel::asset::PAGE_SIZE as f64;
+    let page = (cell / ps).floor();
+    lookup.page_resident([page.x as u32, page.y as u32, page.z as u32])
+}
+
+/// The four side planes of the view frustum through the eye (origin), as (inward normal, d).
+/// The near and far planes are not used: instances behind the eye fail a side plane test or
+/// are handled by the prepass depth test.
+fn frustum_planes(
+    right: DVec3,
+    up: DVec3,
+    forward: DVec3,
+    tan_x: f64,
+    tan_y: f64,
+) -> [(DVec3, f64); 4] {
+    let n = |v: DVec3| v.normalize_or(forward);
+    [
+        (n(forward * tan_x + right), 0.0),
+        (n(forward * tan_x - right), 0.0),
+        (n(forward * tan_y + up), 0.0),
+        (n(forward * tan_y - up), 0.0),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn auto_lod_picks_the_level_whose_cell_is_about_one_pixel() {
+        let cam = Camera {
+            fov_y_deg: 90.0,
+            ..Camera::new(DVec3::new(0.0, 0.0, 10.0), DVec3::ZERO)
+        };
+        // tan(45°) = 1: at distance d (to the nearest bounding-sphere point) a screen of
+        // height h shows 2d world units, so a cell of 2 / 2^L projects to h / (d 2^L) px.
+        let xf = DAffine3::IDENTITY;
+        let d = 10.0 - 3f64.sqrt();
+        let h = 720u32;
+        let want = (h as f64 / d).log2().round() as u32;
+        assert_eq!(
+            choose_level(LodPolicy::Auto { bias: 0 }, &xf, &cam, (1280, h), 12),
+            want
+        );
+        assert_eq!(
+            choose_level(LodPolicy::Auto { bias: 1 }, &xf, &cam, (1280, h), 12),
+            want + 1
+        );
+        assert_eq!(
+            choose_level(LodPolicy::Auto { bias: -20 }, &xf, &cam, (1280, h), 12),
+            0
+        );
+        // Twice the distance: one level coarser; a far object clamps at 0, a near one at max.
+        let far = Camera {
+            position: DVec3::new(0.0, 0.0, 2.0 * d + 3f64.sqrt()),
+            ..cam
+        };
+        assert_eq!(
+            choose_level(LodPolicy::Auto { bias: 0 }, &xf, &far, (1280, h), 12),
+            want - 1
+        );
+        let very_far = Camera {
+            position: DVec3::new(0.0, 0.0, 1e9),
+            ..cam
+        };
+        assert_eq!(
+            choose_level(LodPolicy::Auto { bias: 0 }, &xf, &very_far, (1280, h), 12),
+            0
+        );
+        let inside = Camera {
+            position: DVec3::new(0.0, 0.0, 0.5),
+            ..cam
+        };
+        assert_eq!(
+            choose_level(LodPolicy::Auto { bias: 0 }, &xf, &inside, (1280, h), 9),
+            9
+        );
+        assert_eq!(
+            choose_level(LodPolicy::Fixed(15), &xf, &cam, (1280, h), 9),
+            9
+        );
+    }
+
+    #[test]
+    fn frustum_planes_contain_the_view_axis_and_exclude_what_is_behind() {
+        let (r, u, f) = (DVec3::X, DVec3::Y, DVec3::NEG_Z);
+        let planes = frustum_planes(r, u, f, 1.0, 1.0);
+        let inside = |p: DVec3, radius: f64| planes.iter().all(|(n, d)| n.dot(p) + d >= -radius);
+        assert!(inside(DVec3::new(0.0, 0.0, -5.0), 0.1));
+        assert!(!inside(DVec3::new(0.0, 0.0, 5.0), 0.1), "behind the camera");
+        assert!(!inside(DVec3::new(20.0, 0.0, -5.0), 1.0), "far right");
+        assert!(
+            inside(DVec3::new(5.5, 0.0, -5.0), 1.0),
+            "sphere crossing the right plane"
+        );
+    }
+}

@@ -1,0 +1,298 @@
+// The sparse march: the first voxel along a ray through one LOD's sparse lookup (page
+// table, page pool, coarse occupancy; common.inc.wgsl), the GPU side of the CPU reference's
+// hierarchical DDA. Included by ray_march_filter.wgsl; the includer declares
+// `override MAX_STEPS: u32`.
+//
+// The rules (f32), following the CPU reference (ssbvb-voxel reference/dda.rs):
+//
+// - Space: the instance's object space; the ray is `camera_object + t * d` with
+//   `d = world_to_object * dir` and `dir` the normalized camera-relative world ray, so `t`
+//   is the world distance for every instance (no renormalization).
+// - Axes with `d < 0` are mirrored (`x -> -x`, cell `i -> n - 1 - i`; exact with dyadic
+//   cell boundaries), so the loop only steps forward. Axes with a negligible `d` component
+//   are static (the ray stays in one cell on them).
+// - Crossing times are computed per plane (`(b_k - o) / d`, never accumulated), exactly
+//   like the reference: times are monotone in `k` and two axes tie only when their
+//   computed times are equal. Cells are never derived from a rounded position alone: a
+//   position estimate is corrected against the plane times (`first_plane`), so the cell a
+//   ray is in always agrees with the times, and every step advances at least one plane
+//   (guaranteed progress).
+// - Hierarchy: in an unoccupied coarse block (64^3 cells) or a non-resident page (16^3)
+//   the ray jumps to the first time it reaches the region's far boundary, landing in the
+//   state the cell-by-cell loop would reach there. Inside a resident page each cell costs
+//   one read of the page pool (the page is looked up once, when the ray enters it).
+// - Ties (the ray crosses several planes at the same time, i.e. passes exactly through an
+//   edge or a corner): the cell entered diagonally is tested first, then the cells the ray
+//   only touches along the edge, in the reference's rank order.
+// - Hit: the voxel's touch time (the latest of its near-plane crossing times, at least 0)
+//   and the entered face (the axis crossed at that time; ties to the faster axis; a camera
+//   inside the voxel gets the dominant axis of the direction).
+// - Every loop iteration counts one step (cells, pages and coarse blocks alike); after
+//   MAX_STEPS the ray reports no hit.
+
+// Stands in for infinity: WGSL lets implementations assume no infinities at run time.
+const BIG: f32 = 3.0e38;
+// Direction components below this fraction of the largest one are treated as 0: over the
+// whole box the ray moves less than 4e-12 object units on that axis, far below a cell of
+// any supported level (2^-15), and crossing times stay finite.
+const STATIC_AXIS: f32 = 1e-12;
+// Cameras farther than this (object units) from an instance see nothing of it (keeps every
+// crossing time finite).
+const MAX_ORIGIN: f32 = 1e12;
+
+// An object-space ray in the mirrored frame of one instance's LOD grid.
+struct Ray {
+    // Origin (negated on mirrored axes).
+    o: vec3<f32>,
+    // |direction| per axis; 0 on static axes.
+    d: vec3<f32>,
+    moving: vec3<bool>,
+    mirrored: vec3<bool>,
+    // Cells per axis and cell size of the grid.
+    n: i32,
+    s: f32,
+    // The ray's interval inside the [-1, 1]^3 box (t_enter > t_exit: it misses).
+    t_enter: f32,
+    t_exit: f32,
+}
+
+// The first voxel along a ray.
+struct Hit {
+    found: bool,
+    // Voxel id in the LOD's point cloud.
+    id: u32,
+    // World distance to the entered face (0 when the camera is inside the voxel).
+    t: f32,
+    // Entered face, as VoxelSlot.face.
+    face: u32,
+}
+
+fn no_hit() -> Hit {
+    return Hit(false, 0u, BIG, 0u);
+}
+
+fn make_ray(inst: Instance, level: u32, dir: vec3<f32>) -> Ray {
+    let o_obj = inst.camera_object.xyz;
+    let d_obj = (inst.world_to_object * vec4(dir, 0.0)).xyz;
+    let ad = abs(d_obj);
+    let m = max(ad.x, max(ad.y, ad.z));
+    var r: Ray;
+    r.moving = ad > vec3(m * STATIC_AXIS);
+    r.mirrored = r.moving & (d_obj < vec3(0.0));
+    r.o = select(o_obj, -o_obj, r.mirrored);
+    r.d = select(vec3(0.0), ad, r.moving);
+    r.n = 1 << level;
+    r.s = cell_size(level);
+    // Slab test; static axes divide by 1 and are then replaced (no 0 / 0).
+    let dd = select(vec3(1.0), r.d, r.moving);
+    let t0 = select(vec3(-BIG), (vec3(-1.0) - r.o) / dd, r.moving);
+    let t1 = select(vec3(BIG), (vec3(1.0) - r.o) / dd, r.moving);
+    r.t_enter = max(t0.x, max(t0.y, t0.z));
+    r.t_exit = min(t1.x, min(t1.y, t1.z));
+    let bad = !(m > 0.0 && m < BIG) || any(!(abs(o_obj) < vec3(MAX_ORIGIN)))
+        || any(!r.moving & (abs(r.o) > vec3(1.0)));
+    if bad {
+        r.t_enter = BIG;
+        r.t_exit = -BIG;
+    }
+    return r;
+}
+
+// Time at which the ray crosses plane `k` (at -1 + k * s) of moving axis `a`.
+fn plane_t(r: Ray, a: u32, k: i32) -> f32 {
+    return ((f32(k) * r.s - 1.0) - r.o[a]) / r.d[a];
+}
+
+fn plane_ok(r: Ray, a: u32, k: i32, t: f32, strict: bool) -> bool {
+    let tk = plane_t(r, a, k);
+    return select(tk >= t, tk > t, strict);
+}
+
+// The smallest plane `k` in [lo, hi] of moving axis `a` crossed at or after `t` (strictly
+// after when `strict`), or hi + 1. The position estimate is right but for rounding; a
+// binary search fixes whatever it got wrong (far cameras round positions coarsely).
+fn first_plane(r: Ray, a: u32, t: f32, lo_in: i32, hi_in: i32, strict: bool) -> i32 {
+    var lo = lo_in;
+    var hi = hi_in + 1;
+    if lo >= hi {
+        return lo;
+    }
+    let x = (r.o[a] + t * r.d[a] + 1.0) / r.s;
+    let xs = select(f32(lo), x, x == x);
+    let est = i32(clamp(ceil(xs), f32(lo), f32(hi - 1)));
+    if plane_ok(r, a, est, t, strict) {
+        if est == lo || !plane_ok(r, a, est - 1, t, strict) {
+            return est;
+        }
+        hi = est - 1;
+    } else {
+        if est + 1 >= hi || plane_ok(r, a, est + 1, t, strict) {
+            return est + 1;
+        }
+        lo = est + 2;
+    }
+    loop {
+        if lo >= hi {
+            break;
+        }
+        let mid = lo + (hi - lo) / 2;
+        if plane_ok(r, a, mid, t, strict) {
+            hi = mid;
+        } else {
+            lo = mid + 1;
+        }
+    }
+    return lo;
+}
+
+// A mirrored-frame cell in the grid's own coordinates.
+fn orig_cell(r: Ray, c: vec3<i32>) -> vec3<u32> {
+    return vec3<u32>(select(c, vec3(r.n - 1) - c, r.mirrored));
+}
+
+// The hit record of occupied cell `c` (mirrored frame): its touch time and entered face.
+fn cell_hit(r: Ray, c: vec3<i32>, id: u32) -> Hit {
+    var t = -BIG;
+    var axis = 3u;
+    for (var a = 0u; a < 3u; a++) {
+        if r.moving[a] {
+            let ta = plane_t(r, a, c[a]);
+            if axis == 3u || ta > t || (ta == t && r.d[a] > r.d[axis]) {
+                t = ta;
+                axis = a;
+            }
+        }
+    }
+    if t < 0.0 {
+        // The camera is inside the voxel: the dominant axis of the direction.
+        t = 0.0;
+        if r.d.x >= r.d.y && r.d.x >= r.d.z {
+            axis = 0u;
+        } else if r.d.y >= r.d.z {
+            axis = 1u;
+        } else {
+            axis = 2u;
+        }
+    }
+    // The entered face's normal points against the ray: -axis (0..2) when moving towards
+    // +axis, +axis (3..5) on mirrored axes.
+    return Hit(true, id, t, axis + select(0u, 3u, r.mirrored[axis]));
+}
+
+// Marches `r` through `lod` from `t_from` (clamped to the box) up to `t_limit`.
+fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32) -> Hit {
+    let t0 = max(max(r.t_enter, t_from), 0.0);
+    let t_end = min(r.t_exit, t_limit);
+    if !(t0 <= t_end) {
+        return no_hit();
+    }
+    // The cell at t0 on each axis: the one the ray is inside of just after t0.
+    var c = vec3(0);
+    var t_next = vec3(BIG);
+    for (var a = 0u; a < 3u; a++) {
+        if r.moving[a] {
+            let k = first_plane(r, a, t0, 0, r.n, true);
+            c[a] = clamp(k - 1, 0, r.n - 1);
+            t_next[a] = select(BIG, plane_t(r, a, k), k <= r.n);
+        } else {
+            c[a] = clamp(i32(floor((r.o[a] + 1.0) / r.s)), 0, r.n - 1);
+        }
+    }
+    // The resident page the ray is in (page coordinates, pool page): cell steps inside it
+    // read one pool word instead of the coarse bits, the page table and the pool.
+    var cur_page = vec3(0xffffffffu);
+    var cur_pool = 0u;
+    for (var step = 0u; step < MAX_STEPS; step++) {
+        let co = orig_cell(r, c);
+        let pg = co / PAGE_SIZE;
+        var unit = 0;
+        if any(pg != cur_page) {
+            if !coarse_occupied(lod, co) {
+                unit = i32(PAGE_SIZE * COARSE_PAGES);
+            } else {
+                let ppa = lod.pages_per_axis;
+                let entry = page_tables[lod.page_table_offset + pg.x + ppa * (pg.y + ppa * pg.z)];
+                if entry == EMPTY_PAGE {
+                    unit = i32(PAGE_SIZE);
+                } else {
+                    cur_page = pg;
+                    cur_pool = entry;
+                }
+            }
+        }
+        if unit == 0 {
+            let l = co % PAGE_SIZE;
+            let v = pages[(lod.page_offset + cur_pool) * PAGE_CELLS + l.x
+                + PAGE_SIZE * (l.y + PAGE_SIZE * l.z)];
+            if v != 0u {
+                return cell_hit(r, c, v - 1u);
+            }
+        }
+        if unit != 0 {
+            // Empty region: its far plane per moving axis (mirrored frame), the first time
+            // the ray reaches one of them, and the state just before that event.
+            var far = vec3(0);
+            var t_out = BIG;
+            for (var a = 0u; a < 3u; a++) {
+                if r.moving[a] {
+                    let u = i32(co[a]) / unit;
+                    far[a] = select(min((u + 1) * unit, r.n), r.n - u * unit, r.mirrored[a]);
+                    t_out = min(t_out, plane_t(r, a, far[a]));
+                }
+            }
+            if t_out > t_end {
+                return no_hit();
+            }
+            for (var a = 0u; a < 3u; a++) {
+                if r.moving[a] {
+                    let k = first_plane(r, a, t_out, c[a] + 1, far[a], false);
+                    c[a] = max(c[a], k - 1);
+                    t_next[a] = plane_t(r, a, k);
+                }
+            }
+        }
+        // Step to the next event: every axis whose next plane is crossed first.
+        let tm = min(t_next.x, min(t_next.y, t_next.z));
+        if tm > t_end {
+            return no_hit();
+        }
+        let cross = r.moving & (t_next == vec3(tm));
+        c += select(vec3(0), vec3(1), cross);
+        for (var a = 0u; a < 3u; a++) {
+            if cross[a] {
+                t_next[a] = select(BIG, plane_t(r, a, c[a] + 1), c[a] + 1 <= r.n);
+            }
+        }
+        if u32(cross.x) + u32(cross.y) + u32(cross.z) > 1u {
+            // Through an edge or corner: the diagonal cell, then the cells touched only
+            // along the edge, in the reference's rank order (differ on x, y, z, xy, xz, yz).
+            var order = array(0u, 1u, 2u, 4u, 3u, 5u, 6u);
+            let crossed = select(0u, 1u, cross.x) | select(0u, 2u, cross.y) | select(0u, 4u, cross.z);
+            for (var i = 0u; i < 7u; i++) {
+                let mask = order[i];
+                if (mask & crossed) != mask {
+                    continue;
+                }
+                let back = vec3(i32(mask & 1u), i32((mask >> 1u) & 1u), i32((mask >> 2u) & 1u));
+                let cand = c - back;
+                if all(cand < vec3(r.n)) {
+                    let v = lookup_cell(lod, orig_cell(r, cand));
+                    if v != 0u {
+                        return cell_hit(r, cand, v - 1u);
+                    }
+                }
+            }
+        }
+        if any(c >= vec3(r.n)) {
+            return no_hit();
+        }
+    }
+    return no_hit();
+}
+
+// Where to start marching the prepass instance: the prepass entry moved back by one cell,
+// by an eighth of how much the entry depth changes to a neighbouring pixel of the same
+// instance (rasterizers snap vertices to 1/16 px or finer, and on faces seen at grazing
+// angles that moves the interpolated entry along the ray by that fraction of the
+// per-pixel change), and by a relative 1e-5 for f32 rounding. Pixels without such a
+// neighbour, and instances whose proxy holds the camera, start at the camera.
