@@ -166,3 +166,34 @@ pub fn read_half4(frame: &Frame, name: &str) -> Vec<[f32; 4]> {
         .map(|t| std::array::from_fn(|c| f16_to_f32(u16::from_le_bytes([t[2 * c], t[2 * c + 1]]))))
         .collect()
 }
+
+/// The G-buffer of a ray-cast or rasterized frame as reference-comparable hits: one per
+/// pixel where something was drawn, with the depth along the pixel's ray and the written
+/// normal (instance and cell unknown: [`u32::MAX`]). Fails the test at a non-finite
+/// position or normal, or a drawn pixel whose stencil is not the voxel value (1); `what`
+/// names the render in those messages.
+pub fn gbuffer_hits(frame: &Frame, what: &str) -> Vec<Option<ssbvb_voxel::accuracy::GpuHit>> {
+    let albedo = frame.read("gbuffer_albedo");
+    let pos = frame.read_f32("gbuffer_position");
+    let normal = read_half4(frame, "gbuffer_normal");
+    let stencil = frame.read_stencil("depth_stencil");
+    (0..normal.len())
+        .map(|i| {
+            (albedo[i * 4 + 3] > 0).then(|| {
+                let p = &pos[i * 4..i * 4 + 4];
+                let n = normal[i];
+                assert!(
+                    p.iter().chain(&n).all(|v| v.is_finite()),
+                    "{what}: NaN at {i}"
+                );
+                assert_eq!(stencil[i], 1, "{what}: stencil at {i}");
+                ssbvb_voxel::accuracy::GpuHit {
+                    instance: u32::MAX,
+                    cell: [u32::MAX; 3],
+                    t: (p[0] as f64).hypot(p[1] as f64).hypot(p[2] as f64),
+                    normal: [n[0], n[1], n[2]],
+                }
+            })
+        })
+        .collect()
+}

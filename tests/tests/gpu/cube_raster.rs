@@ -63,29 +63,17 @@ fn instances(scene: &Scene) -> Vec<(DAffine3, u32, Arc<VoxelAsset>)> {
 /// cell behind the written position along the written normal, in the instance whose LOD
 /// holds a voxel there.
 fn hits(f: &ssbvb_tests::Frame, scene: &Scene, cam: &Camera, what: &str) -> Vec<Option<GpuHit>> {
-    let albedo = f.read("gbuffer_albedo");
-    let pos = f.read_f32("gbuffer_position");
-    let normal = ssbvb_tests::read_half4(f, "gbuffer_normal");
-    let stencil = f.read_stencil("depth_stencil");
     let insts = instances(scene);
-    (0..(SIZE.0 * SIZE.1) as usize)
-        .map(|i| {
-            (albedo[i * 4 + 3] > 0).then(|| {
-                let p = &pos[i * 4..i * 4 + 4];
-                let n = normal[i];
-                assert!(
-                    p.iter().chain(&n).all(|v| v.is_finite()),
-                    "{what}: NaN at {i}"
-                );
-                assert_eq!(stencil[i], 1, "{what}: stencil at {i}");
+    let pos = f.read_f32("gbuffer_position");
+    ssbvb_tests::gbuffer_hits(f, what)
+        .into_iter()
+        .enumerate()
+        .map(|(i, h)| {
+            h.map(|mut hit| {
+                let p = &pos[i * 4..i * 4 + 3];
                 let world = cam.position + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+                let n = hit.normal;
                 let n_world = DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64);
-                let mut hit = GpuHit {
-                    instance: u32::MAX,
-                    cell: [u32::MAX; 3],
-                    t: (p[0] as f64).hypot(p[1] as f64).hypot(p[2] as f64),
-                    normal: [n[0], n[1], n[2]],
-                };
                 for (ii, (xf, level, asset)) in insts.iter().enumerate() {
                     let s = 2.0 / (1u64 << level) as f64;
                     let p_obj = xf.inverse().transform_point3(world);

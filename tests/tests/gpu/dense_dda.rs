@@ -9,7 +9,7 @@ use std::sync::Arc;
 use glam::DVec3;
 use ssbvb_passes::dense_dda::MAX_DENSE_LEVEL;
 use ssbvb_passes::{GpuScene, PassError, Profiling, Renderer};
-use ssbvb_voxel::accuracy::{self, GpuHit};
+use ssbvb_voxel::accuracy;
 use ssbvb_voxel::asset::{LodLevel, PackedVoxel, PointCloud, ProxyMesh, SparseLookup};
 use ssbvb_voxel::camera::Camera;
 
@@ -34,30 +34,7 @@ fn dense_dda_matches_the_reference() {
             let scene = ssbvb_tests::single_object_scene(asset.clone(), level);
             let reference = ssbvb_tests::reference_of(&scene, cam, SIZE);
             let f = ssbvb_tests::render(DENSE_DDA, scene, cam, SIZE);
-            let albedo = f.read("gbuffer_albedo");
-            let pos = f.read_f32("gbuffer_position");
-            let normal = ssbvb_tests::read_half4(&f, "gbuffer_normal");
-            let stencil = f.read_stencil("depth_stencil");
-            let hits: Vec<Option<GpuHit>> = (0..(SIZE.0 * SIZE.1) as usize)
-                .map(|i| {
-                    (albedo[i * 4 + 3] > 0).then(|| {
-                        let p = &pos[i * 4..i * 4 + 4];
-                        assert!(
-                            p.iter().chain(&normal[i]).all(|v| v.is_finite()),
-                            "{file}: NaN at {i}"
-                        );
-                        assert_eq!(stencil[i], 1, "{file}: stencil at {i}");
-                        GpuHit {
-                            instance: 0,
-                            // The G-buffer holds no cell id: only coverage, depth and
-                            // normal are compared.
-                            cell: [u32::MAX; 3],
-                            t: (p[0] as f64).hypot(p[1] as f64).hypot(p[2] as f64),
-                            normal: [normal[i][0], normal[i][1], normal[i][2]],
-                        }
-                    })
-                })
-                .collect();
+            let hits = ssbvb_tests::gbuffer_hits(&f, file);
             let r = accuracy::compare(&reference, &hits, &[cell]).unwrap();
             eprintln!(
                 "DenseDda {file} L{level} camera {ci}: IoU {:.4}, depth median {:.5} p95 {:.4} voxels, normal median {:.2}°, px {}",
@@ -75,6 +52,16 @@ fn dense_dda_matches_the_reference() {
             assert!(r.coverage_iou >= 0.99, "{file} camera {ci}: {r:?}");
             assert!(
                 r.depth_error_voxels.median <= 0.01,
+                "{file} camera {ci}: {r:?}"
+            );
+            // Measured on lavapipe: depth p95 and normal median are 0 (exact face hits); the
+            // bounds leave a margin for other adapters' rounding.
+            assert!(
+                r.depth_error_voxels.p95 <= 0.05,
+                "{file} camera {ci}: {r:?}"
+            );
+            assert!(
+                r.normal_error_deg.median <= 0.5,
                 "{file} camera {ci}: {r:?}"
             );
         }
