@@ -1,0 +1,145 @@
+//! [`load_or_prepare`]: the asset of a model file from the cache, or prepared from the
+//! source and written to the cache, with what was done and why.
+
+use std::io;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use super::{
+    CacheError, FORMAT_VERSION, cache_file_name, default_cache_dir, hash_source, read_cache,
+    write_cache,
+};
+use crate::asset::VoxelAsset;
+use crate::load::{LoadError, load_model};
+use crate::prepare::{PrepareStats, prepare_asset};
+use crate::progress::Progress;
+use crate::voxelize::VoxelizeError;
+
+/// Whether an asset came from the cache or was rebuilt, and why.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "status", rename_all = "snake_case")]
+pub enum CacheStatus {
+    /// Read from a valid cache file.
+    Hit,
+    /// Prepared from the source (the reason says why the cache was not used).
+    Rebuilt {
+        /// Why: "cache missing", "cache corrupt (checksum mismatch in section …)", …
+        reason: String,
+    },
+}
+
+/// What [`load_or_prepare`] did.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PrepareOutcome {
+    /// The cache file read or written.
+    pub cache_path: PathBuf,
+    /// Hit or rebuilt (with the reason).
+    pub status: CacheStatus,
+    /// Preparation statistics when the asset was rebuilt.
+    pub stats: Option<PrepareStats>,
+    /// Set when the rebuilt asset could not be written to the cache (the asset is still
+    /// returned; the next run rebuilds again).
+    pub cache_write_error: Option<String>,
+}
+
+impl std::fmt::Display for PrepareOutcome {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.status {
+            CacheStatus::Hit => write!(f, "cache hit ({})", self.cache_path.display())?,
+            CacheStatus::Rebuilt { reason } => {
+                write!(f, "{reason}, rebuilt ({})", self.cache_path.display())?
+            }
+        }
+        if let Some(e) = &self.cache_write_error {
+            write!(f, "; cache not written: {e}")?;
+        }
+        Ok(())
+    }
+}
+
+/// Why [`load_or_prepare`] failed.
+#[derive(Debug, thiserror::Error)]
+pub enum PrepareError {
+    /// The model could not be loaded.
+    #[error(transparent)]
+    Load(#[from] LoadError),
+    /// The model could not be voxelized.
+    #[error("{}: {error}", .path.display())]
+    Voxelize {
+        /// The model file.
+        path: PathBuf,
+        /// What went wrong.
+        error: VoxelizeError,
+    },
+    /// The source file could not be read for hashing.
+    #[error(transparent)]
+    Cache(#[from] CacheError),
+}
+
+/// Returns the asset of `model_path` at `level`: read from the cache when a valid cache
+/// file exists, otherwise prepared (with the default [`crate::prepare::PrepareOptions`])
+/// and written to the cache. `cache_dir` defaults to [`default_cache_dir`]. A cache that
+/// cannot be written is reported in the outcome, not an error.
+pub fn load_or_prepare(
+    model_path: &Path,
+    level: u32,
+    cache_dir: Option<&Path>,
+    progress: &dyn Progress,
+) -> Result<(VoxelAsset, PrepareOutcome), PrepareError> {
+    let source_hash = hash_source(model_path)?;
+    let dir = cache_dir.map_or_else(default_cache_dir, Path::to_path_buf);
+    let cache_path = dir.join(cache_file_name(source_hash, level));
+    let reason = match read_cache(&cache_path, source_hash, level) {
+        Ok(asset) => {
+            let outcome = PrepareOutcome {
+                cache_path,
+                status: CacheStatus::Hit,
+                stats: None,
+                cache_write_error: None,
+            };
+            return Ok((asset, outcome));
+        }
+        Err(e) => e.rebuild_reason(),
+    };
+    let model = load_model(model_path)?;
+    let (asset, stats) =
+        prepare_asset(&model, level, progress).map_err(|error| PrepareError::Voxelize {
+            path: model_path.to_path_buf(),
+            error,
+        })?;
+    drop(model);
+    let cache_write_error = write_cache(&cache_path, &asset, source_hash, level)
+        .err()
+        .map(|e| e.to_string());
+    let outcome = PrepareOutcome {
+        cache_path,
+        status: CacheStatus::Rebuilt { reason },
+        stats: Some(stats),
+        cache_write_error,
+    };
+    Ok((asset, outcome))
+}
+
+impl CacheError {
+    /// Short description used in rebuild reasons ("cache missing", "cache corrupt (…)").
+    fn rebuild_reason(&self) -> String {
+        match self {
+            CacheError::Io { error, .. } if error.kind() == io::ErrorKind::NotFound => {
+                "cache missing".into()
+            }
+            CacheError::Io { error, .. } => format!("cache unreadable ({error})"),
+            CacheError::BadMagic { .. } => "cache corrupt (bad magic)".into(),
+            CacheError::UnsupportedVersion { found, .. } => {
+                format!("cache from format version {found} (this build writes {FORMAT_VERSION})")
+            }
+            CacheError::SourceMismatch { .. } => "cache stale (source file changed)".into(),
+            CacheError::LevelMismatch { found, .. } => format!("cache holds level {found}"),
+            CacheError::Truncated { what, .. } => format!("cache corrupt (truncated in {what})"),
+            CacheError::Checksum { section, .. } => {
+                format!("cache corrupt (checksum mismatch in section {section})")
+            }
+            CacheError::Corrupt { reason, .. } => format!("cache corrupt ({reason})"),
+        }
+    }
+}

@@ -1,0 +1,123 @@
+//! The exact rules: axis-parallel, grazing, edge and corner rays, and rays starting inside.
+
+use glam::DVec3;
+use ssbvb_voxel::asset::LodLevel;
+use ssbvb_voxel::model::cell_size;
+use ssbvb_voxel::reference::{Traversal, trace_object_ray};
+
+use crate::{b, lod};
+
+#[test]
+fn axis_parallel_grazing_edge_and_corner_rays_follow_the_documented_rules() {
+    let level = 3;
+    let s = cell_size(level);
+    let centre = |k: i64| b(level, k) + 0.5 * s;
+    let one = lod(level, &[[3, 3, 3]]);
+    let trace = |l: &LodLevel, o: DVec3, d: DVec3| {
+        let h = trace_object_ray(&l.lookup, o, d, Traversal::Hierarchical);
+        assert_eq!(h, trace_object_ray(&l.lookup, o, d, Traversal::CellByCell));
+        h
+    };
+
+    // Straight through the middle, along +x: enters the -x face.
+    let h = trace(&one, DVec3::new(-3.0, centre(3), centre(3)), DVec3::X).unwrap();
+    assert_eq!(
+        (h.cell, h.face_axis, h.face_normal, h.inside),
+        ([3, 3, 3], 0, DVec3::NEG_X, false)
+    );
+    assert_eq!(h.t, b(level, 3) + 3.0);
+    // Along -y from above: enters the +y face.
+    let h = trace(&one, DVec3::new(centre(3), 5.0, centre(3)), DVec3::NEG_Y).unwrap();
+    assert_eq!((h.face_normal, h.t), (DVec3::Y, 5.0 - b(level, 4)));
+
+    // Grazing: the ray runs inside the voxel's top face plane y = b(4): closed cells hit.
+    let h = trace(&one, DVec3::new(-3.0, b(level, 4), centre(3)), DVec3::X).unwrap();
+    assert_eq!((h.cell, h.face_normal), ([3, 3, 3], DVec3::NEG_X));
+    // Along an edge (y and z both on the voxel's upper planes).
+    let h = trace(&one, DVec3::new(-3.0, b(level, 4), b(level, 4)), DVec3::X).unwrap();
+    assert_eq!(h.cell, [3, 3, 3]);
+    // Just off the face: a miss.
+    assert!(
+        trace(
+            &one,
+            DVec3::new(-3.0, b(level, 4) + 1e-12, centre(3)),
+            DVec3::X
+        )
+        .is_none()
+    );
+
+    // Two voxels stacked in y; a ray in their shared plane reports the lower one...
+    let two = lod(level, &[[3, 4, 3], [3, 3, 3]]);
+    let h = trace(&two, DVec3::new(-3.0, b(level, 4), centre(3)), DVec3::X).unwrap();
+    assert_eq!((h.cell, h.voxel), ([3, 3, 3], 1));
+    // ...and the upper one when the lower one is absent.
+    let upper = lod(level, &[[3, 4, 3]]);
+    let h = trace(&upper, DVec3::new(-3.0, b(level, 4), centre(3)), DVec3::X).unwrap();
+    assert_eq!(h.cell, [3, 4, 3]);
+
+    // Diagonal through the corner shared by cells (3,3), (4,3), (3,4), (4,4) in xy.
+    let o = DVec3::new(b(level, 4) - 1.5 * s, b(level, 4) - 1.5 * s, centre(3));
+    let d = DVec3::new(1.0, 1.0, 0.0);
+    // Entering (4,4) through its corner: that cell wins, x face on the exact tie.
+    let h = trace(&lod(level, &[[4, 3, 3], [3, 4, 3], [4, 4, 3]]), o, d).unwrap();
+    assert_eq!((h.cell, h.face_axis, h.t), ([4, 4, 3], 0, 1.5 * s));
+    // Without (4,4): both neighbours are touched at the same time; rank sums tie, and the
+    // one differing from (4,4) on x wins: (3,4), entered through its -y face.
+    let h = trace(&lod(level, &[[4, 3, 3], [3, 4, 3]]), o, d).unwrap();
+    assert_eq!(
+        (h.cell, h.face_normal, h.t),
+        ([3, 4, 3], DVec3::NEG_Y, 1.5 * s)
+    );
+    // A diagonal gap between voxels that share only an edge does not leak.
+    let h = trace(&lod(level, &[[4, 3, 3]]), o, d).unwrap();
+    assert_eq!((h.cell, h.face_normal), ([4, 3, 3], DVec3::NEG_X));
+
+    // Camera inside the voxel: t = 0, normal from the dominant axis, against the ray.
+    let inside = DVec3::splat(centre(3));
+    let h = trace(&one, inside, DVec3::new(0.3, -0.9, 0.1)).unwrap();
+    assert_eq!((h.t, h.inside, h.face_normal), (0.0, true, DVec3::Y));
+    // Camera exactly on the voxel's face, looking in: t = 0 through that face.
+    let h = trace(
+        &one,
+        DVec3::new(b(level, 3), centre(3), centre(3)),
+        DVec3::X,
+    )
+    .unwrap();
+    assert_eq!((h.t, h.inside, h.face_normal), (0.0, false, DVec3::NEG_X));
+    // Looking out of the face: still touching the closed cell at t = 0.
+    let h = trace(
+        &one,
+        DVec3::new(b(level, 3), centre(3), centre(3)),
+        DVec3::NEG_X,
+    )
+    .unwrap();
+    assert_eq!((h.t, h.inside), (0.0, true));
+
+    // Rays outside the box, parallel to it, on its faces, zero, NaN: no panics, no NaN.
+    let corner = lod(level, &[[0, 0, 0], [7, 7, 7]]);
+    assert!(trace(&corner, DVec3::new(-3.0, 1.0 + 1e-15, 0.0), DVec3::X).is_none());
+    let h = trace(&corner, DVec3::new(-3.0, -1.0, -1.0), DVec3::X).unwrap();
+    assert_eq!((h.cell, h.t), ([0, 0, 0], 2.0));
+    let h = trace(&corner, DVec3::new(3.0, 1.0, 1.0), DVec3::NEG_X).unwrap();
+    assert_eq!((h.cell, h.t), ([7, 7, 7], 2.0));
+    assert!(trace(&corner, DVec3::ZERO, DVec3::ZERO).is_none());
+    assert!(trace(&corner, DVec3::NAN, DVec3::X).is_none());
+    assert!(trace(&corner, DVec3::ZERO, DVec3::new(f64::INFINITY, 0.0, 0.0)).is_none());
+    assert!(
+        trace(
+            &corner,
+            DVec3::new(-3.0, -1.0, -1.0),
+            DVec3::new(1e-310, 1.0, 0.0)
+        )
+        .is_none()
+    );
+    // A subnormal component inside the box acts as a static axis (its crossings overflow
+    // to infinity), never as NaN.
+    let h = trace(
+        &corner,
+        DVec3::new(-0.9, -3.0, -0.9),
+        DVec3::new(1e-310, 1.0, 0.0),
+    )
+    .unwrap();
+    assert_eq!((h.cell, h.t, h.face_normal), ([0, 0, 0], 2.0, DVec3::NEG_Y));
+}
