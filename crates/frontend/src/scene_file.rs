@@ -16,7 +16,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Context, Result, anyhow, bail};
 use glam::{DAffine3, DQuat, DVec3};
 use serde::Deserialize;
 use ssbvb_passes::{LodPolicy, Scene, TriangleObject, VoxelObject};
@@ -186,6 +186,75 @@ pub enum TriangleDesc {
     },
 }
 
+fn finite3(v: (f64, f64, f64)) -> bool {
+    v.0.is_finite() && v.1.is_finite() && v.2.is_finite()
+}
+
+impl SceneFile {
+    /// Values the renderer cannot use, each naming its field (empty when the file is
+    /// usable). Checked before any model is voxelized.
+    pub fn problems(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        let c = &self.camera;
+        if !finite3(c.position) || !finite3(c.look_at) || !finite3(c.up) {
+            out.push("camera: position, look_at and up must be finite".to_string());
+        } else if c.position == c.look_at {
+            out.push("camera: position and look_at are the same point".to_string());
+        }
+        if !(c.fov_y > 0.0 && c.fov_y < 180.0) {
+            out.push(format!(
+                "camera.fov_y must be in (0, 180) degrees, got {}",
+                c.fov_y
+            ));
+        }
+        if !(c.near > 0.0 && c.near.is_finite()) {
+            out.push(format!(
+                "camera.near must be a positive number, got {}",
+                c.near
+            ));
+        } else if c.far > 0.0 && c.far <= c.near {
+            out.push(format!(
+                "camera.far ({}) must be beyond camera.near ({}), or 0 for no far plane",
+                c.far, c.near
+            ));
+        }
+        for (i, o) in self.objects.iter().enumerate() {
+            match o.lod {
+                Some(LodDesc::Fixed(l)) if l > o.level => out.push(format!(
+                    "objects[{i}].lod: Fixed({l}) is finer than the object's level {}",
+                    o.level
+                )),
+                _ => {}
+            }
+            for (j, t) in o.instances.iter().flatten().enumerate() {
+                if !(t.scale > 0.0 && t.scale.is_finite()) {
+                    out.push(format!(
+                        "objects[{i}].instances[{j}].scale must be a positive number, got {}",
+                        t.scale
+                    ));
+                }
+                if !finite3(t.translation) || !t.rotation_y_deg.is_finite() {
+                    out.push(format!(
+                        "objects[{i}].instances[{j}]: translation and rotation_y_deg must be \
+                         finite"
+                    ));
+                }
+            }
+        }
+        for (i, t) in self.triangles.iter().enumerate() {
+            let TriangleDesc::Plane {
+                center, half_size, ..
+            } = t;
+            if !(*half_size > 0.0 && half_size.is_finite() && finite3(*center)) {
+                out.push(format!(
+                    "triangles[{i}]: half_size must be a positive number and center finite"
+                ));
+            }
+        }
+        out
+    }
+}
+
 /// A scene ready to upload, with its camera and pipeline path.
 pub struct LoadedScene {
     /// The scene.
@@ -200,6 +269,15 @@ pub struct LoadedScene {
 
 /// Reads a scene file and prepares (or loads from cache) every object's asset.
 pub fn load(path: &Path, progress: &dyn ssbvb_voxel::progress::Progress) -> Result<LoadedScene> {
+    load_with_cache(path, None, progress)
+}
+
+/// [`load`] with the asset cache in `cache` (`None`: the default cache folder).
+fn load_with_cache(
+    path: &Path,
+    cache: Option<&Path>,
+    progress: &dyn ssbvb_voxel::progress::Progress,
+) -> Result<LoadedScene> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("cannot read scene {}", path.display()))?;
     // Optional fields are written plainly (`lod: Fixed(8)`, not `lod: Some(Fixed(8))`).
@@ -214,6 +292,10 @@ pub fn load(path: &Path, progress: &dyn ssbvb_voxel::progress::Progress) -> Resu
             e.code
         )
     })?;
+    let problems = file.problems();
+    if !problems.is_empty() {
+        bail!("{}: {}", path.display(), problems.join("; "));
+    }
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut scene = Scene {
         light: file.light.unwrap_or_default(),
@@ -222,8 +304,9 @@ pub fn load(path: &Path, progress: &dyn ssbvb_voxel::progress::Progress) -> Resu
     let mut notes = Vec::new();
     for o in &file.objects {
         let model = dir.join(&o.model);
-        let (asset, outcome) = ssbvb_voxel::cache::load_or_prepare(&model, o.level, None, progress)
-            .with_context(|| format!("scene {}: object {}", path.display(), o.model))?;
+        let (asset, outcome) =
+            ssbvb_voxel::cache::load_or_prepare(&model, o.level, cache, progress)
+                .with_context(|| format!("scene {}: object {}", path.display(), o.model))?;
         notes.push(format!("{}: {outcome}", o.model));
         let lod = match o.lod {
             None => LodPolicy::Fixed(o.level),
@@ -265,4 +348,100 @@ pub fn load(path: &Path, progress: &dyn ssbvb_voxel::progress::Progress) -> Resu
         },
         notes,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ssbvb_voxel::progress::NoProgress;
+
+    /// Writes `text` as a scene beside a tiny OBJ (`tri.obj`) and loads it.
+    fn load_text(text: &str) -> Result<LoadedScene> {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("tri.obj"),
+            "v -1 -1 -1\nv 1 -1 0\nv 0 1 1\nf 1 2 3\n",
+        )
+        .unwrap();
+        let path = dir.path().join("scene.ron");
+        std::fs::write(&path, text).unwrap();
+        load_with_cache(&path, Some(&dir.path().join("cache")), &NoProgress)
+    }
+
+    fn err(text: &str) -> String {
+        match load_text(text) {
+            Ok(_) => panic!("expected an error for {text}"),
+            Err(e) => format!("{e:#}"),
+        }
+    }
+
+    #[test]
+    fn a_small_scene_loads_with_its_defaults() {
+        let s = load_text("Scene(objects: [(model: \"tri.obj\", level: 3)])").unwrap();
+        assert_eq!(s.scene.objects.len(), 1);
+        assert_eq!(s.scene.objects[0].lod, LodPolicy::Fixed(3));
+        assert_eq!(s.scene.objects[0].instances, vec![DAffine3::IDENTITY]);
+        assert!(
+            s.pipeline.ends_with("pipelines/ssbvb.ron"),
+            "{:?}",
+            s.pipeline
+        );
+        assert_eq!(s.camera.position, DVec3::new(0.0, 0.0, 3.0));
+    }
+
+    #[test]
+    fn syntax_errors_and_unknown_fields_name_file_line_and_column() {
+        let e = err("Scene(\n  objects: [(model: \"tri.obj\", level: 3,)],\n  bogus: 1,\n)");
+        assert!(e.contains("scene.ron:3:"), "{e}");
+        assert!(e.contains("bogus"), "{e}");
+        let e = err("Scene(objects: [(model: \"tri.obj\" level: 3)])");
+        assert!(e.contains("scene.ron:1:"), "{e}");
+    }
+
+    #[test]
+    fn a_missing_model_is_named() {
+        let e = err("Scene(objects: [(model: \"nope.obj\", level: 3)])");
+        assert!(e.contains("nope.obj"), "{e}");
+    }
+
+    #[test]
+    fn unusable_values_name_their_field() {
+        let cases = [
+            (
+                "Scene(objects: [(model: \"tri.obj\", level: 3, instances: [(scale: 0.0)])])",
+                "objects[0].instances[0].scale must be a positive number, got 0",
+            ),
+            (
+                "Scene(objects: [(model: \"tri.obj\", level: 3, lod: Fixed(5))])",
+                "objects[0].lod: Fixed(5) is finer than the object's level 3",
+            ),
+            (
+                "Scene(camera: (position: (0.0, 0.0, 3.0), near: 2.0, far: 1.0))",
+                "camera.far (1) must be beyond camera.near (2)",
+            ),
+            (
+                "Scene(camera: (position: (0.0, 0.0, 3.0), near: 0.0))",
+                "camera.near must be a positive number, got 0",
+            ),
+            (
+                "Scene(camera: (position: (0.0, 0.0, 3.0), fov_y: 180.0))",
+                "camera.fov_y must be in (0, 180) degrees, got 180",
+            ),
+            (
+                "Scene(camera: (position: (0.0, 0.0, 0.0)))",
+                "camera: position and look_at are the same point",
+            ),
+            (
+                "Scene(triangles: [Plane(center: (0.0, 0.0, 0.0), half_size: -1.0, color: (1.0, 1.0, 1.0, 1.0))])",
+                "triangles[0]: half_size must be a positive number",
+            ),
+        ];
+        for (text, want) in cases {
+            let e = err(text);
+            assert!(e.contains(want), "{text}\n got: {e}");
+            assert!(e.contains("scene.ron"), "{e}");
+        }
+        // A far plane of 0 means none.
+        load_text("Scene(camera: (position: (0.0, 0.0, 3.0), far: 0.0))").unwrap();
+    }
 }
