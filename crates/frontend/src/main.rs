@@ -1,9 +1,7 @@
 //! The `ssbvb` command-line tool.
 
 mod adapter_cmd;
-mod bench_cmd;
-mod bench_plot;
-mod bench_sweep;
+mod bench;
 mod bundled;
 mod pipeline_cmd;
 mod progress;
@@ -34,7 +32,7 @@ enum Command {
     Render(render_cmd::RenderArgs),
     /// Benchmark techniques × levels × resolutions against the CPU reference (CSV, JSON,
     /// Markdown).
-    Bench(bench_cmd::BenchArgs),
+    Bench(bench::BenchArgs),
     /// Voxelize a model: every LOD, sparse lookup pages, proxy meshes; cached on disk.
     Voxelize(voxelize_cmd::VoxelizeArgs),
     /// Open a window on a scene or model: orbit/fly camera, overlay with per-pass timings,
@@ -53,7 +51,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Pipeline(c) => pipeline_cmd::run(&c),
         Command::Adapter(a) => adapter_cmd::run(&a),
-        Command::Bench(a) => bench_cmd::run(&a).map(|_| ExitCode::SUCCESS),
+        Command::Bench(a) => bench::run(&a).map(|_| ExitCode::SUCCESS),
         Command::Render(a) => render_cmd::run(&a).map(|_| ExitCode::SUCCESS),
         Command::View(a) => view::run(&a).map(|_| ExitCode::SUCCESS),
         Command::Voxelize(a) => voxelize_cmd::run(&a).map(|_| ExitCode::SUCCESS),

@@ -232,7 +232,8 @@ pub(crate) struct SweepRow {
     pub ssim: Option<f64>,
 }
 
-fn reference_at(
+/// The CPU reference image of `asset` at `level`, seen from `camera` at `size`.
+pub(crate) fn reference_at(
     asset: &VoxelAsset,
     level: u32,
     camera: &Camera,
@@ -321,7 +322,7 @@ pub(crate) fn run_sweeps(
             width: size.0,
             height: size.1,
             frames: m.times.len(),
-            frame_ms_median: crate::bench_cmd::median(&mut t),
+            frame_ms_median: super::run::median(&mut t),
             fill_count: m.fill,
             coverage_iou: m.acc.coverage_iou,
             depth_error_voxels_median: m.acc.depth_error_voxels.median,

@@ -1,0 +1,130 @@
+//! `ssbvb bench`: technique × model × level × resolution on one adapter, with warm-up
+//! frames, timed frames (median and spread), per-pass times, the SSBVB fill count, GPU
+//! memory, and accuracy against the CPU reference. Writes CSV, JSON and a Markdown table,
+//! PNG plots, and with `--sweep` (or `--preset full`) speed–accuracy knob sweeps.
+//!
+//! This file holds the command line and [`run()`], the order of the steps; the steps live
+//! in their own files: `techniques` (what is compared), `matrix` (what each preset
+//! covers), `run` (measuring the cells), `sweep` (the knob sweeps), `plot` (PNG plots) and
+//! `report` (JSON, CSV, Markdown).
+
+mod matrix;
+mod plot;
+mod report;
+mod run;
+mod sweep;
+mod techniques;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use anyhow::{Context, Result};
+use clap::{Args, ValueEnum};
+use ssbvb_voxel::camera::Camera;
+
+use crate::render_cmd::assets_dir;
+use report::Report;
+use sweep::SweepRow;
+use techniques::Technique;
+
+/// Benchmark presets.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum Preset {
+    /// Small: CI-sized (bunny levels 5-6, 160x120, few frames).
+    Quick,
+    /// The measurement run: bunny levels 7-12 at 640x480 and 1280x720, plus knob sweeps.
+    Full,
+    /// The seed-002 study: a filled ball, 50 % random voxels and the bunny mesh, model
+    /// resolutions 8-512 (levels 3-9), targets 640x480-2560x1440, and the fastest technique
+    /// per cell (its Table 11).
+    Study,
+}
+
+/// Arguments of `ssbvb bench`.
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// Which matrix to run.
+    #[arg(long, value_enum, default_value = "quick")]
+    pub preset: Preset,
+    /// Output folder for bench.csv, bench.json and bench.md.
+    #[arg(long, default_value = "bench-out")]
+    pub out: PathBuf,
+    /// Print the results as one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
+    /// Also sweep the knobs of the default SSBVB pipeline one at a time (ray-march
+    /// max_steps, billboard size_scale, smoothing max_i, LOD bias) and write sweeps.csv
+    /// and `trade_<knob>.png`; always on with `--preset full`.
+    #[arg(long)]
+    pub sweep: bool,
+    /// Levels to run instead of the preset's (comma-separated, e.g. `3,4,5`).
+    #[arg(long, value_delimiter = ',')]
+    pub levels: Option<Vec<u32>>,
+    /// Image sizes to run instead of the preset's (comma-separated, e.g.
+    /// `640x480,1280x720`).
+    #[arg(long, value_delimiter = ',', value_parser = crate::pipeline_cmd::parse_size)]
+    pub sizes: Option<Vec<(u32, u32)>>,
+    /// Techniques to run (comma-separated names; default: all).
+    #[arg(long, value_delimiter = ',')]
+    pub techniques: Option<Vec<String>>,
+    /// Timed frames per cell instead of the preset's.
+    #[arg(long)]
+    pub frames: Option<usize>,
+}
+
+/// Runs `ssbvb bench`.
+pub fn run(args: &BenchArgs) -> Result<()> {
+    let m = matrix::matrix(args);
+    let techniques = techniques::select(args)?;
+    let ctx = open_context(&techniques)?;
+    let software = ctx.report().is_software;
+    let results = run::run_matrix(&ctx, &m, &techniques, !args.json)?;
+    let sweeps = sweeps(args, &ctx, &m.camera)?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let plots = plot::write_plots(&args.out, &results.rows, &sweeps)?;
+    let fastest = report::fastest(&results.rows);
+    let report = Report {
+        adapter: ctx.report().to_string(),
+        adapter_is_software: software,
+        timing: report::timing(software),
+        preset: format!("{:?}", args.preset),
+        camera: m.camera,
+        rows: results.rows,
+        skipped: results.skipped,
+        sweeps,
+        fastest,
+        plots,
+    };
+    report::write_outputs(&args.out, &report)?;
+    report::print(&report, &args.out, args.json)
+}
+
+/// A headless GPU context that can run every technique's pipeline.
+fn open_context(techniques: &[&Technique]) -> Result<ssbvb_gpu::GpuContext> {
+    let pipelines = techniques
+        .iter()
+        .map(|t| sweep::bundled_pipeline(t.pipeline))
+        .collect::<Result<Vec<_>>>()?;
+    crate::adapter_cmd::headless_context(&pipelines.iter().collect::<Vec<_>>())
+}
+
+/// The knob sweeps on the bunny, with `--sweep` or the full preset (never for the study);
+/// empty otherwise.
+fn sweeps(args: &BenchArgs, ctx: &ssbvb_gpu::GpuContext, camera: &Camera) -> Result<Vec<SweepRow>> {
+    if !((args.sweep || matches!(args.preset, Preset::Full))
+        && !matches!(args.preset, Preset::Study))
+    {
+        return Ok(Vec::new());
+    }
+    let cfg = matrix::sweep_config(args.preset);
+    let model = assets_dir().join("models/bunny.obj");
+    let (asset, _) = ssbvb_voxel::cache::load_or_prepare(
+        &model,
+        cfg.level,
+        None,
+        &ssbvb_voxel::progress::NoProgress,
+    )
+    .with_context(|| format!("preparing {}", model.display()))?;
+    sweep::run_sweeps(ctx, &Arc::new(asset), camera, &cfg, !args.json)
+}

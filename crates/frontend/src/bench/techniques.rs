@@ -1,0 +1,117 @@
+//! The techniques `ssbvb bench` compares: each a bundled pipeline file, optionally with
+//! one pass parameter changed, and the finest level it supports. Adding a technique is one
+//! entry in [`TECHNIQUES`].
+
+use anyhow::{Context, Result};
+use ssbvb_graph::{BillboardMode, PassKind};
+
+use super::{BenchArgs, Preset};
+
+/// One benchmarked technique.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Technique {
+    /// Name in reports and in `--techniques`.
+    pub(super) name: &'static str,
+    /// Bundled pipeline file.
+    pub(super) pipeline: &'static str,
+    /// A parameter changed from the file's (returns whether it changed the kind).
+    pub(super) edit: Option<fn(&mut PassKind) -> bool>,
+    /// Highest level the technique supports.
+    pub(super) max_level: u32,
+}
+
+/// Every technique, in report order.
+pub(super) const TECHNIQUES: &[Technique] = &[
+    Technique {
+        name: "ssbvb-flat",
+        pipeline: "ssbvb.ron",
+        edit: None,
+        max_level: 16,
+    },
+    Technique {
+        name: "ssbvb-raybox",
+        pipeline: "ssbvb.ron",
+        edit: Some(|k| match k {
+            PassKind::Billboards(b) => {
+                b.mode = BillboardMode::RayBox;
+                true
+            }
+            _ => false,
+        }),
+        max_level: 16,
+    },
+    Technique {
+        name: "ssbvb-unique",
+        pipeline: "ssbvb.ron",
+        edit: Some(|k| match k {
+            PassKind::RayMarchFilter(f) => {
+                f.unique_voxels = true;
+                true
+            }
+            _ => false,
+        }),
+        max_level: 16,
+    },
+    Technique {
+        name: "dense-dda",
+        pipeline: "dense_dda.ron",
+        edit: None,
+        max_level: 8,
+    },
+    Technique {
+        name: "octree",
+        pipeline: "octree_ray_cast.ron",
+        edit: None,
+        max_level: 16,
+    },
+    Technique {
+        name: "cube-raster",
+        pipeline: "cube_raster.ron",
+        edit: None,
+        max_level: 16,
+    },
+    Technique {
+        name: "cube-raster-array",
+        pipeline: "cube_raster.ron",
+        edit: Some(|k| match k {
+            PassKind::CubeRaster(c) => {
+                c.merge_full_nodes = false;
+                true
+            }
+            _ => false,
+        }),
+        max_level: 16,
+    },
+];
+
+/// Technique names, for `--techniques`.
+fn technique_names() -> Vec<&'static str> {
+    TECHNIQUES.iter().map(|t| t.name).collect()
+}
+
+/// The techniques a run measures: those named with `--techniques` (an error names the
+/// known ones), else all, or for the study all but the per-pixel SSBVB variants.
+pub(super) fn select(args: &BenchArgs) -> Result<Vec<&'static Technique>> {
+    Ok(match &args.techniques {
+        // The study's coarse models make cells span dozens of pixels: the per-pixel SSBVB
+        // then draws each voxel once per pixel it covers (18.6 s a frame for the 8³ ball
+        // at 640x480 on lavapipe), so the study runs the unique-voxel SSBVB; name the
+        // others with --techniques to include them.
+        None if matches!(args.preset, Preset::Study) => TECHNIQUES
+            .iter()
+            .filter(|t| !matches!(t.name, "ssbvb-flat" | "ssbvb-raybox"))
+            .collect(),
+        None => TECHNIQUES.iter().collect(),
+        Some(names) => names
+            .iter()
+            .map(|n| {
+                TECHNIQUES.iter().find(|t| t.name == n).with_context(|| {
+                    format!(
+                        "unknown technique `{n}`; known: {}",
+                        technique_names().join(", ")
+                    )
+                })
+            })
+            .collect::<Result<_>>()?,
+    })
+}
