@@ -296,6 +296,10 @@ pub struct Loaded {
     /// Human-readable warnings (a missing MTL library or texture, skipped primitives, ...),
     /// each naming the file concerned.
     pub warnings: Vec<String>,
+    /// Every file the model depends on, the model file first: MTL libraries, textures,
+    /// external glTF buffers and images, including those looked for and not found (adding
+    /// one changes the model). The asset cache keys on their contents.
+    pub sources: Vec<PathBuf>,
 }
 
 /// Loads any supported model, choosing the format by extension (case-insensitive) or, for
@@ -347,8 +351,19 @@ pub fn load_model_with(path: &Path, options: &LoadOptions) -> Result<Loaded, Loa
         return Ok(Loaded {
             model: Model::Voxels(voxels),
             warnings: Vec::new(),
+            sources: vec![path.to_path_buf()],
         });
     }
+    // Collect the files this load touches (nested loads keep their outer list).
+    let outer = SOURCES.with(|s| s.borrow_mut().replace(vec![path.to_path_buf()]));
+    let result = load_main(path, format, options);
+    let sources = SOURCES.with(|s| std::mem::replace(&mut *s.borrow_mut(), outer));
+    let mut loaded = result?;
+    loaded.sources = sources.unwrap_or_default();
+    Ok(loaded)
+}
+
+fn load_main(path: &Path, format: Format, options: &LoadOptions) -> Result<Loaded, LoadError> {
     let bytes = read_file(path)?;
     let base_dir = path.parent().map(|p| {
         if p.as_os_str().is_empty() {
@@ -391,7 +406,12 @@ pub fn load_from_bytes(
             }
         }
     }
-    Ok(Loaded { model, warnings })
+    Ok(Loaded {
+        model,
+        warnings,
+        // Filled in by `load_model_with`, which knows which files were read.
+        sources: Vec::new(),
+    })
 }
 
 /// Writes a raw dense grid atomically (a temporary file in the same folder, then a rename),
@@ -489,8 +509,29 @@ fn read_head(path: &Path, buf: &mut [u8]) -> Result<usize, LoadError> {
     Ok(n)
 }
 
+thread_local! {
+    /// The files the load running on this thread has read or looked for (see
+    /// [`Loaded::sources`]); `None` outside [`load_model_with`]. The loaders read every
+    /// file on the calling thread, so a thread-local sees them all without passing a
+    /// recorder through every parser.
+    static SOURCES: std::cell::RefCell<Option<Vec<PathBuf>>> =
+        const { std::cell::RefCell::new(None) };
+}
+
+/// Notes that the running load depends on `path` (read, or looked for and not found).
+pub(crate) fn record_source(path: &Path) {
+    SOURCES.with(|s| {
+        if let Some(v) = s.borrow_mut().as_mut() {
+            if !v.iter().any(|p| p == path) {
+                v.push(path.to_path_buf());
+            }
+        }
+    });
+}
+
 /// Reads a whole file, refusing files larger than [`MAX_FILE_BYTES`] before reading.
 pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, LoadError> {
+    record_source(path);
     let meta = fs::metadata(path).map_err(|e| LoadError::io(path, e))?;
     if meta.is_dir() {
         return Err(LoadError::io(

@@ -187,3 +187,109 @@ fn cache_round_trip_and_rebuild_on_real_models() {
         assert_eq!(a, c);
     }
 }
+
+/// The cache follows every file a model reads: editing an MTL library, a texture or a
+/// glTF buffer, or adding a library that was missing, rebuilds the asset with a reason that
+/// names the file; an untouched model is a hit.
+#[test]
+fn the_cache_rebuilds_when_a_file_the_model_reads_changes() {
+    use std::path::Path;
+
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let d = dir.path();
+    let run = |model: &Path| load_or_prepare(model, 3, Some(&cache), &NoProgress).unwrap();
+    let rebuilt_naming = |model: &Path, file: &str| -> VoxelAsset {
+        let (asset, outcome) = run(model);
+        match &outcome.status {
+            CacheStatus::Rebuilt { reason } => {
+                assert!(reason.contains(file), "{file}: {reason}")
+            }
+            CacheStatus::Hit => panic!("{file} changed but the cache was hit"),
+        }
+        assert!(outcome.cache_write_error.is_none(), "{outcome}");
+        asset
+    };
+    let hit = |model: &Path| assert_eq!(run(model).1.status, CacheStatus::Hit);
+    // Mean colour of the finest level, linear RGB.
+    let mean_color = |a: &VoxelAsset| {
+        let v = &a.lods.last().unwrap().point_cloud.voxels;
+        let mut m = [0.0f32; 3];
+        for x in v {
+            let c = x.color();
+            for i in 0..3 {
+                m[i] += c[i] / v.len() as f32;
+            }
+        }
+        m
+    };
+
+    // OBJ + MTL: the stale-material report (red, then blue).
+    let obj = d.join("tri.obj");
+    std::fs::write(
+        &obj,
+        "mtllib tri.mtl\nv -1 -1 -1\nv 1 -1 0\nv 0 1 1\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3\n",
+    )
+    .unwrap();
+    std::fs::write(d.join("tri.mtl"), "newmtl m\nKd 1 0 0\n").unwrap();
+    let red = mean_color(&run(&obj).0);
+    assert!(red[0] > 0.9 && red[2] < 0.1, "{red:?}");
+    hit(&obj);
+    std::fs::write(d.join("tri.mtl"), "newmtl m\nKd 0 0 1\n").unwrap();
+    let blue = mean_color(&rebuilt_naming(&obj, "tri.mtl"));
+    assert!(blue[2] > 0.9 && blue[0] < 0.1, "{blue:?}");
+    hit(&obj);
+
+    // A texture named by the MTL library.
+    let png = |rgb: [u8; 3]| {
+        let img = image::RgbImage::from_pixel(2, 2, image::Rgb(rgb));
+        img.save(d.join("tex.png")).unwrap();
+    };
+    png([255, 0, 0]);
+    std::fs::write(d.join("tri.mtl"), "newmtl m\nmap_Kd tex.png\n").unwrap();
+    let textured = mean_color(&rebuilt_naming(&obj, "tri.mtl"));
+    assert!(textured[0] > 0.9 && textured[1] < 0.1, "{textured:?}");
+    png([0, 255, 0]);
+    let green = mean_color(&rebuilt_naming(&obj, "tex.png"));
+    assert!(green[1] > 0.9 && green[0] < 0.1, "{green:?}");
+
+    // A library that did not exist when the asset was built.
+    let lonely = d.join("lonely.obj");
+    std::fs::write(
+        &lonely,
+        "mtllib later.mtl\nv -1 -1 -1\nv 1 -1 0\nv 0 1 1\nusemtl m\nf 1 2 3\n",
+    )
+    .unwrap();
+    run(&lonely);
+    hit(&lonely);
+    std::fs::write(d.join("later.mtl"), "newmtl m\nKd 0 1 0\n").unwrap();
+    let later = mean_color(&rebuilt_naming(&lonely, "later.mtl"));
+    assert!(later[1] > 0.9, "{later:?}");
+
+    // glTF with an external buffer: moving a vertex changes the voxels.
+    let write_bin = |z: f32| {
+        let v: [f32; 9] = [-1.0, -1.0, -1.0, 1.0, -1.0, 0.0, 0.0, 1.0, z];
+        let bytes: Vec<u8> = v.iter().flat_map(|f| f.to_le_bytes()).collect();
+        std::fs::write(d.join("tri.bin"), bytes).unwrap();
+    };
+    write_bin(1.0);
+    let gltf = d.join("tri.gltf");
+    std::fs::write(
+        &gltf,
+        r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
+"buffers":[{"uri":"tri.bin","byteLength":36}],
+"bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":36}],
+"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[-1,-1,-1],"max":[1,1,1]}]}"#,
+    )
+    .unwrap();
+    let before = run(&gltf).0;
+    hit(&gltf);
+    write_bin(-1.0);
+    let after = rebuilt_naming(&gltf, "tri.bin");
+    assert_ne!(
+        before.lods.last().unwrap().point_cloud.voxels,
+        after.lods.last().unwrap().point_cloud.voxels,
+        "the moved vertex must change the voxels"
+    );
+}

@@ -36,6 +36,7 @@
 //!
 //! [`load_or_prepare`] (in `prepare`) puts the cache in front of the preparation stage.
 
+mod deps;
 mod prepare;
 
 use std::fs::File;

@@ -6,12 +6,13 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use super::deps::{self, Dependency};
 use super::{
     CacheError, FORMAT_VERSION, cache_file_name, default_cache_dir, hash_source, read_cache,
     write_cache,
 };
 use crate::asset::VoxelAsset;
-use crate::load::{LoadError, load_model};
+use crate::load::{LoadError, LoadOptions, load_model_with};
 use crate::prepare::{PrepareStats, prepare_asset};
 use crate::progress::Progress;
 use crate::voxelize::VoxelizeError;
@@ -81,35 +82,68 @@ pub enum PrepareError {
 /// file exists, otherwise prepared (with the default [`crate::prepare::PrepareOptions`])
 /// and written to the cache. `cache_dir` defaults to [`default_cache_dir`]. A cache that
 /// cannot be written is reported in the outcome, not an error.
+///
+/// The cache is keyed by the content of the model file and of every file its load read or
+/// looked for (MTL libraries, textures, glTF buffers and images; see `deps.rs`), so editing
+/// any of them rebuilds the asset, and the reason names the files that changed.
 pub fn load_or_prepare(
     model_path: &Path,
     level: u32,
     cache_dir: Option<&Path>,
     progress: &dyn Progress,
 ) -> Result<(VoxelAsset, PrepareOutcome), PrepareError> {
-    let source_hash = hash_source(model_path)?;
+    let model_hash = hash_source(model_path)?;
     let dir = cache_dir.map_or_else(default_cache_dir, Path::to_path_buf);
-    let cache_path = dir.join(cache_file_name(source_hash, level));
-    let reason = match read_cache(&cache_path, source_hash, level) {
-        Ok(asset) => {
-            let outcome = PrepareOutcome {
-                cache_path,
-                status: CacheStatus::Hit,
-                stats: None,
-                cache_write_error: None,
-            };
-            return Ok((asset, outcome));
+    let list = deps::list_path(&dir, model_hash);
+    let reason = match deps::read_list(&list) {
+        Some(recorded) => {
+            let (changed, now) = deps::changes(&recorded);
+            let key = deps::combined_key(model_hash, &now);
+            let cache_path = dir.join(cache_file_name(key, level));
+            match read_cache(&cache_path, key, level) {
+                Ok(asset) => {
+                    let outcome = PrepareOutcome {
+                        cache_path,
+                        status: CacheStatus::Hit,
+                        stats: None,
+                        cache_write_error: None,
+                    };
+                    return Ok((asset, outcome));
+                }
+                Err(_) if !changed.is_empty() => format!(
+                    "changed since the cache was written: {}",
+                    changed
+                        .iter()
+                        .map(|p| p.display().to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+                Err(e) => e.rebuild_reason(),
+            }
         }
-        Err(e) => e.rebuild_reason(),
+        None => "cache missing".to_string(),
     };
-    let model = load_model(model_path)?;
+    let loaded = load_model_with(model_path, &LoadOptions::default())?;
+    for w in &loaded.warnings {
+        log::warn!("{w}");
+    }
     let (asset, stats) =
-        prepare_asset(&model, level, progress).map_err(|error| PrepareError::Voxelize {
+        prepare_asset(&loaded.model, level, progress).map_err(|error| PrepareError::Voxelize {
             path: model_path.to_path_buf(),
             error,
         })?;
-    drop(model);
-    let cache_write_error = write_cache(&cache_path, &asset, source_hash, level)
+    // The model file itself is the first source; its hash is the list's name.
+    let now: Vec<Dependency> = loaded
+        .sources
+        .iter()
+        .skip(1)
+        .map(|p| Dependency::now(p))
+        .collect();
+    drop(loaded);
+    let key = deps::combined_key(model_hash, &now);
+    let cache_path = dir.join(cache_file_name(key, level));
+    let cache_write_error = write_cache(&cache_path, &asset, key, level)
+        .and_then(|()| deps::write_list(&list, &now).map_err(|e| CacheError::io(&list, e)))
         .err()
         .map(|e| e.to_string());
     let outcome = PrepareOutcome {

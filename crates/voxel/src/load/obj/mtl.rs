@@ -4,7 +4,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use super::text::{Lines, numbers, parse_f32, split_keyword, tokens, trim};
-use crate::load::{LoadError, decode_texture, read_file};
+use crate::load::{LoadError, decode_texture, read_file, record_source};
 use crate::model::{Material, Texture};
 
 /// One `newmtl` of an MTL library (only what the voxelizer uses).
@@ -76,7 +76,12 @@ fn resolve_file(dir: &Path, name: &str) -> Option<PathBuf> {
         return Some(direct);
     }
     let slashed = dir.join(name.replace('\\', "/"));
-    slashed.is_file().then_some(slashed)
+    if slashed.is_file() {
+        return Some(slashed);
+    }
+    // Not there: creating it later changes the model.
+    record_source(&direct);
+    None
 }
 
 /// Loads every `mtllib` (later definitions of a name win, as in most viewers).
