@@ -23,11 +23,7 @@ pub mod schema;
 pub mod watch;
 
 pub use error::{GraphError, Loc, PipelineErrors};
-pub use kinds::{
-    BillboardMode, BillboardsParams, CompositeKind, CubeRasterParams, DenseDdaParams,
-    EmptySpacePrepassKind, KIND_NAMES, OctreeRayCastParams, PassKind, RayMarchFilterParams,
-    SmoothParams, TrianglesKind,
-};
+pub use kinds::*;
 pub use locate::Position;
 pub use pass_kind::{Access, KindSpec, OfKind, PassStage, SlotClass, SlotDesc};
 pub use resolve::{
