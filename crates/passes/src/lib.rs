@@ -8,32 +8,36 @@
 //! declaration ([`bindings`]).
 
 pub mod adapter_needs;
-pub mod billboards;
 pub mod bindings;
-pub mod composite;
-pub mod cube_raster;
-pub mod dense_dda;
 pub mod embed;
-pub mod empty_space;
 pub mod frame;
 pub mod gbuffer;
 pub mod gpu_scene;
 pub mod measure;
-pub mod octree_ray_cast;
 pub mod pipelines;
-pub mod ray_march_filter;
 pub mod registry;
 pub mod scene;
 pub mod shaders;
-pub mod smooth;
-pub mod triangles;
 pub mod visibility;
 pub mod wgsl_layout;
+
+// The passes: one line each (module and registration), in registration order.
+registry::pass_modules! {
+    empty_space::EmptySpace,
+    ray_march_filter::RayMarchFilter,
+    billboards::Billboards,
+    triangles::Triangles,
+    smooth::Smooth,
+    composite::Composite,
+    dense_dda::DenseDda,
+    octree_ray_cast::OctreeRayCast,
+    cube_raster::CubeRaster,
+}
 
 pub use adapter_needs::pipeline_requirements;
 pub use frame::{FrameStats, PassTiming, Profiling, Recorder, Renderer};
 pub use gpu_scene::{GpuScene, ObjectMemory};
-pub use registry::{PassImpl, PassInit, REGISTRY, Registration};
+pub use registry::{PassImpl, PassInit, Registration};
 pub use scene::{LodPolicy, Scene, TriangleObject, VoxelObject};
 
 use ssbvb_gpu::{GpuContext, GpuError, wgpu};
@@ -83,7 +87,7 @@ pub fn registered_kinds() -> Vec<PassKind> {
         .collect()
 }
 
-/// Builds the pass object of a scheduled pass through its [`registry::REGISTRY`] entry.
+/// Builds the pass object of a scheduled pass through its [`REGISTRY`] entry.
 pub fn create_pass(
     ctx: &GpuContext,
     scene: &GpuScene,

@@ -1,6 +1,7 @@
 //! The one table of implemented pass kinds. Each pass type implements [`PassImpl`] next to
 //! its code (WGSL file, own bindings, adapter needs, constructor from its typed
-//! parameters); [`REGISTRY`] lists the types, one line each (the recipe is in the README,
+//! parameters); the `pass_modules!` list in `lib.rs` declares each pass module and its
+//! [`crate::REGISTRY`] entry, one line each (the recipe is in the README,
 //! "Adding a pass kind").
 
 use ssbvb_gpu::requirements::LimitNeed;
@@ -9,10 +10,7 @@ use ssbvb_graph::{KindSpec, OfKind, PassKind, ResolvedPipeline, ScheduledPass};
 
 use crate::bindings::OwnBinding;
 use crate::gpu_scene::GpuScene;
-use crate::{
-    PassError, PassNode, billboards, composite, cube_raster, dense_dda, empty_space,
-    octree_ray_cast, ray_march_filter, smooth, triangles,
-};
+use crate::{PassError, PassNode};
 
 /// What a pass is built from.
 #[derive(Clone, Copy)]
@@ -118,22 +116,23 @@ pub const fn register<P: PassImpl>() -> Registration {
     }
 }
 
-/// Every implemented pass kind.
-pub const REGISTRY: &[Registration] = &[
-    register::<empty_space::EmptySpace>(),
-    register::<ray_march_filter::RayMarchFilter>(),
-    register::<billboards::Billboards>(),
-    register::<triangles::Triangles>(),
-    register::<smooth::Smooth>(),
-    register::<composite::Composite>(),
-    register::<dense_dda::DenseDda>(),
-    register::<octree_ray_cast::OctreeRayCast>(),
-    register::<cube_raster::CubeRaster>(),
-];
+/// Declares the pass modules and the registration table from one list (in `lib.rs`):
+/// each entry `module::Type` becomes `pub mod module;` and `register::<module::Type>()` in
+/// [`crate::REGISTRY`], so adding a pass is one line there.
+macro_rules! pass_modules {
+    ($( $(#[$doc:meta])* $module:ident :: $ty:ident ),* $(,)?) => {
+        $( $(#[$doc])* pub mod $module; )*
+
+        /// Every implemented pass kind, in the order of the list in `lib.rs`.
+        pub const REGISTRY: &[$crate::registry::Registration] =
+            &[$( $crate::registry::register::<$module::$ty>() ),*];
+    };
+}
+pub(crate) use pass_modules;
 
 /// The registration of `kind`.
 pub fn registration(kind: &PassKind) -> Option<&'static Registration> {
-    REGISTRY.iter().find(|r| r.kind == kind.name())
+    crate::REGISTRY.iter().find(|r| r.kind == kind.name())
 }
 
 #[cfg(test)]
@@ -145,9 +144,12 @@ mod tests {
     #[test]
     fn every_declared_kind_is_registered_once() {
         for kind in PassKind::all_defaults() {
-            let n = REGISTRY.iter().filter(|r| r.kind == kind.name()).count();
+            let n = crate::REGISTRY
+                .iter()
+                .filter(|r| r.kind == kind.name())
+                .count();
             assert_eq!(n, 1, "pass kind {} is registered {n} times", kind.name());
         }
-        assert_eq!(REGISTRY.len(), ssbvb_graph::KIND_NAMES.len());
+        assert_eq!(crate::REGISTRY.len(), ssbvb_graph::KIND_NAMES.len());
     }
 }
