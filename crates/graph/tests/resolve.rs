@@ -452,3 +452,97 @@ fn the_cube_raster_pipeline_resolves_and_merging_defaults_to_on() {
     let bare = ok(&src.replace("CubeRaster(merge_full_nodes: true)", "CubeRaster()"));
     assert_eq!(bare.passes[1].kind, p.passes[1].kind);
 }
+
+/// Every parameter check of every kind: the error is `BadParameter`, names the pass, the
+/// kind and the rule, and points at the pass's line.
+#[test]
+fn bad_parameters_name_pass_kind_rule_and_line() {
+    const DENSE: &str = include_str!("../../../assets/pipelines/dense_dda.ron");
+    const OCTREE: &str = include_str!("../../../assets/pipelines/octree_ray_cast.ron");
+    let cases: [(&str, &str, &str, &str, &str); 8] = [
+        (
+            SSBVB,
+            "RayMarchFilter(max_steps: 1024)",
+            "RayMarchFilter(max_steps: 0)",
+            "RayMarchFilter",
+            "max_steps must be at least 1",
+        ),
+        (
+            SSBVB,
+            "Billboards(mode: Flat, size_scale: 1.0)",
+            "Billboards(mode: Flat, size_scale: 0.0)",
+            "Billboards",
+            "size_scale must be a positive number, got 0",
+        ),
+        (
+            SSBVB,
+            "Billboards(mode: Flat, size_scale: 1.0)",
+            "Billboards(mode: Flat, size_scale: -2.5)",
+            "Billboards",
+            "size_scale must be a positive number, got -2.5",
+        ),
+        (
+            SSBVB,
+            "Smooth(max_i: 1.0, min_dist: 0.5)",
+            "Smooth(max_i: 1.0, min_dist: -0.5)",
+            "Smooth",
+            "min_dist must be a number >= 0, got -0.5",
+        ),
+        (
+            SSBVB,
+            "Smooth(max_i: 1.0, min_dist: 0.5)",
+            "Smooth(max_i: -1.0, min_dist: 0.5)",
+            "Smooth",
+            "max_i must be a number >= 0, got -1",
+        ),
+        (
+            SSBVB,
+            "Smooth(max_i: 1.0, min_dist: 0.5)",
+            "Smooth(max_i: inf, min_dist: 0.5)",
+            "Smooth",
+            "max_i must be a number >= 0, got inf",
+        ),
+        (
+            DENSE,
+            "DenseDda(max_steps: 4096)",
+            "DenseDda(max_steps: 0)",
+            "DenseDda",
+            "max_steps must be at least 1",
+        ),
+        (
+            OCTREE,
+            "OctreeRayCast(max_steps: 4096)",
+            "OctreeRayCast(max_steps: 0)",
+            "OctreeRayCast",
+            "max_steps must be at least 1",
+        ),
+    ];
+    for (base, from, to, kind, rule) in cases {
+        assert!(base.contains(from), "{from} not in the bundled pipeline");
+        let src = base.replace(from, to);
+        let e = err(&src);
+        let found = e.errors.iter().find_map(|x| match x {
+            GraphError::BadParameter {
+                at,
+                kind: k,
+                message,
+                ..
+            } if k == kind && message.contains(rule) => Some(at.clone()),
+            _ => None,
+        });
+        let at = found.unwrap_or_else(|| panic!("{to}: no BadParameter `{rule}` in {e}"));
+        let line = line_of(&src, to);
+        assert_eq!(
+            at.pos.map(|p| p.line),
+            Some(line),
+            "{to}: reported at {at}, written on line {line}"
+        );
+        assert_eq!(e.errors.len(), 1, "{to}: {e}");
+    }
+    // NaN is refused too (RON has no NaN literal; the check is on the typed value).
+    let nan = ssbvb_graph::PassKind::Billboards(ssbvb_graph::BillboardsParams {
+        mode: ssbvb_graph::BillboardMode::Flat,
+        size_scale: f32::NAN,
+    });
+    assert_eq!(nan.parameter_problems().len(), 1);
+}
