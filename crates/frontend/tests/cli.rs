@@ -97,9 +97,18 @@ fn bad_inputs_give_clear_errors() {
         .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/model.obj"));
-    let out = ssbvb().args(["render", "--size", "0x10"]).output().unwrap();
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("size"));
+    // Each bad size gets its own reason, not just clap's usage text.
+    for (size, reason) in [
+        ("0x10", "size must be 1..=16384 per side, got 0x10"),
+        ("20000x10", "size must be 1..=16384 per side, got 20000x10"),
+        ("64", "expected WxH, got `64`"),
+        ("ax10", "bad size `ax10`"),
+    ] {
+        let out = ssbvb().args(["render", "--size", size]).output().unwrap();
+        assert!(!out.status.success(), "{size}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains(reason), "{size}: {stderr}");
+    }
 }
 
 #[test]
