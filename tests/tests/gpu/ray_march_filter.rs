@@ -221,8 +221,11 @@ fn check_against_reference(
         "{name}: same-voxel rate {}",
         report.same_voxel_rate
     );
+    // Measured on lavapipe: medians up to 2.6e-4 voxel (a level-11 grid seen whole),
+    // 1e-5 typically; the bound keeps a 4x margin and catches a march that is off by a
+    // fraction of a cell.
     assert!(
-        report.depth_error_voxels.median <= 0.5,
+        report.depth_error_voxels.median <= 1e-3,
         "{name}: depth error {:?}",
         report.depth_error_voxels
     );
@@ -310,7 +313,7 @@ fn filter_at_half_resolution_matches_the_reference_at_half_size() {
         "{differing} pixels differ in coverage: {report:?}"
     );
     assert!(report.same_voxel_rate >= 0.99, "{report:?}");
-    assert!(report.depth_error_voxels.median <= 0.5, "{report:?}");
+    assert!(report.depth_error_voxels.median <= 1e-3, "{report:?}");
 }
 
 #[test]
@@ -491,7 +494,10 @@ fn extreme_distances_and_planes() {
     check_against_reference("near_far_1e11", &scene, &planes, SIZE);
 
     // 1e6 object sizes away, looking at a voxel centre through the middle pixel of an odd
-    // image: no NaN, no Inf, no validation error, at most a few pixels.
+    // image: no NaN, no Inf, no validation error, and no pixel the reference does not
+    // cover. The reference (f64) covers the middle pixel; the filter misses it today (the
+    // object is ~1e-5 of a pixel, below what f32 camera-relative rays resolve), which this
+    // test reports instead of passing silently on an empty image.
     let v = scene.objects[0].asset.lods[6].point_cloud.voxels[0].cell();
     let centre = DVec3::from(v.map(|c| (c as f64 + 0.5) * cell_size(6) - 1.0));
     let far = Camera {
@@ -499,7 +505,18 @@ fn extreme_distances_and_planes() {
         ..Camera::new(centre - dir * 2e6, centre)
     };
     let run = run_filter(&scene, &far, (81, 61), 1024);
-    assert!(run.fill <= 4, "{}", run.fill);
+    let reference = reference_of(&scene, &far, (81, 61));
+    let report = accuracy::compare(&reference, &run.hits, &cell_sizes(&scene)).unwrap();
+    eprintln!(
+        "far probe at 2e6: reference covers {} px, the filter {} px (known miss: f32 rays)",
+        report.covered_reference, report.covered_gpu
+    );
+    assert_eq!(report.covered_reference, 1, "{report:?}");
+    assert_eq!(run.fill as usize, report.covered_gpu);
+    assert_eq!(
+        report.covered_gpu, report.covered_both,
+        "the filter covers pixels the reference does not: {report:?}"
+    );
 }
 
 #[test]
