@@ -92,3 +92,45 @@ pub fn voxel_pixels(ctx: &GpuContext, r: &Renderer) -> Result<Option<usize>, Pas
     let voxel = crate::gbuffer::STENCIL_VOXEL as u8;
     Ok(Some(stencil.bytes.iter().filter(|&&s| s == voxel).count()))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::f16_to_f32;
+
+    /// An independent decoder: the f16 bit fields moved into f32's (exponent rebiased,
+    /// subnormals normalized), no arithmetic on values.
+    fn by_bits(h: u16) -> f32 {
+        let sign = u32::from(h >> 15) << 31;
+        let exp = u32::from((h >> 10) & 0x1f);
+        let mant = u32::from(h & 0x3ff);
+        let bits = match (exp, mant) {
+            (0, 0) => sign,
+            (0, m) => {
+                // Subnormal: shift the mantissa up until its leading one is the hidden bit.
+                let shift = m.leading_zeros() - 21;
+                let m = (m << shift) & 0x3ff;
+                sign | ((127 - 15 + 1 - shift) << 23) | (m << 13)
+            }
+            (31, 0) => sign | 0x7f80_0000,
+            (31, m) => sign | 0x7f80_0000 | (m << 13),
+            (e, m) => sign | ((e + 127 - 15) << 23) | (m << 13),
+        };
+        f32::from_bits(bits)
+    }
+
+    #[test]
+    fn every_half_decodes_like_the_bit_level_conversion() {
+        for h in 0..=u16::MAX {
+            let (a, b) = (f16_to_f32(h), by_bits(h));
+            if b.is_nan() {
+                assert!(a.is_nan(), "{h:#06x}: {a}");
+            } else {
+                assert_eq!(a.to_bits(), b.to_bits(), "{h:#06x}: {a} vs {b}");
+            }
+        }
+        assert_eq!(f16_to_f32(0x3c00), 1.0);
+        assert_eq!(f16_to_f32(0xc000), -2.0);
+        assert_eq!(f16_to_f32(0x7bff), 65504.0);
+        assert_eq!(f16_to_f32(0x0001), 2f32.powi(-24));
+    }
+}
