@@ -293,3 +293,33 @@ fn the_cache_rebuilds_when_a_file_the_model_reads_changes() {
         "the moved vertex must change the voxels"
     );
 }
+
+/// A cache folder that cannot be created (its parent is a file): the asset is still
+/// prepared and returned, the outcome says why nothing was cached, and the next call
+/// rebuilds again instead of failing.
+#[test]
+fn an_unwritable_cache_is_reported_not_fatal() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("tri.obj");
+    std::fs::write(&obj, "v -1 -1 -1\nv 1 -1 0\nv 0 1 1\nf 1 2 3\n").unwrap();
+    let blocker = dir.path().join("not-a-folder");
+    std::fs::write(&blocker, "x").unwrap();
+    let cache = blocker.join("cache");
+    for _ in 0..2 {
+        let (asset, outcome) = load_or_prepare(&obj, 3, Some(&cache), &NoProgress).unwrap();
+        assert!(!asset.lods.last().unwrap().point_cloud.voxels.is_empty());
+        assert!(
+            matches!(outcome.status, CacheStatus::Rebuilt { .. }),
+            "{outcome}"
+        );
+        let why = outcome
+            .cache_write_error
+            .as_deref()
+            .expect("the write failed");
+        assert!(why.contains("not-a-folder"), "{why}");
+        assert!(
+            outcome.to_string().contains("cache not written"),
+            "{outcome}"
+        );
+    }
+}

@@ -30,8 +30,9 @@ proptest! {
     #[test]
     fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..512), f in 0usize..6) {
         let format = [Format::Obj, Format::Ply, Format::Gltf, Format::Glb, Format::Vox, Format::Raw][f];
-        if let Err(e) = parse(&bytes, format, "p.bin") {
-            prop_assert!(e.to_string().starts_with("p.bin"));
+        match parse(&bytes, format, "p.bin") {
+            Ok(m) => crate::assert_usable(&m, "p.bin", "arbitrary bytes"),
+            Err(e) => prop_assert!(e.to_string().starts_with("p.bin")),
         }
     }
 
@@ -48,8 +49,9 @@ proptest! {
         }
         let keep = cut.index(bytes.len() + 1).max(bytes.len() / 2);
         bytes.truncate(keep);
-        if let Err(e) = parse(&bytes, format, "m.bin") {
-            prop_assert!(e.to_string().starts_with("m.bin"));
+        match parse(&bytes, format, "m.bin") {
+            Ok(m) => crate::assert_usable(&m, "m.bin", "mutated fixture"),
+            Err(e) => prop_assert!(e.to_string().starts_with("m.bin")),
         }
     }
 }

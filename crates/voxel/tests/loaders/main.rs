@@ -135,17 +135,69 @@ impl XorShift {
     }
 }
 
-/// Truncations at many offsets and random byte flips of `bytes`: every result must be an
-/// `Ok` or an `Err` whose message names the file (a panic fails the test).
+/// What every successfully loaded model must be, checked here independently of the
+/// loaders' own checks: a mesh with triangles whose indices are in range, finite
+/// positions, attribute arrays empty or one per vertex, material indices in range; voxels
+/// with one colour each (or none).
+fn assert_usable(model: &Model, name: &str, what: &str) {
+    match model {
+        Model::Mesh(m) => {
+            let n = m.positions.len();
+            assert!(
+                !m.triangles.is_empty(),
+                "{name} ({what}): Ok without triangles"
+            );
+            assert!(
+                m.triangles.iter().flatten().all(|&i| (i as usize) < n),
+                "{name} ({what}): triangle index out of range"
+            );
+            assert!(
+                m.positions.iter().all(|p| p.is_finite()),
+                "{name} ({what}): non-finite position"
+            );
+            for (len, attr) in [
+                (m.normals.len(), "normals"),
+                (m.uvs.len(), "uvs"),
+                (m.colors.len(), "colors"),
+            ] {
+                assert!(
+                    len == 0 || len == n,
+                    "{name} ({what}): {len} {attr} for {n} vertices"
+                );
+            }
+            assert!(
+                m.triangle_materials.is_empty()
+                    || (m.triangle_materials.len() == m.triangles.len()
+                        && m.triangle_materials
+                            .iter()
+                            .all(|&t| (t as usize) < m.materials.len().max(1))),
+                "{name} ({what}): material index out of range"
+            );
+        }
+        Model::Voxels(v) => {
+            assert!(
+                v.colors.is_empty() || v.colors.len() == v.voxels.len(),
+                "{name} ({what}): {} colours for {} voxels",
+                v.colors.len(),
+                v.voxels.len()
+            );
+        }
+    }
+}
+
+/// Truncations at many offsets and random byte flips of `bytes`: every result must be a
+/// usable model ([`assert_usable`]) or an `Err` whose message names the file (a panic fails
+/// the test).
 fn mutate_and_parse(bytes: &[u8], format: Format, name: &str, truncations: usize, flips: usize) {
     let step = (bytes.len() / truncations.max(1)).max(1);
     let mut cut = 0;
     while cut < bytes.len() {
-        if let Err(e) = parse(&bytes[..cut], format, name) {
-            assert!(
+        match parse(&bytes[..cut], format, name) {
+            Ok(m) => assert_usable(&m, name, &format!("cut at {cut}")),
+            Err(e) => assert!(
                 e.to_string().starts_with(name),
                 "message must name the file: {e}"
-            );
+            ),
         }
         cut += step;
     }
@@ -162,11 +214,12 @@ fn mutate_and_parse(bytes: &[u8], format: Format, name: &str, truncations: usize
                 _ => rng.next() as u8,
             };
         }
-        if let Err(e) = parse(&buf, format, name) {
-            assert!(
+        match parse(&buf, format, name) {
+            Ok(m) => assert_usable(&m, name, "flipped bytes"),
+            Err(e) => assert!(
                 e.to_string().starts_with(name),
                 "message must name the file: {e}"
-            );
+            ),
         }
     }
 }
