@@ -41,6 +41,13 @@ pub struct RenderArgs {
     /// Vertical field of view in degrees.
     #[arg(long)]
     pub fov_y: Option<f64>,
+    /// Near plane distance (default: the scene's, else 0.01).
+    #[arg(long, allow_hyphen_values = true)]
+    pub near: Option<f64>,
+    /// Far plane distance (default: the scene's, else none: an infinite reversed-Z
+    /// projection; 0 also means none).
+    #[arg(long, allow_hyphen_values = true)]
+    pub far: Option<f64>,
     /// Pipeline file (default: the scene's, or assets/pipelines/ssbvb.ron).
     #[arg(long)]
     pub pipeline: Option<PathBuf>,
@@ -92,6 +99,8 @@ struct Report {
     /// Pixels showing a voxel (GPU: stencil = voxel), what the fill count compares with.
     voxel_pixels: Option<usize>,
     visible_instances: usize,
+    /// Why the image may be empty (nothing in view, everything beyond the far plane).
+    warnings: Vec<String>,
     gpu_memory_bytes: Vec<ObjectReport>,
     asset_notes: Vec<String>,
 }
@@ -150,7 +159,11 @@ pub fn load_input(
             }],
             ..Default::default()
         },
-        camera: Camera::default(),
+        // No far plane: a distant view is never clipped away.
+        camera: Camera {
+            far: f64::INFINITY,
+            ..Camera::default()
+        },
         pipeline: None,
         notes: vec![format!("{}: {outcome}", input.display())],
     })
@@ -183,9 +196,29 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
         camera.fov_y_deg = f;
     }
+    if let Some(n) = args.near {
+        if !(n > 0.0 && n.is_finite()) {
+            bail!("--near must be a positive number, got {n}");
+        }
+        camera.near = n;
+    }
+    if let Some(f) = args.far {
+        if f.is_nan() || f < 0.0 {
+            bail!("--far must be a distance (0 for none), got {f}");
+        }
+        camera.far = if f == 0.0 { f64::INFINITY } else { f };
+    }
+    if camera.far.is_finite() && camera.far <= camera.near {
+        bail!(
+            "the far plane ({}) must be beyond the near plane ({})",
+            camera.far,
+            camera.near
+        );
+    }
     if camera.position == camera.look_at {
         bail!("the camera position and --look-at are the same point");
     }
+    let warnings = clipping_warnings(&scene, &camera);
     let (w, h) = args.size;
     let start = Instant::now();
     let report = if args.reference {
@@ -224,6 +257,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             covered_pixels: Some(img.coverage()),
             voxel_pixels: Some(img.coverage()),
             visible_instances: instances.len(),
+            warnings,
             gpu_memory_bytes: Vec::new(),
             asset_notes: notes,
         }
@@ -267,6 +301,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             covered_pixels: Some(rgba.chunks(4).filter(|p| p[3] > 0).count()),
             voxel_pixels: ssbvb_passes::measure::voxel_pixels(&ctx, &renderer)?,
             visible_instances: stats.visible_instances,
+            warnings,
             gpu_memory_bytes: gpu_scene
                 .memory
                 .iter()
@@ -286,6 +321,61 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         print_report(&report);
     }
     Ok(())
+}
+
+/// Why a view may show nothing, from the scene and camera alone: every voxel instance
+/// beyond the far plane (the GPU clips there; the reference does not), or none in front of
+/// the camera.
+pub(crate) fn clipping_warnings(scene: &Scene, camera: &Camera) -> Vec<String> {
+    let forward = camera.basis().2;
+    let mut spans = Vec::new();
+    let mut imprecise = None;
+    for o in &scene.objects {
+        let finest = o.asset.lods.len().saturating_sub(1) as u32;
+        let level = match o.lod {
+            LodPolicy::Fixed(l) => l.min(finest),
+            LodPolicy::Auto { .. } => finest,
+        };
+        for xf in &o.instances {
+            // Bounding sphere of the object box [-1, 1]^3.
+            let radius = (xf.matrix3 * DVec3::ONE)
+                .length()
+                .max((xf.matrix3 * DVec3::new(1.0, 1.0, -1.0)).length())
+                .max((xf.matrix3 * DVec3::new(1.0, -1.0, 1.0)).length())
+                .max((xf.matrix3 * DVec3::new(-1.0, 1.0, 1.0)).length());
+            let depth = (xf.translation - camera.position).dot(forward);
+            spans.push((depth - radius, depth + radius));
+            // The GPU works in f32 relative to the camera: about 2^-22 of the distance is
+            // lost, which is more than a fraction of a voxel far away.
+            let cell = 2.0 * xf.matrix3.determinant().abs().cbrt() / (1u64 << level) as f64;
+            let dist = (xf.translation - camera.position).length();
+            if dist * 2f64.powi(-22) > cell / 8.0 {
+                imprecise.get_or_insert((dist, cell));
+            }
+        }
+    }
+    let mut out = Vec::new();
+    if let Some((dist, cell)) = imprecise {
+        out.push(format!(
+            "an object is {dist:.3e} units from the camera with voxels of {cell:.3e}: the GPU's \
+             f32 camera-relative rays lose about {:.1e} units there, so voxels may be missing \
+             (known limit; `--reference` is exact)",
+            dist * 2f64.powi(-22)
+        ));
+    }
+    if spans.is_empty() {
+        return out;
+    }
+    if spans.iter().all(|&(_, far_end)| far_end <= 0.0) {
+        out.push("every voxel object is behind the camera: nothing to draw".to_string());
+    } else if !camera.is_infinite() && spans.iter().all(|&(near_end, _)| near_end >= camera.far) {
+        out.push(format!(
+            "every voxel object lies beyond the far plane ({}): the GPU draws nothing; use \
+             --far 0 (no far plane) or a larger --far",
+            camera.far
+        ));
+    }
+    out
 }
 
 /// RGBA8 bytes of an output texture (sRGB or not, RGBA or BGRA).
@@ -344,6 +434,9 @@ fn print_report(r: &Report) {
         println!("pixels showing a voxel: {c}");
     }
     println!("visible instances: {}", r.visible_instances);
+    for w in &r.warnings {
+        println!("warning: {w}");
+    }
     for o in &r.gpu_memory_bytes {
         println!(
             "GPU memory, object {}: {} bytes (point clouds {}, lookup {}, proxies {})",

@@ -63,8 +63,8 @@ pub struct CameraDesc {
     /// Near plane.
     #[serde(default = "near")]
     pub near: f64,
-    /// Far plane (0 or less: infinite).
-    #[serde(default = "far")]
+    /// Far plane (0, the default: none, an infinite reversed-Z projection).
+    #[serde(default)]
     pub far: f64,
 }
 
@@ -77,9 +77,6 @@ fn fov() -> f64 {
 fn near() -> f64 {
     0.01
 }
-fn far() -> f64 {
-    1000.0
-}
 
 impl Default for CameraDesc {
     fn default() -> Self {
@@ -89,7 +86,7 @@ impl Default for CameraDesc {
             up: up(),
             fov_y: fov(),
             near: near(),
-            far: far(),
+            far: 0.0,
         }
     }
 }

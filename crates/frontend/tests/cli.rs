@@ -378,3 +378,51 @@ fn adapters_are_checked_before_use() {
         );
     }
 }
+
+/// No far plane by default: a bunny 1e4 units away still renders; `--far` below its
+/// distance clips it and the report says why; bad planes are refused.
+#[test]
+fn near_and_far_planes() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/models/bunny.obj");
+    let render = |extra: &[&str]| {
+        let out = ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+            .arg("render")
+            .arg(&model)
+            .args(["--level", "5", "--size", "48x36", "--json", "-o"])
+            .arg(dir.path().join("far.png"))
+            // 1e4 units away through a lens that the bunny fills.
+            .args(["--camera-pos", "0,0,10000", "--fov-y", "0.015"])
+            .args(extra)
+            .output()
+            .unwrap();
+        (
+            out.status.success(),
+            serde_json::from_slice::<serde_json::Value>(&out.stdout).ok(),
+            String::from_utf8_lossy(&out.stderr).to_string(),
+        )
+    };
+    let (ok, json, err) = render(&[]);
+    assert!(ok, "{err}");
+    let json = json.unwrap();
+    assert!(json["covered_pixels"].as_u64().unwrap() > 300, "{json}");
+    assert_eq!(json["warnings"].as_array().unwrap().len(), 0, "{json}");
+    let (ok, json, err) = render(&["--far", "1000"]);
+    assert!(ok, "{err}");
+    let json = json.unwrap();
+    assert_eq!(json["covered_pixels"].as_u64().unwrap(), 0, "{json}");
+    let w = json["warnings"][0].as_str().unwrap();
+    assert!(w.contains("beyond the far plane (1000)"), "{w}");
+    for (flags, reason) in [
+        (&["--near", "0"][..], "--near must be a positive number"),
+        (&["--far", "-1"][..], "--far must be a distance"),
+        (
+            &["--near", "5", "--far", "2"][..],
+            "far plane (2) must be beyond the near plane (5)",
+        ),
+    ] {
+        let (ok, _, err) = render(flags);
+        assert!(!ok && err.contains(reason), "{flags:?}: {err}");
+    }
+}
