@@ -170,8 +170,30 @@ fn render_json_and_bench_quick() {
     assert_eq!(rows.len(), 14, "{csv}");
     for r in rows {
         let r: Vec<&str> = r.split(',').collect();
-        let iou: f64 = r[col("coverage_iou")].parse().unwrap();
-        assert!(iou >= 0.97, "{r:?}");
+        let num = |name: &str| -> Option<f64> { r[col(name)].parse().ok() };
+        let iou = num("coverage_iou").unwrap();
+        let depth = num("depth_error_voxels_median").unwrap();
+        let normal = num("normal_error_deg_median").unwrap();
+        let (psnr, ssim) = (num("psnr_db").unwrap(), num("ssim").unwrap());
+        // Bounds from this preset's measurements on lavapipe (docs/benchmarks.md) with a
+        // margin. Exact techniques (ray-box billboards, ray casters, cubes): IoU 1.0, depth
+        // ~1e-6 voxel, face normals, PSNR 15.5 / SSIM 0.53 against the reference's stored
+        // normals (the documented shading-normal convention). Flat billboards: IoU 0.9976+,
+        // depth half a voxel (quads at the voxel centre), stored normals: PSNR 26.9+, SSIM
+        // 0.957+.
+        if matches!(r[col("technique")], "ssbvb-flat" | "ssbvb-unique") {
+            assert!(iou >= 0.995, "{r:?}");
+            assert!((0.45..=0.55).contains(&depth), "{r:?}");
+            assert!(normal <= 45.0, "{r:?}");
+            assert!(psnr >= 25.0 && ssim >= 0.94, "{r:?}");
+        } else {
+            assert!(iou >= 0.999, "{r:?}");
+            assert!(depth <= 1e-3 && normal <= 0.5, "{r:?}");
+            assert!(psnr >= 14.5 && ssim >= 0.48, "{r:?}");
+        }
+        if let Some(same) = num("same_voxel_rate") {
+            assert!(same >= 0.999, "{r:?}");
+        }
         // The SSBVB draws one billboard per covered pixel (up to silhouette rays), or with
         // unique_voxels one per visible voxel (fewer: cells span more than a pixel here).
         let technique = r[col("technique")];
