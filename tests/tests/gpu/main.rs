@@ -9,6 +9,7 @@ mod embed;
 mod empty_space;
 mod octree_ray_cast;
 mod pipeline;
+mod ray_casters;
 mod ray_march_filter;
 mod smooth_composite;
 mod triangles;
