@@ -70,6 +70,28 @@ fn check(mode: &str) {
                 })
                 .collect();
             let r = accuracy::compare(&reference, &hits, &[cell]).unwrap();
+            // Holes: pixels the reference covers, the GPU does not, away from silhouettes
+            // (all eight neighbours covered by the reference too).
+            let (w, h) = (SIZE.0 as i64, SIZE.1 as i64);
+            let covered = |x: i64, y: i64| {
+                x >= 0 && y >= 0 && x < w && y < h && reference.hits[(y * w + x) as usize].is_some()
+            };
+            let mut holes = 0;
+            for y in 0..h {
+                for x in 0..w {
+                    let i = (y * w + x) as usize;
+                    let interior = (-1..=1).all(|dy| (-1..=1).all(|dx| covered(x + dx, y + dy)));
+                    holes += (interior && hits[i].is_none()) as usize;
+                }
+            }
+            eprintln!("{mode} {file} camera {ci}: {holes} interior holes");
+            // Measured: none, except 4 on the cow seen straight down the Z axis in both modes
+            // (rays exactly on cell planes between two of its parts, where f32 and the f64
+            // reference break the tie differently).
+            assert!(
+                holes <= 8,
+                "{mode} {file} camera {ci}: {holes} holes inside the object"
+            );
             eprintln!(
                 "{mode} {file} L{level} camera {ci}: IoU {:.4}, same voxel {:.4}, depth median {:.4} p95 {:.3} voxels, normal median {:.2}°",
                 r.coverage_iou,
@@ -97,7 +119,9 @@ fn check(mode: &str) {
                     );
                 }
                 _ => {
-                    assert!(r.coverage_iou >= 0.97, "{file} camera {ci}: {r:?}");
+                    // Measured: IoU 0.9889 at worst (the knight, silhouettes of voxels
+                    // several pixels wide); bound with a margin.
+                    assert!(r.coverage_iou >= 0.985, "{file} camera {ci}: {r:?}");
                     assert!(
                         r.depth_error_voxels.median <= 0.6,
                         "{file} camera {ci}: {r:?}"
