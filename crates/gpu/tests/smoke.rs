@@ -248,6 +248,9 @@ fn render_pass_with_depth_and_stencil_is_exact() {
             .as_f32();
         assert_eq!(depth[0], 0.5);
         assert_eq!(depth[(w - 1) as usize], 0.75);
+    } else {
+        // Depth24PlusStencil8 cannot be copied out: say that the check did not run.
+        eprintln!("depth values not checked: {ds_format:?} cannot be read back");
     }
     assert_no_uncaptured();
 }
