@@ -75,3 +75,66 @@ fn measured_gbuffer_hits_match_the_harness_and_the_reference() {
     assert!(r.same_voxel_rate >= 0.99, "{r:?}");
     assert!(r.coverage_iou >= 0.99, "{r:?}");
 }
+
+/// `LodPolicy::Auto` on the GPU: three bunnies at different distances get different levels,
+/// each the level whose cell projects closest to a pixel (checked from the camera geometry,
+/// not with `choose_level`), and the frame matches the reference rendered at those levels.
+#[test]
+fn auto_lod_picks_a_level_per_instance_and_matches_the_reference() {
+    use glam::{DAffine3, DVec3};
+    use ssbvb_passes::{LodPolicy, Scene, VoxelObject};
+    let size = (160u32, 120u32);
+    let asset = ssbvb_tests::model_asset("bunny.obj", 7);
+    let at = [
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(-3.0, 0.0, -12.0),
+        DVec3::new(5.0, 0.5, -40.0),
+    ];
+    let scene_with = |lods: &[LodPolicy]| Scene {
+        objects: at
+            .iter()
+            .zip(lods)
+            .map(|(p, lod)| VoxelObject {
+                asset: asset.clone(),
+                instances: vec![DAffine3::from_translation(*p)],
+                lod: *lod,
+            })
+            .collect(),
+        ..Default::default()
+    };
+    let cam =
+        ssbvb_voxel::camera::Camera::new(DVec3::new(0.5, 0.4, 4.0), DVec3::new(0.0, 0.0, -10.0));
+    let src = include_str!("../../../assets/pipelines/cube_raster.ron");
+    let f = ssbvb_tests::render(
+        src,
+        scene_with(&[LodPolicy::Auto { bias: 0 }; 3]),
+        &cam,
+        size,
+    );
+    let mut levels = vec![u32::MAX; 3];
+    for v in &f.scene.visible {
+        levels[v.object] = v.level;
+    }
+    eprintln!("auto levels {levels:?}");
+    let tan = (cam.fov_y_deg.to_radians() / 2.0).tan();
+    for (p, &l) in at.iter().zip(&levels) {
+        assert!(l <= 7, "an instance was not drawn: {levels:?}");
+        // Pixels per cell of level l at the bounding sphere's nearest point.
+        let dist = (*p - cam.position).length() - 3f64.sqrt();
+        let px = (2.0 / (1u64 << l) as f64) * size.1 as f64 / (2.0 * dist * tan);
+        assert!(
+            (0.70..=1.42).contains(&px) || (l == 7 && px < 1.42) || (l == 0 && px > 0.7),
+            "level {l} at distance {dist:.1}: a cell spans {px:.2} px"
+        );
+    }
+    assert!(levels[0] > levels[2], "{levels:?}");
+    let fixed: Vec<LodPolicy> = levels.iter().map(|&l| LodPolicy::Fixed(l)).collect();
+    let reference = ssbvb_tests::reference_of(&scene_with(&fixed), &cam, size);
+    let hits = ssbvb_tests::gbuffer_hits(&f, "auto LOD");
+    let cells: Vec<f64> = levels.iter().map(|&l| 2.0 / (1u64 << l) as f64).collect();
+    let r = ssbvb_voxel::accuracy::compare(&reference, &hits, &cells).unwrap();
+    eprintln!("auto LOD vs reference at {levels:?}: {r:?}");
+    assert!(r.covered_reference > 1000, "{r:?}");
+    assert!(r.coverage_iou >= 0.99, "{r:?}");
+    assert!(r.depth_error_voxels.median <= 1e-3, "{r:?}");
+}
