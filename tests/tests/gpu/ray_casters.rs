@@ -1,6 +1,6 @@
-//! The dense-DDA and octree baselines beyond one object seen from outside: several
-//! instances of one object (rotated, scaled, overlapping on screen) and a camera inside the
-//! grid, against the CPU reference.
+//! The dense-DDA, octree and cube-raster baselines beyond one object seen from outside:
+//! several instances of one object (rotated, scaled, mirrored, overlapping on screen) and a
+//! camera inside the grid, against the CPU reference.
 
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 use ssbvb_voxel::accuracy;
@@ -8,6 +8,7 @@ use ssbvb_voxel::camera::Camera;
 
 const DENSE_DDA: &str = include_str!("../../../assets/pipelines/dense_dda.ron");
 const OCTREE: &str = include_str!("../../../assets/pipelines/octree_ray_cast.ron");
+const CUBES: &str = include_str!("../../../assets/pipelines/cube_raster.ron");
 const SIZE: (u32, u32) = (120, 90);
 const LEVEL: u32 = 5;
 
@@ -18,7 +19,11 @@ fn check(name: &str, scene: &ssbvb_passes::Scene, cam: &Camera, min_px: usize) {
         .map(|xf| 2.0 * xf.matrix3.determinant().abs().cbrt() / (1u64 << LEVEL) as f64)
         .collect();
     let reference = ssbvb_tests::reference_of(scene, cam, SIZE);
-    for (technique, src) in [("DenseDda", DENSE_DDA), ("OctreeRayCast", OCTREE)] {
+    for (technique, src) in [
+        ("DenseDda", DENSE_DDA),
+        ("OctreeRayCast", OCTREE),
+        ("CubeRaster", CUBES),
+    ] {
         let f = ssbvb_tests::render(src, scene.clone(), cam, SIZE);
         let hits = ssbvb_tests::gbuffer_hits(&f, name);
         let r = accuracy::compare(&reference, &hits, &cells).unwrap();
@@ -35,7 +40,7 @@ fn check(name: &str, scene: &ssbvb_passes::Scene, cam: &Camera, min_px: usize) {
             r.covered_reference < (SIZE.0 * SIZE.1) as usize,
             "{technique} {name}: every pixel covered (camera inside a voxel?)"
         );
-        // Exact traversals: the bounds of dense_dda.rs and octree_ray_cast.rs.
+        // Exact techniques: the bounds of dense_dda.rs and octree_ray_cast.rs.
         assert!(r.coverage_iou >= 0.99, "{technique} {name}: {r:?}");
         assert!(
             r.depth_error_voxels.median <= 0.01,
