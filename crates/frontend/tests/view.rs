@@ -117,6 +117,37 @@ fn view_under_xvfb_shows_the_scene_and_writes_a_screenshot() {
         same as f64 >= 0.97 * scene as f64,
         "only {same} of {scene} scene pixels of the window match `ssbvb render`"
     );
+    // An independent oracle: the exact CPU reference (`render --reference`, voxels only, no
+    // smoothing). Where it shows the bunny, the window shows the bunny's colours, up to the
+    // smoothing of normals (the ground plane behind it would be far off).
+    let exact = dir.path().join("reference.png");
+    let mut c = Command::new(env!("CARGO_BIN_EXE_ssbvb"));
+    ssbvb_env(&mut c);
+    let out = c
+        .args(["render", "--reference", "--size", "320x240", "-o"])
+        .arg(&exact)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let exact = read_png(&exact);
+    let (mut bunny, mut close) = (0usize, 0usize);
+    for (x, y, r) in exact.enumerate_pixels() {
+        if y < 60 || r[3] == 0 {
+            continue;
+        }
+        bunny += 1;
+        let v = img.get_pixel(x, y);
+        close += (0..3).all(|c| (i32::from(v[c]) - i32::from(r[c])).abs() <= 24) as usize;
+    }
+    eprintln!("window vs CPU reference: {close} of {bunny} bunny pixels within 24/255");
+    assert!(
+        bunny > 2000,
+        "the reference shows only {bunny} bunny pixels"
+    );
     // And the scene is not the background: the bunny and the ground differ from the
     // empty top-right corner.
     let corner = *img.get_pixel(319, 60);
