@@ -89,3 +89,23 @@ fn a_camera_inside_the_grid_matches_the_reference() {
     };
     check("camera inside the grid", &scene, &cam, 3000);
 }
+
+#[test]
+fn far_from_the_origin_and_close_up_match_the_reference() {
+    // The object 1e7 units from the world origin (camera-relative rendering keeps f32
+    // precise), seen from 2 units and from 0.3 units away with a near plane of 1e-4.
+    let offset = DVec3::new(1e7, -2e7, 1.5e7);
+    let mut scene =
+        ssbvb_tests::single_object_scene(ssbvb_tests::model_asset("bunny.obj", LEVEL), LEVEL);
+    scene.objects[0].instances = vec![DAffine3::from_translation(offset)];
+    let far_from_origin = Camera::new(offset + DVec3::new(1.5, 1.0, 2.0), offset);
+    check("at 1e7", &scene, &far_from_origin, 2000);
+    let close = Camera {
+        near: 1e-4,
+        ..Camera::new(
+            offset + DVec3::new(0.35, 0.1, 0.95),
+            offset + DVec3::new(0.0, 0.1, 0.0),
+        )
+    };
+    check("close up at 1e7", &scene, &close, 3000);
+}
