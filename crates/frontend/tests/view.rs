@@ -60,6 +60,26 @@ fn read_png(path: &Path) -> image::RgbaImage {
         .to_rgba8()
 }
 
+/// `ssbvb render` of the default scene at the window's size (plus `extra` flags) into
+/// `png`, read back.
+fn render_default_scene(png: &Path, extra: &[&str]) -> image::RgbaImage {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_ssbvb"));
+    ssbvb_env(&mut c);
+    let out = c
+        .args(["render", "--size", "320x240"])
+        .args(extra)
+        .arg("-o")
+        .arg(png)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    read_png(png)
+}
+
 #[test]
 fn view_under_xvfb_shows_the_scene_and_writes_a_screenshot() {
     let xvfb = xvfb_run();
@@ -84,20 +104,7 @@ fn view_under_xvfb_shows_the_scene_and_writes_a_screenshot() {
 
     // The same view rendered offline: where it drew the scene, the window shows the same
     // colours (away from the overlay's title bar at the top).
-    let reference = dir.path().join("render.png");
-    let mut c = Command::new(env!("CARGO_BIN_EXE_ssbvb"));
-    ssbvb_env(&mut c);
-    let out = c
-        .args(["render", "--size", "320x240", "-o"])
-        .arg(&reference)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let reference = read_png(&reference);
+    let reference = render_default_scene(&dir.path().join("render.png"), &[]);
     let (mut scene, mut same) = (0usize, 0usize);
     for (x, y, r) in reference.enumerate_pixels() {
         if y < 60 || r[3] == 0 {
@@ -120,20 +127,7 @@ fn view_under_xvfb_shows_the_scene_and_writes_a_screenshot() {
     // An independent oracle: the exact CPU reference (`render --reference`, voxels only, no
     // smoothing). Where it shows the bunny, the window shows the bunny's colours, up to the
     // smoothing of normals (the ground plane behind it would be far off).
-    let exact = dir.path().join("reference.png");
-    let mut c = Command::new(env!("CARGO_BIN_EXE_ssbvb"));
-    ssbvb_env(&mut c);
-    let out = c
-        .args(["render", "--reference", "--size", "320x240", "-o"])
-        .arg(&exact)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let exact = read_png(&exact);
+    let exact = render_default_scene(&dir.path().join("reference.png"), &["--reference"]);
     let (mut bunny, mut close) = (0usize, 0usize);
     for (x, y, r) in exact.enumerate_pixels() {
         if y < 60 || r[3] == 0 {
