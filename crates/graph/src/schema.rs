@@ -178,22 +178,6 @@ impl Format {
             Format::Depth32FloatStencil8 => 8,
         }
     }
-
-    /// Whether this is a depth (or depth-stencil) format.
-    pub fn is_depth(self) -> bool {
-        matches!(
-            self,
-            Format::Depth32Float | Format::Depth24PlusStencil8 | Format::Depth32FloatStencil8
-        )
-    }
-
-    /// Whether the format has a stencil aspect.
-    pub fn has_stencil(self) -> bool {
-        matches!(
-            self,
-            Format::Depth24PlusStencil8 | Format::Depth32FloatStencil8
-        )
-    }
 }
 
 /// One pass of the pipeline.

@@ -546,3 +546,70 @@ fn bad_parameters_name_pass_kind_rule_and_line() {
     });
     assert_eq!(nan.parameter_problems().len(), 1);
 }
+
+/// Smaller rules the mutation campaign found untested (`docs/reliability.md`).
+#[test]
+fn keep_after_class_and_syntax_rules() {
+    // A kept resource nobody writes.
+    let src = SSBVB.replace("output: \"color\",", "output: \"color\",\n  keep: [\"entry2\"],")
+        .replace(
+            "\"color\":            Texture(format: Rgba8UnormSrgb, size: Screen),",
+            "\"color\":            Texture(format: Rgba8UnormSrgb, size: Screen),\n    \"entry2\": Texture(format: Rgba32Float, size: Screen),",
+        );
+    assert_mentions(&err(&src), &["entry2", "is kept but written by no pass"]);
+
+    // A pass whose output nobody reads stays alive when a live pass names it in `after`.
+    let src = SSBVB
+        .replace(
+            "\"color\":            Texture(format: Rgba8UnormSrgb, size: Screen),",
+            "\"color\":            Texture(format: Rgba8UnormSrgb, size: Screen),\n    \"scratch\": Texture(format: Rgba8UnormSrgb, size: Screen),",
+        )
+        .replace(
+            "      reads: {\"albedo\": \"gbuffer_albedo\"",
+            "      after: [\"extra\"],\n      reads: {\"albedo\": \"gbuffer_albedo\"",
+        )
+        .replace(
+            "  ],\n  output:",
+            "    (name: \"extra\", kind: Composite, reads: {\"albedo\": \"gbuffer_albedo\", \"normal\": \"gbuffer_normal\", \"position\": \"gbuffer_position\"}, writes: {\"color\": \"scratch\"}),\n  ],\n  output:",
+        );
+    let p = ok(&src);
+    assert!(
+        p.passes.iter().any(|s| s.name == "extra"),
+        "{:?}",
+        p.pruned_passes
+    );
+    let extra = p.passes.iter().position(|s| s.name == "extra").unwrap();
+    let composite = p.passes.iter().position(|s| s.name == "composite").unwrap();
+    assert!(extra < composite);
+
+    // A buffer bound to a texture slot.
+    let src = SSBVB.replace("reads: [\"entry\"],", "reads: {\"entry\": \"ssbvb\"},");
+    let e = err(&src);
+    assert!(
+        e.errors
+            .iter()
+            .any(|x| matches!(x, GraphError::ClassMismatch { .. })),
+        "{e}"
+    );
+
+    // A syntax error before an unknown kind: both are reported (the kinds are scanned in
+    // the text; serde stops at its first error).
+    let src = SSBVB.replace("kind: Composite", "kind: Compost").replacen(
+        "size: Screen),",
+        "size: Screen) oops,",
+        1,
+    );
+    let e = err(&src);
+    assert!(
+        e.errors
+            .iter()
+            .any(|x| matches!(x, GraphError::UnknownKind { .. })),
+        "{e}"
+    );
+    assert!(
+        e.errors
+            .iter()
+            .any(|x| matches!(x, GraphError::Syntax { .. })),
+        "{e}"
+    );
+}
