@@ -100,14 +100,27 @@ impl Locator {
                 toks.push((Tok::Str(s), pos));
             } else if c.is_alphanumeric() || c == '_' {
                 let mut s = String::new();
-                while let Some(&d) = it.peek() {
-                    if d.is_alphanumeric() || d == '_' || d == '.' {
-                        s.push(d);
-                        it.next();
-                        bump!(d);
-                    } else {
+                loop {
+                    while let Some(&d) = it.peek() {
+                        if d.is_alphanumeric() || d == '_' || d == '.' {
+                            s.push(d);
+                            it.next();
+                            bump!(d);
+                        } else {
+                            break;
+                        }
+                    }
+                    // A raw identifier (`r#Composite`) names `Composite`, as serde reads it.
+                    let mut ahead = it.clone();
+                    let raw = s == "r"
+                        && ahead.next() == Some('#')
+                        && ahead.next().is_some_and(|d| d.is_alphabetic() || d == '_');
+                    if !raw {
                         break;
                     }
+                    it.next();
+                    bump!('#');
+                    s.clear();
                 }
                 toks.push((Tok::Ident(s), pos));
             } else {

@@ -613,3 +613,22 @@ fn keep_after_class_and_syntax_rules() {
         "{e}"
     );
 }
+
+/// RON's raw identifiers name the same kind (`r#Composite` is `Composite`), and an unknown
+/// raw kind is reported by its name.
+#[test]
+fn raw_identifier_kinds_are_read_as_their_names() {
+    let src = SSBVB.replace("kind: Composite", "kind: r#Composite");
+    assert!(src.contains("r#Composite"));
+    let p = ok(&src);
+    assert!(
+        p.passes
+            .iter()
+            .any(|s| s.kind == ssbvb_graph::PassKind::Composite)
+    );
+    let e = err(&SSBVB.replace("kind: Composite", "kind: r#Compost"));
+    assert_mentions(
+        &e,
+        &["unknown pass kind `Compost`", "did you mean `Composite`"],
+    );
+}
