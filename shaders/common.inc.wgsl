@@ -46,6 +46,21 @@ struct Instance {
     scene_index: u32,
 }
 
+// A node of the hierarchy over the visible instances' camera-relative world boxes (group 0,
+// binding 7), rebuilt every frame (ssbvb-voxel instance_bvh.rs; node 0 is the root).
+struct BvhNode {
+    lo: vec3<f32>,
+    // Left child, or BVH_LEAF | index into `instances`.
+    left: u32,
+    hi: vec3<f32>,
+    // Right child (unused in a leaf).
+    right: u32,
+}
+
+const BVH_LEAF: u32 = 0x80000000u;
+// Most nodes on a traversal stack (instance_bvh.rs MAX_DEPTH, plus one).
+const BVH_STACK: u32 = 26u;
+
 // Where one LOD of one asset lives in the shared voxel buffers (group 0, binding 2).
 struct LodInfo {
     level: u32,
@@ -100,6 +115,7 @@ const STENCIL_TRIANGLE: u32 = 2u;
 @group(0) @binding(4) var<storage, read> page_tables: array<u32>;
 @group(0) @binding(5) var<storage, read> pages: array<u32>;
 @group(0) @binding(6) var<storage, read> coarse: array<u32>;
+@group(0) @binding(7) var<storage, read> instance_bvh: array<BvhNode>;
 
 fn voxel_cell(v: PackedVoxel) -> vec3<u32> {
     return vec3(v.xy & 0xffffu, v.xy >> 16u, v.z_normal & 0xffffu);

@@ -12,12 +12,19 @@
 //
 // # Several instances
 //
-// The prepass names the instance whose proxy is nearest, but a later instance can hold a
+// The prepass names the instance whose proxy is nearest, but another instance can hold a
 // nearer voxel (overlapping boxes, or a ray that crosses a proxy without hitting a voxel).
-// When more than one instance is visible, every other instance's box is tested and those
-// whose box entry is nearer than the best hit so far are marched up to it: O(instances)
-// box tests per covered pixel. Exact ties go to the lower instance index (as the
-// reference).
+// After marching the prepass instance, the ray walks the hierarchy over the visible
+// instances' boxes (`instance_bvh`), nearer child first, skipping every box it enters
+// beyond the best hit so far, and marches the instances of the boxes it reaches up to that
+// hit: a pixel's cost follows the instances its ray meets. Exact ties go to the lower
+// instance index (as the reference, which walks the same hierarchy).
+//
+// # Counters
+//
+// Per frame, for `render --json` and the bench (RayMarchFilter::counters): rays cast,
+// march steps and hierarchy boxes tested (summed per workgroup, then once per workgroup
+// into 64-bit sums), instances marched, and a histogram of steps per ray for the p99.
 
 // The indirect draw of the billboard pass (wgpu's DrawIndirectArgs).
 struct DrawArgs {
@@ -41,6 +48,23 @@ override UNIQUE_VOXELS: bool = false;
 // cleared every frame; instance k's bits start at word `claim_offsets[k]`.
 @group(1) @binding(3) var<storage, read_write> claimed_voxels: array<atomic<u32>>;
 @group(1) @binding(4) var<storage, read> claim_offsets: array<u32>;
+// Pass-private: the frame's counters (layout in ray_march_filter.rs, `CounterWords`),
+// cleared every frame.
+@group(1) @binding(5) var<storage, read_write> filter_counters: array<atomic<u32>>;
+
+// Words of `filter_counters`: rays, then (low, high) pairs of sums, then the histogram.
+const C_RAYS: u32 = 0u;
+const C_STEPS: u32 = 1u;
+const C_BOXES: u32 = 3u;
+const C_MARCHES: u32 = 5u;
+const C_HISTOGRAM: u32 = 8u;
+
+var<private> boxes_tested: u32;
+var<private> marches: u32;
+var<workgroup> wg_rays: atomic<u32>;
+var<workgroup> wg_steps: atomic<u32>;
+var<workgroup> wg_boxes: atomic<u32>;
+var<workgroup> wg_marches: atomic<u32>;
 
 //#include "sparse_march.inc.wgsl"
 
@@ -84,18 +108,59 @@ fn clear_draw() {
     billboard_draw.first_instance = 0u;
 }
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let size = vec2<i32>(textureDimensions(entry));
-    let px = vec2<i32>(gid.xy);
-    if px.x >= size.x || px.y >= size.y {
+// Entry time (t >= 0) of the camera-relative ray `t * dir` into a hierarchy node's box, or
+// BIG when it misses. Direction components below 1e-20 are treated as 0 (boxes are
+// clamped to 1e37 and widened, so nothing overflows or is missed).
+fn bvh_enter(i: u32, dir: vec3<f32>) -> f32 {
+    boxes_tested += 1u;
+    let n = instance_bvh[i];
+    var enter = 0.0;
+    var exit = BIG;
+    for (var a = 0u; a < 3u; a++) {
+        if abs(dir[a]) < 1e-20 {
+            if !(n.lo[a] <= 0.0 && 0.0 <= n.hi[a]) {
+                return BIG;
+            }
+            continue;
+        }
+        let inv = 1.0 / dir[a];
+        let t0 = n.lo[a] * inv;
+        let t1 = n.hi[a] * inv;
+        enter = max(enter, min(t0, t1));
+        exit = min(exit, max(t0, t1));
+    }
+    return select(BIG, enter, enter <= exit);
+}
+
+// The best hit of visible instance `j` against `best` (nearer, or as near with a lower
+// index).
+fn consider(j: u32, dir: vec3<f32>, best: ptr<function, Hit>, best_inst: ptr<function, u32>) {
+    let inst_j = instances[j];
+    let lod_j = lods[inst_j.lod];
+    let rj = make_ray(inst_j, lod_j.level, dir);
+    let limit = (*best).t;
+    if !(max(rj.t_enter, 0.0) <= min(rj.t_exit, limit)) {
         return;
+    }
+    marches += 1u;
+    let h = march(rj, lod_j, 0.0, limit);
+    if h.found && (!(*best).found || h.t < (*best).t || (h.t == (*best).t && j < *best_inst)) {
+        *best = h;
+        *best_inst = j;
+    }
+}
+
+// Filters one pixel; returns whether it cast a ray.
+fn filter_pixel(px: vec2<i32>) -> bool {
+    let size = vec2<i32>(textureDimensions(entry));
+    if px.x >= size.x || px.y >= size.y {
+        return false;
     }
     let e = textureLoad(entry, px, 0);
     let count = u32(max(frame.misc.w, 0.0));
     // w = instance + 1, an exact small integer; NaN or stale values are ignored.
     if !(e.w >= 1.0 && e.w < f32(count) + 0.5) {
-        return;
+        return false;
     }
     let k = u32(e.w) - 1u;
     // The filter may run at a fraction of the screen (`entry` declared ScreenScaled): the
@@ -105,29 +170,54 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let inst = instances[k];
     let lod = lods[inst.lod];
     let r = make_ray(inst, lod.level, dir);
+    marches = 1u;
     var best = march(r, lod, start_time(k, e, px, size, dir, r), BIG);
     var best_inst = k;
     if count > 1u {
-        for (var j = 0u; j < count; j++) {
-            if j == k {
+        var stack: array<u32, BVH_STACK>;
+        var stack_t: array<f32, BVH_STACK>;
+        var sp = 0u;
+        let root_t = bvh_enter(0u, dir);
+        if root_t < BIG {
+            stack[0] = 0u;
+            stack_t[0] = root_t;
+            sp = 1u;
+        }
+        // Each of the 2 count - 1 nodes is pushed at most once; the bound only guards
+        // against a corrupt buffer.
+        for (var guard = 0u; sp > 0u && guard < 2u * count; guard++) {
+            sp -= 1u;
+            if stack_t[sp] > best.t {
                 continue;
             }
-            let inst_j = instances[j];
-            let lod_j = lods[inst_j.lod];
-            let rj = make_ray(inst_j, lod_j.level, dir);
-            let limit = best.t;
-            if !(max(rj.t_enter, 0.0) <= min(rj.t_exit, limit)) {
+            let node = instance_bvh[stack[sp]];
+            if (node.left & BVH_LEAF) != 0u {
+                let j = node.left & ~BVH_LEAF;
+                if j != k && j < count {
+                    consider(j, dir, &best, &best_inst);
+                }
                 continue;
             }
-            let h = march(rj, lod_j, 0.0, limit);
-            if h.found && (!best.found || h.t < best.t || (h.t == best.t && j < best_inst)) {
-                best = h;
-                best_inst = j;
+            let tl = bvh_enter(node.left, dir);
+            let tr = bvh_enter(node.right, dir);
+            // The farther child goes on the stack first, so the nearer one is popped first.
+            let near_is_left = tl <= tr;
+            let t_far = select(tl, tr, near_is_left);
+            let t_near = select(tr, tl, near_is_left);
+            if t_far < BIG && sp < BVH_STACK {
+                stack[sp] = select(node.left, node.right, near_is_left);
+                stack_t[sp] = t_far;
+                sp += 1u;
+            }
+            if t_near < BIG && sp < BVH_STACK {
+                stack[sp] = select(node.right, node.left, near_is_left);
+                stack_t[sp] = t_near;
+                sp += 1u;
             }
         }
     }
     if !best.found {
-        return;
+        return true;
     }
     let hit_lod = lods[instances[best_inst].lod];
     let voxel_id = hit_lod.voxel_offset + best.id;
@@ -137,7 +227,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let word = claim_offsets[best_inst] + (best.id >> 5u);
         let bit = 1u << (best.id & 31u);
         if (atomicOr(&claimed_voxels[word], bit) & bit) != 0u {
-            return;
+            return true;
         }
     }
     let idx = atomicAdd(&billboard_draw.instance_count, 1u);
@@ -151,5 +241,58 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             best.t,
             best.face,
         );
+    }
+    return true;
+}
+
+// Histogram bin of a step count: exact below 32, then 8 bins per power of two (the top
+// three bits after the leading one). RayMarchFilter::counters inverts it.
+fn steps_bin(s: u32) -> u32 {
+    if s < 32u {
+        return s;
+    }
+    let e = firstLeadingBit(s);
+    return 32u + (e - 5u) * 8u + ((s >> (e - 3u)) & 7u);
+}
+
+// Adds a workgroup's sum to a (low, high) pair of words.
+fn add_wide(word: u32, v: u32) {
+    if v == 0u {
+        return;
+    }
+    let old = atomicAdd(&filter_counters[word], v);
+    if old + v < old {
+        atomicAdd(&filter_counters[word + 1u], 1u);
+    }
+}
+
+@compute @workgroup_size(8, 8)
+fn main(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(local_invocation_index) li: u32,
+) {
+    if li == 0u {
+        atomicStore(&wg_rays, 0u);
+        atomicStore(&wg_steps, 0u);
+        atomicStore(&wg_boxes, 0u);
+        atomicStore(&wg_marches, 0u);
+    }
+    workgroupBarrier();
+    march_steps = 0u;
+    boxes_tested = 0u;
+    marches = 0u;
+    if filter_pixel(vec2<i32>(gid.xy)) {
+        atomicAdd(&wg_rays, 1u);
+        atomicAdd(&wg_steps, march_steps);
+        atomicAdd(&wg_boxes, boxes_tested);
+        atomicAdd(&wg_marches, marches);
+        atomicAdd(&filter_counters[C_HISTOGRAM + steps_bin(march_steps)], 1u);
+    }
+    workgroupBarrier();
+    if li == 0u {
+        atomicAdd(&filter_counters[C_RAYS], atomicLoad(&wg_rays));
+        add_wide(C_STEPS, atomicLoad(&wg_steps));
+        add_wide(C_BOXES, atomicLoad(&wg_boxes));
+        add_wide(C_MARCHES, atomicLoad(&wg_marches));
     }
 }

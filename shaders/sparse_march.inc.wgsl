@@ -40,6 +40,9 @@ const STATIC_AXIS: f32 = 1e-12;
 // crossing time finite).
 const MAX_ORIGIN: f32 = 1e12;
 
+// Loop iterations of every march since the includer last reset it (its counters).
+var<private> march_steps: u32;
+
 // An object-space ray in the mirrored frame of one instance's LOD grid.
 struct Ray {
     // Origin (negated on mirrored axes).
@@ -203,6 +206,7 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32) -> Hit {
     var cur_page = vec3(0xffffffffu);
     var cur_pool = 0u;
     for (var step = 0u; step < MAX_STEPS; step++) {
+        march_steps += 1u;
         let co = orig_cell(r, c);
         let pg = co / PAGE_SIZE;
         var unit = 0;

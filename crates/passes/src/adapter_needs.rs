@@ -13,7 +13,7 @@ use crate::registry::registration;
 use wgpu::DownlevelFlags as F;
 
 /// Storage buffers of the scene's bind group (group 0), visible to every stage.
-const SCENE_STORAGE_BUFFERS: u64 = 6;
+const SCENE_STORAGE_BUFFERS: u64 = 7;
 
 /// What `pipeline` needs from an adapter: the scene's bindings, each live pass kind's
 /// needs, every texture resource's format with its usages, and the depth-stencil readback

@@ -454,6 +454,17 @@ impl Renderer {
         crate::ray_march_filter::fill_count(ctx, self).map(Some)
     }
 
+    /// What the passes counted in the last frame (reads back from the GPU), with the
+    /// SSBVB fill count as the billboards drawn.
+    pub fn counters(&self, ctx: &GpuContext) -> Result<crate::FrameCounters, PassError> {
+        let mut out = crate::FrameCounters::default();
+        for p in &self.passes {
+            p.counters(ctx, &mut out)?;
+        }
+        out.billboards_drawn = self.fill_count(ctx)?.map(u64::from);
+        Ok(out)
+    }
+
     /// The output texture.
     pub fn output(&self) -> &FrameTexture {
         self.resources.texture(self.pipeline.output)

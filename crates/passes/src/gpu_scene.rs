@@ -12,7 +12,7 @@ use ssbvb_voxel::camera::Camera;
 use crate::PassError;
 use crate::scene::Scene;
 pub use crate::visibility::choose_level;
-use crate::visibility::{frame_uniform, mat, visible_instances};
+use crate::visibility::{frame_uniform, instance_bvh, mat, visible_instances};
 
 /// Mirror of WGSL `Frame`.
 #[repr(C)]
@@ -58,6 +58,21 @@ pub struct InstanceUniform {
     pub flags: u32,
     /// Index of the instance in the whole scene.
     pub scene_index: u32,
+}
+
+/// Mirror of WGSL `BvhNode` (32 bytes): one node of the hierarchy over the visible
+/// instances' camera-relative world boxes (`ssbvb_voxel::instance_bvh`, rebuilt per frame).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct GpuBvhNode {
+    /// Box minimum (rounded down to f32).
+    pub lo: [f32; 3],
+    /// Left child, or `LEAF | visible instance index`.
+    pub left: u32,
+    /// Box maximum (rounded up to f32).
+    pub hi: [f32; 3],
+    /// Right child (0 for a leaf).
+    pub right: u32,
 }
 
 /// Mirror of WGSL `LodInfo` (32 bytes).
@@ -162,8 +177,10 @@ pub struct GpuScene {
     pub bind_group: wgpu::BindGroup,
     /// Per-frame constants.
     pub frame_buffer: wgpu::Buffer,
-    /// Visible instances (capacity grows as needed).
+    /// Visible instances (room for every instance of the scene).
     pub instance_buffer: wgpu::Buffer,
+    /// The hierarchy over the visible instances' boxes (room for every instance).
+    pub bvh_buffer: wgpu::Buffer,
     /// LOD table.
     pub lod_buffer: wgpu::Buffer,
     /// Point clouds.
@@ -306,7 +323,7 @@ impl GpuScene {
             },
             count: None,
         }];
-        entries.extend((1..=6).map(ro));
+        entries.extend((1..=7).map(ro));
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scene"),
             entries: &entries,
@@ -319,6 +336,12 @@ impl GpuScene {
         });
         let total_instances: usize = scene.objects.iter().map(|o| o.instances.len()).sum();
         let instance_buffer = Self::instance_buffer(ctx, total_instances.max(1));
+        let bvh_buffer = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("instance bvh"),
+            size: ((2 * total_instances).max(1) * std::mem::size_of::<GpuBvhNode>()) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let lod_buffer = storage(ctx, "lods", bytemuck::cast_slice(&lods))?;
         let voxel_buffer = storage(ctx, "voxels", bytemuck::cast_slice(&voxels))?;
         let page_table_buffer = storage(ctx, "page_tables", bytemuck::cast_slice(&page_tables))?;
@@ -384,6 +407,7 @@ impl GpuScene {
                 &page_table_buffer,
                 &page_buffer,
                 &coarse_buffer,
+                &bvh_buffer,
             ],
         );
         Ok(Self {
@@ -392,6 +416,7 @@ impl GpuScene {
             bind_group,
             frame_buffer,
             instance_buffer,
+            bvh_buffer,
             lod_buffer,
             voxel_buffer,
             page_table_buffer,
@@ -421,7 +446,7 @@ impl GpuScene {
     fn make_bind_group(
         ctx: &GpuContext,
         layout: &wgpu::BindGroupLayout,
-        bufs: [&wgpu::Buffer; 7],
+        bufs: [&wgpu::Buffer; 8],
     ) -> wgpu::BindGroup {
         let entries: Vec<_> = bufs
             .iter()
@@ -447,6 +472,11 @@ impl GpuScene {
         let frame = frame_uniform(camera, screen, &self.scene.light);
         let (visible, uniforms) =
             visible_instances(&self.scene, &self.lod_base, &self.proxies, camera, screen);
+        let bvh = instance_bvh(&uniforms);
+        if !bvh.is_empty() {
+            ctx.queue
+                .write_buffer(&self.bvh_buffer, 0, bytemuck::cast_slice(&bvh));
+        }
         let mut frame = frame;
         frame.misc[3] = visible.len() as f32;
         ctx.queue

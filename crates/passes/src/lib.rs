@@ -3,12 +3,14 @@
 //! ([`gpu_scene`]) and the frame executor ([`frame::Renderer`]).
 //!
 //! Bindings: group 0 is the scene (frame constants, visible instances, every LOD's point
-//! cloud, page tables, page pools and coarse occupancy; `shaders/common.inc.wgsl`); group 1
+//! cloud, page tables, page pools, coarse occupancy and the hierarchy over the visible
+//! instances' boxes; `shaders/common.inc.wgsl`); group 1
 //! holds the pass's graph resources and its own resources, laid out from the pass's
 //! declaration ([`bindings`]).
 
 pub mod adapter_needs;
 pub mod bindings;
+pub mod counters;
 pub mod embed;
 pub mod frame;
 pub mod gbuffer;
@@ -35,6 +37,7 @@ registry::pass_modules! {
 }
 
 pub use adapter_needs::pipeline_requirements;
+pub use counters::FrameCounters;
 pub use frame::{FrameStats, PassTiming, Profiling, Recorder, Renderer};
 pub use gpu_scene::{GpuScene, ObjectMemory};
 pub use registry::{PassImpl, PassInit, Registration};
@@ -76,6 +79,12 @@ pub trait PassNode {
         encoder: &mut wgpu::CommandEncoder,
         rec: &mut Recorder<'_>,
     ) -> Result<(), PassError>;
+
+    /// Adds what this pass counted in the last frame to `out` (reads back from the GPU;
+    /// call after the frame, as [`Renderer::counters`] does). Most passes count nothing.
+    fn counters(&self, _ctx: &GpuContext, _out: &mut FrameCounters) -> Result<(), PassError> {
+        Ok(())
+    }
 }
 
 /// Pass kinds implemented by this crate, with default parameters (their WGSL must exist

@@ -11,9 +11,15 @@
 //! The march follows the CPU reference's rules (`ssbvb_voxel::reference::dda`) in f32:
 //! crossing times per plane, mirrored axes, the reference's tie and face rules; the WGSL
 //! file's header explains how it stays robust. With several visible instances each covered
-//! pixel also box-tests every other instance and marches those whose box entry is nearer
-//! than its best hit: O(instances) per covered pixel, the price of exact results where
-//! objects overlap.
+//! pixel then walks the hierarchy over the visible instances' boxes (group 0
+//! `instance_bvh`, built per frame from `ssbvb_voxel::instance_bvh`) and marches the
+//! instances whose boxes it enters before its best hit: a pixel's cost follows the
+//! instances its ray meets, and the result stays exact where objects overlap.
+//!
+//! The pass counts its work every frame ([`RayMarchFilter`]'s
+//! [`PassNode::counters`]): rays, march steps (mean and p99), hierarchy boxes tested and
+//! instances marched per ray. The sums are reduced per workgroup first, so the counting
+//! costs a few atomics per 64 pixels plus one histogram increment per ray.
 //!
 //! Two dispatches in one compute pass: `clear_draw` (one thread) resets the draw to
 //! `{6, 0, 0, 0}`, then `main` over `ceil(w / 8) × ceil(h / 8)` workgroups of 8 × 8.
@@ -35,6 +41,7 @@ use ssbvb_graph::{PassKind, RayMarchFilterParams};
 use ssbvb_voxel::asset::PackedVoxel;
 
 use crate::bindings::{OwnBinding, OwnKind, PassBindings};
+use crate::counters::{FrameCounters, histogram_quantile};
 use crate::frame::{Recorder, Renderer};
 use crate::pipelines::pipeline_layout;
 use crate::registry::{KindNeeds, PassImpl, PassInit};
@@ -92,7 +99,13 @@ pub struct RayMarchFilter {
     /// `unique_voxels`: the claim bitset and the per-instance word offsets (capacities
     /// in words / instances grow as needed).
     claims: Option<Claims>,
+    /// The frame's counters (`CounterWords` words).
+    counters: wgpu::Buffer,
 }
+
+/// Words of the counter buffer: rays, (low, high) sums of steps, boxes and marches, a
+/// spare word, then the steps-per-ray histogram (constants `C_*` in the WGSL).
+const COUNTER_WORDS: usize = 8 + crate::counters::STEP_BINS;
 
 /// What the filter binds itself (`unique_voxels`): the claim bitset and the first word of
 /// each visible instance's bits.
@@ -104,6 +117,10 @@ pub const OWN: &[OwnBinding] = &[
     OwnBinding {
         name: "claim_offsets",
         kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "filter_counters",
+        kind: OwnKind::StorageReadWrite,
     },
 ];
 
@@ -135,7 +152,7 @@ impl PassImpl for RayMarchFilter {
     // Its output is the billboards' indirect draw; 8×8 threads per workgroup.
     const NEEDS: KindNeeds = KindNeeds {
         limit: Some(max_compute_invocations_per_workgroup(64)),
-        ..KindNeeds::new(wgpu::DownlevelFlags::INDIRECT_EXECUTION, 4)
+        ..KindNeeds::new(wgpu::DownlevelFlags::INDIRECT_EXECUTION, 5)
     };
 
     /// Compiles both entry points; `max_steps` becomes the WGSL override `MAX_STEPS`.
@@ -175,12 +192,21 @@ impl PassImpl for RayMarchFilter {
         let (clear, main, bindings) = built;
         // Without unique_voxels the shader never touches the claims: bind minimal buffers.
         let claims = Some(Claims::new(ctx, 4, 4));
+        let counters = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("filter counters"),
+            size: (COUNTER_WORDS * 4) as u64,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
         Ok(Self {
             clear,
             main,
             bindings,
             unique_voxels,
             claims,
+            counters,
         })
     }
 }
@@ -200,8 +226,10 @@ impl PassNode for RayMarchFilter {
             &[
                 ("claimed_voxels", claims.bits.as_entire_binding()),
                 ("claim_offsets", claims.offsets.as_entire_binding()),
+                ("filter_counters", self.counters.as_entire_binding()),
             ],
         )?;
+        encoder.clear_buffer(&self.counters, 0, None);
         let entry = &rec.texture("entry").texture;
         let (w, h) = (entry.width(), entry.height());
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -215,6 +243,22 @@ impl PassNode for RayMarchFilter {
         // wgpu orders the two dispatches (the draw arguments are written, then counted).
         pass.set_pipeline(&self.main);
         pass.dispatch_workgroups(w.div_ceil(WORKGROUP), h.div_ceil(WORKGROUP), 1);
+        Ok(())
+    }
+
+    fn counters(&self, ctx: &GpuContext, out: &mut FrameCounters) -> Result<(), PassError> {
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&ctx.read_buffer(&self.counters)?);
+        if words.len() < COUNTER_WORDS {
+            return Err(PassError::BadScene("filter counters readback is short".into()));
+        }
+        let wide = |i: usize| words[i] as u64 | (words[i + 1] as u64) << 32;
+        let rays = words[0] as u64;
+        let per_ray = |sum: u64| (rays > 0).then(|| sum as f64 / rays as f64);
+        out.filter_rays = Some(rays);
+        out.march_steps_mean = per_ray(wide(1));
+        out.instance_boxes_per_ray = per_ray(wide(3));
+        out.instances_marched_per_ray = per_ray(wide(5));
+        out.march_steps_p99 = histogram_quantile(&words[8..COUNTER_WORDS], 0.99);
         Ok(())
     }
 }

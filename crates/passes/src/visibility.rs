@@ -6,7 +6,9 @@ use glam::{DAffine3, DMat4, DVec3};
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::shading::Light;
 
-use crate::gpu_scene::{FrameUniform, InstanceUniform, ProxyRange, VisibleInstance};
+use ssbvb_voxel::instance_bvh::{Aabb, InstanceBvh};
+
+use crate::gpu_scene::{FrameUniform, GpuBvhNode, InstanceUniform, ProxyRange, VisibleInstance};
 use crate::scene::{LodPolicy, Scene};
 
 /// A matrix as WGSL's column-major `mat4x4<f32>`.
@@ -136,6 +138,48 @@ pub(crate) fn visible_instances(
         }
     }
     (visible, uniforms)
+}
+
+/// The hierarchy over the visible instances' camera-relative world boxes, as the GPU reads
+/// it (item `i` is visible instance `i`; empty when none is visible).
+///
+/// The boxes come from the f32 `object_to_world` the shaders use, computed in f64, then
+/// widened by 1e-5 of (distance + size) and rounded outwards: the filter's own slab test
+/// runs in f32 in object space, with errors of a few ulps of those magnitudes, and a box
+/// that is too tight would drop a candidate (a hole), while one too wide only costs a test.
+pub(crate) fn instance_bvh(uniforms: &[InstanceUniform]) -> Vec<GpuBvhNode> {
+    let boxes: Vec<Option<Aabb>> = uniforms
+        .iter()
+        .map(|u| {
+            let m = glam::Mat4::from_cols_array_2d(&u.object_to_world).as_dmat4();
+            let xf = DAffine3::from_mat4(m);
+            let b = Aabb::of_instance(&xf)?;
+            let size = (b.hi - b.lo).max_element() + b.center().abs().max_element();
+            Some(b.widened(size * 1e-5))
+        })
+        .collect();
+    // Shaders may assume no infinities: boxes beyond 1e37 are clamped (such instances
+    // are outside the march's range, `MAX_ORIGIN`, anyway).
+    let down = |v: f64| {
+        let v = v.clamp(-1e37, 1e37);
+        let f = v as f32;
+        if f as f64 > v { f.next_down() } else { f }
+    };
+    let up = |v: f64| {
+        let v = v.clamp(-1e37, 1e37);
+        let f = v as f32;
+        if (f as f64) < v { f.next_up() } else { f }
+    };
+    InstanceBvh::build(&boxes)
+        .nodes()
+        .iter()
+        .map(|n| GpuBvhNode {
+            lo: n.bounds.lo.to_array().map(down),
+            left: n.left,
+            hi: n.bounds.hi.to_array().map(up),
+            right: n.right,
+        })
+        .collect()
 }
 
 /// The LOD level of an instance for a camera and screen: fixed, or the level whose cell

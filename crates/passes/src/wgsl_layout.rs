@@ -3,7 +3,7 @@
 //! the same name (a field added on one side only, or a different alignment, fails there
 //! with the struct and field named). Padding fields (`pad`, `_pad`, …) are not compared.
 
-use crate::gpu_scene::{FrameUniform, InstanceUniform, LodInfo, MeshUniform};
+use crate::gpu_scene::{FrameUniform, GpuBvhNode, InstanceUniform, LodInfo, MeshUniform};
 use crate::ray_march_filter::{DrawArgs, VoxelSlot};
 use ssbvb_voxel::asset::PackedVoxel;
 use ssbvb_voxel::cube_list::Cube;
@@ -71,6 +71,15 @@ pub fn shared_structs() -> Vec<StructLayout> {
                 level,
                 flags,
                 scene_index
+            }
+        ),
+        layout!(
+            "BvhNode",
+            GpuBvhNode {
+                lo,
+                left,
+                hi,
+                right
             }
         ),
         layout!(

@@ -6,7 +6,7 @@
 //! LOD ([`svo`]) → per LOD a packed point cloud ([`asset::PointCloud`]) and a sparse lookup
 //! of 16³ pages ([`asset::SparseLookup`]) → a conservative proxy mesh ([`proxy`]). The exact CPU
 //! reference ray caster ([`mod@reference`]) is the ground truth every GPU technique is
-//! measured against; [`cache`] stores a prepared asset on disk. [`cube_list`] builds the
+//! measured against (over many instances through an [`instance_bvh`]); [`cache`] stores a prepared asset on disk. [`cube_list`] builds the
 //! instance data of the cube rasterization baseline.
 
 pub mod accuracy;
@@ -14,6 +14,7 @@ pub mod asset;
 pub mod cache;
 pub mod camera;
 pub mod cube_list;
+pub mod instance_bvh;
 pub mod load;
 pub mod model;
 pub mod prepare;

@@ -5,7 +5,9 @@
 //! object space in f64 and traced through the instance's sparse lookup with an exact voxel
 //! DDA ([`trace_object_ray`]; the hit rules — closed cells, grazing rays hit, tie rule,
 //! face normal — are documented in [`dda`]). The nearest hit over all instances wins (on an
-//! exact tie the lower instance index). The hit is shaded with [`shading::shade`] using the
+//! exact tie the lower instance index); the instances a ray may meet come from an
+//! [`InstanceBvh`] over their world boxes, so a pixel costs what its ray meets, not what
+//! the scene holds. The hit is shaded with [`shading::shade`] using the
 //! voxel's stored normal and colour.
 //!
 //! Rays start at the eye (`t = 0`), not at the near plane: a camera inside a voxel sees that
@@ -27,6 +29,7 @@ use rayon::prelude::*;
 pub use self::dda::{ObjectHit, Traversal, trace_object_ray};
 use crate::asset::LodLevel;
 use crate::camera::{Camera, normalize_or};
+use crate::instance_bvh::{Aabb, InstanceBvh};
 use crate::shading::{Light, linear_to_srgb8, shade};
 
 /// One placed copy of a LOD level.
@@ -115,26 +118,58 @@ fn prepare<'a>(instances: &[Instance<'a>]) -> Vec<Option<Prepared<'a>>> {
         .collect()
 }
 
-/// Traces one world ray (`dir` normalized) against prepared instances: the nearest hit.
-fn trace_prepared(
-    prepared: &[Option<Prepared>],
-    origin: DVec3,
-    dir: DVec3,
-) -> Option<(u32, ObjectHit)> {
-    let mut best: Option<(u32, ObjectHit)> = None;
-    for (i, p) in prepared.iter().enumerate() {
-        let Some(p) = p else { continue };
-        // The object-space direction is not renormalized, so the object-space ray
-        // parameter *is* the world distance.
-        let o = p.to_object * (origin - p.translation);
-        let d = p.to_object * dir;
-        let hit = trace_object_ray(&p.lod.lookup, o, d, Traversal::Hierarchical)
-            .filter(|h| h.t.is_finite() && best.as_ref().is_none_or(|(_, b)| h.t < b.t));
-        if let Some(h) = hit {
-            best = Some((i as u32, h));
+/// The instances of a render, prepared for tracing, and the hierarchy over their boxes.
+struct PreparedScene<'a> {
+    instances: Vec<Option<Prepared<'a>>>,
+    bvh: InstanceBvh,
+}
+
+impl<'a> PreparedScene<'a> {
+    fn new(instances: &[Instance<'a>]) -> Self {
+        let prepared = prepare(instances);
+        let boxes: Vec<Option<Aabb>> = instances
+            .iter()
+            .zip(&prepared)
+            .map(|(inst, p)| {
+                p.as_ref()?;
+                let b = Aabb::of_instance(&inst.object_to_world)?;
+                // The box test runs in world space, the trace in object space: a relative
+                // 1e-9 covers the rounding between the two (f64 errors are ~1e-16).
+                let size = (b.hi - b.lo).max_element() + b.center().abs().max_element();
+                Some(b.widened(size * 1e-9))
+            })
+            .collect();
+        Self {
+            instances: prepared,
+            bvh: InstanceBvh::build(&boxes),
         }
     }
-    best
+
+    /// Traces one world ray (`dir` normalized): the nearest hit, on an exact tie the lower
+    /// instance index.
+    fn trace(&self, origin: DVec3, dir: DVec3) -> Option<(u32, ObjectHit)> {
+        let mut best: Option<(u32, ObjectHit)> = None;
+        self.bvh.traverse(origin, dir, |i, _| {
+            if let Some(p) = &self.instances[i as usize] {
+                // The object-space direction is not renormalized, so the object-space ray
+                // parameter *is* the world distance.
+                let o = p.to_object * (origin - p.translation);
+                let d = p.to_object * dir;
+                let hit =
+                    trace_object_ray(&p.lod.lookup, o, d, Traversal::Hierarchical).filter(|h| {
+                        h.t.is_finite()
+                            && best
+                                .as_ref()
+                                .is_none_or(|(bi, b)| h.t < b.t || (h.t == b.t && i < *bi))
+                    });
+                if let Some(h) = hit {
+                    best = Some((i, h));
+                }
+            }
+            best.as_ref().map_or(f64::INFINITY, |(_, b)| b.t)
+        });
+        best
+    }
 }
 
 fn to_f32(v: DVec3) -> [f32; 3] {
@@ -150,27 +185,22 @@ pub fn trace_pixel(
     width: u32,
     height: u32,
 ) -> Option<Hit> {
-    let prepared = prepare(instances);
+    let scene = PreparedScene::new(instances);
     let rays = camera.pixel_rays(width, height);
     let (o, d) = rays.ray(px, py);
-    trace_world(&prepared, o, d, rays.forward())
+    trace_world(&scene, o, d, rays.forward())
 }
 
 /// Traces a world ray: `dir` is normalized here, so [`Hit::t`] is a world distance.
 /// `forward` is the camera's forward axis (for [`Hit::view_depth`]).
 pub fn trace_ray(instances: &[Instance], origin: DVec3, dir: DVec3, forward: DVec3) -> Option<Hit> {
-    let prepared = prepare(instances);
-    trace_world(&prepared, origin, normalize_or(dir, forward), forward)
+    let scene = PreparedScene::new(instances);
+    trace_world(&scene, origin, normalize_or(dir, forward), forward)
 }
 
-fn trace_world(
-    prepared: &[Option<Prepared>],
-    origin: DVec3,
-    dir: DVec3,
-    forward: DVec3,
-) -> Option<Hit> {
-    let (instance, h) = trace_prepared(prepared, origin, dir)?;
-    let p = prepared[instance as usize].as_ref()?;
+fn trace_world(scene: &PreparedScene, origin: DVec3, dir: DVec3, forward: DVec3) -> Option<Hit> {
+    let (instance, h) = scene.trace(origin, dir)?;
+    let p = scene.instances[instance as usize].as_ref()?;
     let normal = normalize_or(p.normal_to_world * h.face_normal, -dir);
     Some(Hit {
         instance,
@@ -236,7 +266,7 @@ pub fn render(
     height: u32,
     light: &Light,
 ) -> ReferenceImage {
-    let prepared = prepare(instances);
+    let scene = PreparedScene::new(instances);
     let rays = camera.pixel_rays(width, height);
     let w = width as usize;
     let len = w * height as usize;
@@ -249,8 +279,10 @@ pub fn render(
             .for_each(|(y, (hit_row, color_row))| {
                 for x in 0..w {
                     let (o, d) = rays.ray(x as u32, y as u32);
-                    let hit = trace_world(&prepared, o, d, rays.forward());
-                    let placed = hit.as_ref().map(|h| (h, &prepared[h.instance as usize]));
+                    let hit = trace_world(&scene, o, d, rays.forward());
+                    let placed = hit
+                        .as_ref()
+                        .map(|h| (h, &scene.instances[h.instance as usize]));
                     if let Some((h, Some(p))) = placed {
                         color_row[x] = shade_with(p.lod, p.normal_to_world, h, d, light);
                     }
