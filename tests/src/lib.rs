@@ -138,15 +138,14 @@ impl Frame {
     }
 }
 
-/// The CPU reference of `scene` (fixed LODs only) seen by `camera` at `size`.
+/// The CPU reference of `scene` seen by `camera` at `size`, each instance at the level the
+/// renderer chooses for it (`choose_level`, per instance under `Auto`).
 pub fn reference_of(scene: &Scene, camera: &Camera, size: (u32, u32)) -> ReferenceImage {
     let mut instances = Vec::new();
     for o in &scene.objects {
-        let level = match o.lod {
-            LodPolicy::Fixed(l) => l.min(o.asset.lods.len() as u32 - 1),
-            LodPolicy::Auto { .. } => panic!("reference_of needs fixed LODs"),
-        };
+        let max = o.asset.lods.len() as u32 - 1;
         for xf in &o.instances {
+            let level = ssbvb_passes::gpu_scene::choose_level(o.lod, xf, camera, size, max);
             instances.push(reference::Instance {
                 lod: &o.asset.lods[level as usize],
                 object_to_world: *xf,

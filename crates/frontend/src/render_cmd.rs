@@ -99,6 +99,11 @@ struct Report {
     /// Pixels showing a voxel (GPU: stencil = voxel), what the fill count compares with.
     voxel_pixels: Option<usize>,
     visible_instances: usize,
+    /// Hardware-independent counts (march steps, boxes tested, billboards drawn, …); empty
+    /// for the reference.
+    counters: ssbvb_passes::FrameCounters,
+    /// Visible instances per chosen level (JSON keys are the levels).
+    lod_histogram: std::collections::BTreeMap<u32, usize>,
     /// Why the image may be empty (nothing in view, everything beyond the far plane).
     warnings: Vec<String>,
     gpu_memory_bytes: Vec<ObjectReport>,
@@ -223,11 +228,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let start = Instant::now();
     let report = if args.reference {
         let mut instances = Vec::new();
+        let mut lod_histogram = std::collections::BTreeMap::new();
         for o in &scene.objects {
             let max = o.asset.lods.len() as u32 - 1;
             for xf in &o.instances {
                 let level =
                     ssbvb_passes::gpu_scene::choose_level(o.lod, xf, &camera, args.size, max);
+                *lod_histogram.entry(level).or_insert(0) += 1;
                 instances.push(ssbvb_voxel::reference::Instance {
                     lod: &o.asset.lods[level as usize],
                     object_to_world: *xf,
@@ -257,6 +264,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             covered_pixels: Some(img.coverage()),
             voxel_pixels: Some(img.coverage()),
             visible_instances: instances.len(),
+            counters: Default::default(),
+            lod_histogram,
             warnings,
             gpu_memory_bytes: Vec::new(),
             asset_notes: notes,
@@ -286,6 +295,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         let rgba = to_rgba8(&out)?;
         ssbvb_gpu::readback::write_png_rgba8(&args.output, w, h, &rgba)?;
         let fill = renderer.fill_count(&ctx)?;
+        let counters = renderer.counters(&ctx)?;
         Report {
             output: args.output.display().to_string(),
             mode: "gpu",
@@ -301,6 +311,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             covered_pixels: Some(rgba.chunks(4).filter(|p| p[3] > 0).count()),
             voxel_pixels: ssbvb_passes::measure::voxel_pixels(&ctx, &renderer)?,
             visible_instances: stats.visible_instances,
+            counters,
+            lod_histogram: gpu_scene.lod_histogram(),
             warnings,
             gpu_memory_bytes: gpu_scene
                 .memory
@@ -434,6 +446,25 @@ fn print_report(r: &Report) {
         println!("pixels showing a voxel: {c}");
     }
     println!("visible instances: {}", r.visible_instances);
+    if !r.lod_histogram.is_empty() {
+        let levels: Vec<String> = r
+            .lod_histogram
+            .iter()
+            .map(|(l, n)| format!("{n} at {l}"))
+            .collect();
+        println!("levels: {}", levels.join(", "));
+    }
+    let c = &r.counters;
+    if let (Some(rays), Some(mean), Some(p99)) =
+        (c.filter_rays, c.march_steps_mean, c.march_steps_p99)
+    {
+        println!(
+            "filter: {rays} rays, march steps per ray mean {mean:.1}, p99 <= {p99}; per ray \
+             {:.2} instance boxes tested, {:.2} instances marched",
+            c.instance_boxes_per_ray.unwrap_or(0.0),
+            c.instances_marched_per_ray.unwrap_or(0.0)
+        );
+    }
     for w in &r.warnings {
         println!("warning: {w}");
     }

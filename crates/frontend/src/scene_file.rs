@@ -115,11 +115,15 @@ impl CameraDesc {
 pub enum LodDesc {
     /// A fixed level.
     Fixed(u32),
-    /// Automatic with a bias.
+    /// Per instance, the coarsest level whose voxel projects to at most `pixel_error`
+    /// pixels (default 1; 0 = finest), plus `bias` levels.
     Auto {
         /// Levels added (positive = finer).
         #[serde(default)]
         bias: i32,
+        /// Largest projected voxel size in pixels.
+        #[serde(default = "one")]
+        pixel_error: f64,
     },
 }
 
@@ -153,6 +157,12 @@ pub struct InstanceDesc {
     #[serde(default = "one")]
     pub scale: f64,
 }
+
+/// Most instances a scene file may hold (all objects together).
+pub const MAX_INSTANCES: usize = 1 << 18;
+
+/// Bad instances named one by one in an error; the rest are counted.
+const MAX_LISTED: usize = 8;
 
 fn one() -> f64 {
     1.0
@@ -215,15 +225,36 @@ impl SceneFile {
                 c.far, c.near
             ));
         }
+        let total: usize = self
+            .objects
+            .iter()
+            .map(|o| o.instances.as_ref().map_or(1, Vec::len))
+            .sum();
+        if total > MAX_INSTANCES {
+            out.push(format!(
+                "objects: {total} instances in all; a scene holds at most {MAX_INSTANCES} \
+                 (each visible one costs a 160-byte GPU record and a hierarchy node)"
+            ));
+        }
+        let mut bad_instances = 0;
         for (i, o) in self.objects.iter().enumerate() {
             match o.lod {
                 Some(LodDesc::Fixed(l)) if l > o.level => out.push(format!(
                     "objects[{i}].lod: Fixed({l}) is finer than the object's level {}",
                     o.level
                 )),
+                Some(LodDesc::Auto { pixel_error, .. })
+                    if !(pixel_error >= 0.0 && pixel_error.is_finite()) =>
+                {
+                    out.push(format!(
+                        "objects[{i}].lod: Auto pixel_error must be a finite number >= 0, got \
+                         {pixel_error}"
+                    ))
+                }
                 _ => {}
             }
             for (j, t) in o.instances.iter().flatten().enumerate() {
+                let before = out.len();
                 if !(t.scale > 0.0 && t.scale.is_finite()) {
                     out.push(format!(
                         "objects[{i}].instances[{j}].scale must be a positive number, got {}",
@@ -236,7 +267,20 @@ impl SceneFile {
                          finite"
                     ));
                 }
+                // Name the first few bad instances, count the rest.
+                if out.len() > before {
+                    bad_instances += 1;
+                    if bad_instances > MAX_LISTED {
+                        out.truncate(before);
+                    }
+                }
             }
+        }
+        if bad_instances > MAX_LISTED {
+            out.push(format!(
+                "and {} more bad instances",
+                bad_instances - MAX_LISTED
+            ));
         }
         for (i, t) in self.triangles.iter().enumerate() {
             let TriangleDesc::Plane {
@@ -308,7 +352,7 @@ fn load_with_cache(
         let lod = match o.lod {
             None => LodPolicy::Fixed(o.level),
             Some(LodDesc::Fixed(l)) => LodPolicy::Fixed(l),
-            Some(LodDesc::Auto { bias }) => LodPolicy::Auto { bias },
+            Some(LodDesc::Auto { bias, pixel_error }) => LodPolicy::Auto { bias, pixel_error },
         };
         let instances = o.instances.clone().unwrap_or_else(|| {
             vec![InstanceDesc {
@@ -440,5 +484,57 @@ mod tests {
         }
         // A far plane of 0 means none.
         load_text("Scene(camera: (position: (0.0, 0.0, 3.0), far: 0.0))").unwrap();
+    }
+
+    #[test]
+    fn auto_lod_takes_a_pixel_error_and_refuses_a_bad_one() {
+        let s = load_text("Scene(objects: [(model: \"tri.obj\", level: 3, lod: Auto())])").unwrap();
+        assert_eq!(s.scene.objects[0].lod, LodPolicy::AUTO);
+        let s = load_text(
+            "Scene(objects: [(model: \"tri.obj\", level: 3, lod: Auto(pixel_error: 2.5, bias: -1))])",
+        )
+        .unwrap();
+        assert_eq!(
+            s.scene.objects[0].lod,
+            LodPolicy::Auto {
+                bias: -1,
+                pixel_error: 2.5
+            }
+        );
+        let e =
+            err("Scene(objects: [(model: \"tri.obj\", level: 3, lod: Auto(pixel_error: -1.0))])");
+        assert!(
+            e.contains("objects[0].lod: Auto pixel_error must be a finite number >= 0, got -1"),
+            "{e}"
+        );
+    }
+
+    /// Millions of instances, or thousands of bad ones, get a short error before anything
+    /// is voxelized or uploaded.
+    #[test]
+    fn too_many_instances_and_many_bad_ones_are_summarized() {
+        let many = "(),".repeat(MAX_INSTANCES + 1);
+        let e = err(&format!(
+            "Scene(objects: [(model: \"tri.obj\", level: 3, instances: [{many}])])"
+        ));
+        assert!(
+            e.contains(&format!("{} instances in all", MAX_INSTANCES + 1)),
+            "{e}"
+        );
+        assert!(e.len() < 400, "{} bytes: {e:.400}", e.len());
+        let bad = "(scale: -1.0),".repeat(1000);
+        let e = err(&format!(
+            "Scene(objects: [(model: \"tri.obj\", level: 3, instances: [{bad}])])"
+        ));
+        assert!(e.contains("objects[0].instances[7].scale"), "{e}");
+        assert!(!e.contains("objects[0].instances[8].scale"), "{e}");
+        assert!(e.contains("and 992 more bad instances"), "{e}");
+        // The limit itself is allowed.
+        let ok = "(),".repeat(2000);
+        let s = load_text(&format!(
+            "Scene(objects: [(model: \"tri.obj\", level: 3, instances: [{ok}])])"
+        ))
+        .unwrap();
+        assert_eq!(s.scene.objects[0].instances.len(), 2000);
     }
 }

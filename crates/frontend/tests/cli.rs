@@ -448,3 +448,52 @@ fn near_and_far_planes() {
         assert!(!ok && err.contains(reason), "{flags:?}: {err}");
     }
 }
+
+/// The paper's scene in small (`bunnies_64.ron`): `render --json` reports the per-level
+/// histogram of the visible instances and the filter's counters, and the filter tests a
+/// few hierarchy boxes per ray rather than every visible instance.
+#[test]
+fn bunny_grid_scene_reports_levels_and_counters() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = ssbvb()
+        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+        .args([
+            "render",
+            "assets/scenes/bunnies_64.ron",
+            "--size",
+            "96x72",
+            "--json",
+            "-o",
+        ])
+        .arg(dir.path().join("grid.png"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let visible = json["visible_instances"].as_u64().unwrap();
+    assert!(visible >= 40, "{json}");
+    let levels = json["lod_histogram"].as_object().unwrap();
+    let total: u64 = levels.values().map(|v| v.as_u64().unwrap()).sum();
+    assert_eq!(total, visible, "{json}");
+    assert!(
+        levels.len() >= 2,
+        "near and far bunnies take different levels: {json}"
+    );
+    assert!(
+        levels.keys().all(|l| l.parse::<u32>().unwrap() <= 7),
+        "{json}"
+    );
+    let c = &json["counters"];
+    let rays = c["filter_rays"].as_u64().unwrap();
+    let fill = json["ssbvb_fill_count"].as_u64().unwrap();
+    assert_eq!(c["billboards_drawn"].as_u64(), Some(fill), "{json}");
+    assert!(rays >= fill && fill > 1000, "{json}");
+    let boxes = c["instance_boxes_per_ray"].as_f64().unwrap();
+    assert!(boxes > 1.0 && boxes < visible as f64 / 2.0, "{json}");
+    assert!(c["march_steps_mean"].as_f64().unwrap() >= 1.0, "{json}");
+    assert!(c["march_steps_p99"].as_u64().unwrap() >= 1, "{json}");
+}

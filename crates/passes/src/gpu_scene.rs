@@ -3,7 +3,7 @@
 //! pass; WGSL declarations in `shaders/common.inc.wgsl`).
 
 use bytemuck::{Pod, Zeroable};
-use glam::{DAffine3, DMat4};
+use glam::{DAffine3, DMat4, DVec3};
 use ssbvb_gpu::wgpu::util::DeviceExt;
 use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_voxel::asset::{PAGE_CELLS, PackedVoxel};
@@ -197,6 +197,9 @@ pub struct GpuScene {
     pub proxy_indices: wgpu::Buffer,
     /// `lod_base[object]`: index of the object's level 0 in the LOD table.
     pub lod_base: Vec<u32>,
+    /// Per LOD-table entry, the object-space box of its voxels (`None`: no voxels): the
+    /// instance hierarchy bounds these rather than the whole `[-1, 1]³`.
+    pub lod_bounds: Vec<Option<(DVec3, DVec3)>>,
     /// `proxies[object][level]`.
     pub proxies: Vec<Vec<ProxyRange>>,
     /// Triangle meshes, one per scene triangle object.
@@ -238,6 +241,25 @@ fn storage(ctx: &GpuContext, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer, 
         }))
 }
 
+/// The object-space box of a level's voxels (their cells' union), `None` when it has none.
+fn voxel_bounds(lod: &ssbvb_voxel::asset::LodLevel) -> Option<(DVec3, DVec3)> {
+    let mut lo = [u32::MAX; 3];
+    let mut hi = [0u32; 3];
+    for v in &lod.point_cloud.voxels {
+        let c = v.cell();
+        for a in 0..3 {
+            lo[a] = lo[a].min(c[a]);
+            hi[a] = hi[a].max(c[a]);
+        }
+    }
+    if lo[0] > hi[0] {
+        return None;
+    }
+    let s = ssbvb_voxel::model::cell_size(lod.level);
+    let corner = |c: [u32; 3]| DVec3::from(c.map(|v| v as f64 * s - 1.0));
+    Some((corner(lo), corner(hi.map(|v| v + 1))))
+}
+
 fn checked_u32(v: usize, what: &str) -> Result<u32, PassError> {
     u32::try_from(v).map_err(|_| {
         PassError::TooLarge(format!("{what}: {v} does not fit the GPU's 32-bit indices"))
@@ -255,6 +277,7 @@ impl GpuScene {
         let mut proxy_v: Vec<[f32; 4]> = Vec::new();
         let mut proxy_i: Vec<u32> = Vec::new();
         let mut lod_base = Vec::new();
+        let mut lod_bounds = Vec::new();
         let mut proxies = Vec::new();
         let mut memory = Vec::new();
         for obj in &scene.objects {
@@ -278,6 +301,7 @@ impl GpuScene {
                     coarse_offset: checked_u32(coarse.len(), "coarse size")?,
                     pad: 0,
                 });
+                lod_bounds.push(voxel_bounds(lod));
                 voxels.extend_from_slice(&lod.point_cloud.voxels);
                 page_tables.extend_from_slice(&l.page_table);
                 pages.extend_from_slice(&l.pool);
@@ -425,6 +449,7 @@ impl GpuScene {
             proxy_vertices,
             proxy_indices,
             lod_base,
+            lod_bounds,
             proxies,
             meshes,
             visible: Vec::new(),
@@ -472,7 +497,7 @@ impl GpuScene {
         let frame = frame_uniform(camera, screen, &self.scene.light);
         let (visible, uniforms) =
             visible_instances(&self.scene, &self.lod_base, &self.proxies, camera, screen);
-        let bvh = instance_bvh(&uniforms);
+        let bvh = instance_bvh(&uniforms, &self.lod_bounds);
         if !bvh.is_empty() {
             ctx.queue
                 .write_buffer(&self.bvh_buffer, 0, bytemuck::cast_slice(&bvh));
@@ -501,6 +526,15 @@ impl GpuScene {
                 .write_buffer(&mesh.uniform, 0, bytemuck::bytes_of(&u));
         }
         self.visible = visible;
+    }
+
+    /// Visible instances of the current frame per chosen level.
+    pub fn lod_histogram(&self) -> std::collections::BTreeMap<u32, usize> {
+        let mut h = std::collections::BTreeMap::new();
+        for v in &self.visible {
+            *h.entry(v.level).or_insert(0) += 1;
+        }
+        h
     }
 
     /// Bytes of the shared voxel buffers (all objects).

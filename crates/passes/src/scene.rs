@@ -11,12 +11,24 @@ use ssbvb_voxel::shading::Light;
 pub enum LodPolicy {
     /// Always this level (clamped to the levels the asset has).
     Fixed(u32),
-    /// The level whose projected cell size is closest to one pixel, plus `bias` levels
-    /// (positive = finer). The pixel-error criterion of RastaVox.
+    /// Per instance, the coarsest level whose cell projects to at most `pixel_error`
+    /// pixels (at the instance's nearest bounding-sphere point), plus `bias` levels
+    /// (positive = finer). The pixel-error criterion of RastaVox; `pixel_error` 0 (or
+    /// less) means the finest level.
     Auto {
         /// Levels added to the chosen one.
         bias: i32,
+        /// Largest projected cell size in pixels (1 = about a pixel per voxel).
+        pixel_error: f64,
     },
+}
+
+impl LodPolicy {
+    /// `Auto` with a pixel error of 1 and no bias.
+    pub const AUTO: LodPolicy = LodPolicy::Auto {
+        bias: 0,
+        pixel_error: 1.0,
+    };
 }
 
 /// A voxel asset placed one or more times.

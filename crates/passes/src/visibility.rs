@@ -141,19 +141,25 @@ pub(crate) fn visible_instances(
 }
 
 /// The hierarchy over the visible instances' camera-relative world boxes, as the GPU reads
-/// it (item `i` is visible instance `i`; empty when none is visible).
+/// it (item `i` is visible instance `i`; empty when none is visible). Each box bounds the
+/// voxels of the instance's chosen level (`lod_bounds`, by LOD-table index); an instance
+/// without voxels is left out.
 ///
 /// The boxes come from the f32 `object_to_world` the shaders use, computed in f64, then
 /// widened by 1e-5 of (distance + size) and rounded outwards: the filter's own slab test
 /// runs in f32 in object space, with errors of a few ulps of those magnitudes, and a box
 /// that is too tight would drop a candidate (a hole), while one too wide only costs a test.
-pub(crate) fn instance_bvh(uniforms: &[InstanceUniform]) -> Vec<GpuBvhNode> {
+pub(crate) fn instance_bvh(
+    uniforms: &[InstanceUniform],
+    lod_bounds: &[Option<(DVec3, DVec3)>],
+) -> Vec<GpuBvhNode> {
     let boxes: Vec<Option<Aabb>> = uniforms
         .iter()
         .map(|u| {
             let m = glam::Mat4::from_cols_array_2d(&u.object_to_world).as_dmat4();
             let xf = DAffine3::from_mat4(m);
-            let b = Aabb::of_instance(&xf)?;
+            let (lo, hi) = lod_bounds.get(u.lod as usize).copied().flatten()?;
+            let b = Aabb::of_object_box(&xf, lo, hi)?;
             let size = (b.hi - b.lo).max_element() + b.center().abs().max_element();
             Some(b.widened(size * 1e-5))
         })
@@ -182,9 +188,9 @@ pub(crate) fn instance_bvh(uniforms: &[InstanceUniform]) -> Vec<GpuBvhNode> {
         .collect()
 }
 
-/// The LOD level of an instance for a camera and screen: fixed, or the level whose cell
-/// projects closest to one pixel (at the instance's nearest bounding-sphere point) plus the
-/// bias, clamped to `0..=max_level`.
+/// The LOD level of an instance for a camera and screen: fixed, or the coarsest level
+/// whose cell projects to at most `pixel_error` pixels at the instance's nearest
+/// bounding-sphere point, plus the bias, clamped to `0..=max_level`.
 pub fn choose_level(
     policy: LodPolicy,
     xf: &DAffine3,
@@ -194,18 +200,22 @@ pub fn choose_level(
 ) -> u32 {
     match policy {
         LodPolicy::Fixed(l) => l.min(max_level),
-        LodPolicy::Auto { bias } => {
+        LodPolicy::Auto { bias, pixel_error } => {
             // Cell size in world units at level L: 2 * scale / 2^L. Projected size in
-            // pixels at distance d: cell / (d * 2 tan(fov/2)) * height.
+            // pixels at distance d: cell / (d * 2 tan(fov/2)) * height, i.e. the whole
+            // box's `box_px` over 2^L; the coarsest L with box_px / 2^L <= pixel_error.
             let h = screen.1.max(1) as f64;
             let tan_y = (camera.fov_y_deg.clamp(1e-9, 179.999).to_radians() * 0.5).tan();
             let scale = scale_of(xf);
             let radius = scale * 3f64.sqrt();
             let dist =
                 ((xf.translation - camera.position).length() - radius).max(camera.near.max(1e-9));
-            let ideal = (2.0 * scale * h / (dist * 2.0 * tan_y)).log2();
-            let l = if ideal.is_finite() {
-                ideal.round() as i64
+            let box_px = 2.0 * scale * h / (dist * 2.0 * tan_y);
+            let ideal = (box_px / pixel_error).log2();
+            let l = if pixel_error > 0.0 && ideal.is_finite() {
+                // A hair below an integer stays there (the rounding of box_px must not cost
+                // a level).
+                (ideal - 1e-9).ceil() as i64
             } else {
                 max_level as i64
             };
@@ -257,7 +267,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn auto_lod_picks_the_level_whose_cell_is_about_one_pixel() {
+    fn auto_lod_picks_the_coarsest_level_within_the_pixel_error() {
         let cam = Camera {
             fov_y_deg: 90.0,
             ..Camera::new(DVec3::new(0.0, 0.0, 10.0), DVec3::ZERO)
@@ -267,18 +277,31 @@ mod tests {
         let xf = DAffine3::IDENTITY;
         let d = 10.0 - 3f64.sqrt();
         let h = 720u32;
-        let want = (h as f64 / d).log2().round() as u32;
+        let cell_px = |level: u32| h as f64 / d / (1u64 << level) as f64;
+        let auto = |bias, pixel_error| LodPolicy::Auto { bias, pixel_error };
+        for pe in [0.5, 1.0, 2.0, 3.0, 16.0] {
+            let l = choose_level(auto(0, pe), &xf, &cam, (1280, h), 12);
+            assert!(cell_px(l) <= pe, "pixel error {pe}: level {l}");
+            assert!(
+                l == 0 || cell_px(l - 1) > pe,
+                "pixel error {pe}: {l} is not coarsest"
+            );
+        }
+        let one = choose_level(LodPolicy::AUTO, &xf, &cam, (1280, h), 12);
+        assert_eq!(one, (h as f64 / d).log2().ceil() as u32);
         assert_eq!(
-            choose_level(LodPolicy::Auto { bias: 0 }, &xf, &cam, (1280, h), 12),
-            want
+            choose_level(auto(0, 2.0), &xf, &cam, (1280, h), 12),
+            one - 1
         );
         assert_eq!(
-            choose_level(LodPolicy::Auto { bias: 1 }, &xf, &cam, (1280, h), 12),
-            want + 1
+            choose_level(auto(1, 1.0), &xf, &cam, (1280, h), 12),
+            one + 1
         );
+        assert_eq!(choose_level(auto(-20, 1.0), &xf, &cam, (1280, h), 12), 0);
+        assert_eq!(choose_level(auto(0, 0.0), &xf, &cam, (1280, h), 12), 12);
         assert_eq!(
-            choose_level(LodPolicy::Auto { bias: -20 }, &xf, &cam, (1280, h), 12),
-            0
+            choose_level(auto(0, f64::NAN), &xf, &cam, (1280, h), 12),
+            12
         );
         // Twice the distance: one level coarser; a far object clamps at 0, a near one at max.
         let far = Camera {
@@ -286,29 +309,75 @@ mod tests {
             ..cam
         };
         assert_eq!(
-            choose_level(LodPolicy::Auto { bias: 0 }, &xf, &far, (1280, h), 12),
-            want - 1
+            choose_level(LodPolicy::AUTO, &xf, &far, (1280, h), 12),
+            one - 1
         );
         let very_far = Camera {
             position: DVec3::new(0.0, 0.0, 1e9),
             ..cam
         };
         assert_eq!(
-            choose_level(LodPolicy::Auto { bias: 0 }, &xf, &very_far, (1280, h), 12),
+            choose_level(LodPolicy::AUTO, &xf, &very_far, (1280, h), 12),
             0
         );
         let inside = Camera {
             position: DVec3::new(0.0, 0.0, 0.5),
             ..cam
         };
-        assert_eq!(
-            choose_level(LodPolicy::Auto { bias: 0 }, &xf, &inside, (1280, h), 9),
-            9
-        );
+        assert_eq!(choose_level(LodPolicy::AUTO, &xf, &inside, (1280, h), 9), 9);
         assert_eq!(
             choose_level(LodPolicy::Fixed(15), &xf, &cam, (1280, h), 9),
             9
         );
+    }
+
+    /// The GPU nodes hold, rounded outwards to f32 and widened, each instance's box of its
+    /// level's voxels; an instance whose level has no voxels is left out.
+    #[test]
+    fn gpu_hierarchy_boxes_contain_the_voxel_boxes() {
+        let xf = |x: f64, s: f64| DAffine3 {
+            matrix3: glam::DMat3::from_rotation_y(0.3) * s,
+            translation: DVec3::new(x, 1e3 / 3.0, -7.1),
+        };
+        let uniform = |m: DAffine3, lod: u32| InstanceUniform {
+            object_to_world: mat(DMat4::from(m)),
+            world_to_object: mat(DMat4::from(m.inverse())),
+            camera_object: [0.0; 4],
+            lod,
+            level: 0,
+            flags: 0,
+            scene_index: 0,
+        };
+        let bounds = [
+            Some((DVec3::new(-0.5, -1.0, 0.0), DVec3::new(0.5, 0.25, 1.0))),
+            None,
+        ];
+        let xfs = [xf(1.0, 0.7), xf(-4.0, 1.3), xf(9.5, 0.01)];
+        let uniforms = [uniform(xfs[0], 0), uniform(xfs[1], 1), uniform(xfs[2], 0)];
+        let nodes = instance_bvh(&uniforms, &bounds);
+        assert_eq!(nodes.len(), 3, "two items: a root and two leaves");
+        let mut items = Vec::new();
+        for n in &nodes {
+            if n.left & ssbvb_voxel::instance_bvh::LEAF == 0 {
+                continue;
+            }
+            let item = (n.left & !ssbvb_voxel::instance_bvh::LEAF) as usize;
+            items.push(item);
+            // The box of the f32 transform the shaders use, in f64.
+            let m = glam::Mat4::from_cols_array_2d(&uniforms[item].object_to_world).as_dmat4();
+            let (lo, hi) = bounds[0].unwrap();
+            let exact = Aabb::of_object_box(&DAffine3::from_mat4(m), lo, hi).unwrap();
+            for a in 0..3 {
+                let (glo, ghi) = (n.lo[a] as f64, n.hi[a] as f64);
+                assert!(glo < exact.lo[a] && ghi > exact.hi[a], "{n:?} vs {exact:?}");
+                // Widened by 1e-5 of (distance + size), not more than twice that.
+                let size = (exact.hi - exact.lo).max_element() + exact.center().abs().max_element();
+                assert!(exact.lo[a] - glo < 2e-5 * size, "{n:?} vs {exact:?}");
+            }
+        }
+        items.sort();
+        assert_eq!(items, vec![0, 2]);
+        assert!(instance_bvh(&[], &bounds).is_empty());
     }
 
     #[test]

@@ -48,10 +48,17 @@ impl Aabb {
     /// The world box of an instance's object box `[-1, 1]³` under `object_to_world`, or
     /// `None` when the transform is not finite.
     pub fn of_instance(object_to_world: &DAffine3) -> Option<Aabb> {
+        Self::of_object_box(object_to_world, DVec3::NEG_ONE, DVec3::ONE)
+    }
+
+    /// The world box of the object-space box `[lo, hi]` under `object_to_world` (tight
+    /// for that box), or `None` when the result is not finite.
+    pub fn of_object_box(object_to_world: &DAffine3, lo: DVec3, hi: DVec3) -> Option<Aabb> {
         let m = object_to_world.matrix3;
-        // Half-extent per world axis: the sum of the absolute column components.
-        let half = m.x_axis.abs() + m.y_axis.abs() + m.z_axis.abs();
-        let c = object_to_world.translation;
+        let h = (hi - lo) * 0.5;
+        // Half-extent per world axis: the absolute columns weighted by the box's half-size.
+        let half = m.x_axis.abs() * h.x + m.y_axis.abs() * h.y + m.z_axis.abs() * h.z;
+        let c = object_to_world.transform_point3((lo + hi) * 0.5);
         (half.is_finite() && c.is_finite()).then(|| Aabb {
             lo: c - half,
             hi: c + half,

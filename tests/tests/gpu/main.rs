@@ -11,5 +11,6 @@ mod octree_ray_cast;
 mod pipeline;
 mod ray_casters;
 mod ray_march_filter;
+mod scale;
 mod smooth_composite;
 mod triangles;

@@ -33,15 +33,14 @@ use crate::empty_space::{debug_png, entries, hollow_box, prefilter_pipeline, syn
 
 const SIZE: (u32, u32) = (160, 120);
 
-/// Placed instances of a scene in the reference's order, with their fixed levels.
-fn placed(scene: &Scene) -> Vec<(DAffine3, u32, usize)> {
+/// Placed instances of a scene in the reference's order, with the level each takes for
+/// `camera` on a `screen`-sized frame.
+fn placed(scene: &Scene, camera: &Camera, screen: (u32, u32)) -> Vec<(DAffine3, u32, usize)> {
     let mut out = Vec::new();
     for (oi, o) in scene.objects.iter().enumerate() {
-        let LodPolicy::Fixed(l) = o.lod else {
-            panic!("fixed LODs only")
-        };
-        let l = l.min(o.asset.lods.len() as u32 - 1);
+        let max = o.asset.lods.len() as u32 - 1;
         for xf in &o.instances {
+            let l = ssbvb_passes::gpu_scene::choose_level(o.lod, xf, camera, screen, max);
             out.push((*xf, l, oi));
         }
     }
@@ -49,15 +48,20 @@ fn placed(scene: &Scene) -> Vec<(DAffine3, u32, usize)> {
 }
 
 /// A rendered filter frame, decoded.
-struct FilterRun {
-    frame: Frame,
+pub(crate) struct FilterRun {
+    pub(crate) frame: Frame,
     slots: Vec<VoxelSlot>,
-    fill: u32,
+    pub(crate) fill: u32,
     /// Per pixel, the GPU's hit in the reference's numbering.
     hits: Vec<Option<GpuHit>>,
 }
 
-fn run_filter(scene: &Scene, camera: &Camera, size: (u32, u32), max_steps: u32) -> FilterRun {
+pub(crate) fn run_filter(
+    scene: &Scene,
+    camera: &Camera,
+    size: (u32, u32),
+    max_steps: u32,
+) -> FilterRun {
     run_filter_with(&prefilter_pipeline(max_steps), scene, camera, size, size)
 }
 
@@ -85,7 +89,7 @@ fn run_filter_with(
     for e in entries(&frame) {
         assert!(e.iter().all(|v| v.is_finite()), "entry {e:?}");
     }
-    let inst = placed(scene);
+    let inst = placed(scene, camera, size);
     let mut hits = vec![None; pixels];
     for s in &slots {
         assert!((s.pixel as usize) < pixels, "{s:?}");
@@ -118,7 +122,7 @@ fn run_filter_with(
 
 /// Whether the reference's hit/miss at pixel `(x, y)` changes within `eps` pixels.
 fn grazes(scene: &Scene, camera: &Camera, size: (u32, u32), x: u32, y: u32, eps: f64) -> bool {
-    let inst = placed(scene);
+    let inst = placed(scene, camera, size);
     let refs: Vec<reference::Instance> = inst
         .iter()
         .map(|(xf, l, oi)| reference::Instance {
@@ -147,8 +151,8 @@ fn grazes(scene: &Scene, camera: &Camera, size: (u32, u32), x: u32, y: u32, eps:
 }
 
 /// World size of one cell of every instance (uniform scale assumed: cube root of |det|).
-fn cell_sizes(scene: &Scene) -> Vec<f64> {
-    placed(scene)
+fn cell_sizes(scene: &Scene, camera: &Camera, screen: (u32, u32)) -> Vec<f64> {
+    placed(scene, camera, screen)
         .iter()
         .map(|(xf, l, _)| cell_size(*l) * xf.matrix3.determinant().abs().cbrt())
         .collect()
@@ -180,7 +184,7 @@ fn diff_png(name: &str, size: (u32, u32), reference: &ReferenceImage, hits: &[Op
 
 /// Renders `scene` with the filter and checks it against the reference; returns the
 /// report (also printed, for the numbers in reviews).
-fn check_against_reference(
+pub(crate) fn check_against_reference(
     name: &str,
     scene: &Scene,
     camera: &Camera,
@@ -190,7 +194,8 @@ fn check_against_reference(
     let reference = reference_of(scene, camera, size);
     assert!(reference.all_finite());
     diff_png(name, size, &reference, &run.hits);
-    let report = accuracy::compare(&reference, &run.hits, &cell_sizes(scene)).unwrap();
+    let report =
+        accuracy::compare(&reference, &run.hits, &cell_sizes(scene, camera, size)).unwrap();
     eprintln!("{name}: {report:?}");
     // Compaction: one slot per covered pixel.
     assert_eq!(run.fill as usize, report.covered_gpu);
@@ -302,7 +307,8 @@ fn filter_at_half_resolution_matches_the_reference_at_half_size() {
     let run = run_filter_with(&scaled, &scene, &camera, SIZE, half);
     let reference = reference_of(&scene, &camera, half);
     diff_png("bunny6_half_filter", half, &reference, &run.hits);
-    let report = accuracy::compare(&reference, &run.hits, &cell_sizes(&scene)).unwrap();
+    let report =
+        accuracy::compare(&reference, &run.hits, &cell_sizes(&scene, &camera, SIZE)).unwrap();
     eprintln!("half-resolution filter: {report:?}");
     assert_eq!(run.fill as usize, report.covered_gpu);
     assert!(report.covered_reference > 300, "{report:?}");
@@ -506,7 +512,8 @@ fn extreme_distances_and_planes() {
     };
     let run = run_filter(&scene, &far, (81, 61), 1024);
     let reference = reference_of(&scene, &far, (81, 61));
-    let report = accuracy::compare(&reference, &run.hits, &cell_sizes(&scene)).unwrap();
+    let report =
+        accuracy::compare(&reference, &run.hits, &cell_sizes(&scene, &far, (81, 61))).unwrap();
     eprintln!(
         "far probe at 2e6: reference covers {} px, the filter {} px (known miss: f32 rays)",
         report.covered_reference, report.covered_gpu

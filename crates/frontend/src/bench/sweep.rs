@@ -359,7 +359,10 @@ pub(crate) fn run_sweeps(
     }
     let max_level = asset.lods.len() as u32 - 1;
     for &bias in cfg.lod_bias {
-        let lod = LodPolicy::Auto { bias };
+        let lod = LodPolicy::Auto {
+            bias,
+            pixel_error: 1.0,
+        };
         let level = ssbvb_passes::gpu_scene::choose_level(
             lod,
             &DAffine3::IDENTITY,

@@ -385,7 +385,7 @@ fn lod(ui: &mut egui::Ui, view: &OverlayView<'_>, actions: &mut Vec<Action>) {
             };
             if auto != was_auto {
                 policy = if auto {
-                    LodPolicy::Auto { bias: 0 }
+                    LodPolicy::AUTO
                 } else {
                     LodPolicy::Fixed(o.max_level)
                 };
@@ -395,8 +395,9 @@ fn lod(ui: &mut egui::Ui, view: &OverlayView<'_>, actions: &mut Vec<Action>) {
             LodPolicy::Fixed(level) => {
                 ui.add(egui::Slider::new(level, 0..=o.max_level).text("level"));
             }
-            LodPolicy::Auto { bias } => {
+            LodPolicy::Auto { bias, pixel_error } => {
                 let m = o.max_level as i32;
+                ui.add(egui::Slider::new(pixel_error, 0.0..=16.0).text("pixel error"));
                 ui.add(egui::Slider::new(bias, -m..=m).text("bias (+ finer)"));
             }
         }
