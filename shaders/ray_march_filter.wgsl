@@ -44,9 +44,12 @@ override UNIQUE_VOXELS: bool = false;
 // Compacted hits: entries 0 .. billboard_draw.instance_count are valid.
 @group(1) @binding(1) var<storage, read_write> ssbvb: array<VoxelSlot>;
 @group(1) @binding(2) var<storage, read_write> billboard_draw: DrawArgs;
-// Pass-private (UNIQUE_VOXELS): one bit per voxel of each visible instance's level,
-// cleared every frame; instance k's bits start at word `claim_offsets[k]`.
-@group(1) @binding(3) var<storage, read_write> claimed_voxels: array<atomic<u32>>;
+// Pass-private (UNIQUE_VOXELS): the set of (instance, voxel) keys appended this frame, an
+// open-addressing hash table of 2 x pixels words or more (a power of two, cleared every
+// frame), so its memory follows the screen, not the scene. Instance k's keys are
+// `claim_offsets[k] + voxel id` (NO_DEDUP: its keys do not fit 32 bits; each of its
+// pixels appends).
+@group(1) @binding(3) var<storage, read_write> voxel_claims: array<atomic<u32>>;
 @group(1) @binding(4) var<storage, read> claim_offsets: array<u32>;
 // Pass-private: the frame's counters (layout in ray_march_filter.rs, `CounterWords`),
 // cleared every frame.
@@ -150,6 +153,44 @@ fn consider(j: u32, dir: vec3<f32>, best: ptr<function, Hit>, best_inst: ptr<fun
     }
 }
 
+const NO_DEDUP: u32 = 0xffffffffu;
+// Probes before a crowded table gives up (then the pixel appends: a duplicate billboard,
+// never a hole). At a load factor of at most 1/2 a probe sequence averages under 3.
+const MAX_PROBES: u32 = 32u;
+
+// A 32-bit integer mix (lowbias32, Chris Wellons): neighbouring voxel ids land far apart.
+fn hash32(v: u32) -> u32 {
+    var x = v;
+    x ^= x >> 16u;
+    x *= 0x7feb352du;
+    x ^= x >> 15u;
+    x *= 0x846ca68bu;
+    x ^= x >> 16u;
+    return x;
+}
+
+// Claims `key` (< 2^32 - 1) in `voxel_claims`: true for the first claim this frame.
+fn claim(key: u32) -> bool {
+    let mask = arrayLength(&voxel_claims) - 1u;
+    let stored = key + 1u;
+    var h = hash32(key) & mask;
+    for (var i = 0u; i < MAX_PROBES; i++) {
+        let r = atomicCompareExchangeWeak(&voxel_claims[h], 0u, stored);
+        if r.exchanged {
+            return true;
+        }
+        if r.old_value == stored {
+            return false;
+        }
+        // Another key: the next slot. (A weak exchange may fail spuriously with the slot
+        // still empty: then the same slot is tried again.)
+        if r.old_value != 0u {
+            h = (h + 1u) & mask;
+        }
+    }
+    return true;
+}
+
 // Filters one pixel; returns whether it cast a ray.
 fn filter_pixel(px: vec2<i32>) -> bool {
     let size = vec2<i32>(textureDimensions(entry));
@@ -222,11 +263,10 @@ fn filter_pixel(px: vec2<i32>) -> bool {
     let hit_lod = lods[instances[best_inst].lod];
     let voxel_id = hit_lod.voxel_offset + best.id;
     if UNIQUE_VOXELS {
-        // Each visible instance owns a range of bits (instances of one object share voxel
-        // ids but are distinct billboards): the first pixel to set the bit appends.
-        let word = claim_offsets[best_inst] + (best.id >> 5u);
-        let bit = 1u << (best.id & 31u);
-        if (atomicOr(&claimed_voxels[word], bit) & bit) != 0u {
+        // Instances of one object share voxel ids but are distinct billboards: each owns a
+        // range of keys. The first pixel to claim a key appends.
+        let base = claim_offsets[best_inst];
+        if base != NO_DEDUP && !claim(base + best.id) {
             return true;
         }
     }

@@ -23,6 +23,18 @@ const FILES: &[(&str, &[u8])] = &[
         include_bytes!("../../../assets/pipelines/ssbvb.ron"),
     ),
     (
+        "pipelines/ssbvb_flat.ron",
+        include_bytes!("../../../assets/pipelines/ssbvb_flat.ron"),
+    ),
+    (
+        "scenes/bunnies_64.ron",
+        include_bytes!("../../../assets/scenes/bunnies_64.ron"),
+    ),
+    (
+        "scenes/bunnies_4096.ron",
+        include_bytes!("../../../assets/scenes/bunnies_4096.ron"),
+    ),
+    (
         "pipelines/ssbvb_embedded.ron",
         include_bytes!("../../../assets/pipelines/ssbvb_embedded.ron"),
     ),

@@ -355,7 +355,9 @@ impl GpuContext {
             | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES
             | wgpu::Features::DEPTH32FLOAT_STENCIL8
             | wgpu::Features::INDIRECT_FIRST_INSTANCE
-            | wgpu::Features::FLOAT32_FILTERABLE;
+            | wgpu::Features::FLOAT32_FILTERABLE
+            // Counters (fragments shaded per pass) where the adapter has them.
+            | wgpu::Features::PIPELINE_STATISTICS_QUERY;
         let features = adapter.features() & wanted;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("ssbvb"),

@@ -96,7 +96,7 @@ mod tests {
             filter(&q),
             PassKind::RayMarchFilter(RayMarchFilterParams {
                 max_steps: 7,
-                unique_voxels: false
+                unique_voxels: true
             })
         );
         // An invalid edit is refused with the pass named.

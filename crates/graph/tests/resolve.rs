@@ -462,8 +462,8 @@ fn bad_parameters_name_pass_kind_rule_and_line() {
     let cases: [(&str, &str, &str, &str, &str); 8] = [
         (
             SSBVB,
-            "RayMarchFilter(max_steps: 1024)",
-            "RayMarchFilter(max_steps: 0)",
+            "RayMarchFilter(max_steps: 1024, unique_voxels: true)",
+            "RayMarchFilter(max_steps: 0, unique_voxels: true)",
             "RayMarchFilter",
             "max_steps must be at least 1",
         ),

@@ -45,10 +45,11 @@
 //! everything facing away) 69–88 of 5,300–7,900, IoU 1.0 → 0.984–0.989; the fragments it
 //! saves are those holes.
 
-use ssbvb_gpu::wgpu;
+use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_graph::{BillboardMode, BillboardsParams};
 
 use crate::bindings::PassBindings;
+use crate::counters::FrameCounters;
 use crate::frame::Recorder;
 use crate::gbuffer::{begin_gbuffer_pass, gbuffer_depth_stencil, gbuffer_targets};
 use crate::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
@@ -118,6 +119,9 @@ impl BillboardOptions {
 pub struct Billboards {
     pipeline: wgpu::RenderPipeline,
     bindings: PassBindings,
+    /// Fragment-shader invocations of the last frame (a pipeline-statistics query and its
+    /// resolve buffer), where the device has `PIPELINE_STATISTICS_QUERY`.
+    fragments: Option<(wgpu::QuerySet, wgpu::Buffer)>,
 }
 
 impl Billboards {
@@ -153,7 +157,29 @@ impl Billboards {
                 ..RenderSpec::new(&pass.name, &module, &layout, &targets)
             },
         );
-        Ok(Self { pipeline, bindings })
+        let fragments = ctx
+            .has(wgpu::Features::PIPELINE_STATISTICS_QUERY)
+            .then(|| {
+                let set = d.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("billboard fragments"),
+                    ty: wgpu::QueryType::PipelineStatistics(
+                        wgpu::PipelineStatisticsTypes::FRAGMENT_SHADER_INVOCATIONS,
+                    ),
+                    count: 1,
+                });
+                let buf = d.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("billboard fragments"),
+                    size: 8,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                (set, buf)
+            });
+        Ok(Self {
+            pipeline,
+            bindings,
+            fragments,
+        })
     }
 }
 
@@ -181,7 +207,26 @@ impl PassNode for Billboards {
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &rec.scene.bind_group, &[]);
         pass.set_bind_group(1, &bg, &[]);
+        if let Some((set, _)) = &self.fragments {
+            pass.begin_pipeline_statistics_query(set, 0);
+        }
         pass.draw_indirect(draw, 0);
+        if self.fragments.is_some() {
+            pass.end_pipeline_statistics_query();
+        }
+        drop(pass);
+        if let Some((set, buf)) = &self.fragments {
+            encoder.resolve_query_set(set, 0..1, buf, 0);
+        }
+        Ok(())
+    }
+
+    fn counters(&self, ctx: &GpuContext, out: &mut FrameCounters) -> Result<(), PassError> {
+        if let Some((_, buf)) = &self.fragments {
+            let bytes = ctx.read_buffer(buf)?;
+            let n = u64::from_le_bytes(bytes[..8].try_into().expect("8 bytes"));
+            *out.billboard_fragments.get_or_insert(0) += n;
+        }
         Ok(())
     }
 }

@@ -26,6 +26,13 @@ pub struct FrameCounters {
     /// Billboards the billboard pass drew (the SSBVB fill count).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub billboards_drawn: Option<u64>,
+    /// Fragment-shader invocations of the billboard passes (a pipeline-statistics query;
+    /// `None` where the adapter lacks `PIPELINE_STATISTICS_QUERY`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub billboard_fragments: Option<u64>,
+    /// `billboard_fragments` per pixel showing a voxel: the billboards' overdraw.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fragments_per_covered_pixel: Option<f64>,
 }
 
 /// Bins of the steps-per-ray histogram (`steps_bin` in `ray_march_filter.wgsl`).

@@ -455,13 +455,19 @@ impl Renderer {
     }
 
     /// What the passes counted in the last frame (reads back from the GPU), with the
-    /// SSBVB fill count as the billboards drawn.
+    /// SSBVB fill count as the billboards drawn and the billboard fragments per pixel
+    /// showing a voxel (stencil).
     pub fn counters(&self, ctx: &GpuContext) -> Result<crate::FrameCounters, PassError> {
         let mut out = crate::FrameCounters::default();
         for p in &self.passes {
             p.counters(ctx, &mut out)?;
         }
         out.billboards_drawn = self.fill_count(ctx)?.map(u64::from);
+        if let Some(f) = out.billboard_fragments {
+            let covered = crate::measure::voxel_pixels(ctx, self)?;
+            out.fragments_per_covered_pixel =
+                covered.filter(|&c| c > 0).map(|c| f as f64 / c as f64);
+        }
         Ok(out)
     }
 

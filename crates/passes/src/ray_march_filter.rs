@@ -24,11 +24,15 @@
 //! Two dispatches in one compute pass: `clear_draw` (one thread) resets the draw to
 //! `{6, 0, 0, 0}`, then `main` over `ceil(w / 8) × ceil(h / 8)` workgroups of 8 × 8.
 //!
-//! With `unique_voxels` each (visible instance, voxel) is appended once: the pass keeps a
-//! bitset with one bit per voxel of each visible instance's level (cleared every frame,
-//! grown when needed) and the first pixel to set a bit appends. The billboards then
-//! cover the same pixels with the same fragments (duplicates drew identical ones), but a
-//! voxel spanning n pixels is drawn once instead of n times — n² fragments fewer.
+//! With `unique_voxels` each (visible instance, voxel) is appended once: the first pixel to
+//! claim its key in a hash set appends. The set is an open-addressing table of at least
+//! twice the filter's pixels (a power of two, cleared every frame), so its memory follows
+//! the screen, never the scene; keys are `claim_offsets[instance] + voxel id`, with the
+//! offsets laid out per visible instance (an instance whose keys would pass 2³² − 1 is not
+//! deduplicated: its pixels append as without the option). The billboards then cover the
+//! same pixels with the same fragments (duplicates drew identical ones), but a voxel
+//! spanning n pixels is drawn once instead of n times — n² fragments fewer, which is what
+//! bounds the overdraw of a camera close to a surface.
 //!
 //! The filter reads `entry`'s own size: a prepass and filter declared at a fraction of
 //! the screen (`ScreenScaled`) cast one ray per texel centre, through the matching point
@@ -96,8 +100,8 @@ pub struct RayMarchFilter {
     main: wgpu::ComputePipeline,
     bindings: PassBindings,
     unique_voxels: bool,
-    /// `unique_voxels`: the claim bitset and the per-instance word offsets (capacities
-    /// in words / instances grow as needed).
+    /// `unique_voxels`: the claim table and the per-instance key offsets (the table
+    /// follows the filter's size, the offsets grow with the visible instances).
     claims: Option<Claims>,
     /// The frame's counters (`CounterWords` words).
     counters: wgpu::Buffer,
@@ -107,11 +111,11 @@ pub struct RayMarchFilter {
 /// spare word, then the steps-per-ray histogram (constants `C_*` in the WGSL).
 const COUNTER_WORDS: usize = 8 + crate::counters::STEP_BINS;
 
-/// What the filter binds itself (`unique_voxels`): the claim bitset and the first word of
-/// each visible instance's bits.
+/// What the filter binds itself: the claim table and the first key of each visible
+/// instance (`unique_voxels`), and the frame's counters.
 pub const OWN: &[OwnBinding] = &[
     OwnBinding {
-        name: "claimed_voxels",
+        name: "voxel_claims",
         kind: OwnKind::StorageReadWrite,
     },
     OwnBinding {
@@ -125,24 +129,58 @@ pub const OWN: &[OwnBinding] = &[
 ];
 
 struct Claims {
-    bits: wgpu::Buffer,
+    table: wgpu::Buffer,
     offsets: wgpu::Buffer,
 }
 
+/// Marks an instance whose keys do not fit 32 bits (`NO_DEDUP` in the WGSL).
+const NO_DEDUP: u32 = u32::MAX;
+
 impl Claims {
-    fn new(ctx: &GpuContext, words: u64, instances: u64) -> Self {
-        let buffer = |label, size: u64, usage| {
+    /// `table_words` must be a power of two (the shader masks the hash with it).
+    fn new(ctx: &GpuContext, table_words: u64, instances: u64) -> Self {
+        debug_assert!(table_words.is_power_of_two());
+        let buffer = |label, size: u64| {
             ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size: size.max(16),
-                usage: wgpu::BufferUsages::STORAGE | usage,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             })
         };
-        let bits = buffer("claimed voxels", words * 4, wgpu::BufferUsages::COPY_DST);
-        let offsets = buffer("claim offsets", instances * 4, wgpu::BufferUsages::COPY_DST);
-        Self { bits, offsets }
+        Self {
+            table: buffer("voxel claims", table_words * 4),
+            offsets: buffer("claim offsets", instances * 4),
+        }
     }
+}
+
+/// Words of the claim table for a filter of `pixels` texels: the next power of two of
+/// twice that, so the table is at most half full (every pixel claims at most one key).
+pub fn claim_table_words(pixels: u64) -> u64 {
+    (2 * pixels).max(16).next_power_of_two()
+}
+
+/// The first key of each visible instance whose levels hold `voxels` voxels: running sums,
+/// and `u32::MAX` (no deduplication) for an instance whose keys would not all be below
+/// `u32::MAX`.
+pub fn claim_offsets(voxels: impl IntoIterator<Item = u64>) -> Vec<u32> {
+    let mut next = 0u64;
+    voxels
+        .into_iter()
+        .map(|n| {
+            // Keys first..first + n - 1 must stay below u32::MAX (stored as key + 1).
+            if n == 0 {
+                0
+            } else if next + n <= u32::MAX as u64 {
+                let first = next as u32;
+                next += n;
+                first
+            } else {
+                NO_DEDUP
+            }
+        })
+        .collect()
 }
 
 impl PassImpl for RayMarchFilter {
@@ -191,7 +229,7 @@ impl PassImpl for RayMarchFilter {
         })?;
         let (clear, main, bindings) = built;
         // Without unique_voxels the shader never touches the claims: bind minimal buffers.
-        let claims = Some(Claims::new(ctx, 4, 4));
+        let claims = Some(Claims::new(ctx, 16, 4));
         let counters = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("filter counters"),
             size: (COUNTER_WORDS * 4) as u64,
@@ -224,7 +262,7 @@ impl PassNode for RayMarchFilter {
         let bind_group = self.bindings.bind_group(
             rec,
             &[
-                ("claimed_voxels", claims.bits.as_entire_binding()),
+                ("voxel_claims", claims.table.as_entire_binding()),
                 ("claim_offsets", claims.offsets.as_entire_binding()),
                 ("filter_counters", self.counters.as_entire_binding()),
             ],
@@ -264,44 +302,44 @@ impl PassNode for RayMarchFilter {
 }
 
 impl RayMarchFilter {
-    /// Lays out one bit range per visible instance (its level's voxel count, rounded up
-    /// to words), grows the buffers when needed, uploads the offsets and records the
-    /// clear of the used words.
+    /// Lays out the keys of the visible instances, sizes the claim table for the filter's
+    /// texels (reallocated when that changes; the offsets grow by half again when the
+    /// visible instances outgrow them), uploads the offsets and records the table's clear.
     fn prepare_claims(
         &mut self,
         rec: &Recorder<'_>,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), PassError> {
         let scene = rec.scene;
-        let mut offsets = Vec::with_capacity(scene.visible.len());
-        let mut words = 0u64;
-        for v in &scene.visible {
-            offsets.push(words as u32);
-            let n = scene.scene.objects[v.object].asset.lods[v.level as usize]
+        let offsets = claim_offsets(scene.visible.iter().map(|v| {
+            scene.scene.objects[v.object].asset.lods[v.level as usize]
                 .point_cloud
                 .voxels
-                .len() as u64;
-            words += n.div_ceil(32);
-        }
-        let words = words.max(1);
+                .len() as u64
+        }));
+        let entry = &rec.texture("entry").texture;
+        let words = claim_table_words(entry.width() as u64 * entry.height() as u64);
         let max = rec.gpu.device.limits().max_storage_buffer_binding_size;
         if words * 4 > max {
             return Err(PassError::TooLarge(format!(
-                "unique_voxels needs {} bytes of claim bits for {} visible instances; the \
-                 device binds at most {max}: use coarser levels or turn unique_voxels off",
+                "unique_voxels needs a {}-byte claim table for {}x{} pixels; the device binds \
+                 at most {max}: use a smaller screen or turn unique_voxels off",
                 words * 4,
-                offsets.len()
+                entry.width(),
+                entry.height()
             )));
         }
         let instances = offsets.len().max(1) as u64;
-        let fits = self
-            .claims
-            .as_ref()
-            .is_some_and(|c| c.bits.size() >= words * 4 && c.offsets.size() >= instances * 4);
-        if !fits {
-            // Grow by half again, so that a camera move does not reallocate every frame.
-            let cap = |n: u64| n + n / 2;
-            self.claims = Some(Claims::new(rec.gpu, cap(words), cap(instances)));
+        let (table_fits, offsets_fit) = self.claims.as_ref().map_or((false, false), |c| {
+            (c.table.size() == words * 4, c.offsets.size() >= instances * 4)
+        });
+        if !table_fits || !offsets_fit {
+            let cap = if offsets_fit {
+                self.claims.as_ref().map_or(instances, |c| c.offsets.size() / 4)
+            } else {
+                instances + instances / 2
+            };
+            self.claims = Some(Claims::new(rec.gpu, words, cap));
         }
         let claims = self.claims.as_ref().expect("claims exist");
         if !offsets.is_empty() {
@@ -309,7 +347,7 @@ impl RayMarchFilter {
                 .queue
                 .write_buffer(&claims.offsets, 0, bytemuck::cast_slice(&offsets));
         }
-        encoder.clear_buffer(&claims.bits, 0, Some(words * 4));
+        encoder.clear_buffer(&claims.table, 0, None);
         Ok(())
     }
 }
@@ -358,4 +396,32 @@ pub fn read_slots(ctx: &GpuContext, renderer: &Renderer) -> Result<Vec<VoxelSlot
     let bytes = ctx.read_buffer(renderer.resources.buffer(i))?;
     let all: Vec<VoxelSlot> = bytemuck::pod_collect_to_vec(&bytes[..bytes.len() / 32 * 32]);
     Ok(all.into_iter().take(count).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn claim_table_is_a_power_of_two_at_least_twice_the_pixels() {
+        for pixels in [0u64, 1, 7, 4800, 640 * 480, 1280 * 720, 3840 * 2160] {
+            let w = claim_table_words(pixels);
+            assert!(w.is_power_of_two() && w >= 2 * pixels && w >= 16, "{pixels}: {w}");
+            assert!(w < 4 * pixels.max(8), "{pixels}: {w} is more than needed");
+        }
+    }
+
+    #[test]
+    fn claim_offsets_are_running_sums_until_keys_pass_32_bits() {
+        // An instance without voxels claims nothing (its offset does not matter).
+        assert_eq!(claim_offsets([10, 0, 5, 7]), vec![0, 0, 10, 15]);
+        let big = u32::MAX as u64 / 2;
+        // The third instance's keys would reach u32::MAX: it is not deduplicated, and a
+        // later small one that still fits keeps its range.
+        assert_eq!(
+            claim_offsets([big, big, 10, 1]),
+            vec![0, big as u32, NO_DEDUP, 2 * big as u32]
+        );
+        assert!(claim_offsets([]).is_empty());
+    }
 }

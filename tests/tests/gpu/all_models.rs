@@ -13,7 +13,7 @@ use ssbvb_passes::ray_march_filter::read_slots;
 use ssbvb_voxel::accuracy::{self, GpuHit};
 use ssbvb_voxel::camera::Camera;
 
-const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
+const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb_flat.ron");
 const SIZE: (u32, u32) = (120, 90);
 
 const MODELS: &[(&str, u32)] = &[

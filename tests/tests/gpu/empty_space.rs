@@ -14,15 +14,18 @@ use ssbvb_voxel::model::{ObjectSpace, cell_size};
 /// The bundled SSBVB pipeline pruned to the prepass and the filter: the output is `entry`
 /// and the filter's resources are kept for readback.
 pub fn prefilter_pipeline(max_steps: u32) -> String {
-    let src = include_str!("../../../assets/pipelines/ssbvb.ron");
+    let src = include_str!("../../../assets/pipelines/ssbvb_flat.ron");
     let out = r#"output: "color","#;
-    assert!(src.contains(out), "ssbvb.ron no longer ends with {out}");
+    assert!(
+        src.contains(out),
+        "ssbvb_flat.ron no longer ends with {out}"
+    );
     let src = src.replace(
         out,
         r#"output: "entry", keep: ["ssbvb", "billboard_draw"],"#,
     );
     let filter = "RayMarchFilter(max_steps: 1024)";
-    assert!(src.contains(filter), "ssbvb.ron has no {filter}");
+    assert!(src.contains(filter), "ssbvb_flat.ron has no {filter}");
     src.replace(filter, &format!("RayMarchFilter(max_steps: {max_steps})"))
 }
 

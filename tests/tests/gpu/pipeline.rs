@@ -38,7 +38,7 @@ fn measured_gbuffer_hits_match_the_harness_and_the_reference() {
     let scene =
         ssbvb_tests::single_object_scene(ssbvb_tests::model_asset("bunny.obj", level), level);
     let cam = ssbvb_voxel::camera::Camera::new(glam::DVec3::new(1.8, 1.1, 2.4), glam::DVec3::ZERO);
-    let src = include_str!("../../../assets/pipelines/ssbvb.ron");
+    let src = include_str!("../../../assets/pipelines/ssbvb_flat.ron");
     let reference = ssbvb_tests::reference_of(&scene, &cam, size);
     let f = ssbvb_tests::render(src, scene, &cam, size);
     let measured = ssbvb_passes::measure::gbuffer_hits(ssbvb_tests::ctx(), &f.renderer).unwrap();

@@ -602,7 +602,7 @@ fn tiny_and_huge_grid_levels_match_the_reference() {
 /// are cleared between them).
 #[test]
 fn unique_voxels_draw_the_same_gbuffer_with_fewer_billboards() {
-    let base = include_str!("../../../assets/pipelines/ssbvb.ron").replace(
+    let base = include_str!("../../../assets/pipelines/ssbvb_flat.ron").replace(
         r#"output: "color","#,
         r#"output: "gbuffer_position", keep: ["billboard_draw", "gbuffer_normal", "gbuffer_albedo"],"#,
     );

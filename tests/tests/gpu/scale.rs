@@ -109,3 +109,76 @@ fn counters_of_one_instance_and_of_a_step_limit() {
     }
     assert!(free > 3.0, "{free}");
 }
+
+/// A camera close to the bunny's surface (voxels tens of pixels wide): the default
+/// pipeline draws each visible voxel once — no more billboards than visible voxels (counted
+/// from the reference's hits, an independent oracle) or covered pixels — and a few
+/// fragments per covered pixel, while the paper's per-pixel Flat frame draws a quad per
+/// pixel, tens of fragments each. Both show the same G-buffer.
+#[test]
+fn near_camera_overdraw_is_bounded_in_the_default_pipeline() {
+    let level = 5;
+    let scene = ssbvb_tests::single_object_scene(model_asset("bunny.obj", level), level);
+    let size = (96, 72);
+    let views = [
+        (
+            "touching",
+            Camera::new(DVec3::new(0.05, 0.2, 0.75), DVec3::new(0.0, 0.0, -1.0)),
+        ),
+        ("mid", Camera::new(DVec3::new(1.6, 1.1, 2.4), DVec3::ZERO)),
+    ];
+    let default = include_str!("../../../assets/pipelines/ssbvb.ron");
+    let flat = include_str!("../../../assets/pipelines/ssbvb_flat.ron");
+    for (name, camera) in views {
+        let reference = ssbvb_tests::reference_of(&scene, &camera, size);
+        let mut visible: Vec<(u32, u32)> = reference
+            .hits
+            .iter()
+            .flatten()
+            .map(|h| (h.instance, h.voxel))
+            .collect();
+        visible.sort_unstable();
+        visible.dedup();
+        let covered = reference.coverage();
+        let d = ssbvb_tests::render(default, scene.clone(), &camera, size);
+        let f = ssbvb_tests::render(flat, scene.clone(), &camera, size);
+        let (cd, cf) = (
+            d.renderer.counters(ctx()).unwrap(),
+            f.renderer.counters(ctx()).unwrap(),
+        );
+        eprintln!(
+            "{name}: {covered} covered px, {} visible voxels; default {cd:?}; flat {cf:?}",
+            visible.len()
+        );
+        let drawn = cd.billboards_drawn.unwrap();
+        // Silhouette rays may differ from the reference's by a handful.
+        assert!(
+            drawn as usize <= visible.len() + 4,
+            "{name}: {drawn} billboards"
+        );
+        assert!(drawn as usize <= covered + 4, "{name}: {drawn} billboards");
+        // llvmpipe counts fragment-shader invocations per touched 4x4 block (every count is
+        // a multiple of 16), so small quads count up to 16 each: the mid view's numbers are
+        // inflated, the touching view's (quads of hundreds of pixels) nearly exact.
+        // Measured: touching 2.6 (flat 799), mid 16.4 (flat 55.1).
+        let frags = cd
+            .fragments_per_covered_pixel
+            .expect("lavapipe counts fragments");
+        let flat_frags = cf.fragments_per_covered_pixel.unwrap();
+        assert!(
+            frags < flat_frags * 0.5,
+            "{name}: {frags} vs flat {flat_frags}"
+        );
+        if name == "touching" {
+            assert!(frags < 4.0, "{name}: {frags} fragments per covered pixel");
+            assert!(
+                flat_frags > 100.0 * frags,
+                "{name}: flat {flat_frags} vs {frags}"
+            );
+        }
+        // Same G-buffer (up to a few ties between voxels at one depth).
+        let (a, b) = (d.read("gbuffer_normal"), f.read("gbuffer_normal"));
+        let differing = a.chunks(8).zip(b.chunks(8)).filter(|(p, q)| p != q).count();
+        assert!(differing <= 3, "{name}: {differing} pixels differ");
+    }
+}

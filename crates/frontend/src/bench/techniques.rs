@@ -22,15 +22,16 @@ pub(super) struct Technique {
 
 /// Every technique, in report order.
 pub(super) const TECHNIQUES: &[Technique] = &[
+    // The paper's frame: one billboard per covered pixel.
     Technique {
         name: "ssbvb-flat",
-        pipeline: "ssbvb.ron",
+        pipeline: "ssbvb_flat.ron",
         edit: None,
         max_level: 16,
     },
     Technique {
         name: "ssbvb-raybox",
-        pipeline: "ssbvb.ron",
+        pipeline: "ssbvb_flat.ron",
         edit: Some(|k| match k {
             PassKind::Billboards(b) => {
                 b.mode = BillboardMode::RayBox;
@@ -40,16 +41,11 @@ pub(super) const TECHNIQUES: &[Technique] = &[
         }),
         max_level: 16,
     },
+    // The default pipeline: each visible voxel appended once.
     Technique {
         name: "ssbvb-unique",
         pipeline: "ssbvb.ron",
-        edit: Some(|k| match k {
-            PassKind::RayMarchFilter(f) => {
-                f.unique_voxels = true;
-                true
-            }
-            _ => false,
-        }),
+        edit: None,
         max_level: 16,
     },
     Technique {
