@@ -58,6 +58,8 @@ struct BvhNode {
 }
 
 const BVH_LEAF: u32 = 0x80000000u;
+// Stands in for infinity: WGSL lets implementations assume no infinities at run time.
+const BIG: f32 = 3.0e38;
 // Most nodes on a traversal stack (instance_bvh.rs MAX_DEPTH, plus one).
 const BVH_STACK: u32 = 26u;
 

@@ -2,10 +2,13 @@
 // G-buffer output with exact depth, the hit record, the fullscreen triangle, and the
 // per-plane crossing helpers that follow the CPU reference's conventions.
 // Needs common.inc.wgsl before it, and the including file must define
-// `fn trace(inst: Instance, dir_world: vec3<f32>, t_best: f32) -> Hit` (the technique);
-// `fs_main` below keeps the nearest hit over all visible instances.
+// `fn trace(inst: Instance, dir_world: vec3<f32>, t_best: f32) -> Hit` (the technique;
+// hits at or beyond `t_best` do not count); `fs_main` below keeps the nearest hit over the
+// visible instances its ray meets (the instance hierarchy; exact ties to the lower index,
+// as the reference).
 
 //#include "fullscreen.inc.wgsl"
+//#include "instance_bvh.inc.wgsl"
 
 struct GBufferDepth {
     @location(0) albedo: vec4<f32>,
@@ -39,19 +42,29 @@ fn entered_face(a: u32, d: vec3<f32>) -> u32 {
     return select(a + 3u, a, d[a] > 0.0);
 }
 
+// The pixel's best hit so far and its instance.
+var<private> best: Hit;
+var<private> best_inst: u32;
+
+// Traces visible instance `j` (called by the hierarchy walk): a hit nearer than the best,
+// or as near with a lower index, replaces it.
+fn bvh_visit(j: u32, dir: vec3<f32>) -> f32 {
+    // One ulp beyond the best, so that a hit at exactly its distance comes back.
+    let limit = select(bitcast<f32>(bitcast<u32>(best.t) + 1u), best.t, best.t >= 1e30);
+    let h = trace(instances[j], dir, limit);
+    if h.hit && (!best.hit || h.t < best.t || (h.t == best.t && j < best_inst)) {
+        best = h;
+        best_inst = j;
+    }
+    return best.t;
+}
+
 @fragment
 fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     let dir = pixel_ray(frag.xy);
-    var best = Hit(false, 1e30, 0u, 0u);
-    var best_inst = 0u;
-    let count = u32(frame.misc.w);
-    for (var i = 0u; i < count; i++) {
-        let h = trace(instances[i], dir, best.t);
-        if h.hit {
-            best = h;
-            best_inst = i;
-        }
-    }
+    best = Hit(false, 1e30, 0u, 0u);
+    best_inst = 0u;
+    bvh_walk(dir, BIG, u32(frame.misc.w));
     if !best.hit {
         discard;
     }

@@ -62,7 +62,6 @@ const C_BOXES: u32 = 3u;
 const C_MARCHES: u32 = 5u;
 const C_HISTOGRAM: u32 = 8u;
 
-var<private> boxes_tested: u32;
 var<private> marches: u32;
 var<workgroup> wg_rays: atomic<u32>;
 var<workgroup> wg_steps: atomic<u32>;
@@ -70,6 +69,7 @@ var<workgroup> wg_boxes: atomic<u32>;
 var<workgroup> wg_marches: atomic<u32>;
 
 //#include "sparse_march.inc.wgsl"
+//#include "instance_bvh.inc.wgsl"
 
 fn start_time(k: u32, e: vec4<f32>, px: vec2<i32>, size: vec2<i32>, dir: vec3<f32>, r: Ray) -> f32 {
     let inst = instances[k];
@@ -111,46 +111,31 @@ fn clear_draw() {
     billboard_draw.first_instance = 0u;
 }
 
-// Entry time (t >= 0) of the camera-relative ray `t * dir` into a hierarchy node's box, or
-// BIG when it misses. Direction components below 1e-20 are treated as 0 (boxes are
-// clamped to 1e37 and widened, so nothing overflows or is missed).
-fn bvh_enter(i: u32, dir: vec3<f32>) -> f32 {
-    boxes_tested += 1u;
-    let n = instance_bvh[i];
-    var enter = 0.0;
-    var exit = BIG;
-    for (var a = 0u; a < 3u; a++) {
-        if abs(dir[a]) < 1e-20 {
-            if !(n.lo[a] <= 0.0 && 0.0 <= n.hi[a]) {
-                return BIG;
-            }
-            continue;
-        }
-        let inv = 1.0 / dir[a];
-        let t0 = n.lo[a] * inv;
-        let t1 = n.hi[a] * inv;
-        enter = max(enter, min(t0, t1));
-        exit = min(exit, max(t0, t1));
-    }
-    return select(BIG, enter, enter <= exit);
-}
+// The pixel's best hit so far and its instance; the prepass instance (marched first).
+var<private> best: Hit;
+var<private> best_inst: u32;
+var<private> prepass_inst: u32;
 
-// The best hit of visible instance `j` against `best` (nearer, or as near with a lower
-// index).
-fn consider(j: u32, dir: vec3<f32>, best: ptr<function, Hit>, best_inst: ptr<function, u32>) {
+// Marches visible instance `j` up to the best hit; keeps its hit when nearer, or as near
+// with a lower index. Called by the hierarchy walk.
+fn bvh_visit(j: u32, dir: vec3<f32>) -> f32 {
+    if j == prepass_inst {
+        return best.t;
+    }
     let inst_j = instances[j];
     let lod_j = lods[inst_j.lod];
     let rj = make_ray(inst_j, lod_j.level, dir);
-    let limit = (*best).t;
+    let limit = best.t;
     if !(max(rj.t_enter, 0.0) <= min(rj.t_exit, limit)) {
-        return;
+        return best.t;
     }
     marches += 1u;
     let h = march(rj, lod_j, 0.0, limit);
-    if h.found && (!(*best).found || h.t < (*best).t || (h.t == (*best).t && j < *best_inst)) {
-        *best = h;
-        *best_inst = j;
+    if h.found && (!best.found || h.t < best.t || (h.t == best.t && j < best_inst)) {
+        best = h;
+        best_inst = j;
     }
+    return best.t;
 }
 
 const NO_DEDUP: u32 = 0xffffffffu;
@@ -212,50 +197,11 @@ fn filter_pixel(px: vec2<i32>) -> bool {
     let lod = lods[inst.lod];
     let r = make_ray(inst, lod.level, dir);
     marches = 1u;
-    var best = march(r, lod, start_time(k, e, px, size, dir, r), BIG);
-    var best_inst = k;
+    best = march(r, lod, start_time(k, e, px, size, dir, r), BIG);
+    best_inst = k;
+    prepass_inst = k;
     if count > 1u {
-        var stack: array<u32, BVH_STACK>;
-        var stack_t: array<f32, BVH_STACK>;
-        var sp = 0u;
-        let root_t = bvh_enter(0u, dir);
-        if root_t < BIG {
-            stack[0] = 0u;
-            stack_t[0] = root_t;
-            sp = 1u;
-        }
-        // Each of the 2 count - 1 nodes is pushed at most once; the bound only guards
-        // against a corrupt buffer.
-        for (var guard = 0u; sp > 0u && guard < 2u * count; guard++) {
-            sp -= 1u;
-            if stack_t[sp] > best.t {
-                continue;
-            }
-            let node = instance_bvh[stack[sp]];
-            if (node.left & BVH_LEAF) != 0u {
-                let j = node.left & ~BVH_LEAF;
-                if j != k && j < count {
-                    consider(j, dir, &best, &best_inst);
-                }
-                continue;
-            }
-            let tl = bvh_enter(node.left, dir);
-            let tr = bvh_enter(node.right, dir);
-            // The farther child goes on the stack first, so the nearer one is popped first.
-            let near_is_left = tl <= tr;
-            let t_far = select(tl, tr, near_is_left);
-            let t_near = select(tr, tl, near_is_left);
-            if t_far < BIG && sp < BVH_STACK {
-                stack[sp] = select(node.left, node.right, near_is_left);
-                stack_t[sp] = t_far;
-                sp += 1u;
-            }
-            if t_near < BIG && sp < BVH_STACK {
-                stack[sp] = select(node.right, node.left, near_is_left);
-                stack_t[sp] = t_near;
-                sp += 1u;
-            }
-        }
+        bvh_walk(dir, best.t, count);
     }
     if !best.found {
         return true;

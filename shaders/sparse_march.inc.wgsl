@@ -30,8 +30,6 @@
 // - Every loop iteration counts one step (cells, pages and coarse blocks alike); after
 //   MAX_STEPS the ray reports no hit.
 
-// Stands in for infinity: WGSL lets implementations assume no infinities at run time.
-const BIG: f32 = 3.0e38;
 // Direction components below this fraction of the largest one are treated as 0: over the
 // whole box the ray moves less than 4e-12 object units on that axis, far below a cell of
 // any supported level (2^-15), and crossing times stay finite.

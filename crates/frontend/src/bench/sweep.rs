@@ -1,6 +1,8 @@
-//! Speed–accuracy knob sweeps of `ssbvb bench --sweep`: each knob of the default SSBVB
-//! pipeline (`assets/pipelines/ssbvb.ron`) changed alone, the frame timed and compared
-//! with the CPU reference (coverage, depth, and the shaded composite as PSNR).
+//! Speed–accuracy knob sweeps of `ssbvb bench --sweep`: each knob of the paper's SSBVB
+//! frame (`assets/pipelines/ssbvb_flat.ron`: one billboard per covered pixel, so the
+//! resolution and size knobs act on every pixel's billboard) changed alone, the frame
+//! timed and compared with the CPU reference (coverage, depth, and the shaded composite
+//! as PSNR).
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -254,7 +256,7 @@ pub(crate) fn run_sweeps(
     cfg: &SweepConfig,
     log: bool,
 ) -> Result<Vec<SweepRow>> {
-    let base = bundled_pipeline("ssbvb.ron")?;
+    let base = bundled_pipeline("ssbvb_flat.ron")?;
     let size = cfg.size;
     let fixed_ref = reference_at(asset, cfg.level, camera, size);
     let mut points: Vec<(&'static str, f64, bool, ResolvedPipeline)> = Vec::new();
@@ -465,7 +467,7 @@ mod tests {
 
     #[test]
     fn filter_scale_pipeline_resolves_with_scaled_resources() {
-        let base = bundled_pipeline("ssbvb.ron").unwrap();
+        let base = bundled_pipeline("ssbvb_flat.ron").unwrap();
         let p = with_filter_scale(&base, 0.5).unwrap();
         let entry = p.resource("entry").unwrap();
         match &p.resources[entry].desc {
