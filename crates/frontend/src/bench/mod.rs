@@ -5,13 +5,14 @@
 //!
 //! This file holds the command line and [`run()`], the order of the steps; the steps live
 //! in their own files: `techniques` (what is compared), `matrix` (what each preset
-//! covers), `run` (measuring the cells), `sweep` (the knob sweeps), `plot` (PNG plots) and
-//! `report` (JSON, CSV, Markdown).
+//! covers), `run` (measuring the cells), `sweep` (the knob sweeps), `plot` (PNG plots),
+//! `report` (JSON, CSV, Markdown) and `scale` (`--preset scale`, its own table).
 
 mod matrix;
 mod plot;
 mod report;
 mod run;
+mod scale;
 mod sweep;
 mod techniques;
 
@@ -38,6 +39,10 @@ pub enum Preset {
     /// resolutions 8-512 (levels 3-9), targets 640x480-2560x1440, and the fastest technique
     /// per cell (its Table 11).
     Study,
+    /// Cost against scene size: the bunny grid at 1, 16, 256 and 4096 instances
+    /// (`--instances`) with Auto LOD, plus a near, a mid and a far camera on one bunny;
+    /// writes scale.csv, scale.json and scale.md.
+    Scale,
 }
 
 /// Arguments of `ssbvb bench`.
@@ -70,10 +75,24 @@ pub struct BenchArgs {
     /// Timed frames per cell instead of the preset's.
     #[arg(long)]
     pub frames: Option<usize>,
+    /// Instance counts of `--preset scale` (comma-separated; default 1,16,256,4096).
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(usize))]
+    pub instances: Option<Vec<usize>>,
 }
 
 /// Runs `ssbvb bench`.
 pub fn run(args: &BenchArgs) -> Result<()> {
+    if matches!(args.preset, Preset::Scale) {
+        if let Some(n) = args
+            .instances
+            .iter()
+            .flatten()
+            .find(|&&n| n == 0 || n > 1 << 16)
+        {
+            anyhow::bail!("--instances: {n} is not a count from 1 to 65536");
+        }
+        return scale::run(args);
+    }
     let m = matrix::matrix(args);
     let techniques = techniques::select(args)?;
     let ctx = open_context(&techniques)?;
