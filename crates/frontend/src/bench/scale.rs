@@ -471,9 +471,8 @@ mod tests {
         assert_eq!(g.len(), 64);
         assert!((g[0].translation - DVec3::new(-7.7, 0.0, -7.7)).length() < 1e-12);
         assert!((g[1].translation - DVec3::new(-5.5, 0.0, -7.7)).length() < 1e-12);
-        let want = DQuat::from_rotation_y(293f64.to_radians());
-        let got = DQuat::from_mat3(&g[1].matrix3);
-        assert!(got.angle_between(want) < 1e-9);
+        let want = glam::DMat3::from_rotation_y(293f64.to_radians());
+        assert!(g[1].matrix3.abs_diff_eq(want, 1e-12), "{:?}", g[1].matrix3);
         let text = include_str!("../../../../assets/scenes/bunnies_64.ron");
         assert!(text.contains("(translation: (-5.5, 0.0, -7.7), rotation_y_deg: 293.0)"));
         assert_eq!(grid(1)[0].translation, DVec3::ZERO);
