@@ -497,3 +497,67 @@ fn bunny_grid_scene_reports_levels_and_counters() {
     assert!(c["march_steps_mean"].as_f64().unwrap() >= 1.0, "{json}");
     assert!(c["march_steps_p99"].as_u64().unwrap() >= 1, "{json}");
 }
+
+/// `bench --preset scale` in small: a row per technique and view with the counters, the
+/// instance count and the IoU against the reference, and the three output files.
+#[test]
+fn bench_scale_preset_writes_rows_per_view() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = ssbvb()
+        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+        .args([
+            "bench",
+            "--preset",
+            "scale",
+            "--instances",
+            "1,4",
+            "--sizes",
+            "64x48",
+        ])
+        .args([
+            "--frames",
+            "1",
+            "--techniques",
+            "ssbvb-unique,octree",
+            "--out",
+        ])
+        .arg(dir.path().join("scale"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.path().join("scale/scale.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    // 2 techniques x (2 grid views + near, mid, far).
+    assert_eq!(rows.len(), 10, "{csv}");
+    for r in &rows {
+        let iou: f64 = r[col("coverage_iou")].parse().unwrap();
+        let view = r[col("view")];
+        // The far view is the known f32 limit of the filter (docs/benchmarks.md).
+        if view != "far" {
+            assert!(iou >= 0.99, "{r:?}");
+        }
+        if r[col("technique")] == "ssbvb-unique" {
+            let steps: f64 = r[col("march_steps_mean")].parse().unwrap();
+            assert!(steps >= 1.0, "{r:?}");
+            assert!(!r[col("filter_us_per_covered_px")].is_empty(), "{r:?}");
+        }
+    }
+    let four = rows
+        .iter()
+        .find(|r| r[col("view")] == "grid" && r[col("instances")] == "4")
+        .unwrap();
+    assert_eq!(four[col("visible_instances")], "4", "{csv}");
+    for f in ["scale.json", "scale.md"] {
+        assert!(dir.path().join("scale").join(f).is_file(), "{f}");
+    }
+}
