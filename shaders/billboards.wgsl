@@ -130,6 +130,9 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     let inst = instances[slot.instance];
     let size = cell_size(inst.level);
     let centre_obj = cell_min(voxel_cell(slot.voxel), inst.level) + 0.5 * size;
+    // The centre in view space straight from object space (f64-composed matrix): exact
+    // lateral offsets however far the instance is; `c` (world) for what needs no more.
+    let cv_exact = (inst.object_to_view * vec4(centre_obj, 1.0)).xyz;
     let c = (inst.object_to_world * vec4(centre_obj, 1.0)).xyz;
     let n = voxel_normal_world(inst, slot.voxel);
     if dot(n, -c) < CULL_COS * length(c) {
@@ -137,7 +140,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     }
     let r = circumradius(inst.object_to_world, size);
     let view3 = mat3x3(frame.view[0].xyz, frame.view[1].xyz, frame.view[2].xyz);
-    let cv = view3 * c;
+    let cv = cv_exact;
     let uv = corner(vi % 6u);
     let near = frame.misc.y;
     if cv.z + r >= -near * 1.001 || !(r > 0.0) {
@@ -214,7 +217,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     // The view matrix is a rotation: its transpose takes view space back to world.
     let world = transpose(view3) * corner_view;
     out.world = world;
-    out.clip = frame.view_proj * vec4(world, 1.0);
+    out.clip = frame.proj * vec4(corner_view, 1.0);
     return out;
 }
 

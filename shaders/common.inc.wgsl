@@ -13,6 +13,10 @@ struct Frame {
     inv_view_proj: mat4x4<f32>,
     // Camera-relative world -> view (a rotation).
     view: mat4x4<f32>,
+    // View -> clip (reversed Z). Instance geometry goes object -> view (Instance
+    // `object_to_view`, composed in f64) -> clip: large camera-relative world coordinates
+    // would round by more than a pixel in a narrow far view.
+    proj: mat4x4<f32>,
     // Ray through NDC (x, y): forward.xyz + x * right.xyz + y * up.xyz (not normalized);
     // right and up are pre-scaled by the half-extents of the view at distance 1.
     cam_right: vec4<f32>,
@@ -32,6 +36,8 @@ struct Frame {
 struct Instance {
     // Object space -> camera-relative world.
     object_to_world: mat4x4<f32>,
+    // Object space -> view space (composed in f64: exact lateral offsets at any distance).
+    object_to_view: mat4x4<f32>,
     // Camera-relative world -> object space.
     world_to_object: mat4x4<f32>,
     // Camera position in object space (xyz); w: world size of one cell of the chosen LOD.

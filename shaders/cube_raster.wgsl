@@ -91,7 +91,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ci: u32) -> 
     cell[(a + 1u) % 3u] += q.x * size;
     cell[(a + 2u) % 3u] += q.y * size;
     let p_obj = vec3<f32>(cell) * s - 1.0;
-    out.clip = frame.view_proj * (inst.object_to_world * vec4(p_obj, 1.0));
+    out.clip = frame.proj * (inst.object_to_view * vec4(p_obj, 1.0));
     return out;
 }
 

@@ -30,8 +30,9 @@ struct VsOut {
 fn vs_main(@location(0) position: vec4<f32>, @builtin(instance_index) instance: u32) -> VsOut {
     let inst = instances[instance];
     var out: VsOut;
-    // Camera-relative world space keeps f32 precision for objects far from the origin.
-    out.clip = frame.view_proj * (inst.object_to_world * vec4(position.xyz, 1.0));
+    // Object -> view (composed in f64 on the CPU) -> clip keeps f32 precision for objects
+    // far from the origin and from the camera.
+    out.clip = frame.proj * (inst.object_to_view * vec4(position.xyz, 1.0));
     out.object_pos = position.xyz;
     out.instance = instance;
     return out;

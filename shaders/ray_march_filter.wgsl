@@ -71,18 +71,16 @@ var<workgroup> wg_marches: atomic<u32>;
 //#include "sparse_march.inc.wgsl"
 //#include "instance_bvh.inc.wgsl"
 
-fn start_time(k: u32, e: vec4<f32>, px: vec2<i32>, size: vec2<i32>, dir: vec3<f32>, r: Ray) -> f32 {
-    let inst = instances[k];
-    if (inst.flags & 1u) != 0u {
-        return 0.0;
-    }
-    let o = inst.camera_object.xyz;
-    let d = (inst.world_to_object * vec4(dir, 0.0)).xyz;
+// How far (in `t`) before the prepass entry `e` the march of the prepass instance starts:
+// one cell, plus an eighth of how much the entry moves along the ray to a neighbouring
+// pixel of the same instance (rasterizers snap vertices to 1/16 px or finer, and on faces
+// seen at grazing angles that moves the interpolated entry along the ray by that fraction
+// of the per-pixel change), plus 1e-4 object units for rounding. A pixel without such a
+// neighbour starts 3.5 object units back, outside the object's box ([-1, 1]^3 has a
+// diagonal of 3.46). Entry points are small object-space numbers, so this is exact
+// whatever the camera's distance.
+fn entry_margin(e: vec4<f32>, px: vec2<i32>, size: vec2<i32>, d: vec3<f32>, s: f32) -> f32 {
     let dd = dot(d, d);
-    if !(dd > 0.0) {
-        return 0.0;
-    }
-    let tp = dot(e.xyz - o, d) / dd;
     var slope = -1.0;
     var offsets = array(vec2(1, 0), vec2(-1, 0), vec2(0, 1), vec2(0, -1));
     for (var i = 0u; i < 4u; i++) {
@@ -90,16 +88,39 @@ fn start_time(k: u32, e: vec4<f32>, px: vec2<i32>, size: vec2<i32>, dir: vec3<f3
         if all(q >= vec2(0)) && all(q < size) {
             let en = textureLoad(entry, q, 0);
             if en.w == e.w {
-                slope = max(slope, abs(dot(en.xyz - o, d) / dd - tp));
+                slope = max(slope, abs(dot(en.xyz - e.xyz, d)) / dd);
             }
         }
     }
     if slope < 0.0 {
-        return 0.0;
+        return 3.5 * inverseSqrt(dd);
     }
-    let margin = r.s * inverseSqrt(dd) + slope * 0.125 + abs(tp) * 1e-5;
-    let t = tp - margin;
-    return select(0.0, t, t > 0.0);
+    return (s + 1e-4) * inverseSqrt(dd) + slope * 0.125;
+}
+
+// Marches the prepass instance `k` for a pixel with entry `e`. A proxy holding the camera
+// starts at the camera; otherwise the ray starts at the entry point moved back by
+// `entry_margin` (never behind the camera), in a frame whose origin is that point: plane
+// crossing times are then differences of small object-space numbers, so a camera 1e6
+// units away loses no precision (from the camera, f32 would lose several cells). The
+// hit's `t` is returned in the camera's frame.
+fn march_prepass(k: u32, e: vec4<f32>, px: vec2<i32>, size: vec2<i32>, dir: vec3<f32>) -> Hit {
+    let inst = instances[k];
+    let lod = lods[inst.lod];
+    if (inst.flags & 1u) != 0u {
+        return march(make_ray(inst, lod.level, dir), lod, 0.0, BIG);
+    }
+    let d = (inst.world_to_object * vec4(dir, 0.0)).xyz;
+    let dd = dot(d, d);
+    // The entry's distance from the camera (its f32 rounding only shifts the depth).
+    let tp = dot(e.xyz - inst.camera_object.xyz, d) / dd;
+    let back = min(entry_margin(e, px, size, d, cell_size(lod.level)), max(tp, 0.0));
+    let r = make_ray_od(e.xyz - d * back, d, lod.level);
+    var h = march(r, lod, 0.0, BIG);
+    if h.found {
+        h.t = max(tp - back, 0.0) + h.t;
+    }
+    return h;
 }
 
 @compute @workgroup_size(1)
@@ -193,11 +214,8 @@ fn filter_pixel(px: vec2<i32>) -> bool {
     // prepass rasterized this texel's centre, which is this point of the full screen.
     let dir = pixel_ray((vec2<f32>(px) + vec2(0.5)) * frame.screen.xy / vec2<f32>(size));
 
-    let inst = instances[k];
-    let lod = lods[inst.lod];
-    let r = make_ray(inst, lod.level, dir);
     marches = 1u;
-    best = march(r, lod, start_time(k, e, px, size, dir, r), BIG);
+    best = march_prepass(k, e, px, size, dir);
     best_inst = k;
     prepass_inst = k;
     if count > 1u {

@@ -73,8 +73,12 @@ fn no_hit() -> Hit {
 }
 
 fn make_ray(inst: Instance, level: u32, dir: vec3<f32>) -> Ray {
-    let o_obj = inst.camera_object.xyz;
-    let d_obj = (inst.world_to_object * vec4(dir, 0.0)).xyz;
+    return make_ray_od(inst.camera_object.xyz, (inst.world_to_object * vec4(dir, 0.0)).xyz, level);
+}
+
+// The ray `o_obj + t * d_obj` in object space (`d_obj` not normalized: `t` keeps the
+// world scale of the includer's direction).
+fn make_ray_od(o_obj: vec3<f32>, d_obj: vec3<f32>, level: u32) -> Ray {
     let ad = abs(d_obj);
     let m = max(ad.x, max(ad.y, ad.z));
     var r: Ray;
@@ -291,10 +295,3 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32) -> Hit {
     }
     return no_hit();
 }
-
-// Where to start marching the prepass instance: the prepass entry moved back by one cell,
-// by an eighth of how much the entry depth changes to a neighbouring pixel of the same
-// instance (rasterizers snap vertices to 1/16 px or finer, and on faces seen at grazing
-// angles that moves the interpolated entry along the ray by that fraction of the
-// per-pixel change), and by a relative 1e-5 for f32 rounding. Pixels without such a
-// neighbour, and instances whose proxy holds the camera, start at the camera.

@@ -24,6 +24,10 @@ pub struct FrameUniform {
     pub inv_view_proj: [[f32; 4]; 4],
     /// Camera-relative world → view.
     pub view: [[f32; 4]; 4],
+    /// View → clip (reversed Z). Positions far from the camera go object → view (per
+    /// instance, composed in f64) → clip, never through large camera-relative world
+    /// coordinates whose f32 rounding exceeds a pixel.
+    pub proj: [[f32; 4]; 4],
     /// Right axis scaled by the half-width of the view at distance 1.
     pub cam_right: [f32; 4],
     /// Up axis scaled by the half-height of the view at distance 1.
@@ -40,12 +44,15 @@ pub struct FrameUniform {
     pub misc: [f32; 4],
 }
 
-/// Mirror of WGSL `Instance` (160 bytes).
+/// Mirror of WGSL `Instance` (224 bytes).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct InstanceUniform {
     /// Object → camera-relative world.
     pub object_to_world: [[f32; 4]; 4],
+    /// Object → view, composed in f64 (its translation is the instance's view-space
+    /// origin: lateral offsets stay small and exact however far the instance is).
+    pub object_to_view: [[f32; 4]; 4],
     /// Camera-relative world → object.
     pub world_to_object: [[f32; 4]; 4],
     /// Camera in object space (xyz), world size of a cell (w).

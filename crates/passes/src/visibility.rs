@@ -22,7 +22,8 @@ pub fn frame_uniform(camera: &Camera, screen: (u32, u32), light: &Light) -> Fram
     let (w, h) = (screen.0.max(1) as f64, screen.1.max(1) as f64);
     let aspect = w / h;
     let rot = camera.view_rotation_matrix();
-    let view_proj = camera.projection(aspect) * rot;
+    let proj = camera.projection(aspect);
+    let view_proj = proj * rot;
     let (right, up, forward) = camera.basis();
     let tan_y = (camera.fov_y_deg.clamp(1e-9, 179.999).to_radians() * 0.5).tan();
     let tan_x = tan_y * aspect;
@@ -31,6 +32,7 @@ pub fn frame_uniform(camera: &Camera, screen: (u32, u32), light: &Light) -> Fram
         view_proj: mat(view_proj),
         inv_view_proj: mat(view_proj.inverse()),
         view: mat(rot),
+        proj: mat(proj),
         cam_right: (right * tan_x).as_vec3().extend(0.0).into(),
         cam_up: (up * tan_y).as_vec3().extend(0.0).into(),
         cam_forward: forward.as_vec3().extend(0.0).into(),
@@ -73,6 +75,7 @@ pub(crate) fn visible_instances(
     let tan_x = tan_y * aspect;
     // Frustum planes in camera-relative world space (normals pointing inwards).
     let planes = frustum_planes(right, up, forward, tan_x, tan_y);
+    let view_rotation = camera.view_rotation_matrix();
     let mut visible = Vec::new();
     let mut uniforms = Vec::new();
     let mut scene_index = 0u32;
@@ -116,6 +119,7 @@ pub(crate) fn visible_instances(
             let cell_world = 2.0 * scale_of(xf) / (1u64 << level) as f64;
             uniforms.push(InstanceUniform {
                 object_to_world: mat(DMat4::from(rel)),
+                object_to_view: mat(view_rotation * DMat4::from(rel)),
                 world_to_object: mat(DMat4::from(inv)),
                 camera_object: [
                     cam_obj.x as f32,
@@ -341,6 +345,7 @@ mod tests {
         };
         let uniform = |m: DAffine3, lod: u32| InstanceUniform {
             object_to_world: mat(DMat4::from(m)),
+            object_to_view: mat(DMat4::from(m)),
             world_to_object: mat(DMat4::from(m.inverse())),
             camera_object: [0.0; 4],
             lod,

@@ -52,6 +52,7 @@ pub fn shared_structs() -> Vec<StructLayout> {
                 view_proj,
                 inv_view_proj,
                 view,
+                proj,
                 cam_right,
                 cam_up,
                 cam_forward,
@@ -65,6 +66,7 @@ pub fn shared_structs() -> Vec<StructLayout> {
             "Instance",
             InstanceUniform {
                 object_to_world,
+                object_to_view,
                 world_to_object,
                 camera_object,
                 lod,

@@ -182,3 +182,37 @@ fn near_camera_overdraw_is_bounded_in_the_default_pipeline() {
         assert!(differing <= 3, "{name}: {differing} pixels differ");
     }
 }
+
+/// The far view: the bunny from (309426, 206284, 928279) through a 0.00016° lens,
+/// with the default (infinite) far plane. The prepass and billboards go object → view in
+/// an f64-composed matrix and the filter marches from the entry point, so the frame
+/// matches the f64 reference (measured IoU 0.997 at level 8, 320x240; before, 0.118 —
+/// f32 camera-relative coordinates lost the voxels).
+#[test]
+fn the_far_narrow_view_matches_the_reference() {
+    let level = 6;
+    let scene = ssbvb_tests::single_object_scene(model_asset("bunny.obj", level), level);
+    let camera = Camera {
+        fov_y_deg: 0.00016,
+        far: f64::INFINITY,
+        ..Camera::new(DVec3::new(309426.0, 206284.0, 928279.0), DVec3::ZERO)
+    };
+    let size = (96, 72);
+    let reference = ssbvb_tests::reference_of(&scene, &camera, size);
+    assert!(reference.coverage() > 1500, "{}", reference.coverage());
+    let f = ssbvb_tests::render(
+        include_str!("../../../assets/pipelines/ssbvb.ron"),
+        scene,
+        &camera,
+        size,
+    );
+    let hits = ssbvb_tests::gbuffer_hits(&f, "far narrow");
+    let cell = 2.0 / (1u64 << level) as f64;
+    let r = ssbvb_voxel::accuracy::compare(&reference, &hits, &[cell]).unwrap();
+    eprintln!("far narrow view: {r:?}");
+    assert!(r.coverage_iou >= 0.97, "{r:?}");
+    // Depth: the G-buffer stores camera-relative f32 positions, and an f32 ulp at 1.1e6
+    // units is 0.125, four cells of level 6: measured median 1.5 cells, p95 4.3.
+    assert!(r.depth_error_voxels.median <= 3.0, "{r:?}");
+    assert!(r.depth_error_voxels.p95 <= 8.0, "{r:?}");
+}
