@@ -477,13 +477,14 @@ impl Viewer {
             .iter()
             .enumerate()
             .map(|(i, o)| {
-                let drawn = self.scene.visible.iter().filter(|v| v.object == i);
+                let mut drawn = [0usize; 17];
+                for v in self.scene.visible.iter().filter(|v| v.object == i) {
+                    drawn[(v.level as usize).min(16)] += 1;
+                }
                 ObjectLod {
                     policy: o.lod,
                     max_level: o.asset.lods.len().saturating_sub(1) as u32,
-                    drawn: drawn
-                        .map(|v| (v.level, v.level))
-                        .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1))),
+                    drawn,
                 }
             })
             .collect();

@@ -55,8 +55,24 @@ pub struct ObjectLod {
     pub policy: LodPolicy,
     /// Finest level the asset has (levels are 0..=max).
     pub max_level: u32,
-    /// Lowest and highest level its visible instances were drawn at last frame.
-    pub drawn: Option<(u32, u32)>,
+    /// Visible instances drawn at each level last frame (index = level; levels above 16
+    /// count at 16).
+    pub drawn: [usize; 17],
+}
+
+impl ObjectLod {
+    /// The non-empty levels of [`ObjectLod::drawn`] as `count at level` pairs, or `None`
+    /// when nothing was drawn.
+    pub fn histogram_text(&self) -> Option<String> {
+        let parts: Vec<String> = self
+            .drawn
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| **n > 0)
+            .map(|(l, n)| format!("{n} at {l}"))
+            .collect();
+        (!parts.is_empty()).then(|| parts.join(", "))
+    }
 }
 
 /// What the overlay shows this frame.
@@ -378,9 +394,8 @@ fn lod(ui: &mut egui::Ui, view: &OverlayView<'_>, actions: &mut Vec<Action>) {
             let was_auto = auto;
             ui.radio_value(&mut auto, false, "fixed");
             ui.radio_value(&mut auto, true, "auto");
-            match o.drawn {
-                Some((a, b)) if a == b => ui.weak(format!("drawn at {a}")),
-                Some((a, b)) => ui.weak(format!("drawn at {a}..{b}")),
+            match o.histogram_text() {
+                Some(h) => ui.weak(format!("drawn: {h}")),
                 None => ui.weak("not visible"),
             };
             if auto != was_auto {
@@ -440,5 +455,28 @@ fn camera(ui: &mut egui::Ui, view: &OverlayView<'_>, actions: &mut Vec<Action>) 
             }
             ui.weak("WASD move · Q/E down/up · right drag: look · Shift: ×4 · wheel: speed");
         }
+    }
+}
+
+#[cfg(test)]
+mod lod_tests {
+    use super::*;
+
+    #[test]
+    fn the_level_histogram_lists_drawn_levels_in_order() {
+        let mut drawn = [0usize; 17];
+        drawn[3] = 12;
+        drawn[5] = 1;
+        let o = ObjectLod {
+            policy: LodPolicy::AUTO,
+            max_level: 8,
+            drawn,
+        };
+        assert_eq!(o.histogram_text().as_deref(), Some("12 at 3, 1 at 5"));
+        let none = ObjectLod {
+            drawn: [0; 17],
+            ..o
+        };
+        assert_eq!(none.histogram_text(), None);
     }
 }
