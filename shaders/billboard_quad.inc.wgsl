@@ -244,7 +244,9 @@ fn flat_fragment(slot: VoxelSlot, q: Quad, px: vec2<f32>, world_on_quad: vec3<f3
     var f: Fragment;
     f.covered = true;
     var world = world_on_quad;
-    f.depth = ndc_depth(world_on_quad);
+    // The quad's plane: one depth for the whole quad, as the rasterizer interpolates it.
+    let clip = frame.proj * vec4(0.0, 0.0, q.cz, 1.0);
+    f.depth = clamp(clip.z / clip.w, 0.0, 1.0);
     if q.near_field {
         let h = slot_ray_box(slot, px);
         if !h.hit {

@@ -23,6 +23,10 @@ const FILES: &[(&str, &[u8])] = &[
         include_bytes!("../../../assets/pipelines/ssbvb.ron"),
     ),
     (
+        "pipelines/ssbvb_splat.ron",
+        include_bytes!("../../../assets/pipelines/ssbvb_splat.ron"),
+    ),
+    (
         "pipelines/ssbvb_flat.ron",
         include_bytes!("../../../assets/pipelines/ssbvb_flat.ron"),
     ),

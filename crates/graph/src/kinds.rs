@@ -38,6 +38,11 @@ pass_kinds! {
     /// visible instance's LOD — or, with `merge_full_nodes`, one cube per completely full
     /// octree node — writing the same G-buffer as the billboards (stencil = voxel).
     CubeRaster(CubeRasterParams);
+    /// The billboards as a compute splat (Schütz et al.'s compute rasterization, for
+    /// adapters with weak raster units): per SSBVB entry, its quad's pixels take the
+    /// nearest depth by atomic max, then the lowest entry at that depth, and a fullscreen
+    /// resolve writes the same G-buffer as `Billboards` (stencil = voxel).
+    SplatBillboards(SplatBillboardsParams);
 }
 
 const DEPTH_STENCIL: &[Format] = &[Format::Depth32FloatStencil8, Format::Depth24PlusStencil8];
@@ -382,6 +387,56 @@ impl KindSpec for CubeRasterParams {
     const SLOTS: &'static [SlotDesc] = GBUFFER_WRITES;
 }
 
+/// Parameters of `SplatBillboards` (the same as `Billboards`).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SplatBillboardsParams {
+    /// Flat quads at the voxel centre's depth (the paper) or exact ray–box depth per pixel.
+    #[serde(default)]
+    pub mode: BillboardMode,
+    /// Scale of the quad relative to the voxel's projected footprint.
+    #[serde(default = "one")]
+    pub size_scale: f32,
+}
+
+impl Default for SplatBillboardsParams {
+    fn default() -> Self {
+        Self {
+            mode: BillboardMode::Flat,
+            size_scale: 1.0,
+        }
+    }
+}
+
+impl KindSpec for SplatBillboardsParams {
+    const NAME: &'static str = "SplatBillboards";
+    const STAGE: PassStage = PassStage::Render;
+    const SLOTS: &'static [SlotDesc] = &[
+        slot!(
+            "ssbvb",
+            Read,
+            SlotClass::StorageBuffer(BufferLayout::VoxelSlot)
+        ),
+        // Read by the splat (the entry count), not used as an indirect draw.
+        slot!(
+            "billboard_draw",
+            Read,
+            SlotClass::StorageBuffer(BufferLayout::DrawIndirect)
+        ),
+        GBUFFER_WRITES[0],
+        GBUFFER_WRITES[1],
+        GBUFFER_WRITES[2],
+        GBUFFER_WRITES[3],
+    ];
+    fn problems(&self) -> Vec<String> {
+        BillboardsParams {
+            mode: self.mode,
+            size_scale: self.size_scale,
+        }
+        .problems()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -400,6 +455,7 @@ mod tests {
             DenseDdaParams::NAME,
             OctreeRayCastParams::NAME,
             CubeRasterParams::NAME,
+            SplatBillboardsParams::NAME,
         ];
         assert_eq!(spec_names, KIND_NAMES);
     }

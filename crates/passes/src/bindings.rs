@@ -68,9 +68,12 @@ pub type OwnResource<'a> = (&'static str, wgpu::BindingResource<'a>);
 fn visibility(stage: PassStage, writable_storage: bool) -> wgpu::ShaderStages {
     match stage {
         PassStage::Compute => wgpu::ShaderStages::COMPUTE,
-        // Vertex shaders may not write storage.
-        PassStage::Render if writable_storage => wgpu::ShaderStages::FRAGMENT,
-        PassStage::Render => wgpu::ShaderStages::VERTEX_FRAGMENT,
+        // Vertex shaders may not write storage. Compute too: a render pass kind may run
+        // compute work before its draw on the same group (SplatBillboards).
+        PassStage::Render if writable_storage => {
+            wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE
+        }
+        PassStage::Render => wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
     }
 }
 

@@ -34,6 +34,7 @@ registry::pass_modules! {
     dense_dda::DenseDda,
     octree_ray_cast::OctreeRayCast,
     cube_raster::CubeRaster,
+    splat_billboards::SplatBillboards,
 }
 
 pub use adapter_needs::pipeline_requirements;

@@ -13,4 +13,5 @@ mod ray_casters;
 mod ray_march_filter;
 mod scale;
 mod smooth_composite;
+mod splat;
 mod triangles;

@@ -131,7 +131,12 @@ pub(super) fn run(args: &BenchArgs) -> Result<()> {
             .filter(|t| {
                 matches!(
                     t.name,
-                    "ssbvb-unique" | "ssbvb-flat" | "octree" | "dense-dda" | "cube-raster"
+                    "ssbvb-unique"
+                        | "ssbvb-splat"
+                        | "ssbvb-flat"
+                        | "octree"
+                        | "dense-dda"
+                        | "cube-raster"
                 )
             })
             .collect(),

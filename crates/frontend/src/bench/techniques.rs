@@ -48,6 +48,13 @@ pub(super) const TECHNIQUES: &[Technique] = &[
         edit: None,
         max_level: 16,
     },
+    // The default pipeline with the billboards splatted in compute.
+    Technique {
+        name: "ssbvb-splat",
+        pipeline: "ssbvb_splat.ron",
+        edit: None,
+        max_level: 16,
+    },
     Technique {
         name: "dense-dda",
         pipeline: "dense_dda.ron",

@@ -1,0 +1,170 @@
+//#include "common.inc.wgsl"
+//#include "billboard_quad.inc.wgsl"
+//#include "fullscreen.inc.wgsl"
+
+// splat_billboards: the billboards of the SSBVB as a compute splat (Schütz, Kerbl and
+// Wimmer's compute rasterization of point clouds), for adapters whose raster units are
+// weak (a CPU adapter; data-centre GPUs such as the H100/H200). Same quads and the same
+// pixel shading as billboards.wgsl (billboard_quad.inc.wgsl), three steps:
+//
+// 1. `splat_depth` (compute, one thread per SSBVB entry): every pixel centre inside the
+//    entry's quad (the whole screen for a near-field quad) that the billboard covers takes
+//    the larger of its reversed-Z depth and the pixel's (`atomicMax` on the depth's bits:
+//    non-negative floats order like their bits).
+// 2. `splat_entry` (same threads and pixels): where the pixel's depth is this entry's,
+//    the lowest entry wins (`atomicMax` of the inverted index) — as the rasterizer's
+//    strict depth test keeps the first of equal-depth quads, drawn in entry order.
+// 3. `vs_main`/`fs_main` (a fullscreen triangle into the G-buffer): a pixel with a winner
+//    writes what that billboard's fragment writes, with its depth, depth-tested against
+//    the triangles already there; a pixel without one is discarded.
+//
+// Both per-pixel buffers are cleared to 0 every frame (0 = no depth, no entry).
+
+// Whether the fragment intersects the pixel's ray with the voxel box (RayBox) or is the
+// flat quad (Flat, the paper).
+override RAY_BOX: bool = false;
+
+@group(1) @binding(0) var<storage, read> ssbvb: array<VoxelSlot>;
+// Written by the filter: `instance_count` = the number of valid SSBVB entries.
+@group(1) @binding(1) var<storage, read> billboard_draw: array<u32, 4>;
+// Per pixel (y * width + x): the nearest depth's bits, then the winning entry, inverted.
+@group(1) @binding(2) var<storage, read_write> splat_depth_bits: array<atomic<u32>>;
+@group(1) @binding(3) var<storage, read_write> splat_entries: array<atomic<u32>>;
+
+// The fragment of entry `slot` at pixel centre `px` (screen pixels).
+fn fragment_at(slot: VoxelSlot, q: Quad, px: vec2<f32>) -> Fragment {
+    if RAY_BOX {
+        return ray_box_fragment(slot, px);
+    }
+    let dir = pixel_ray(px);
+    let view3 = mat3x3(frame.view[0].xyz, frame.view[1].xyz, frame.view[2].xyz);
+    let dv = view3 * dir;
+    if q.near_field {
+        return flat_fragment(slot, q, px, vec3(0.0));
+    }
+    // Inside the quad? Its rectangle in slope space, in the frame (axis, perp(axis)).
+    var f: Fragment;
+    f.covered = false;
+    if !(dv.z < 0.0) {
+        return f;
+    }
+    let s = dv.xy / -dv.z;
+    let local = vec2(dot(s, q.axis), dot(s, vec2(-q.axis.y, q.axis.x))) - q.mid;
+    if any(abs(local) > q.half) {
+        return f;
+    }
+    // The quad plane's point under the pixel.
+    let world = dir * (q.cz / dv.z);
+    return flat_fragment(slot, q, px, world);
+}
+
+// The pixel rectangle (min x, min y, max x, max y; inclusive) whose centres may lie in the
+// quad: the screen for a near-field quad or a ray-box fragment's quad... the quad's
+// corners otherwise.
+fn pixel_bounds(q: Quad) -> vec4<i32> {
+    let size = vec2<i32>(frame.screen.xy);
+    let all_px = vec4(0, 0, size.x - 1, size.y - 1);
+    if q.near_field {
+        return all_px;
+    }
+    let tan_xy = vec2(length(frame.cam_right.xyz), length(frame.cam_up.xyz));
+    var lo = vec2(3.0e38);
+    var hi = vec2(-3.0e38);
+    for (var k = 0u; k < 4u; k++) {
+        let uv = vec2(f32(k & 1u), f32(k >> 1u));
+        let p = q.mid + (uv * 2.0 - 1.0) * q.half;
+        let s = p.x * q.axis + p.y * vec2(-q.axis.y, q.axis.x);
+        let ndc = s / tan_xy;
+        let pix = vec2((ndc.x + 1.0) * 0.5, (1.0 - ndc.y) * 0.5) * frame.screen.xy;
+        lo = min(lo, pix);
+        hi = max(hi, pix);
+    }
+    // Pixel x covers centres x + 0.5; one pixel of slack for rounding.
+    let a = clamp(vec2<i32>(floor(lo - 0.5)) - 1, vec2(0), size - 1);
+    let b = clamp(vec2<i32>(ceil(hi - 0.5)) + 1, vec2(-1), size - 1);
+    if !(all(lo == lo) && all(hi == hi)) {
+        return all_px;
+    }
+    return vec4(a, b);
+}
+
+// Entry index of a thread of a 2D dispatch of 64-thread workgroups.
+fn entry_index(wg: vec3<u32>, nwg: vec3<u32>, li: u32) -> u32 {
+    return (wg.y * nwg.x + wg.x) * 64u + li;
+}
+
+// Splats entry `e` (pass 0: depths; pass 1: entries at the winning depth).
+fn splat(e: u32, pass_kind: u32) {
+    if e >= min(billboard_draw[1], arrayLength(&ssbvb)) {
+        return;
+    }
+    let slot = ssbvb[e];
+    let q = billboard_quad(slot);
+    if !q.valid {
+        return;
+    }
+    let b = pixel_bounds(q);
+    let width = u32(frame.screen.x);
+    for (var y = b.y; y <= b.w; y++) {
+        for (var x = b.x; x <= b.z; x++) {
+            let f = fragment_at(slot, q, vec2<f32>(f32(x), f32(y)) + 0.5);
+            if !f.covered {
+                continue;
+            }
+            let p = u32(y) * width + u32(x);
+            let bits = bitcast<u32>(clamp(f.depth, 0.0, 1.0));
+            if pass_kind == 0u {
+                atomicMax(&splat_depth_bits[p], bits);
+            } else if atomicLoad(&splat_depth_bits[p]) == bits {
+                atomicMax(&splat_entries[p], ~e);
+            }
+        }
+    }
+}
+
+@compute @workgroup_size(64)
+fn splat_depth(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) li: u32,
+) {
+    splat(entry_index(wg, nwg, li), 0u);
+}
+
+@compute @workgroup_size(64)
+fn splat_entry(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) li: u32,
+) {
+    splat(entry_index(wg, nwg, li), 1u);
+}
+
+struct GBufferDepth {
+    @location(0) albedo: vec4<f32>,
+    @location(1) normal: vec4<f32>,
+    @location(2) position: vec4<f32>,
+    @builtin(frag_depth) depth: f32,
+}
+
+@fragment
+fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
+    let pix = vec2<u32>(frag.xy);
+    let p = pix.y * u32(frame.screen.x) + pix.x;
+    let inverted = atomicLoad(&splat_entries[p]);
+    if inverted == 0u {
+        discard;
+    }
+    let e = ~inverted;
+    let slot = ssbvb[e];
+    let f = fragment_at(slot, billboard_quad(slot), frag.xy);
+    if !f.covered {
+        discard;
+    }
+    var out: GBufferDepth;
+    out.albedo = f.albedo;
+    out.normal = f.normal;
+    out.position = f.position;
+    out.depth = bitcast<f32>(atomicLoad(&splat_depth_bits[p]));
+    return out;
+}
