@@ -84,7 +84,8 @@ struct LodInfo {
     page_offset: u32,
     // First word of this LOD's coarse bits in `coarse`.
     coarse_offset: u32,
-    _pad: u32,
+    // The scene object this LOD belongs to.
+    object: u32,
 }
 
 // A point-cloud voxel as packed by ssbvb-voxel (asset.rs, `PackedVoxel`): 16 bytes.

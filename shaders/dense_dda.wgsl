@@ -20,18 +20,23 @@
 // (xyz) and linear view depth (w); frag_depth the reversed-Z depth of the hit point;
 // stencil = STENCIL_VOXEL (set by the pass). No hit: discard.
 //
-// Limit: one dense texture is bound, so every visible instance must use the same object
-// and level (the pass checks it).
+// The dense grids of every visible (object, level) pair are stacked along z in one atlas;
+// `dense_slices[lod]` is where the instance's LOD starts (0xffffffff: not there).
 
 override MAX_STEPS: u32 = 4096u;
 
 @group(1) @binding(0) var dense: texture_3d<u32>;
+@group(1) @binding(1) var<storage, read> dense_slices: array<u32>;
 
 //#include "ray_cast.inc.wgsl"
 
 // Cell-by-cell DDA of one instance; only hits nearer than `t_best` count.
 fn trace(inst: Instance, dir_world: vec3<f32>, t_best: f32) -> Hit {
     var out = Hit(false, t_best, 0u, 0u);
+    let z0 = dense_slices[inst.lod];
+    if z0 == 0xffffffffu {
+        return out;
+    }
     let o = (inst.world_to_object * vec4(0.0, 0.0, 0.0, 1.0)).xyz;
     let d = (inst.world_to_object * vec4(dir_world, 0.0)).xyz;
     let level = inst.level;
@@ -98,7 +103,7 @@ fn trace(inst: Instance, dir_world: vec3<f32>, t_best: f32) -> Hit {
             return out;
         }
         let orig = select(cell, vec3(n - 1) - cell, mirrored);
-        let v = textureLoad(dense, vec3<u32>(orig), 0).x;
+        let v = textureLoad(dense, vec3<u32>(orig) + vec3(0u, 0u, z0), 0).x;
         if v != 0u {
             out.hit = true;
             out.t = t;

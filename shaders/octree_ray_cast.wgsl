@@ -6,8 +6,10 @@
 //
 // Octree layout (ssbvb_voxel::svo::Svo): nodes level by level, node i of level l being
 // entry i of LOD l's point cloud; `child_mask` bit c = x | y << 1 | z << 2 set when child c
-// exists, existing children stored from `first_child` in increasing c. `svo_level_offsets`
-// holds the first node of every level, so a node's voxel id is `node - offset[level]`.
+// exists, existing children stored from `first_child` in increasing c. Every object's
+// octree is in `svo_nodes` (its child indices shifted by where it starts);
+// `svo_level_offsets[object * SVO_STRIDE + l]` is the first node of its level l (then one
+// past its last level), so a node's voxel id is `node - offset[level]`.
 //
 // As in dense_dda.wgsl and the CPU reference (ssbvb_voxel::reference::dda) the ray is moved
 // into object space with `world_to_object` without renormalizing (t stays the world
@@ -27,12 +29,13 @@
 // linear view depth (w); frag_depth the reversed-Z depth; stencil = STENCIL_VOXEL (set by
 // the pass). No hit: discard.
 //
-// Limit: one octree is bound, so every visible instance must belong to the same object
-// (the pass checks it); levels up to 16 (the stack depth).
+// Limit: levels up to 16 (the stack depth).
 
 override MAX_STEPS: u32 = 4096u;
 
 const STACK_DEPTH: u32 = 16u;
+// Level offsets per object: levels 0..=16 and the end (octree_ray_cast.rs SVO_STRIDE).
+const SVO_STRIDE: u32 = 18u;
 
 struct SvoNode {
     child_mask: u32,
@@ -48,11 +51,12 @@ struct SvoNode {
 fn trace(inst: Instance, dir_world: vec3<f32>, t_best: f32) -> Hit {
     var out = Hit(false, t_best, 0u, 0u);
     let target_level = inst.level;
-    if target_level > STACK_DEPTH || arrayLength(&svo_level_offsets) <= target_level + 1u {
+    let base = lods[inst.lod].object * SVO_STRIDE;
+    if target_level > STACK_DEPTH || arrayLength(&svo_level_offsets) < base + SVO_STRIDE {
         return out;
     }
     // An empty octree has no root.
-    if svo_level_offsets[1] == svo_level_offsets[0] {
+    if svo_level_offsets[base + 1u] == svo_level_offsets[base] {
         return out;
     }
     let o = (inst.world_to_object * vec4(0.0, 0.0, 0.0, 1.0)).xyz;
@@ -115,7 +119,7 @@ fn trace(inst: Instance, dir_world: vec3<f32>, t_best: f32) -> Hit {
     var stack_cell: array<vec3<i32>, STACK_DEPTH>;
     var stack_child: array<u32, STACK_DEPTH>;
     var depth = 0u;
-    var node = svo_level_offsets[0];
+    var node = svo_level_offsets[base];
     var cell = vec3(0);
     var child = 0u;
     // Starting child of the root.
@@ -143,7 +147,7 @@ fn trace(inst: Instance, dir_world: vec3<f32>, t_best: f32) -> Hit {
                 if depth + 1u == target_level {
                     out.hit = true;
                     out.t = t;
-                    out.id = child_node - svo_level_offsets[target_level];
+                    out.id = child_node - svo_level_offsets[base + target_level];
                     out.face = entered_face(face_axis, d);
                     return out;
                 }

@@ -8,20 +8,22 @@
 //! depth (`frag_depth`) and the entered face's normal. The shared smoothing and composite
 //! run after it unchanged.
 //!
-//! The dense texture of an (object, level) pair is built lazily, the first frame it is
-//! needed, from the asset's sparse lookup: each resident 16³ page is written with
-//! `queue.write_texture` into a zero-initialized texture, then cached for later frames.
+//! Every (object, level) pair a visible instance uses has its dense grid in one `R32Uint`
+//! 3D atlas texture (voxel id + 1, 0 = empty): the grids stacked along z, each at the
+//! x = y = 0 corner, written page by page from the asset's sparse lookup with
+//! `queue.write_texture`. An instance finds its grid's first slice in `dense_slices`
+//! (indexed by LOD-table entry; `u32::MAX`: not in the atlas). The atlas is rebuilt, with
+//! the union of the old and the new pairs, the first frame a new pair is visible (with the
+//! new ones only when the union would pass the device's 3D texture depth).
 //!
 //! # Limits
 //!
 //! - Levels above [`MAX_DENSE_LEVEL`] (8: 256³ cells × 4 bytes = 64 MiB) are refused with
-//!   [`PassError::TooLarge`].
-//! - One dense texture is bound per frame, so every visible instance must belong to the
-//!   same object and use the same LOD level (e.g. `LodPolicy::Fixed`); otherwise the frame
-//!   fails with [`PassError::BadScene`].
-//! - Cost is O(instances × cells along the ray) per pixel: no empty-space skipping.
+//!   [`PassError::TooLarge`], as is an atlas deeper than the device allows.
+//! - Cost per pixel: the instances whose boxes its ray enters before its best hit (the
+//!   instance hierarchy) × the cells along the ray: no empty-space skipping.
 
-use std::collections::HashMap;
+use std::collections::BTreeSet;
 
 use ssbvb_gpu::requirements::max_texture_dimension_3d;
 use ssbvb_gpu::{GpuContext, wgpu};
@@ -38,68 +40,133 @@ use crate::{PassError, PassNode};
 /// The finest level a dense texture is built for (256³ `u32` = 64 MiB).
 pub const MAX_DENSE_LEVEL: u32 = 8;
 
-/// What the dense-DDA pass binds itself: the dense texture of the visible level.
-pub const OWN: &[OwnBinding] = &[OwnBinding {
-    name: "dense",
-    kind: OwnKind::Texture3dUint,
-}];
+/// What the dense-DDA pass binds itself: the atlas of dense grids and each LOD's first
+/// slice in it.
+pub const OWN: &[OwnBinding] = &[
+    OwnBinding {
+        name: "dense",
+        kind: OwnKind::Texture3dUint,
+    },
+    OwnBinding {
+        name: "dense_slices",
+        kind: OwnKind::StorageRead,
+    },
+];
 
-/// The compiled dense-DDA pass and its cache of dense textures.
+/// The compiled dense-DDA pass and its atlas.
 pub struct DenseDda {
     pipeline: PulledPipeline,
-    /// `(object, level)` → dense texture view.
-    textures: HashMap<(usize, u32), wgpu::TextureView>,
+    atlas: Option<Atlas>,
+}
+
+/// The dense grids of some (object, level) pairs, stacked along z.
+struct Atlas {
+    pairs: BTreeSet<GridKey>,
+    bind_group: wgpu::BindGroup,
+}
+
+/// An (object, level) pair: one dense grid of the atlas.
+pub type GridKey = (usize, u32);
+
+/// Where each pair's grid starts along z (pairs in order), the atlas's width (the largest
+/// grid's edge) and depth (the sum of the edges).
+pub fn atlas_layout(pairs: &BTreeSet<GridKey>) -> (Vec<(GridKey, u32)>, u32, u32) {
+    let mut z = 0u32;
+    let mut width = 1u32;
+    let mut out = Vec::with_capacity(pairs.len());
+    for &(object, level) in pairs {
+        let n = 1u32 << level;
+        out.push(((object, level), z));
+        z += n;
+        width = width.max(n);
+    }
+    (out, width, z.max(1))
 }
 
 impl DenseDda {
-    /// The (object, level) every visible instance uses, or `None` when nothing is visible.
-    fn chosen(scene: &GpuScene) -> Result<Option<(usize, u32)>, PassError> {
-        let Some(first) = scene.visible.first() else {
-            return Ok(None);
-        };
-        let key = (first.object, first.level);
-        if let Some(other) = scene.visible.iter().find(|v| (v.object, v.level) != key) {
-            return Err(PassError::BadScene(format!(
-                "DenseDda binds one dense texture per frame: every visible instance must use \
-                 the same object and level, but object {} level {} and object {} level {} are \
-                 both visible (use one object and a fixed LOD)",
-                key.0, key.1, other.object, other.level
-            )));
+    /// The (object, level) pairs of the visible instances; levels above
+    /// [`MAX_DENSE_LEVEL`] are refused.
+    fn needed(scene: &GpuScene) -> Result<BTreeSet<GridKey>, PassError> {
+        let mut pairs = BTreeSet::new();
+        for v in &scene.visible {
+            if v.level > MAX_DENSE_LEVEL {
+                return Err(PassError::TooLarge(format!(
+                    "DenseDda: object {} at level {} needs a dense {n}³ texture ({} MiB); the \
+                     dense baseline supports levels up to {MAX_DENSE_LEVEL} (256³, 64 MiB)",
+                    v.object,
+                    v.level,
+                    ((1u64 << (3 * v.level)) * 4) >> 20,
+                    n = 1u64 << v.level,
+                )));
+            }
+            pairs.insert((v.object, v.level));
         }
-        if key.1 > MAX_DENSE_LEVEL {
+        Ok(pairs)
+    }
+
+    /// Builds the atlas of `pairs` and its bind group.
+    fn build(&self, rec: &Recorder<'_>, pairs: BTreeSet<GridKey>) -> Result<Atlas, PassError> {
+        let ctx = rec.gpu;
+        let scene = rec.scene;
+        let (layout, width, depth) = atlas_layout(&pairs);
+        let max = ctx.device.limits().max_texture_dimension_3d;
+        if depth > max || width > max {
             return Err(PassError::TooLarge(format!(
-                "DenseDda: object {} at level {} needs a dense {n}³ texture ({} MiB); the \
-                 dense baseline supports levels up to {MAX_DENSE_LEVEL} (256³, 64 MiB)",
-                key.0,
-                key.1,
-                ((1u64 << (3 * key.1)) * 4) >> 20,
-                n = 1u64 << key.1,
+                "DenseDda: the visible levels need a {width}×{width}×{depth} atlas; the device \
+                 allows 3D textures up to {max}: use fewer levels (a fixed LOD)"
             )));
         }
-        Ok(Some(key))
+        let label = "dense_dda atlas";
+        let texture = ctx.validated(label, |d| {
+            d.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width,
+                    height: width,
+                    depth_or_array_layers: depth,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D3,
+                format: wgpu::TextureFormat::R32Uint,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            })
+        })?;
+        let lod_count = scene.lod_bounds.len().max(1);
+        let mut slices = vec![u32::MAX; lod_count];
+        for ((object, level), z) in layout {
+            let lod = &scene.scene.objects[object].asset.lods[level as usize];
+            write_grid(ctx, &texture, z, &lod.lookup);
+            slices[scene.lod_base[object] as usize + level as usize] = z;
+        }
+        let view = texture.create_view(&Default::default());
+        let bind_group = ctx.validated(label, |d| {
+            let slices = wgpu::util::DeviceExt::create_buffer_init(
+                d,
+                &wgpu::util::BufferInitDescriptor {
+                    label: Some("dense_dda slices"),
+                    contents: bytemuck::cast_slice(&slices),
+                    usage: wgpu::BufferUsages::STORAGE,
+                },
+            );
+            self.pipeline.bindings.own_bind_group(
+                d,
+                "dense_dda",
+                &[
+                    ("dense", wgpu::BindingResource::TextureView(&view)),
+                    ("dense_slices", slices.as_entire_binding()),
+                ],
+            )
+        })??;
+        Ok(Atlas { pairs, bind_group })
     }
 }
 
-/// A dense `R32Uint` texture of a lookup (voxel id + 1, 0 empty), written page by page.
-fn dense_texture(ctx: &GpuContext, lookup: &SparseLookup) -> Result<wgpu::TextureView, PassError> {
+/// Writes a lookup's dense grid (voxel id + 1, 0 empty) into the atlas from slice `z0`,
+/// page by page (empty pages stay zero).
+fn write_grid(ctx: &GpuContext, texture: &wgpu::Texture, z0: u32, lookup: &SparseLookup) {
     let n = 1u32 << lookup.level;
-    let label = format!("dense_dda texture level {}", lookup.level);
-    let texture = ctx.validated(&label, |d| {
-        d.create_texture(&wgpu::TextureDescriptor {
-            label: Some(&label),
-            size: wgpu::Extent3d {
-                width: n,
-                height: n,
-                depth_or_array_layers: n,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D3,
-            format: wgpu::TextureFormat::R32Uint,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        })
-    })?;
     // A page's extent (levels below 4: the grid is smaller than its single page).
     let e = n.min(PAGE_SIZE);
     let ppa = lookup.pages_per_axis;
@@ -121,12 +188,12 @@ fn dense_texture(ctx: &GpuContext, lookup: &SparseLookup) -> Result<wgpu::Textur
                 }
                 ctx.queue.write_texture(
                     wgpu::TexelCopyTextureInfo {
-                        texture: &texture,
+                        texture,
                         mip_level: 0,
                         origin: wgpu::Origin3d {
                             x: px * PAGE_SIZE,
                             y: py * PAGE_SIZE,
-                            z: pz * PAGE_SIZE,
+                            z: z0 + pz * PAGE_SIZE,
                         },
                         aspect: wgpu::TextureAspect::All,
                     },
@@ -145,7 +212,6 @@ fn dense_texture(ctx: &GpuContext, lookup: &SparseLookup) -> Result<wgpu::Textur
             }
         }
     }
-    Ok(texture.create_view(&Default::default()))
 }
 
 impl PassImpl for DenseDda {
@@ -154,7 +220,7 @@ impl PassImpl for DenseDda {
     const OWN: &'static [OwnBinding] = OWN;
     const NEEDS: KindNeeds = KindNeeds {
         limit: Some(max_texture_dimension_3d(1 << MAX_DENSE_LEVEL)),
-        ..KindNeeds::NONE
+        ..KindNeeds::new(wgpu::DownlevelFlags::empty(), 1)
     };
 
     /// Compiles the pipeline for the formats bound to `pass`; `max_steps` becomes the WGSL
@@ -163,7 +229,7 @@ impl PassImpl for DenseDda {
         let max_steps = params.max_steps;
         Ok(Self {
             pipeline: PulledPipeline::new::<Self>(init, &[("MAX_STEPS", f64::from(max_steps))])?,
-            textures: HashMap::new(),
+            atlas: None,
         })
     }
 }
@@ -174,26 +240,31 @@ impl PassNode for DenseDda {
         encoder: &mut wgpu::CommandEncoder,
         rec: &mut Recorder<'_>,
     ) -> Result<(), PassError> {
-        let chosen = Self::chosen(rec.scene)?;
-        let bind_group = match chosen {
-            Some((object, level)) => {
-                let view = match self.textures.entry((object, level)) {
-                    std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
-                    std::collections::hash_map::Entry::Vacant(e) => {
-                        let lod = &rec.scene.scene.objects[object].asset.lods[level as usize];
-                        e.insert(dense_texture(rec.gpu, &lod.lookup)?)
-                    }
-                };
-                Some(self.pipeline.bindings.own_bind_group(
-                    &rec.gpu.device,
-                    "dense_dda",
-                    &[("dense", wgpu::BindingResource::TextureView(view))],
-                )?)
+        let needed = Self::needed(rec.scene)?;
+        let missing = self
+            .atlas
+            .as_ref()
+            .is_none_or(|a| !needed.is_subset(&a.pairs));
+        if missing && !needed.is_empty() {
+            let mut union = needed.clone();
+            if let Some(a) = &self.atlas {
+                union.extend(a.pairs.iter().copied());
             }
-            None => None,
-        };
-        self.pipeline
-            .record_fullscreen(encoder, rec, bind_group.as_ref());
+            let max = rec.gpu.device.limits().max_texture_dimension_3d;
+            // Keep what was built unless the atlas would grow past the device's depth.
+            let pairs = if atlas_layout(&union).2 <= max {
+                union
+            } else {
+                needed.clone()
+            };
+            self.atlas = Some(self.build(rec, pairs)?);
+        }
+        let bind_group = self
+            .atlas
+            .as_ref()
+            .filter(|_| !needed.is_empty())
+            .map(|a| &a.bind_group);
+        self.pipeline.record_fullscreen(encoder, rec, bind_group);
         Ok(())
     }
 }
@@ -207,5 +278,15 @@ mod tests {
         assert!(src.contains("override MAX_STEPS: u32"));
         assert!(src.contains("const STENCIL_VOXEL: u32 = 1u;"));
         assert_eq!(crate::gbuffer::STENCIL_VOXEL, 1);
+    }
+
+    #[test]
+    fn atlas_stacks_the_grids_along_z() {
+        let pairs: std::collections::BTreeSet<(usize, u32)> =
+            [(1, 3), (0, 5), (0, 2)].into_iter().collect();
+        let (layout, width, depth) = super::atlas_layout(&pairs);
+        assert_eq!(layout, vec![((0, 2), 0), ((0, 5), 4), ((1, 3), 36)]);
+        assert_eq!((width, depth), (32, 44));
+        assert_eq!(super::atlas_layout(&Default::default()), (vec![], 1, 1));
     }
 }

@@ -100,8 +100,8 @@ pub struct LodInfo {
     pub page_offset: u32,
     /// First word of coarse bits.
     pub coarse_offset: u32,
-    /// Padding.
-    pub pad: u32,
+    /// The scene object this LOD belongs to (which octree the octree baseline reads).
+    pub object: u32,
 }
 
 /// Where a proxy mesh lives in the shared proxy buffers.
@@ -306,7 +306,7 @@ impl GpuScene {
                     page_table_offset: checked_u32(page_tables.len(), "page table size")?,
                     page_offset: checked_u32(pages.len() / PAGE_CELLS, "page count")?,
                     coarse_offset: checked_u32(coarse.len(), "coarse size")?,
-                    pad: 0,
+                    object: checked_u32(lod_base.len() - 1, "object count")?,
                 });
                 lod_bounds.push(voxel_bounds(lod));
                 voxels.extend_from_slice(&lod.point_cloud.voxels);

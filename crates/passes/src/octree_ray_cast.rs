@@ -10,22 +10,21 @@
 //! exact depth (`frag_depth`) and the entered face's normal. The shared smoothing and
 //! composite run after it unchanged.
 //!
-//! The octree of an object is built lazily with [`Svo::from_asset`], the first frame the
-//! object is visible, uploaded as two storage buffers (`svo_nodes`: `SvoNode`s;
-//! `svo_level_offsets`: first node of every level) and cached with its bind group for
-//! later frames. Node `i` of level `l` is voxel `i` of LOD `l`, so the hit node's colour is
-//! read from the shared point cloud of the instance's LOD.
+//! The octrees of every object of the scene are built with [`Svo::from_asset`] the first
+//! frame, concatenated into two storage buffers (`svo_nodes`: `SvoNode`s, each object's
+//! child indices shifted by where it starts; `svo_level_offsets`: per object
+//! [`SVO_STRIDE`] entries, the first node of each level and then the end) and bound for
+//! every later frame; an instance finds its object's octree through its LOD's
+//! `LodInfo::object`. Node `i` of level `l` is voxel `i` of LOD `l`, so the hit node's
+//! colour is read from the shared point cloud of the instance's LOD.
 //!
 //! # Limits
 //!
-//! - One octree is bound per frame, so every visible instance must belong to the same
-//!   object (instances may use different levels); otherwise the frame fails with
-//!   [`PassError::BadScene`].
 //! - Levels above [`MAX_OCTREE_LEVEL`] (16, the shader's stack depth) and octrees larger
-//!   than the device's storage-binding limit are refused with [`PassError::TooLarge`].
-//! - Cost is O(instances × nodes visited along the ray) per pixel, bounded by `max_steps`.
-
-use std::collections::HashMap;
+//!   than the device's storage-binding limit together are refused with
+//!   [`PassError::TooLarge`].
+//! - Cost per pixel: the instances whose boxes its ray enters before its best hit (the
+//!   instance hierarchy) × the nodes visited along the ray, bounded by `max_steps`.
 
 use ssbvb_gpu::wgpu::util::DeviceExt;
 use ssbvb_gpu::{GpuContext, wgpu};
@@ -43,11 +42,16 @@ use crate::{PassError, PassNode};
 /// The finest level the traversal supports (the WGSL stack depth).
 pub const MAX_OCTREE_LEVEL: u32 = 16;
 
-/// The compiled octree pass and its cache of uploaded octrees.
+/// Entries of `svo_level_offsets` per object: levels 0..=16 and the end (`SVO_STRIDE` in
+/// the WGSL).
+pub const SVO_STRIDE: usize = MAX_OCTREE_LEVEL as usize + 2;
+
+/// The compiled octree pass and the uploaded octrees of the scene.
 pub struct OctreeRayCast {
     pipeline: PulledPipeline,
-    /// Object → bind group of its octree buffers (which it keeps alive).
-    octrees: HashMap<usize, wgpu::BindGroup>,
+    /// The bind group of every object's octree (which keeps its buffers alive), made the
+    /// first frame.
+    octrees: Option<wgpu::BindGroup>,
 }
 
 /// What the octree pass binds itself: the uploaded octree of the visible object.
@@ -63,51 +67,31 @@ pub const OWN: &[OwnBinding] = &[
 ];
 
 impl OctreeRayCast {
-    /// The object every visible instance belongs to, or `None` when nothing is visible.
-    fn chosen(scene: &GpuScene) -> Result<Option<usize>, PassError> {
-        let Some(first) = scene.visible.first() else {
-            return Ok(None);
-        };
-        let object = first.object;
-        if let Some(other) = scene.visible.iter().find(|v| v.object != object) {
-            return Err(PassError::BadScene(format!(
-                "OctreeRayCast binds one octree per frame: every visible instance must belong \
-                 to the same object, but objects {object} and {} are both visible (render one \
-                 object)",
-                other.object
-            )));
-        }
+    /// Refuses visible instances finer than the traversal's stack.
+    fn check_levels(scene: &GpuScene) -> Result<(), PassError> {
         if let Some(v) = scene.visible.iter().find(|v| v.level > MAX_OCTREE_LEVEL) {
             return Err(PassError::TooLarge(format!(
-                "OctreeRayCast: object {object} at level {}; the octree traversal supports \
-                 levels up to {MAX_OCTREE_LEVEL}",
-                v.level
+                "OctreeRayCast: object {} at level {}; the octree traversal supports levels \
+                 up to {MAX_OCTREE_LEVEL}",
+                v.object, v.level
             )));
         }
-        Ok(Some(object))
+        Ok(())
     }
 
-    /// Builds and uploads the octree of `asset`.
-    fn upload(&self, ctx: &GpuContext, asset: &VoxelAsset) -> Result<wgpu::BindGroup, PassError> {
-        let svo = Svo::from_asset(asset)
-            .map_err(|e| PassError::BadScene(format!("OctreeRayCast: {e}")))?;
+    /// Builds every object's octree and uploads them together.
+    fn upload(&self, ctx: &GpuContext, assets: &[&VoxelAsset]) -> Result<wgpu::BindGroup, PassError> {
+        let (nodes, offsets) = concatenated_octrees(assets)?;
         let limit = ctx.device.limits().max_storage_buffer_binding_size;
-        if svo.bytes() as u64 > limit {
+        let bytes = (nodes.len() * std::mem::size_of::<SvoNode>()) as u64;
+        if bytes > limit {
             return Err(PassError::TooLarge(format!(
-                "OctreeRayCast: the octree takes {} MiB, above the device's storage binding \
+                "OctreeRayCast: the octrees take {} MiB, above the device's storage binding \
                  limit of {} MiB",
-                svo.bytes() >> 20,
+                bytes >> 20,
                 limit >> 20
             )));
         }
-        let mut nodes = svo.nodes;
-        if nodes.is_empty() {
-            nodes.push(SvoNode::default());
-        }
-        // Empty bindings are invalid: at least 4 entries, padded with the node count.
-        let mut offsets = svo.level_offsets;
-        let total = offsets.last().copied().unwrap_or(0);
-        offsets.resize(offsets.len().max(4), total);
         let label = "octree_ray_cast octree";
         let bind_group = ctx.validated(label, |d| {
             let node_buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -133,6 +117,42 @@ impl OctreeRayCast {
     }
 }
 
+/// Every asset's octree in one node array (child indices shifted by where each starts)
+/// and the level offsets, [`SVO_STRIDE`] per asset (levels past an asset's last repeat
+/// its end). At least one node.
+pub fn concatenated_octrees(assets: &[&VoxelAsset]) -> Result<(Vec<SvoNode>, Vec<u32>), PassError> {
+    let mut nodes: Vec<SvoNode> = Vec::new();
+    let mut offsets = Vec::with_capacity(assets.len() * SVO_STRIDE);
+    for asset in assets {
+        let svo = Svo::from_asset(asset)
+            .map_err(|e| PassError::BadScene(format!("OctreeRayCast: {e}")))?;
+        if svo.level_offsets.len() > SVO_STRIDE {
+            return Err(PassError::TooLarge(format!(
+                "OctreeRayCast: an octree of {} levels; the traversal supports levels up to \
+                 {MAX_OCTREE_LEVEL}",
+                svo.level_offsets.len() - 1
+            )));
+        }
+        let base = u32::try_from(nodes.len())
+            .map_err(|_| PassError::TooLarge("OctreeRayCast: over 2^32 octree nodes".into()))?;
+        nodes.extend(svo.nodes.iter().map(|n| SvoNode {
+            child_mask: n.child_mask,
+            first_child: if n.child_mask == 0 { 0 } else { n.first_child + base },
+        }));
+        let end = base + svo.level_offsets.last().copied().unwrap_or(0);
+        let mut own: Vec<u32> = svo.level_offsets.iter().map(|o| o + base).collect();
+        own.resize(SVO_STRIDE, end);
+        offsets.extend(own);
+    }
+    if nodes.is_empty() {
+        nodes.push(SvoNode::default());
+    }
+    if offsets.is_empty() {
+        offsets.resize(SVO_STRIDE, 0);
+    }
+    Ok((nodes, offsets))
+}
+
 impl PassImpl for OctreeRayCast {
     type Params = OctreeRayCastParams;
     const SHADER: &'static str = "octree_ray_cast.wgsl";
@@ -145,7 +165,7 @@ impl PassImpl for OctreeRayCast {
         let max_steps = params.max_steps;
         Ok(Self {
             pipeline: PulledPipeline::new::<Self>(init, &[("MAX_STEPS", f64::from(max_steps))])?,
-            octrees: HashMap::new(),
+            octrees: None,
         })
     }
 }
@@ -156,14 +176,13 @@ impl PassNode for OctreeRayCast {
         encoder: &mut wgpu::CommandEncoder,
         rec: &mut Recorder<'_>,
     ) -> Result<(), PassError> {
-        let chosen = Self::chosen(rec.scene)?;
-        if let Some(object) = chosen {
-            if !self.octrees.contains_key(&object) {
-                let bg = self.upload(rec.gpu, &rec.scene.scene.objects[object].asset)?;
-                self.octrees.insert(object, bg);
-            }
+        Self::check_levels(rec.scene)?;
+        if self.octrees.is_none() && !rec.scene.visible.is_empty() {
+            let assets: Vec<&VoxelAsset> =
+                rec.scene.scene.objects.iter().map(|o| &*o.asset).collect();
+            self.octrees = Some(self.upload(rec.gpu, &assets)?);
         }
-        let bind_group = chosen.and_then(|o| self.octrees.get(&o));
+        let bind_group = self.octrees.as_ref().filter(|_| !rec.scene.visible.is_empty());
         self.pipeline.record_fullscreen(encoder, rec, bind_group);
         Ok(())
     }
@@ -177,6 +196,8 @@ mod tests {
         let src = crate::shaders::source("octree_ray_cast.wgsl").unwrap();
         assert!(src.contains("override MAX_STEPS: u32"));
         assert!(src.contains("const STACK_DEPTH: u32 = 16u;"));
+        assert!(src.contains("const SVO_STRIDE: u32 = 18u;"));
         assert_eq!(super::MAX_OCTREE_LEVEL, 16);
+        assert_eq!(super::SVO_STRIDE, 18);
     }
 }

@@ -94,7 +94,7 @@ pub fn shared_structs() -> Vec<StructLayout> {
                 page_table_offset,
                 page_offset,
                 coarse_offset,
-                pad
+                object
             }
         ),
         layout!(

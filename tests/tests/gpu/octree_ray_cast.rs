@@ -3,10 +3,9 @@
 //! voxel as the reference's exact traversal, so coverage IoU must be ≥ 0.99 (f32 vs f64
 //! ties on voxel edges) and the median depth error ≤ 0.01 voxel, with no NaN in the
 //! G-buffer — at the asset's finest level and at a coarser LOD (inner octree nodes).
-//! Scenes with two visible objects are refused with `PassError::BadScene`.
+//! Several objects: `ray_casters.rs`.
 
-use glam::{DAffine3, DVec3};
-use ssbvb_passes::{GpuScene, LodPolicy, PassError, Profiling, Renderer, Scene, VoxelObject};
+use glam::DVec3;
 use ssbvb_voxel::accuracy;
 use ssbvb_voxel::camera::Camera;
 
@@ -75,32 +74,4 @@ fn octree_ray_cast_matches_the_reference() {
 fn octree_ray_cast_matches_the_reference_at_a_coarser_lod() {
     // The level-6 bunny rendered at LOD 4: the hits are inner nodes of the octree.
     check("bunny.obj", 6, 4);
-}
-
-#[test]
-fn octree_ray_cast_refuses_two_visible_objects() {
-    let asset = ssbvb_tests::model_asset("bunny.obj", 6);
-    let object = |x: f64| VoxelObject {
-        asset: asset.clone(),
-        instances: vec![DAffine3::from_translation(DVec3::new(x, 0.0, 0.0))],
-        lod: LodPolicy::Fixed(6),
-    };
-    let scene = Scene {
-        objects: vec![object(-1.2), object(1.2)],
-        ..Default::default()
-    };
-    let c = ssbvb_tests::ctx();
-    let resolved = ssbvb_graph::resolve_str(OCTREE, "octree_ray_cast").unwrap();
-    let mut gpu_scene = GpuScene::new(c, scene).unwrap();
-    let mut renderer = Renderer::new(c, &gpu_scene, resolved, SIZE).unwrap();
-    let cam = Camera::new(DVec3::new(0.0, 0.5, 6.0), DVec3::ZERO);
-    let err = renderer
-        .render(c, &mut gpu_scene, &cam, Profiling::Off)
-        .expect_err("two visible objects must be refused");
-    let msg = err.to_string();
-    assert!(matches!(err, PassError::BadScene(_)), "{msg}");
-    assert!(msg.contains("same object"), "{msg}");
-    c.wait_idle().unwrap();
-    let errs = c.take_uncaptured_errors();
-    assert!(errs.is_empty(), "wgpu errors: {errs:#?}");
 }
