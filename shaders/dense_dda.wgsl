@@ -28,6 +28,9 @@ override MAX_STEPS: u32 = 4096u;
 @group(1) @binding(0) var dense: texture_3d<u32>;
 @group(1) @binding(1) var<storage, read> dense_slices: array<u32>;
 
+// Pass-private: the frame's ray counters (ray_cast.inc.wgsl).
+@group(1) @binding(2) var<storage, read_write> ray_counters: array<atomic<u32>>;
+
 //#include "ray_cast.inc.wgsl"
 
 // Cell-by-cell DDA of one instance; only hits nearer than `t_best` count.
@@ -99,6 +102,7 @@ fn trace(inst: Instance, dir_world: vec3<f32>, t_best: f32) -> Hit {
         face_axis = select(select(2u, 1u, ad.y >= ad.z), 0u, ad.x >= ad.y && ad.x >= ad.z);
     }
     for (var step = 0u; step < MAX_STEPS; step++) {
+        cast_steps += 1u;
         if t >= t_best {
             return out;
         }

@@ -45,6 +45,9 @@ struct SvoNode {
 @group(1) @binding(0) var<storage, read> svo_nodes: array<SvoNode>;
 @group(1) @binding(1) var<storage, read> svo_level_offsets: array<u32>;
 
+// Pass-private: the frame's ray counters (ray_cast.inc.wgsl).
+@group(1) @binding(2) var<storage, read_write> ray_counters: array<atomic<u32>>;
+
 //#include "ray_cast.inc.wgsl"
 
 // Octree descent of one instance; only hits nearer than `t_best` count.
@@ -134,6 +137,7 @@ fn trace(inst: Instance, dir_world: vec3<f32>, t_best: f32) -> Hit {
     }
     var check = true;
     for (var step = 0u; step < MAX_STEPS; step++) {
+        cast_steps += 1u;
         if t >= t_best {
             return out;
         }

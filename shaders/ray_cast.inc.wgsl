@@ -10,6 +10,14 @@
 //#include "fullscreen.inc.wgsl"
 //#include "instance_bvh.inc.wgsl"
 
+// Loop iterations of `trace` for this pixel (the includer's `trace` adds them: DDA cells,
+// or octree nodes visited), for the counters.
+var<private> cast_steps: u32;
+
+// Counters (ray_cast_counters.rs): per lane (pixel x + y mod 64, spreading the atomics)
+// the pixels that cast a ray and the steps they took.
+const COUNTER_LANES: u32 = 64u;
+
 struct GBufferDepth {
     @location(0) albedo: vec4<f32>,
     @location(1) normal: vec4<f32>,
@@ -64,7 +72,13 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     let dir = pixel_ray(frag.xy);
     best = Hit(false, 1e30, 0u, 0u);
     best_inst = 0u;
+    cast_steps = 0u;
     bvh_walk(dir, BIG, u32(frame.misc.w));
+    let lane = (u32(frag.x) + u32(frag.y)) % COUNTER_LANES;
+    if cast_steps > 0u {
+        atomicAdd(&ray_counters[2u * lane], 1u);
+        atomicAdd(&ray_counters[2u * lane + 1u], cast_steps);
+    }
     if !best.hit {
         discard;
     }

@@ -33,6 +33,15 @@ pub struct FrameCounters {
     /// `billboard_fragments` per pixel showing a voxel: the billboards' overdraw.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fragments_per_covered_pixel: Option<f64>,
+    /// Pixels whose ray a ray-casting baseline traced into at least one instance.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ray_cast_rays: Option<u64>,
+    /// Dense DDA: mean cells stepped per traced ray (over every instance it traced).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dda_steps_per_ray: Option<f64>,
+    /// Octree ray casting: mean nodes visited per traced ray.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub octree_nodes_per_ray: Option<f64>,
 }
 
 /// Bins of the steps-per-ray histogram (`steps_bin` in `ray_march_filter.wgsl`).

@@ -31,6 +31,8 @@ use ssbvb_graph::DenseDdaParams;
 use ssbvb_voxel::asset::{EMPTY_PAGE, PAGE_CELLS, PAGE_SIZE, SparseLookup};
 
 use crate::bindings::{OwnBinding, OwnKind};
+use crate::counters::FrameCounters;
+use crate::ray_cast_counters::RayCastCounters;
 use crate::frame::Recorder;
 use crate::gbuffer::PulledPipeline;
 use crate::gpu_scene::GpuScene;
@@ -51,12 +53,17 @@ pub const OWN: &[OwnBinding] = &[
         name: "dense_slices",
         kind: OwnKind::StorageRead,
     },
+    OwnBinding {
+        name: "ray_counters",
+        kind: OwnKind::StorageReadWrite,
+    },
 ];
 
 /// The compiled dense-DDA pass and its atlas.
 pub struct DenseDda {
     pipeline: PulledPipeline,
     atlas: Option<Atlas>,
+    counters: RayCastCounters,
 }
 
 /// The dense grids of some (object, level) pairs, stacked along z.
@@ -156,6 +163,7 @@ impl DenseDda {
                 &[
                     ("dense", wgpu::BindingResource::TextureView(&view)),
                     ("dense_slices", slices.as_entire_binding()),
+                    ("ray_counters", self.counters.binding()),
                 ],
             )
         })??;
@@ -220,7 +228,8 @@ impl PassImpl for DenseDda {
     const OWN: &'static [OwnBinding] = OWN;
     const NEEDS: KindNeeds = KindNeeds {
         limit: Some(max_texture_dimension_3d(1 << MAX_DENSE_LEVEL)),
-        ..KindNeeds::new(wgpu::DownlevelFlags::empty(), 1)
+        // The counters are written in the fragment shader.
+        ..KindNeeds::new(wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE, 2)
     };
 
     /// Compiles the pipeline for the formats bound to `pass`; `max_steps` becomes the WGSL
@@ -230,6 +239,7 @@ impl PassImpl for DenseDda {
         Ok(Self {
             pipeline: PulledPipeline::new::<Self>(init, &[("MAX_STEPS", f64::from(max_steps))])?,
             atlas: None,
+            counters: RayCastCounters::new(init.ctx),
         })
     }
 }
@@ -264,7 +274,15 @@ impl PassNode for DenseDda {
             .as_ref()
             .filter(|_| !needed.is_empty())
             .map(|a| &a.bind_group);
+        self.counters.clear(encoder);
         self.pipeline.record_fullscreen(encoder, rec, bind_group);
+        Ok(())
+    }
+
+    fn counters(&self, ctx: &GpuContext, out: &mut FrameCounters) -> Result<(), PassError> {
+        let (rays, steps) = self.counters.read(ctx)?;
+        out.ray_cast_rays = Some(rays);
+        out.dda_steps_per_ray = steps;
         Ok(())
     }
 }

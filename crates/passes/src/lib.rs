@@ -17,6 +17,7 @@ pub mod gbuffer;
 pub mod gpu_scene;
 pub mod measure;
 pub mod pipelines;
+pub mod ray_cast_counters;
 pub mod registry;
 pub mod scene;
 pub mod shaders;

@@ -33,6 +33,8 @@ use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::svo::{Svo, SvoNode};
 
 use crate::bindings::{OwnBinding, OwnKind};
+use crate::counters::FrameCounters;
+use crate::ray_cast_counters::RayCastCounters;
 use crate::frame::Recorder;
 use crate::gbuffer::PulledPipeline;
 use crate::gpu_scene::GpuScene;
@@ -52,6 +54,7 @@ pub struct OctreeRayCast {
     /// The bind group of every object's octree (which keeps its buffers alive), made the
     /// first frame.
     octrees: Option<wgpu::BindGroup>,
+    counters: RayCastCounters,
 }
 
 /// What the octree pass binds itself: the uploaded octree of the visible object.
@@ -63,6 +66,10 @@ pub const OWN: &[OwnBinding] = &[
     OwnBinding {
         name: "svo_level_offsets",
         kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "ray_counters",
+        kind: OwnKind::StorageReadWrite,
     },
 ];
 
@@ -110,6 +117,7 @@ impl OctreeRayCast {
                 &[
                     ("svo_nodes", node_buffer.as_entire_binding()),
                     ("svo_level_offsets", offset_buffer.as_entire_binding()),
+                    ("ray_counters", self.counters.binding()),
                 ],
             )
         })??;
@@ -157,7 +165,8 @@ impl PassImpl for OctreeRayCast {
     type Params = OctreeRayCastParams;
     const SHADER: &'static str = "octree_ray_cast.wgsl";
     const OWN: &'static [OwnBinding] = OWN;
-    const NEEDS: KindNeeds = KindNeeds::new(wgpu::DownlevelFlags::empty(), 2);
+    // The counters are written in the fragment shader.
+    const NEEDS: KindNeeds = KindNeeds::new(wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE, 3);
 
     /// Compiles the pipeline for the formats bound to `pass`; `max_steps` becomes the WGSL
     /// override `MAX_STEPS`.
@@ -166,6 +175,7 @@ impl PassImpl for OctreeRayCast {
         Ok(Self {
             pipeline: PulledPipeline::new::<Self>(init, &[("MAX_STEPS", f64::from(max_steps))])?,
             octrees: None,
+            counters: RayCastCounters::new(init.ctx),
         })
     }
 }
@@ -183,7 +193,15 @@ impl PassNode for OctreeRayCast {
             self.octrees = Some(self.upload(rec.gpu, &assets)?);
         }
         let bind_group = self.octrees.as_ref().filter(|_| !rec.scene.visible.is_empty());
+        self.counters.clear(encoder);
         self.pipeline.record_fullscreen(encoder, rec, bind_group);
+        Ok(())
+    }
+
+    fn counters(&self, ctx: &GpuContext, out: &mut FrameCounters) -> Result<(), PassError> {
+        let (rays, nodes) = self.counters.read(ctx)?;
+        out.ray_cast_rays = Some(rays);
+        out.octree_nodes_per_ray = nodes;
         Ok(())
     }
 }

@@ -168,6 +168,23 @@ fn ray_casters_and_cubes_draw_several_objects() {
         assert!(r.covered_reference > 1500, "{technique}: {r:?}");
         assert!(r.coverage_iou >= 0.99, "{technique}: {r:?}");
         assert!(r.depth_error_voxels.median <= 0.01, "{technique}: {r:?}");
+        // Counters: every covered pixel traced a ray; the octree descends at least to the
+        // instance's level per ray, the DDA steps at least a cell.
+        let c = f.renderer.counters(ssbvb_tests::ctx()).unwrap();
+        eprintln!("{technique} counters: {c:?}");
+        match technique {
+            "DenseDda" => {
+                assert!(c.ray_cast_rays.unwrap() >= r.covered_gpu as u64, "{c:?}");
+                assert!(c.dda_steps_per_ray.unwrap() >= 1.0, "{c:?}");
+                assert!(c.octree_nodes_per_ray.is_none(), "{c:?}");
+            }
+            "OctreeRayCast" => {
+                assert!(c.ray_cast_rays.unwrap() >= r.covered_gpu as u64, "{c:?}");
+                assert!(c.octree_nodes_per_ray.unwrap() >= 5.0, "{c:?}");
+                assert!(c.dda_steps_per_ray.is_none(), "{c:?}");
+            }
+            _ => assert!(c.ray_cast_rays.is_none(), "{c:?}"),
+        }
     }
     // Both objects cover a good part of the reference image (so an IoU of 0.99 needs both).
     for (lo, hi) in [(0, 2), (2, 4)] {

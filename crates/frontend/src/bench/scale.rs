@@ -366,7 +366,7 @@ fn opt(v: Option<f64>, digits: usize) -> String {
 /// The report as a Markdown table, with each technique's ratio to its one-bunny grid row.
 fn markdown(r: &ScaleReport) -> String {
     let mut s = format!(
-        "## Scale: bunny grid (finest level {}, Auto LOD), {}\n\n| technique | view | instances (visible) | levels | frame ms | filter µs/covered px | ×1 bunny | frame µs/covered px | covered px | steps/ray mean (p99) | boxes/ray | billboards | fragments/covered px | IoU |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "## Scale: bunny grid (finest level {}, Auto LOD), {}\n\n| technique | view | instances (visible) | levels | frame ms | filter µs/covered px | ×1 bunny | frame µs/covered px | covered px | steps/ray mean (p99)¹ | boxes/ray | billboards | fragments/covered px | IoU |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
         r.level, r.adapter
     );
     for x in &r.rows {
@@ -400,7 +400,12 @@ fn markdown(r: &ScaleReport) -> String {
             ratio,
             opt(x.frame_us_per_covered_px, 2),
             x.covered_pixels,
-            opt(c.march_steps_mean, 1),
+            opt(
+                c.march_steps_mean
+                    .or(c.dda_steps_per_ray)
+                    .or(c.octree_nodes_per_ray),
+                1
+            ),
             c.march_steps_p99.map_or(String::new(), |v| v.to_string()),
             opt(c.instance_boxes_per_ray, 1),
             c.billboards_drawn.map_or(String::new(), |v| v.to_string()),
@@ -408,6 +413,10 @@ fn markdown(r: &ScaleReport) -> String {
             x.coverage_iou
         ));
     }
+    s.push_str(
+        "\n¹ Filter: march steps per filter ray (p99); dense DDA: cells per traced ray; octree: \
+         nodes visited per traced ray.\n",
+    );
     for k in &r.skipped {
         s.push_str(&format!("\nSkipped: {k}\n"));
     }
@@ -416,13 +425,13 @@ fn markdown(r: &ScaleReport) -> String {
 
 fn csv(r: &ScaleReport) -> String {
     let mut s = String::from(
-        "technique,view,instances,visible_instances,lod_histogram,width,height,frame_ms_median,filter_ms,covered_pixels,filter_us_per_covered_px,frame_us_per_covered_px,coverage_iou,filter_rays,march_steps_mean,march_steps_p99,instance_boxes_per_ray,instances_marched_per_ray,billboards_drawn,billboard_fragments,fragments_per_covered_pixel\n",
+        "technique,view,instances,visible_instances,lod_histogram,width,height,frame_ms_median,filter_ms,covered_pixels,filter_us_per_covered_px,frame_us_per_covered_px,coverage_iou,filter_rays,march_steps_mean,march_steps_p99,instance_boxes_per_ray,instances_marched_per_ray,billboards_drawn,billboard_fragments,fragments_per_covered_pixel,ray_cast_rays,dda_steps_per_ray,octree_nodes_per_ray\n",
     );
     for x in &r.rows {
         let c = &x.counters;
         let u = |v: Option<u64>| v.map_or(String::new(), |v| v.to_string());
         s.push_str(&format!(
-            "{},{},{},{},{},{},{},{:.4},{},{},{},{},{:.6},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{:.4},{},{},{},{},{:.6},{},{},{},{},{},{},{},{},{},{},{}\n",
             x.technique,
             x.view,
             x.instances,
@@ -444,6 +453,9 @@ fn csv(r: &ScaleReport) -> String {
             u(c.billboards_drawn),
             u(c.billboard_fragments),
             opt(c.fragments_per_covered_pixel, 3),
+            u(c.ray_cast_rays),
+            opt(c.dda_steps_per_ray, 3),
+            opt(c.octree_nodes_per_ray, 3),
         ));
     }
     s
