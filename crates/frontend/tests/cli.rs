@@ -563,4 +563,8 @@ fn bench_scale_preset_writes_rows_per_view() {
     for f in ["scale.json", "scale.md"] {
         assert!(dir.path().join("scale").join(f).is_file(), "{f}");
     }
+    for png in ["scale_frame.png", "scale_filter.png"] {
+        let bytes = std::fs::read(dir.path().join("scale").join(png)).unwrap();
+        assert!(bytes.starts_with(b"\x89PNG"), "{png}");
+    }
 }

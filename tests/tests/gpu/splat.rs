@@ -35,7 +35,14 @@ fn the_splat_draws_the_rasterized_gbuffer() {
         DAffine3::IDENTITY,
         DAffine3::from_translation(DVec3::new(0.4, 0.1, -0.3)),
     ];
-    let views: [(&str, &Scene, Camera); 3] = [
+    // The issue's far narrow view: pixel slopes of ~1e-8 that a normalized f32 direction
+    // cannot resolve.
+    let far = Camera {
+        fov_y_deg: 0.00016,
+        far: f64::INFINITY,
+        ..Camera::new(DVec3::new(309426.0, 206284.0, 928279.0), DVec3::ZERO)
+    };
+    let views: [(&str, &Scene, Camera); 4] = [
         (
             "mid",
             &scene,
@@ -51,6 +58,7 @@ fn the_splat_draws_the_rasterized_gbuffer() {
             &two,
             Camera::new(DVec3::new(0.3, 0.5, 2.8), DVec3::new(0.2, 0.0, 0.0)),
         ),
+        ("far", &scene, far),
     ];
     for mode in ["Flat", "RayBox"] {
         let raster_src =
@@ -65,6 +73,12 @@ fn the_splat_draws_the_rasterized_gbuffer() {
             "the kind is in the file"
         );
         for (name, s, camera) in &views {
+            // RayBox intersects each pixel's f32 ray (a normalized direction) with the box: at
+            // 1e6 units both implementations lose much of the narrow view alike (5 % of its
+            // pixels differ); the default Flat mode does not, and is compared there.
+            if mode == "RayBox" && *name == "far" {
+                continue;
+            }
             let a = render(&raster_src, (*s).clone(), camera, size);
             let b = render(&splat_src, (*s).clone(), camera, size);
             let stencil = |f: &Frame| f.read_stencil("depth_stencil");
@@ -77,7 +91,21 @@ fn the_splat_draws_the_rasterized_gbuffer() {
                 "{mode} {name}: {voxels} voxel px; differing stencil {stencil_diff}, normal \
                  {normals}, albedo {albedo}"
             );
-            assert!(voxels > 500, "{mode} {name}: {voxels}");
+            assert!(
+                voxels > 500 || (mode, *name) == ("RayBox", "far"),
+                "{mode} {name}: {voxels}"
+            );
+            if *name == "far" {
+                // 1e6 units away the reversed-Z depths of neighbouring voxels' quads differ by
+                // less than an f32 ulp: which of two equally deep quads shows is arbitrary in
+                // both (measured: normals differ on 97 of 1453 pixels), and quad edges round
+                // either way on 7. Coverage must still agree closely.
+                assert!(
+                    stencil_diff * 100 <= voxels,
+                    "{mode} {name}: {stencil_diff} stencil px differ"
+                );
+                continue;
+            }
             // Pixel centres exactly on a quad edge may go either way (the rasterizer's
             // top-left rule against the splat's closed test), as may exact depth ties.
             assert!(
@@ -89,7 +117,10 @@ fn the_splat_draws_the_rasterized_gbuffer() {
             // The plane shows around the bunny in both (the splat's resolve is depth-tested
             // against it, and does not draw over it).
             let plane = |s: &[u8]| s.iter().filter(|&&v| v == 2).count();
-            assert!(plane(&sa) > 100 || *name == "touching", "{mode} {name}");
+            assert!(
+                plane(&sa) > 100 || matches!(*name, "touching" | "far"),
+                "{mode} {name}"
+            );
         }
     }
 }

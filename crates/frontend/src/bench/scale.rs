@@ -21,6 +21,7 @@ use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::reference;
 
 use super::BenchArgs;
+use super::plot::{PlotInfo, Series, plot};
 use super::sweep::{bundled_pipeline, with_kind_edit};
 use super::techniques::{TECHNIQUES, Technique};
 use crate::render_cmd::assets_dir;
@@ -215,12 +216,16 @@ pub(super) fn run(args: &BenchArgs) -> Result<()> {
             rows.push(row);
         }
     }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let plots = plots(&args.out, &rows)?;
     let report = ScaleReport {
         adapter: ctx.report().to_string(),
         adapter_is_software: ctx.report().is_software,
         level: LEVEL,
         rows,
         skipped,
+        plots,
     };
     write(&args.out, &report)?;
     if args.json {
@@ -240,6 +245,49 @@ struct ScaleReport {
     rows: Vec<ScaleRow>,
     /// Technique and view pairs not measured, and why.
     skipped: Vec<String>,
+    plots: Vec<PlotInfo>,
+}
+
+/// `scale_frame.png` (every technique) and `scale_filter.png` (the SSBVB variants):
+/// µs per covered pixel against log2 of the instance count, grid rows.
+fn plots(dir: &Path, rows: &[ScaleRow]) -> Result<Vec<PlotInfo>> {
+    let series = |value: fn(&ScaleRow) -> Option<f64>| -> Vec<Series> {
+        let mut names: Vec<&str> = rows.iter().map(|r| r.technique).collect();
+        names.dedup();
+        names
+            .into_iter()
+            .map(|t| Series {
+                name: t.to_string(),
+                points: rows
+                    .iter()
+                    .filter(|r| r.technique == t && r.view == "grid")
+                    .filter_map(|r| Some(((r.instances as f64).log2(), value(r)?)))
+                    .collect(),
+            })
+            .filter(|s| !s.points.is_empty())
+            .collect()
+    };
+    let mut out = Vec::new();
+    for (file, title, y, value) in [
+        (
+            "scale_frame.png",
+            "Frame cost per covered pixel vs instances",
+            "frame µs per covered pixel",
+            (|r: &ScaleRow| r.frame_us_per_covered_px) as fn(&ScaleRow) -> Option<f64>,
+        ),
+        (
+            "scale_filter.png",
+            "Ray-march filter cost per covered pixel vs instances",
+            "filter µs per covered pixel",
+            |r: &ScaleRow| r.filter_us_per_covered_px,
+        ),
+    ] {
+        let s = series(value);
+        if !s.is_empty() {
+            out.push(plot(dir, file, title, ("log2(instances)", y), &s)?);
+        }
+    }
+    Ok(out)
 }
 
 /// Whether `e` is a technique's refusal of the scene (too large, or a baseline's limits).
@@ -419,6 +467,9 @@ fn markdown(r: &ScaleReport) -> String {
     );
     for k in &r.skipped {
         s.push_str(&format!("\nSkipped: {k}\n"));
+    }
+    if !r.plots.is_empty() {
+        s.push_str(&super::plot::markdown(&r.plots));
     }
     s
 }
