@@ -567,4 +567,16 @@ fn bench_scale_preset_writes_rows_per_view() {
         let bytes = std::fs::read(dir.path().join("scale").join(png)).unwrap();
         assert!(bytes.starts_with(b"\x89PNG"), "{png}");
     }
+    // One series per technique in each plot's description.
+    let json: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("scale/scale.json")).unwrap(),
+    )
+    .unwrap();
+    let frame_plot = &json["plots"][0];
+    assert_eq!(frame_plot["file"], "scale_frame.png");
+    assert_eq!(
+        frame_plot["series"].as_array().unwrap().len(),
+        2,
+        "{frame_plot}"
+    );
 }

@@ -252,8 +252,13 @@ struct ScaleReport {
 /// µs per covered pixel against log2 of the instance count, grid rows.
 fn plots(dir: &Path, rows: &[ScaleRow]) -> Result<Vec<PlotInfo>> {
     let series = |value: fn(&ScaleRow) -> Option<f64>| -> Vec<Series> {
-        let mut names: Vec<&str> = rows.iter().map(|r| r.technique).collect();
-        names.dedup();
+        // Techniques in first-seen order, once each (rows interleave them).
+        let mut names: Vec<&str> = Vec::new();
+        for r in rows {
+            if !names.contains(&r.technique) {
+                names.push(r.technique);
+            }
+        }
         names
             .into_iter()
             .map(|t| Series {
