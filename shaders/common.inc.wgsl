@@ -188,6 +188,51 @@ fn pixel_ray(px: vec2<f32>) -> vec3<f32> {
     return normalize(frame.cam_forward.xyz + ndc.x * frame.cam_right.xyz + ndc.y * frame.cam_up.xyz);
 }
 
+// NDC position of a pixel coordinate (pixel centres at + 0.5).
+fn pixel_ndc(px: vec2<f32>) -> vec2<f32> {
+    return vec2(px.x * frame.screen.z * 2.0 - 1.0, 1.0 - px.y * frame.screen.w * 2.0);
+}
+
+// Object units beyond which a camera counts as far from an instance (object_ray).
+const FAR_OBJECT: f32 = 64.0;
+
+// A pixel's ray in an instance's object space: `o + t' d`, the world distance from the
+// camera being `t_base + t'` (`d` is not normalized). Near the instance the origin is the
+// camera. Far from it (|camera| > FAR_OBJECT object units), a camera-relative f32 ray
+// cannot resolve a narrow lens's pixels at the object, so the origin is the ray's point
+// at the depth of the instance's origin, 4 object units back (outside the [-1, 1]^3 box),
+// built from view-space differences of small numbers (the f64-composed `object_to_view`
+// and the pixel's slopes from NDC).
+struct ObjectRay {
+    o: vec3<f32>,
+    d: vec3<f32>,
+    t_base: f32,
+}
+
+fn object_ray(inst: Instance, px: vec2<f32>, dir: vec3<f32>) -> ObjectRay {
+    let co = inst.camera_object.xyz;
+    let d = (inst.world_to_object * vec4(dir, 0.0)).xyz;
+    let cv = inst.object_to_view[3].xyz;
+    if dot(co, co) < FAR_OBJECT * FAR_OBJECT || !(cv.z < 0.0) {
+        return ObjectRay(co, d, 0.0);
+    }
+    let s = pixel_ndc(px) * vec2(length(frame.cam_right.xyz), length(frame.cam_up.xyz));
+    let dv = normalize(vec3(s, -1.0));
+    // The ray's point at view depth cv.z, relative to the instance's origin (view space).
+    let depth = -cv.z;
+    let p_rel = vec3(s * depth - cv.xy, 0.0);
+    let view3 = mat3x3(frame.view[0].xyz, frame.view[1].xyz, frame.view[2].xyz);
+    let w2o = mat3x3(
+        inst.world_to_object[0].xyz,
+        inst.world_to_object[1].xyz,
+        inst.world_to_object[2].xyz,
+    );
+    let v2o = w2o * transpose(view3);
+    let d_obj = v2o * dv;
+    let back = 4.0 * inverseSqrt(dot(d_obj, d_obj));
+    return ObjectRay(v2o * p_rel - d_obj * back, d_obj, depth / -dv.z - back);
+}
+
 // World-space unit normal of an entered face (see VoxelSlot.face), through the instance's
 // inverse transpose.
 fn face_normal_world(inst: Instance, face: u32) -> vec3<f32> {

@@ -34,14 +34,12 @@ override MAX_STEPS: u32 = 4096u;
 //#include "ray_cast.inc.wgsl"
 
 // Cell-by-cell DDA of one instance; only hits nearer than `t_best` count.
-fn trace(inst: Instance, dir_world: vec3<f32>, t_best: f32) -> Hit {
+fn trace(inst: Instance, o: vec3<f32>, d: vec3<f32>, t_best: f32) -> Hit {
     var out = Hit(false, t_best, 0u, 0u);
     let z0 = dense_slices[inst.lod];
     if z0 == 0xffffffffu {
         return out;
     }
-    let o = (inst.world_to_object * vec4(0.0, 0.0, 0.0, 1.0)).xyz;
-    let d = (inst.world_to_object * vec4(dir_world, 0.0)).xyz;
     let level = inst.level;
     let n = i32(1u << level);
     let s = cell_size(level);

@@ -51,7 +51,7 @@ struct SvoNode {
 //#include "ray_cast.inc.wgsl"
 
 // Octree descent of one instance; only hits nearer than `t_best` count.
-fn trace(inst: Instance, dir_world: vec3<f32>, t_best: f32) -> Hit {
+fn trace(inst: Instance, o: vec3<f32>, d: vec3<f32>, t_best: f32) -> Hit {
     var out = Hit(false, t_best, 0u, 0u);
     let target_level = inst.level;
     let base = lods[inst.lod].object * SVO_STRIDE;
@@ -62,8 +62,6 @@ fn trace(inst: Instance, dir_world: vec3<f32>, t_best: f32) -> Hit {
     if svo_level_offsets[base + 1u] == svo_level_offsets[base] {
         return out;
     }
-    let o = (inst.world_to_object * vec4(0.0, 0.0, 0.0, 1.0)).xyz;
-    let d = (inst.world_to_object * vec4(dir_world, 0.0)).xyz;
     let n = i32(1u << target_level);
     let s_target = cell_size(target_level);
     // Mirrored frame: om, da >= 0 on moving axes.

@@ -2,8 +2,9 @@
 // G-buffer output with exact depth, the hit record, the fullscreen triangle, and the
 // per-plane crossing helpers that follow the CPU reference's conventions.
 // Needs common.inc.wgsl before it, and the including file must define
-// `fn trace(inst: Instance, dir_world: vec3<f32>, t_best: f32) -> Hit` (the technique;
-// hits at or beyond `t_best` do not count); `fs_main` below keeps the nearest hit over the
+// `fn trace(inst: Instance, o: vec3<f32>, d: vec3<f32>, t_best: f32) -> Hit` (the technique:
+// the object-space ray `o + t d` of common.inc.wgsl's `object_ray`; hits at or beyond
+// `t_best` do not count); `fs_main` below keeps the nearest hit over the
 // visible instances its ray meets (the instance hierarchy; exact ties to the lower index,
 // as the reference).
 
@@ -15,7 +16,7 @@
 var<private> cast_steps: u32;
 
 // Counters (ray_cast_counters.rs): per lane (pixel x + y mod 64, spreading the atomics)
-// the pixels that cast a ray and the steps they took.
+// the pixels that cast a ray and the steps they took (low and high words).
 const COUNTER_LANES: u32 = 64u;
 
 struct GBufferDepth {
@@ -50,16 +51,21 @@ fn entered_face(a: u32, d: vec3<f32>) -> u32 {
     return select(a + 3u, a, d[a] > 0.0);
 }
 
-// The pixel's best hit so far and its instance.
+// The pixel's best hit so far and its instance, and the pixel's centre.
+var<private> pixel_centre: vec2<f32>;
 var<private> best: Hit;
 var<private> best_inst: u32;
 
 // Traces visible instance `j` (called by the hierarchy walk): a hit nearer than the best,
 // or as near with a lower index, replaces it.
 fn bvh_visit(j: u32, dir: vec3<f32>) -> f32 {
-    // One ulp beyond the best, so that a hit at exactly its distance comes back.
-    let limit = select(bitcast<f32>(bitcast<u32>(best.t) + 1u), best.t, best.t >= 1e30);
-    let h = trace(instances[j], dir, limit);
+    // One ulp beyond the best, so that a hit at exactly its distance comes back (at least
+    // the smallest normal float: a denormal may flush to 0 and lose a tie at t = 0).
+    let up = max(bitcast<f32>(bitcast<u32>(best.t) + 1u), 1.18e-38);
+    let limit = select(up, best.t, best.t >= 1e30);
+    let ray = object_ray(instances[j], pixel_centre, dir);
+    var h = trace(instances[j], ray.o, ray.d, limit - ray.t_base);
+    h.t += ray.t_base;
     if h.hit && (!best.hit || h.t < best.t || (h.t == best.t && j < best_inst)) {
         best = h;
         best_inst = j;
@@ -70,14 +76,19 @@ fn bvh_visit(j: u32, dir: vec3<f32>) -> f32 {
 @fragment
 fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     let dir = pixel_ray(frag.xy);
+    pixel_centre = frag.xy;
     best = Hit(false, 1e30, 0u, 0u);
     best_inst = 0u;
     cast_steps = 0u;
     bvh_walk(dir, BIG, u32(frame.misc.w));
     let lane = (u32(frag.x) + u32(frag.y)) % COUNTER_LANES;
     if cast_steps > 0u {
-        atomicAdd(&ray_counters[2u * lane], 1u);
-        atomicAdd(&ray_counters[2u * lane + 1u], cast_steps);
+        atomicAdd(&ray_counters[3u * lane], 1u);
+        // Steps as a (low, high) pair: a lane of a 4K frame may pass 2^32.
+        let old = atomicAdd(&ray_counters[3u * lane + 1u], cast_steps);
+        if old + cast_steps < old {
+            atomicAdd(&ray_counters[3u * lane + 2u], 1u);
+        }
     }
     if !best.hit {
         discard;

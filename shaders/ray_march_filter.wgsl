@@ -136,6 +136,8 @@ fn clear_draw() {
 var<private> best: Hit;
 var<private> best_inst: u32;
 var<private> prepass_inst: u32;
+// The pixel's centre in screen pixels (for object_ray).
+var<private> pixel_centre: vec2<f32>;
 
 // Marches visible instance `j` up to the best hit; keeps its hit when nearer, or as near
 // with a lower index. Called by the hierarchy walk.
@@ -145,13 +147,15 @@ fn bvh_visit(j: u32, dir: vec3<f32>) -> f32 {
     }
     let inst_j = instances[j];
     let lod_j = lods[inst_j.lod];
-    let rj = make_ray(inst_j, lod_j.level, dir);
-    let limit = best.t;
+    let ray = object_ray(inst_j, pixel_centre, dir);
+    let rj = make_ray_od(ray.o, ray.d, lod_j.level);
+    let limit = best.t - ray.t_base;
     if !(max(rj.t_enter, 0.0) <= min(rj.t_exit, limit)) {
         return best.t;
     }
     marches += 1u;
-    let h = march(rj, lod_j, 0.0, limit);
+    var h = march(rj, lod_j, 0.0, limit);
+    h.t += ray.t_base;
     if h.found && (!best.found || h.t < best.t || (h.t == best.t && j < best_inst)) {
         best = h;
         best_inst = j;
@@ -212,7 +216,8 @@ fn filter_pixel(px: vec2<i32>) -> bool {
     let k = u32(e.w) - 1u;
     // The filter may run at a fraction of the screen (`entry` declared ScreenScaled): the
     // prepass rasterized this texel's centre, which is this point of the full screen.
-    let dir = pixel_ray((vec2<f32>(px) + vec2(0.5)) * frame.screen.xy / vec2<f32>(size));
+    pixel_centre = (vec2<f32>(px) + vec2(0.5)) * frame.screen.xy / vec2<f32>(size);
+    let dir = pixel_ray(pixel_centre);
 
     marches = 1u;
     best = march_prepass(k, e, px, size, dir);

@@ -7,11 +7,11 @@
 // weak (a CPU adapter; data-centre GPUs such as the H100/H200). Same quads and the same
 // pixel shading as billboards.wgsl (billboard_quad.inc.wgsl), three steps:
 //
-// 1. `splat_depth` (compute, one thread per SSBVB entry): every pixel centre inside the
+// 1. Depths (compute, `splat_main`, one thread per SSBVB entry): every pixel centre inside the
 //    entry's quad (the whole screen for a near-field quad) that the billboard covers takes
 //    the larger of its reversed-Z depth and the pixel's (`atomicMax` on the depth's bits:
 //    non-negative floats order like their bits).
-// 2. `splat_entry` (same threads and pixels): where the pixel's depth is this entry's,
+// 2. Entries (`splat_main` again, same threads and pixels): where the pixel's depth is this entry's,
 //    the lowest entry wins (`atomicMax` of the inverted index) — as the rasterizer's
 //    strict depth test keeps the first of equal-depth quads, drawn in entry order.
 // 3. `vs_main`/`fs_main` (a fullscreen triangle into the G-buffer): a pixel with a winner
@@ -77,12 +77,17 @@ fn pixel_bounds(q: Quad) -> vec4<i32> {
         lo = min(lo, pix);
         hi = max(hi, pix);
     }
-    // Pixel x covers centres x + 0.5; one pixel of slack for rounding.
-    let a = clamp(vec2<i32>(floor(lo - 0.5)) - 1, vec2(0), size - 1);
-    let b = clamp(vec2<i32>(ceil(hi - 0.5)) + 1, vec2(-1), size - 1);
     if !(all(lo == lo) && all(hi == hi)) {
         return all_px;
     }
+    // Clamped in f32 first: a quad far off screen (slopes of a very narrow lens) must not
+    // convert out of i32's range. Pixel x covers centre x + 0.5; one pixel of slack for
+    // rounding.
+    let sz = frame.screen.xy;
+    let lo_c = clamp(lo, vec2(-2.0), sz + 2.0);
+    let hi_c = clamp(hi, vec2(-2.0), sz + 2.0);
+    let a = clamp(vec2<i32>(floor(lo_c - 0.5)) - 1, vec2(0), size - 1);
+    let b = clamp(vec2<i32>(ceil(hi_c - 0.5)) + 1, vec2(-1), size - 1);
     return vec4(a, b);
 }
 
@@ -120,22 +125,21 @@ fn splat(e: u32, pass_kind: u32) {
     }
 }
 
+// Both steps are this one pipeline, dispatched twice: with one layer of workgroups (z = 1)
+// it splats depths, with two (z = 2) its second layer splats entries and the first does
+// nothing. One compiled shader, so the depth a pixel is compared with in the second step
+// is bit for bit the one written in the first (two pipelines could contract floating-point
+// operations differently).
 @compute @workgroup_size(64)
-fn splat_depth(
+fn splat_main(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) li: u32,
 ) {
-    splat(entry_index(wg, nwg, li), 0u);
-}
-
-@compute @workgroup_size(64)
-fn splat_entry(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) li: u32,
-) {
-    splat(entry_index(wg, nwg, li), 1u);
+    if wg.z + 1u != nwg.z {
+        return;
+    }
+    splat(entry_index(wg, nwg, li), nwg.z - 1u);
 }
 
 struct GBufferDepth {
@@ -155,9 +159,15 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     }
     let e = ~inverted;
     let slot = ssbvb[e];
-    let f = fragment_at(slot, billboard_quad(slot), frag.xy);
+    let q = billboard_quad(slot);
+    var f = fragment_at(slot, q, frag.xy);
     if !f.covered {
-        discard;
+        // The splat found this pixel covered; a recomputation here (another pipeline) may
+        // round a pixel on the quad's or the box's edge the other way. Never a hole: the
+        // voxel's colour and stored normal at its centre.
+        var flat_q = q;
+        flat_q.near_field = false;
+        f = flat_fragment(slot, flat_q, frag.xy, q.c);
     }
     var out: GBufferDepth;
     out.albedo = f.albedo;

@@ -530,11 +530,11 @@ mod tests {
         assert!(!e.contains("objects[0].instances[8].scale"), "{e}");
         assert!(e.contains("and 992 more bad instances"), "{e}");
         // The limit itself is allowed.
-        let ok = "(),".repeat(2000);
+        let ok = "(),".repeat(MAX_INSTANCES);
         let s = load_text(&format!(
             "Scene(objects: [(model: \"tri.obj\", level: 3, instances: [{ok}])])"
         ))
         .unwrap();
-        assert_eq!(s.scene.objects[0].instances.len(), 2000);
+        assert_eq!(s.scene.objects[0].instances.len(), MAX_INSTANCES);
     }
 }

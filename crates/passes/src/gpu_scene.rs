@@ -366,6 +366,12 @@ impl GpuScene {
             mapped_at_creation: false,
         });
         let total_instances: usize = scene.objects.iter().map(|o| o.instances.len()).sum();
+        if total_instances > ssbvb_voxel::instance_bvh::MAX_GPU_ITEMS {
+            return Err(PassError::TooLarge(format!(
+                "{total_instances} instances; the GPU's instance hierarchy holds at most {}",
+                ssbvb_voxel::instance_bvh::MAX_GPU_ITEMS
+            )));
+        }
         let instance_buffer = Self::instance_buffer(ctx, total_instances.max(1));
         let bvh_buffer = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("instance bvh"),
@@ -504,7 +510,17 @@ impl GpuScene {
         let frame = frame_uniform(camera, screen, &self.scene.light);
         let (visible, uniforms) =
             visible_instances(&self.scene, &self.lod_base, &self.proxies, camera, screen);
-        let bvh = instance_bvh(&uniforms, &self.lod_bounds);
+        let mut bvh = instance_bvh(&uniforms, &self.lod_bounds);
+        if bvh.is_empty() && !uniforms.is_empty() {
+            // Visible instances without voxels: a root that no ray enters (an empty box), so
+            // no walk reads last frame's nodes.
+            bvh.push(GpuBvhNode {
+                lo: [1e37; 3],
+                left: ssbvb_voxel::instance_bvh::LEAF,
+                hi: [-1e37; 3],
+                right: 0,
+            });
+        }
         if !bvh.is_empty() {
             ctx.queue
                 .write_buffer(&self.bvh_buffer, 0, bytemuck::cast_slice(&bvh));

@@ -1,7 +1,7 @@
 //! The counters of the ray-casting baselines (`DenseDda`, `OctreeRayCast`): per frame the
 //! pixels that cast a ray and the loop iterations their traces took (DDA cells, or octree
 //! nodes visited), counted in the fragment shader (`shaders/ray_cast.inc.wgsl`) into 64
-//! lanes of (rays, steps) so the atomics do not all hit one address.
+//! lanes of (rays, steps low, steps high) so the atomics do not all hit one address.
 
 use ssbvb_gpu::{GpuContext, wgpu};
 
@@ -10,7 +10,10 @@ use crate::PassError;
 /// Lanes of the counter buffer (`COUNTER_LANES` in the WGSL).
 pub const LANES: usize = 64;
 
-/// A pass's counter buffer: `LANES` × (rays, steps) `u32`s.
+/// Words per lane: rays, then the steps' low and high words.
+const LANE_WORDS: usize = 3;
+
+/// A pass's counter buffer: `LANES` × (rays, steps low, steps high) `u32`s.
 pub struct RayCastCounters {
     buffer: wgpu::Buffer,
 }
@@ -21,7 +24,7 @@ impl RayCastCounters {
         Self {
             buffer: ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("ray cast counters"),
-                size: (LANES * 2 * 4) as u64,
+                size: (LANES * LANE_WORDS * 4) as u64,
                 usage: wgpu::BufferUsages::STORAGE
                     | wgpu::BufferUsages::COPY_DST
                     | wgpu::BufferUsages::COPY_SRC,
@@ -47,12 +50,12 @@ impl RayCastCounters {
     }
 }
 
-/// Rays and mean steps per ray from the lanes' (rays, steps) words.
+/// Rays and mean steps per ray from the lanes' (rays, steps low, steps high) words.
 pub fn sum_lanes(words: &[u32]) -> (u64, Option<f64>) {
     let (mut rays, mut steps) = (0u64, 0u64);
-    for pair in words.chunks_exact(2) {
-        rays += pair[0] as u64;
-        steps += pair[1] as u64;
+    for lane in words.chunks_exact(LANE_WORDS) {
+        rays += lane[0] as u64;
+        steps += lane[1] as u64 | (lane[2] as u64) << 32;
     }
     (rays, (rays > 0).then(|| steps as f64 / rays as f64))
 }
@@ -61,13 +64,20 @@ pub fn sum_lanes(words: &[u32]) -> (u64, Option<f64>) {
 mod tests {
     #[test]
     fn lanes_sum_into_a_mean() {
-        let mut words = vec![0u32; 2 * super::LANES];
+        let mut words = vec![0u32; super::LANE_WORDS * super::LANES];
         words[0] = 3;
         words[1] = 30;
-        words[2 * 63] = 1;
-        words[2 * 63 + 1] = 2;
+        words[3 * 63] = 1;
+        words[3 * 63 + 1] = 2;
         assert_eq!(super::sum_lanes(&words), (4, Some(8.0)));
-        assert_eq!(super::sum_lanes(&[0; 4]), (0, None));
+        // A carried high word counts 2^32 steps.
+        words[3 * 5] = 4;
+        words[3 * 5 + 2] = 1;
+        assert_eq!(
+            super::sum_lanes(&words).1,
+            Some((32.0 + 4294967296.0) / 8.0)
+        );
+        assert_eq!(super::sum_lanes(&[0; 6]), (0, None));
         let src = crate::shaders::source("dense_dda.wgsl").unwrap();
         assert!(src.contains(&format!("const COUNTER_LANES: u32 = {}u;", super::LANES)));
     }

@@ -5,13 +5,14 @@
 //! shading as [`crate::billboards`] (`shaders/billboard_quad.inc.wgsl`), so the G-buffer is
 //! the same and smoothing and composite run unchanged.
 //!
-//! Per frame: the two per-pixel buffers are cleared; `splat_depth` (one thread per SSBVB
+//! Per frame: the two per-pixel buffers are cleared; a first dispatch (one thread per SSBVB
 //! entry, 64 per workgroup, a 2D grid over the SSBVB's capacity) takes the nearest depth of
-//! every pixel its billboard covers by `atomicMax` on the reversed-Z depth's bits;
-//! `splat_entry` keeps, where that depth is its own, the lowest entry (as the rasterizer's
-//! strict depth test keeps the first of equal-depth quads); a fullscreen resolve writes the
-//! winning billboard's fragment with its depth, depth-tested against what is already in
-//! the G-buffer (the triangles), stencil = voxel.
+//! every pixel its billboard covers by `atomicMax` on the reversed-Z depth's bits; a second
+//! dispatch of the same pipeline keeps, where that depth is its own, the lowest entry (as
+//! the rasterizer's strict depth test keeps the first of equal-depth quads); a fullscreen
+//! resolve writes the winning billboard's fragment with its depth, depth-tested against
+//! what is already in the G-buffer (the triangles), stencil = voxel. Both splat steps are
+//! one compiled shader so that the depths they compute agree bit for bit.
 //!
 //! Why two 32-bit passes and not one 64-bit `atomicMin` of (depth, entry): the 64-bit
 //! form needs `SHADER_INT64_ATOMIC_MIN_MAX`, which Metal and older drivers lack; two
@@ -49,8 +50,8 @@ pub const OWN: &[OwnBinding] = &[
 
 /// The compiled splat: two compute pipelines and the resolve.
 pub struct SplatBillboards {
-    splat_depth: wgpu::ComputePipeline,
-    splat_entry: wgpu::ComputePipeline,
+    /// Both splat steps (dispatched with one, then two layers of workgroups).
+    splat: wgpu::ComputePipeline,
     resolve: PulledPipeline,
     /// The per-pixel buffers (depth bits, entries) and the pixels they hold.
     pixels: Option<(wgpu::Buffer, wgpu::Buffer, u64)>,
@@ -84,26 +85,22 @@ impl PassImpl for SplatBillboards {
             &crate::shaders::source(Self::SHADER)?,
         )?;
         let label = format!("pass `{}`: splat pipelines", pass.name);
-        let (splat_depth, splat_entry) = ctx.validated(&label, |d| {
+        let splat = ctx.validated(&label, |d| {
             let layout = pipeline_layout(d, &label, scene, Some(&resolve.bindings));
-            let make = |entry: &str| {
-                d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(entry),
-                    layout: Some(&layout),
-                    module: &module,
-                    entry_point: Some(entry),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &constants,
-                        ..Default::default()
-                    },
-                    cache: None,
-                })
-            };
-            (make("splat_depth"), make("splat_entry"))
+            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("splat_main"),
+                layout: Some(&layout),
+                module: &module,
+                entry_point: Some("splat_main"),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &constants,
+                    ..Default::default()
+                },
+                cache: None,
+            })
         })?;
         Ok(Self {
-            splat_depth,
-            splat_entry,
+            splat,
             resolve,
             pixels: None,
         })
@@ -165,11 +162,11 @@ impl PassNode for SplatBillboards {
             });
             pass.set_bind_group(0, &rec.scene.bind_group, &[]);
             pass.set_bind_group(1, &bind_group, &[]);
-            // wgpu orders the dispatches: every depth is in before entries are chosen.
-            pass.set_pipeline(&self.splat_depth);
+            // wgpu orders the dispatches: every depth is in before entries are chosen. One
+            // pipeline for both (see the WGSL): z = 1 splats depths, z = 2 entries.
+            pass.set_pipeline(&self.splat);
             pass.dispatch_workgroups(gx, gy, 1);
-            pass.set_pipeline(&self.splat_entry);
-            pass.dispatch_workgroups(gx, gy, 1);
+            pass.dispatch_workgroups(gx, gy, 2);
         }
         self.resolve.record_fullscreen(encoder, rec, Some(&bind_group));
         Ok(())

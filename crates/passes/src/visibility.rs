@@ -216,7 +216,10 @@ pub fn choose_level(
                 ((xf.translation - camera.position).length() - radius).max(camera.near.max(1e-9));
             let box_px = 2.0 * scale * h / (dist * 2.0 * tan_y);
             let ideal = (box_px / pixel_error).log2();
-            let l = if pixel_error > 0.0 && ideal.is_finite() {
+            let l = if ideal == f64::NEG_INFINITY {
+                // Any error is allowed (an infinite pixel_error): the coarsest level.
+                0
+            } else if pixel_error > 0.0 && ideal.is_finite() {
                 // A hair below an integer stays there (the rounding of box_px must not cost
                 // a level).
                 (ideal - 1e-9).ceil() as i64

@@ -26,6 +26,10 @@ use glam::{DAffine3, DVec3};
 /// traversal's stack holds this many entries.
 pub const MAX_DEPTH: usize = 25;
 
+/// The most items a hierarchy the GPU walks may hold (its stack holds [`MAX_DEPTH`] + 1
+/// nodes).
+pub const MAX_GPU_ITEMS: usize = 1 << (MAX_DEPTH - 1);
+
 /// Marks a leaf in [`BvhNode::left`]; the low bits are the item index.
 pub const LEAF: u32 = 0x8000_0000;
 
@@ -134,17 +138,14 @@ pub struct InstanceBvh {
 
 impl InstanceBvh {
     /// Builds the hierarchy over `boxes`; item `i` is `boxes[i]`, and `None` items (hidden
-    /// instances) are left out. At most `2^24` items.
+    /// instances) are left out. Its depth is `ceil(log2 n) + 1` nodes; a GPU walk holds
+    /// [`MAX_DEPTH`] of them, so GPU scenes stay at or below [`MAX_GPU_ITEMS`] items.
     pub fn build(boxes: &[Option<Aabb>]) -> Self {
         let mut items: Vec<(u32, Aabb)> = boxes
             .iter()
             .enumerate()
             .filter_map(|(i, b)| b.map(|b| (i as u32, b)))
             .collect();
-        assert!(
-            items.len() <= 1 << (MAX_DEPTH - 1),
-            "too many items for the BVH"
-        );
         let mut nodes = Vec::with_capacity(items.len() * 2);
         if !items.is_empty() {
             build_node(&mut nodes, &mut items);

@@ -216,3 +216,52 @@ fn the_far_narrow_view_matches_the_reference() {
     assert!(r.depth_error_voxels.median <= 3.0, "{r:?}");
     assert!(r.depth_error_voxels.p95 <= 8.0, "{r:?}");
 }
+
+/// The far narrow view with a second bunny behind the first, partly hidden: where the
+/// nearest proxy's instance misses, the ray goes on to the other instance through the
+/// hierarchy, and that march must be as precise as the first (`object_ray`). The default
+/// pipeline and the ray casters match the reference.
+#[test]
+fn the_far_narrow_view_of_two_bunnies_matches_the_reference() {
+    let level = 5;
+    let mut scene = ssbvb_tests::single_object_scene(model_asset("bunny.obj", level), level);
+    let eye = DVec3::new(309426.0, 206284.0, 928279.0);
+    let back = -eye.normalize() * 3.0;
+    let side = eye.cross(DVec3::Y).normalize() * 0.9;
+    scene.objects[0].instances = vec![DAffine3::IDENTITY, DAffine3::from_translation(back + side)];
+    let camera = Camera {
+        fov_y_deg: 0.00025,
+        far: f64::INFINITY,
+        ..Camera::new(eye, DVec3::ZERO)
+    };
+    let size = (96, 72);
+    let reference = ssbvb_tests::reference_of(&scene, &camera, size);
+    let behind = reference
+        .hits
+        .iter()
+        .flatten()
+        .filter(|h| h.instance == 1)
+        .count();
+    assert!(behind > 300, "the second bunny shows in {behind} px");
+    let cell = 2.0 / (1u64 << level) as f64;
+    for (name, src) in [
+        ("ssbvb", include_str!("../../../assets/pipelines/ssbvb.ron")),
+        (
+            "octree",
+            include_str!("../../../assets/pipelines/octree_ray_cast.ron"),
+        ),
+        (
+            "dense",
+            include_str!("../../../assets/pipelines/dense_dda.ron"),
+        ),
+    ] {
+        let f = ssbvb_tests::render(src, scene.clone(), &camera, size);
+        let hits = ssbvb_tests::gbuffer_hits(&f, "far two");
+        let r = ssbvb_voxel::accuracy::compare(&reference, &hits, &[cell, cell]).unwrap();
+        eprintln!("{name} far two bunnies: {r:?}");
+        // Measured: 0.9964 (SSBVB: flat quads at the silhouettes), 1.0 (ray casters); with
+        // the second bunny marched from the camera: 0.988, 0.974, 0.973.
+        let bound = if name == "ssbvb" { 0.993 } else { 0.995 };
+        assert!(r.coverage_iou >= bound, "{name}: {r:?}");
+    }
+}
