@@ -307,6 +307,39 @@ mod tests {
             "the box is tight: a corner on every face"
         );
         assert!(Aabb::of_instance(&DAffine3::from_translation(DVec3::NAN)).is_none());
+        // A sub-box of unequal sides: the hull of its transformed corners, exactly.
+        let (lo, hi) = (DVec3::new(-0.5, 0.0, -1.0), DVec3::new(0.25, 1.0, -0.5));
+        let sub = Aabb::of_object_box(&xf, lo, hi).unwrap();
+        let hull = (0..8)
+            .map(|i| {
+                xf.transform_point3(DVec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                ))
+            })
+            .fold(Aabb::EMPTY, |b, p| b.union(Aabb { lo: p, hi: p }));
+        assert!(
+            (hull.lo - sub.lo).abs().max_element() < 1e-12,
+            "{hull:?} {sub:?}"
+        );
+        assert!(
+            (hull.hi - sub.hi).abs().max_element() < 1e-12,
+            "{hull:?} {sub:?}"
+        );
+    }
+
+    #[test]
+    fn widening_grows_every_side_and_the_centre_is_the_middle() {
+        let b = Aabb {
+            lo: DVec3::new(1.0, -2.0, 3.0),
+            hi: DVec3::new(2.0, 4.0, 7.0),
+        };
+        let w = b.widened(0.5);
+        assert_eq!(w.lo, DVec3::new(0.5, -2.5, 2.5));
+        assert_eq!(w.hi, DVec3::new(2.5, 4.5, 7.5));
+        assert_eq!(b.center(), DVec3::new(1.5, 1.0, 5.0));
+        assert_eq!(b.union(Aabb::EMPTY), b);
     }
 
     #[test]
