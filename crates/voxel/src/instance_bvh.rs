@@ -395,10 +395,78 @@ mod tests {
             }
             leaves.sort_unstable();
             assert_eq!(leaves, present, "{n} items");
-            assert_eq!(bvh.nodes.len(), (2 * present.len()).saturating_sub(1));
+            assert_eq!(bvh.nodes().len(), (2 * present.len()).saturating_sub(1));
             let bound = (present.len() as f64).log2().ceil() as usize + 1;
             assert!(depth_max <= bound, "depth {depth_max} > {bound} for {n}");
         }
+    }
+
+    fn unit_box(c: DVec3) -> Option<Aabb> {
+        Some(Aabb {
+            lo: c - 0.5,
+            hi: c + 0.5,
+        })
+    }
+
+    /// Boxes in a row along z are split along z: the root's children do not overlap there.
+    #[test]
+    fn the_split_follows_the_axis_where_the_centres_spread() {
+        for axis in 0..3 {
+            let boxes: Vec<Option<Aabb>> = (0..16)
+                .map(|i| {
+                    let mut c = DVec3::splat(0.1);
+                    c[axis] = 3.0 * i as f64;
+                    unit_box(c)
+                })
+                .collect();
+            let bvh = InstanceBvh::build(&boxes);
+            let root = bvh.nodes()[0];
+            let (l, r) = (
+                bvh.nodes()[root.left as usize],
+                bvh.nodes()[root.right as usize],
+            );
+            assert!(
+                l.bounds.hi[axis] < r.bounds.lo[axis],
+                "axis {axis}: {l:?} {r:?}"
+            );
+        }
+    }
+
+    /// A ray along a row of boxes whose first box holds the hit at its entry visits that
+    /// box only (nearest first, the rest pruned) and tests few boxes; two identical boxes
+    /// entered at the best hit's distance are both visited (an exact tie may go to either).
+    #[test]
+    fn the_walk_visits_nearest_first_prunes_beyond_the_hit_and_keeps_ties() {
+        let boxes: Vec<Option<Aabb>> = (0..16)
+            .map(|i| unit_box(DVec3::new(2.0 * i as f64, 0.0, 0.0)))
+            .collect();
+        let bvh = InstanceBvh::build(&boxes);
+        for (origin, dir, first) in [
+            (DVec3::new(-5.0, 0.1, 0.2), DVec3::X, 0),
+            (DVec3::new(40.0, -0.1, 0.2), DVec3::NEG_X, 15),
+        ] {
+            let mut visited = Vec::new();
+            let tested = bvh.traverse(origin, dir, |item, enter| {
+                visited.push(item);
+                enter
+            });
+            assert_eq!(visited, vec![first], "{dir}");
+            // The root, then two children per level down one path (depth 4).
+            assert!(tested <= 9, "{tested} boxes tested");
+        }
+        let twins = vec![
+            unit_box(DVec3::ZERO),
+            unit_box(DVec3::new(5.0, 0.0, 0.0)),
+            unit_box(DVec3::ZERO),
+        ];
+        let bvh = InstanceBvh::build(&twins);
+        let mut visited = Vec::new();
+        bvh.traverse(DVec3::new(-3.0, 0.0, 0.0), DVec3::X, |item, enter| {
+            visited.push(item);
+            enter
+        });
+        visited.sort_unstable();
+        assert_eq!(visited, vec![0, 2]);
     }
 
     /// The traversal's nearest-hit answer equals a brute-force loop over every box, with
