@@ -329,6 +329,16 @@ mod tests {
         );
     }
 
+    /// The GPU's item limit is the largest whose tree fits its stack: depth
+    /// `ceil(log2 n) + 1` nodes at most MAX_DEPTH, and twice as many items would not.
+    #[test]
+    fn the_gpu_item_limit_fits_the_walk_stack() {
+        let depth = |n: usize| (n as f64).log2().ceil() as usize + 1;
+        assert!(MAX_GPU_ITEMS >= 1 << 20, "{MAX_GPU_ITEMS}");
+        assert!(depth(MAX_GPU_ITEMS) <= MAX_DEPTH);
+        assert!(depth(2 * MAX_GPU_ITEMS) > MAX_DEPTH);
+    }
+
     #[test]
     fn widening_grows_every_side_and_the_centre_is_the_middle() {
         let b = Aabb {
