@@ -418,14 +418,16 @@ mod tests {
         })
     }
 
-    /// Boxes in a row along z are split along z: the root's children do not overlap there.
+    /// Boxes in a row along one axis are split along it: the root's children do not
+    /// overlap there. Positions are shuffled against the item order (a split on another
+    /// axis falls back to item order) and sit far from the origin on the other axes.
     #[test]
     fn the_split_follows_the_axis_where_the_centres_spread() {
         for axis in 0..3 {
             let boxes: Vec<Option<Aabb>> = (0..16)
                 .map(|i| {
-                    let mut c = DVec3::splat(0.1);
-                    c[axis] = 3.0 * i as f64;
+                    let mut c = DVec3::splat(100.0);
+                    c[axis] = 3.0 * ((i * 7) % 16) as f64;
                     unit_box(c)
                 })
                 .collect();
