@@ -420,14 +420,17 @@ mod tests {
 
     /// Boxes in a row along one axis are split along it: the root's children do not
     /// overlap there. Positions are shuffled against the item order (a split on another
-    /// axis falls back to item order) and sit far from the origin on the other axes.
+    /// axis falls back to item order).
     #[test]
     fn the_split_follows_the_axis_where_the_centres_spread() {
-        for axis in 0..3 {
+        // This axis: 200..245 (spread 45, ratio 1.2, sum 445). Other axes: 1 or 2 (spread
+        // 1, ratio 2), or 1000 or 1001 (spread 1, sum 2001): a ratio or a sum instead of
+        // the spread picks another axis in one of the two.
+        for (axis, other) in (0..3).flat_map(|a| [(a, 1.0), (a, 1000.0)]) {
             let boxes: Vec<Option<Aabb>> = (0..16)
                 .map(|i| {
-                    let mut c = DVec3::splat(100.0);
-                    c[axis] = 3.0 * ((i * 7) % 16) as f64;
+                    let mut c = DVec3::splat(other + (i % 2) as f64);
+                    c[axis] = 200.0 + 3.0 * ((i * 7) % 16) as f64;
                     unit_box(c)
                 })
                 .collect();
