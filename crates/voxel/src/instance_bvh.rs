@@ -334,7 +334,7 @@ mod tests {
     #[test]
     fn the_gpu_item_limit_fits_the_walk_stack() {
         let depth = |n: usize| (n as f64).log2().ceil() as usize + 1;
-        assert!(MAX_GPU_ITEMS >= 1 << 20, "{MAX_GPU_ITEMS}");
+        assert_eq!(MAX_GPU_ITEMS, 1 << 24);
         assert!(depth(MAX_GPU_ITEMS) <= MAX_DEPTH);
         assert!(depth(2 * MAX_GPU_ITEMS) > MAX_DEPTH);
     }
