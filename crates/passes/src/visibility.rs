@@ -1,6 +1,7 @@
 //! Which instances a frame draws and at which level: frustum culling against each
-//! instance's bounding sphere, the LOD choice, and the per-frame constants and instance
-//! records the GPU reads (`Frame`, `Instance` in `shaders/common.inc.wgsl`).
+//! instance's bounding sphere, the LOD choice, and the per-frame constants, instance
+//! records and instance hierarchy the GPU reads (`Frame`, `Instance`, `BvhNode` in
+//! `shaders/common.inc.wgsl`).
 
 use glam::{DAffine3, DMat4, DVec3};
 use ssbvb_voxel::camera::Camera;
