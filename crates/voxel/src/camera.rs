@@ -390,4 +390,86 @@ mod tests {
         let (_, d) = bad.ray(0, 0, 0, 0);
         assert!(d.is_finite());
     }
+
+    /// A view direction parallel to `up` takes the world axis least aligned with it
+    /// (X, Y, Z order on ties), as documented: the resulting right vectors, exactly.
+    #[test]
+    fn a_degenerate_up_takes_the_least_aligned_world_axis() {
+        for (forward, up, right) in [
+            (DVec3::NEG_Y, DVec3::Y, DVec3::Z),
+            (DVec3::NEG_X, DVec3::X, DVec3::NEG_Z),
+            (DVec3::NEG_Z, DVec3::Z, DVec3::NEG_Y),
+            // Least aligned is Y (0.1 < 0.7): right = forward x Y.
+            (
+                DVec3::new(0.7, 0.1, 0.7),
+                DVec3::new(0.7, 0.1, 0.7),
+                DVec3::ZERO,
+            ),
+        ] {
+            let cam = Camera {
+                up,
+                ..Camera::new(DVec3::ZERO, forward)
+            };
+            let (r, _, f) = cam.basis();
+            let want = if right == DVec3::ZERO {
+                f.cross(DVec3::Y).normalize()
+            } else {
+                right
+            };
+            assert!((r - want).length() < 1e-12, "{forward}: {r} vs {want}");
+        }
+    }
+
+    /// The rotation matrix maps camera-relative points as the full view matrix maps the
+    /// points themselves.
+    #[test]
+    fn the_view_rotation_is_the_view_matrix_without_its_translation() {
+        let cam = Camera::new(DVec3::new(3.0, -2.0, 5.0), DVec3::new(-1.0, 0.5, 0.25));
+        let (v, rot) = (cam.view_matrix(), cam.view_rotation_matrix());
+        for p in [
+            DVec3::ZERO,
+            DVec3::new(1.0, 2.0, 3.0),
+            DVec3::new(-7.0, 0.5, 9.0),
+        ] {
+            let a = v.transform_point3(p);
+            let b = rot.transform_point3(p - cam.position);
+            assert!((a - b).length() < 1e-12, "{p}: {a} vs {b}");
+        }
+        // A point ahead of the camera is at negative view z.
+        assert!(rot.transform_point3(cam.look_at - cam.position).z < 0.0);
+    }
+
+    /// Planes and aspect outside their ranges fall back as documented: near 0, NaN or
+    /// infinite becomes 1e-6; far not above near is infinite; a zero, negative or
+    /// infinite aspect is 1.
+    #[test]
+    fn unusable_planes_and_aspects_fall_back() {
+        let base = Camera::default();
+        for near in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let cam = Camera {
+                near,
+                far: f64::INFINITY,
+                ..base
+            };
+            // Infinite projection: B = n.
+            assert_eq!(cam.projection(1.0).w_axis.z, 1e-6, "near {near}");
+        }
+        let equal = Camera {
+            near: 2.0,
+            far: 2.0,
+            ..base
+        };
+        assert!(equal.is_infinite());
+        let finite = Camera {
+            near: 2.0,
+            far: 2.5,
+            ..base
+        };
+        assert!(!finite.is_infinite());
+        let one = base.projection(1.0);
+        for aspect in [0.0, -2.0, f64::INFINITY, f64::NAN] {
+            assert_eq!(base.projection(aspect), one, "aspect {aspect}");
+        }
+        assert_ne!(base.projection(2.0), one);
+    }
 }
