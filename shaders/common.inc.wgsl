@@ -53,7 +53,7 @@ struct Instance {
 }
 
 // A node of the hierarchy over the visible instances' camera-relative world boxes (group 0,
-// binding 7), rebuilt every frame (ssbvb-voxel instance_bvh.rs; node 0 is the root).
+// binding 6), rebuilt every frame (ssbvb-voxel instance_bvh.rs; node 0 is the root).
 struct BvhNode {
     lo: vec3<f32>,
     // Left child, or BVH_LEAF | index into `instances`.
@@ -72,20 +72,27 @@ const BVH_STACK: u32 = 26u;
 // Where one LOD of one asset lives in the shared voxel buffers (group 0, binding 2).
 struct LodInfo {
     level: u32,
-    // Pages per axis of the page table (16^3 cells per page).
-    pages_per_axis: u32,
-    // Blocks per axis of the coarse occupancy (4^3 pages per block).
-    coarse_per_axis: u32,
-    // First voxel of this LOD in `voxels`.
+    // Depth of the lookup's 64-ary tree (ssbvb-voxel lookup.rs): the root covers 4^depth
+    // cells per axis, its leaves 4^3.
+    depth: u32,
+    // First voxel of this LOD in `voxel_colors` / `voxel_normals`.
     voxel_offset: u32,
-    // First entry of this LOD's page table in `page_tables`.
-    page_table_offset: u32,
-    // First page of this LOD in `pages` (in pages of 4096 cells).
-    page_offset: u32,
-    // First word of this LOD's coarse bits in `coarse`.
-    coarse_offset: u32,
+    // This LOD's root in `lookup_nodes`; child indices are relative to it.
+    node_offset: u32,
     // The scene object this LOD belongs to.
     object: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+}
+
+// One node of a lookup tree: a 64-bit mask of the present 4^3 children (bit = Morton
+// order of the 2-bit local coordinates) and the index of the first child (inner nodes,
+// relative to the LOD's root) or the id of the first voxel (leaves).
+struct LookupNode {
+    lo: u32,
+    hi: u32,
+    base: u32,
 }
 
 // A point-cloud voxel as packed by ssbvb-voxel (asset.rs, `PackedVoxel`): 16 bytes.
@@ -109,10 +116,6 @@ struct VoxelSlot {
     face: u32,
 }
 
-const PAGE_SIZE: u32 = 16u;
-const PAGE_CELLS: u32 = 4096u;
-const COARSE_PAGES: u32 = 4u;
-const EMPTY_PAGE: u32 = 0xffffffffu;
 // Stencil values: voxel billboards and triangle objects.
 const STENCIL_VOXEL: u32 = 1u;
 const STENCIL_TRIANGLE: u32 = 2u;
@@ -120,11 +123,13 @@ const STENCIL_TRIANGLE: u32 = 2u;
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> instances: array<Instance>;
 @group(0) @binding(2) var<storage, read> lods: array<LodInfo>;
-@group(0) @binding(3) var<storage, read> voxels: array<PackedVoxel>;
-@group(0) @binding(4) var<storage, read> page_tables: array<u32>;
-@group(0) @binding(5) var<storage, read> pages: array<u32>;
-@group(0) @binding(6) var<storage, read> coarse: array<u32>;
-@group(0) @binding(7) var<storage, read> instance_bvh: array<BvhNode>;
+// Per voxel: linear RGBA8 colour, and the 16-bit octahedral normal two to a word (low
+// half = even voxel). Positions are implied by the lookup (the voxel id is the Morton rank
+// of its cell), so nothing else is uploaded.
+@group(0) @binding(3) var<storage, read> voxel_colors: array<u32>;
+@group(0) @binding(4) var<storage, read> voxel_normals: array<u32>;
+@group(0) @binding(5) var<storage, read> lookup_nodes: array<LookupNode>;
+@group(0) @binding(6) var<storage, read> instance_bvh: array<BvhNode>;
 
 fn voxel_cell(v: PackedVoxel) -> vec3<u32> {
     return vec3(v.xy & 0xffffu, v.xy >> 16u, v.z_normal & 0xffffu);
@@ -156,29 +161,53 @@ fn cell_min(cell: vec3<u32>, level: u32) -> vec3<f32> {
     return vec3<f32>(cell) * cell_size(level) - 1.0;
 }
 
+// Bit of local child coordinates `l` (in [0, 4)^3) in a lookup node's mask.
+fn child_bit(l: vec3<u32>) -> u32 {
+    return (l.x & 1u) | ((l.y & 1u) << 1u) | ((l.z & 1u) << 2u) | ((l.x >> 1u) << 3u)
+        | ((l.y >> 1u) << 4u) | ((l.z >> 1u) << 5u);
+}
+
+// Whether bit `b` of a node's mask is set.
+fn node_has(n: LookupNode, b: u32) -> bool {
+    return (select(n.lo, n.hi, b >= 32u) & (1u << (b & 31u))) != 0u;
+}
+
+// The child (or voxel) index of present bit `b`: base + the ones below it.
+fn node_child(n: LookupNode, b: u32) -> u32 {
+    let below_lo = select(n.lo & ((1u << (b & 31u)) - 1u), n.lo, b >= 32u);
+    let below_hi = select(0u, n.hi & ((1u << (b & 31u)) - 1u), b >= 32u);
+    return n.base + countOneBits(below_lo) + countOneBits(below_hi);
+}
+
 // Voxel id + 1 at a cell of a LOD (0 when empty); the cell must be inside the grid.
 fn lookup_cell(lod: LodInfo, cell: vec3<u32>) -> u32 {
-    let p = cell / PAGE_SIZE;
-    let ppa = lod.pages_per_axis;
-    let page = page_tables[lod.page_table_offset + p.x + ppa * (p.y + ppa * p.z)];
-    if page == EMPTY_PAGE {
-        return 0u;
+    var node = lod.node_offset;
+    for (var k = 0u; k < lod.depth; k++) {
+        let n = lookup_nodes[node];
+        let b = child_bit((cell >> vec3(2u * (lod.depth - 1u - k))) & vec3(3u));
+        if !node_has(n, b) {
+            return 0u;
+        }
+        if k + 1u == lod.depth {
+            return node_child(n, b) + 1u;
+        }
+        node = lod.node_offset + node_child(n, b);
     }
-    let l = cell % PAGE_SIZE;
-    return pages[(lod.page_offset + page) * PAGE_CELLS + l.x + PAGE_SIZE * (l.y + PAGE_SIZE * l.z)];
+    return 0u;
 }
 
-fn page_resident(lod: LodInfo, cell: vec3<u32>) -> bool {
-    let p = cell / PAGE_SIZE;
-    let ppa = lod.pages_per_axis;
-    return page_tables[lod.page_table_offset + p.x + ppa * (p.y + ppa * p.z)] != EMPTY_PAGE;
+// A voxel's attributes in the 16-byte layout the SSBVB slots carry (asset.rs
+// `PackedVoxel`): its cell from the lookup, the rest from the attribute streams. `id` is
+// the voxel id within the LOD.
+fn packed_voxel(lod: LodInfo, cell: vec3<u32>, id: u32) -> PackedVoxel {
+    let g = lod.voxel_offset + id;
+    let normal = (voxel_normals[g >> 1u] >> (16u * (g & 1u))) & 0xffffu;
+    return PackedVoxel(cell.x | (cell.y << 16u), cell.z | (normal << 16u), voxel_colors[g], 0u);
 }
 
-fn coarse_occupied(lod: LodInfo, cell: vec3<u32>) -> bool {
-    let b = cell / (PAGE_SIZE * COARSE_PAGES);
-    let cpa = lod.coarse_per_axis;
-    let i = b.x + cpa * (b.y + cpa * b.z);
-    return (coarse[lod.coarse_offset + i / 32u] & (1u << (i % 32u))) != 0u;
+// Linear RGBA colour of voxel `id` of a LOD.
+fn lod_voxel_color(lod: LodInfo, id: u32) -> vec4<f32> {
+    return unpack4x8unorm(voxel_colors[lod.voxel_offset + id]);
 }
 
 // Normalized world (camera-relative) direction of the ray through pixel position `px`

@@ -129,10 +129,9 @@ fn fs_main(in: VertexOut) -> GBuffer {
         // a mismatch visible as missing coverage in the accuracy tests.
         discard;
     }
-    let voxel = voxels[lod.voxel_offset + id - 1u];
     let p = dir * t;
     var out: GBuffer;
-    out.albedo = vec4(voxel_color(voxel).rgb, 1.0);
+    out.albedo = vec4(lod_voxel_color(lod, id - 1u).rgb, 1.0);
     out.normal = vec4(face_normal_world(inst, in.face), 1.0);
     out.position = vec4(p, dot(p, frame.cam_forward.xyz));
     return out;

@@ -94,10 +94,9 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
         discard;
     }
     let inst = instances[best_inst];
-    let voxel = voxels[lods[inst.lod].voxel_offset + best.id];
     let p = dir * best.t;
     var out: GBufferDepth;
-    out.albedo = vec4(voxel_color(voxel).rgb, 1.0);
+    out.albedo = vec4(lod_voxel_color(lods[inst.lod], best.id).rgb, 1.0);
     out.normal = vec4(face_normal_world(inst, best.face), 1.0);
     out.position = vec4(p, dot(p, frame.cam_forward.xyz));
     out.depth = ndc_depth(p);

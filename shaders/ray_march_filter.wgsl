@@ -230,7 +230,6 @@ fn filter_pixel(px: vec2<i32>) -> bool {
         return true;
     }
     let hit_lod = lods[instances[best_inst].lod];
-    let voxel_id = hit_lod.voxel_offset + best.id;
     if UNIQUE_VOXELS {
         // Instances of one object share voxel ids but are distinct billboards: each owns a
         // range of keys. The first pixel to claim a key appends.
@@ -244,7 +243,7 @@ fn filter_pixel(px: vec2<i32>) -> bool {
     // (a pipeline may declare ScreenPixelsScaled), whose overflow is dropped.
     if idx < arrayLength(&ssbvb) {
         ssbvb[idx] = VoxelSlot(
-            voxels[voxel_id],
+            packed_voxel(hit_lod, best.cell, best.id),
             best_inst,
             u32(px.y) * u32(size.x) + u32(px.x),
             best.t,

@@ -1,5 +1,5 @@
-// The sparse march: the first voxel along a ray through one LOD's sparse lookup (page
-// table, page pool, coarse occupancy; common.inc.wgsl), the GPU side of the CPU reference's
+// The sparse march: the first voxel along a ray through one LOD's sparse lookup (the
+// 64-ary occupancy tree `lookup_nodes`, common.inc.wgsl), the GPU side of the CPU reference's
 // hierarchical DDA. Included by ray_march_filter.wgsl; the includer declares
 // `override MAX_STEPS: u32`.
 //
@@ -17,17 +17,18 @@
 //   position estimate is corrected against the plane times (`first_plane`), so the cell a
 //   ray is in always agrees with the times, and every step advances at least one plane
 //   (guaranteed progress).
-// - Hierarchy: in an unoccupied coarse block (64^3 cells) or a non-resident page (16^3)
-//   the ray jumps to the first time it reaches the region's far boundary, landing in the
-//   state the cell-by-cell loop would reach there. Inside a resident page each cell costs
-//   one read of the page pool (the page is looked up once, when the ray enters it).
+// - Hierarchy: in an absent child of the lookup tree (an empty region of 4^m cells per
+//   axis, m >= 1) the ray jumps to the first time it reaches the region's far boundary,
+//   landing in the state the cell-by-cell loop would reach there. The nodes on the path
+//   to the current cell are kept, so a step reads only the nodes below the deepest one
+//   that still contains the new cell (usually one: the 4^3 leaf).
 // - Ties (the ray crosses several planes at the same time, i.e. passes exactly through an
 //   edge or a corner): the cell entered diagonally is tested first, then the cells the ray
 //   only touches along the edge, in the reference's rank order.
 // - Hit: the voxel's touch time (the latest of its near-plane crossing times, at least 0)
 //   and the entered face (the axis crossed at that time; ties to the faster axis; a camera
 //   inside the voxel gets the dominant axis of the direction).
-// - Every loop iteration counts one step (cells, pages and coarse blocks alike); after
+// - Every loop iteration counts one step (cells and skipped regions alike); after
 //   MAX_STEPS the ray reports no hit.
 
 // Direction components below this fraction of the largest one are treated as 0: over the
@@ -66,10 +67,12 @@ struct Hit {
     t: f32,
     // Entered face, as VoxelSlot.face.
     face: u32,
+    // The voxel's cell (grid coordinates).
+    cell: vec3<u32>,
 }
 
 fn no_hit() -> Hit {
-    return Hit(false, 0u, BIG, 0u);
+    return Hit(false, 0u, BIG, 0u, vec3(0u));
 }
 
 fn make_ray(inst: Instance, level: u32, dir: vec3<f32>) -> Ray {
@@ -181,7 +184,7 @@ fn cell_hit(r: Ray, c: vec3<i32>, id: u32) -> Hit {
     }
     // The entered face's normal points against the ray: -axis (0..2) when moving towards
     // +axis, +axis (3..5) on mirrored axes.
-    return Hit(true, id, t, axis + select(0u, 3u, r.mirrored[axis]));
+    return Hit(true, id, t, axis + select(0u, 3u, r.mirrored[axis]), orig_cell(r, c));
 }
 
 // Marches `r` through `lod` from `t_from` (clamped to the box) up to `t_limit`.
@@ -203,36 +206,42 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32) -> Hit {
             c[a] = clamp(i32(floor((r.o[a] + 1.0) / r.s)), 0, r.n - 1);
         }
     }
-    // The resident page the ray is in (page coordinates, pool page): cell steps inside it
-    // read one pool word instead of the coarse bits, the page table and the pool.
-    var cur_page = vec3(0xffffffffu);
-    var cur_pool = 0u;
+    // The lookup nodes containing the cell last visited, root first: `path[k]` (absolute
+    // index) covers that cell's 4^(depth - k) region for k < `path_len`. A step re-reads
+    // only the nodes below the deepest one that still contains the new cell.
+    var path: array<u32, 8>;
+    var path_len = 0u;
+    var path_cell = vec3(0u);
+    let depth = lod.depth;
     for (var step = 0u; step < MAX_STEPS; step++) {
         march_steps += 1u;
         let co = orig_cell(r, c);
-        let pg = co / PAGE_SIZE;
-        var unit = 0;
-        if any(pg != cur_page) {
-            if !coarse_occupied(lod, co) {
-                unit = i32(PAGE_SIZE * COARSE_PAGES);
-            } else {
-                let ppa = lod.pages_per_axis;
-                let entry = page_tables[lod.page_table_offset + pg.x + ppa * (pg.y + ppa * pg.z)];
-                if entry == EMPTY_PAGE {
-                    unit = i32(PAGE_SIZE);
-                } else {
-                    cur_page = pg;
-                    cur_pool = entry;
-                }
-            }
+        let diff = (co.x ^ path_cell.x) | (co.y ^ path_cell.y) | (co.z ^ path_cell.z);
+        if diff != 0u {
+            path_len = min(path_len, depth - min(depth - 1u, firstLeadingBit(diff) / 2u));
         }
-        if unit == 0 {
-            let l = co % PAGE_SIZE;
-            let v = pages[(lod.page_offset + cur_pool) * PAGE_CELLS + l.x
-                + PAGE_SIZE * (l.y + PAGE_SIZE * l.z)];
-            if v != 0u {
-                return cell_hit(r, c, v - 1u);
+        if path_len == 0u {
+            path[0] = lod.node_offset;
+            path_len = 1u;
+        }
+        path_cell = co;
+        // Descend: an absent child of size 4^m (m > 0) is an empty region to skip; an
+        // absent cell is an ordinary DDA step; a present cell is the hit.
+        var unit = 0;
+        loop {
+            let k = path_len - 1u;
+            let n = lookup_nodes[path[k]];
+            let shift = 2u * (depth - 1u - k);
+            let b = child_bit((co >> vec3(shift)) & vec3(3u));
+            if !node_has(n, b) {
+                unit = select(0, 1 << shift, shift > 0u);
+                break;
             }
+            if shift == 0u {
+                return cell_hit(r, c, node_child(n, b));
+            }
+            path[path_len] = lod.node_offset + node_child(n, b);
+            path_len += 1u;
         }
         if unit != 0 {
             // Empty region: its far plane per moving axis (mirrored frame), the first time

@@ -116,6 +116,8 @@ struct ObjectReport {
     #[serde(flatten)]
     memory: ssbvb_passes::ObjectMemory,
     total: u64,
+    /// Lookup plus voxel attributes per voxel, over all levels.
+    bytes_per_voxel: f64,
 }
 
 /// A scene or a single model, ready to upload.
@@ -322,6 +324,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                     object: i,
                     memory: *m,
                     total: m.total(),
+                    bytes_per_voxel: m.bytes_per_voxel(),
                 })
                 .collect(),
             asset_notes: notes,
@@ -481,12 +484,14 @@ fn print_report(r: &Report) {
     }
     for o in &r.gpu_memory_bytes {
         println!(
-            "GPU memory, object {}: {} bytes (point clouds {}, lookup {}, proxies {})",
+            "GPU memory, object {}: {} bytes (voxel attributes {}, lookup {}, proxies {}; \
+             {:.2} bytes per voxel)",
             o.object,
             o.total,
             o.memory.point_cloud_bytes,
             o.memory.lookup_bytes,
-            o.memory.proxy_bytes
+            o.memory.proxy_bytes,
+            o.bytes_per_voxel
         );
     }
 }

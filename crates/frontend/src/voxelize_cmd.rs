@@ -178,12 +178,13 @@ fn table(r: &Report) -> String {
     let _ = writeln!(s);
     let _ = writeln!(
         s,
-        "{:>5} {:>12} {:>8} {:>12} {:>11} {:>10} {:>11} {:>9} {:>8}",
+        "{:>5} {:>12} {:>8} {:>12} {:>11} {:>7} {:>10} {:>11} {:>9} {:>8}",
         "level",
         "voxels",
         "pages",
-        "points MiB",
+        "attrs MiB",
         "lookup MiB",
+        "B/voxel",
         "% dense",
         "octree MiB",
         "proxy tri",
@@ -195,12 +196,13 @@ fn table(r: &Report) -> String {
             .map_or_else(|| "-".to_string(), |t| format!("{t:.3}"));
         let _ = writeln!(
             s,
-            "{:>5} {:>12} {:>8} {:>12} {:>11} {:>10.2} {:>11} {:>9} {:>8}",
+            "{:>5} {:>12} {:>8} {:>12} {:>11} {:>7.2} {:>10.4} {:>11} {:>9} {:>8}",
             l.level,
             l.voxels,
             l.resident_pages,
             mib(l.point_cloud_bytes),
             mib(l.lookup_bytes),
+            l.bytes_per_voxel,
             l.lookup_percent_of_dense,
             mib(l.octree_bytes),
             l.proxy_triangles,

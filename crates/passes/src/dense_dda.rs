@@ -28,7 +28,7 @@ use std::collections::BTreeSet;
 use ssbvb_gpu::requirements::max_texture_dimension_3d;
 use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_graph::DenseDdaParams;
-use ssbvb_voxel::asset::{EMPTY_PAGE, PAGE_CELLS, PAGE_SIZE, SparseLookup};
+use ssbvb_voxel::asset::{PAGE_SIZE, SparseLookup};
 
 use crate::bindings::{OwnBinding, OwnKind};
 use crate::counters::FrameCounters;
@@ -172,53 +172,51 @@ impl DenseDda {
 }
 
 /// Writes a lookup's dense grid (voxel id + 1, 0 empty) into the atlas from slice `z0`,
-/// page by page (empty pages stay zero).
+/// one 16³ block at a time (empty blocks stay zero). Cells come in Morton order, which
+/// keeps each block's cells together and makes the `i`-th cell voxel `i`.
 fn write_grid(ctx: &GpuContext, texture: &wgpu::Texture, z0: u32, lookup: &SparseLookup) {
     let n = 1u32 << lookup.level;
-    // A page's extent (levels below 4: the grid is smaller than its single page).
+    // A block's extent (levels below 4: the grid is smaller than a block).
     let e = n.min(PAGE_SIZE);
-    let ppa = lookup.pages_per_axis;
     let mut block = vec![0u32; (e * e * e) as usize];
-    for pz in 0..ppa {
-        for py in 0..ppa {
-            for px in 0..ppa {
-                let page = lookup.page_table[(px + ppa * (py + ppa * pz)) as usize];
-                if page == EMPTY_PAGE {
-                    continue;
-                }
-                let src = &lookup.pool[page as usize * PAGE_CELLS..][..PAGE_CELLS];
-                for z in 0..e {
-                    for y in 0..e {
-                        let s = (PAGE_SIZE * (y + PAGE_SIZE * z)) as usize;
-                        let t = (e * (y + e * z)) as usize;
-                        block[t..t + e as usize].copy_from_slice(&src[s..s + e as usize]);
-                    }
-                }
-                ctx.queue.write_texture(
-                    wgpu::TexelCopyTextureInfo {
-                        texture,
-                        mip_level: 0,
-                        origin: wgpu::Origin3d {
-                            x: px * PAGE_SIZE,
-                            y: py * PAGE_SIZE,
-                            z: z0 + pz * PAGE_SIZE,
-                        },
-                        aspect: wgpu::TextureAspect::All,
-                    },
-                    bytemuck::cast_slice(&block),
-                    wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(e * 4),
-                        rows_per_image: Some(e),
-                    },
-                    wgpu::Extent3d {
-                        width: e,
-                        height: e,
-                        depth_or_array_layers: e,
-                    },
-                );
-            }
+    let write = |origin: [u32; 3], block: &[u32]| {
+        ctx.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: origin[0] * e,
+                    y: origin[1] * e,
+                    z: z0 + origin[2] * e,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytemuck::cast_slice(block),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(e * 4),
+                rows_per_image: Some(e),
+            },
+            wgpu::Extent3d {
+                width: e,
+                height: e,
+                depth_or_array_layers: e,
+            },
+        );
+    };
+    let mut current: Option<[u32; 3]> = None;
+    for (id, c) in lookup.cells().into_iter().enumerate() {
+        let b = c.map(|v| v / e);
+        if current.is_some_and(|cur| cur != b) {
+            write(current.unwrap_or_default(), &block);
+            block.fill(0);
         }
+        current = Some(b);
+        let l = c.map(|v| v % e);
+        block[(l[0] + e * (l[1] + e * l[2])) as usize] = id as u32 + 1;
+    }
+    if let Some(cur) = current {
+        write(cur, &block);
     }
 }
 

@@ -6,8 +6,9 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DAffine3, DMat4, DVec3};
 use ssbvb_gpu::wgpu::util::DeviceExt;
 use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_voxel::asset::{PAGE_CELLS, PackedVoxel};
+use ssbvb_voxel::asset::{GPU_COLOR_BYTES, GPU_NORMAL_BYTES, GPU_VOXEL_BYTES};
 use ssbvb_voxel::camera::Camera;
+use ssbvb_voxel::lookup::NODE_WORDS;
 
 use crate::PassError;
 use crate::scene::Scene;
@@ -88,20 +89,16 @@ pub struct GpuBvhNode {
 pub struct LodInfo {
     /// Grid level.
     pub level: u32,
-    /// Pages per axis.
-    pub pages_per_axis: u32,
-    /// Coarse blocks per axis.
-    pub coarse_per_axis: u32,
-    /// First voxel in the voxel buffer.
+    /// Depth of the lookup tree ([`ssbvb_voxel::lookup::tree_depth`]).
+    pub depth: u32,
+    /// First voxel in the attribute buffers.
     pub voxel_offset: u32,
-    /// First page-table entry.
-    pub page_table_offset: u32,
-    /// First page in the page pool.
-    pub page_offset: u32,
-    /// First word of coarse bits.
-    pub coarse_offset: u32,
+    /// The LOD's root node in the lookup-node buffer.
+    pub node_offset: u32,
     /// The scene object this LOD belongs to (which octree the octree baseline reads).
     pub object: u32,
+    /// Padding to 32 bytes.
+    pub pad: [u32; 3],
 }
 
 /// Where a proxy mesh lives in the shared proxy buffers.
@@ -133,9 +130,16 @@ pub struct VisibleInstance {
 /// GPU bytes of one object's asset (all LODs), for reports.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 pub struct ObjectMemory {
-    /// Point clouds.
+    /// Voxels of all levels.
+    pub voxels: u64,
+    /// Voxel attributes: colour plus normal ([`GPU_VOXEL_BYTES`] per voxel; the cell is
+    /// implied by the lookup).
     pub point_cloud_bytes: u64,
-    /// Page tables, page pools and coarse occupancy.
+    /// Of `point_cloud_bytes`: the colours.
+    pub color_bytes: u64,
+    /// Of `point_cloud_bytes`: the normals.
+    pub normal_bytes: u64,
+    /// Lookup trees (12-byte nodes).
     pub lookup_bytes: u64,
     /// Proxy meshes.
     pub proxy_bytes: u64,
@@ -145,6 +149,15 @@ impl ObjectMemory {
     /// Sum.
     pub fn total(&self) -> u64 {
         self.point_cloud_bytes + self.lookup_bytes + self.proxy_bytes
+    }
+
+    /// Lookup plus attributes per voxel (0 without voxels).
+    pub fn bytes_per_voxel(&self) -> f64 {
+        if self.voxels == 0 {
+            0.0
+        } else {
+            (self.point_cloud_bytes + self.lookup_bytes) as f64 / self.voxels as f64
+        }
     }
 }
 
@@ -190,14 +203,12 @@ pub struct GpuScene {
     pub bvh_buffer: wgpu::Buffer,
     /// LOD table.
     pub lod_buffer: wgpu::Buffer,
-    /// Point clouds.
-    pub voxel_buffer: wgpu::Buffer,
-    /// Page tables.
-    pub page_table_buffer: wgpu::Buffer,
-    /// Page pools.
-    pub page_buffer: wgpu::Buffer,
-    /// Coarse occupancy.
-    pub coarse_buffer: wgpu::Buffer,
+    /// Voxel colours (linear RGBA8, one word per voxel).
+    pub color_buffer: wgpu::Buffer,
+    /// Voxel normals (16-bit octahedral, two per word).
+    pub normal_buffer: wgpu::Buffer,
+    /// The lookup trees' nodes (12 bytes each).
+    pub lookup_buffer: wgpu::Buffer,
     /// Proxy vertices (object space, vec4).
     pub proxy_vertices: wgpu::Buffer,
     /// Proxy indices.
@@ -277,10 +288,9 @@ impl GpuScene {
     /// Uploads every LOD of every object's asset and the triangle meshes.
     pub fn new(ctx: &GpuContext, scene: Scene) -> Result<Self, PassError> {
         let mut lods: Vec<LodInfo> = Vec::new();
-        let mut voxels: Vec<PackedVoxel> = Vec::new();
-        let mut page_tables: Vec<u32> = Vec::new();
-        let mut pages: Vec<u32> = Vec::new();
-        let mut coarse: Vec<u32> = Vec::new();
+        let mut colors: Vec<u32> = Vec::new();
+        let mut normals: Vec<u16> = Vec::new();
+        let mut nodes: Vec<u32> = Vec::new();
         let mut proxy_v: Vec<[f32; 4]> = Vec::new();
         let mut proxy_i: Vec<u32> = Vec::new();
         let mut lod_base = Vec::new();
@@ -298,23 +308,41 @@ impl GpuScene {
             let mut mem = ObjectMemory::default();
             for lod in &obj.asset.lods {
                 let l = &lod.lookup;
+                if l.level != lod.level || l.voxel_count() != lod.point_cloud.voxels.len() as u64 {
+                    return Err(PassError::BadScene(format!(
+                        "level {}: the lookup (level {}, {} voxels) does not match the point \
+                         cloud ({} voxels)",
+                        lod.level,
+                        l.level,
+                        l.voxel_count(),
+                        lod.point_cloud.voxels.len()
+                    )));
+                }
                 lods.push(LodInfo {
                     level: lod.level,
-                    pages_per_axis: l.pages_per_axis,
-                    coarse_per_axis: l.coarse_per_axis,
-                    voxel_offset: checked_u32(voxels.len(), "voxel count")?,
-                    page_table_offset: checked_u32(page_tables.len(), "page table size")?,
-                    page_offset: checked_u32(pages.len() / PAGE_CELLS, "page count")?,
-                    coarse_offset: checked_u32(coarse.len(), "coarse size")?,
+                    depth: l.depth,
+                    voxel_offset: checked_u32(colors.len(), "voxel count")?,
+                    node_offset: checked_u32(nodes.len() / NODE_WORDS, "lookup nodes")?,
                     object: checked_u32(lod_base.len() - 1, "object count")?,
+                    pad: [0; 3],
                 });
                 lod_bounds.push(voxel_bounds(lod));
-                voxels.extend_from_slice(&lod.point_cloud.voxels);
-                page_tables.extend_from_slice(&l.page_table);
-                pages.extend_from_slice(&l.pool);
-                coarse.extend_from_slice(&l.coarse);
-                checked_u32(pages.len(), "page pool size")?;
-                mem.point_cloud_bytes += (lod.point_cloud.voxels.len() * 16) as u64;
+                // Only what the GPU reads: the cell is implied by the lookup (id = Morton
+                // rank), texture coordinates are not read by any pass.
+                colors.extend(lod.point_cloud.voxels.iter().map(|v| v.color));
+                normals.extend(
+                    lod.point_cloud
+                        .voxels
+                        .iter()
+                        .map(|v| (v.z_normal >> 16) as u16),
+                );
+                nodes.extend_from_slice(&l.nodes);
+                checked_u32(nodes.len(), "lookup size")?;
+                let n = lod.point_cloud.voxels.len() as u64;
+                mem.voxels += n;
+                mem.color_bytes += n * GPU_COLOR_BYTES;
+                mem.normal_bytes += n * GPU_NORMAL_BYTES;
+                mem.point_cloud_bytes += n * GPU_VOXEL_BYTES;
                 mem.lookup_bytes += l.bytes() as u64;
                 mem.proxy_bytes +=
                     (lod.proxy.positions.len() * 16 + lod.proxy.triangles.len() * 12) as u64;
@@ -354,7 +382,7 @@ impl GpuScene {
             },
             count: None,
         }];
-        entries.extend((1..=7).map(ro));
+        entries.extend((1..=6).map(ro));
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scene"),
             entries: &entries,
@@ -380,10 +408,12 @@ impl GpuScene {
             mapped_at_creation: false,
         });
         let lod_buffer = storage(ctx, "lods", bytemuck::cast_slice(&lods))?;
-        let voxel_buffer = storage(ctx, "voxels", bytemuck::cast_slice(&voxels))?;
-        let page_table_buffer = storage(ctx, "page_tables", bytemuck::cast_slice(&page_tables))?;
-        let page_buffer = storage(ctx, "pages", bytemuck::cast_slice(&pages))?;
-        let coarse_buffer = storage(ctx, "coarse", bytemuck::cast_slice(&coarse))?;
+        if normals.len() % 2 == 1 {
+            normals.push(0);
+        }
+        let color_buffer = storage(ctx, "voxel colours", bytemuck::cast_slice(&colors))?;
+        let normal_buffer = storage(ctx, "voxel normals", bytemuck::cast_slice(&normals))?;
+        let lookup_buffer = storage(ctx, "lookup nodes", bytemuck::cast_slice(&nodes))?;
         let proxy_vertices = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("proxy vertices"),
             contents: bytemuck::cast_slice(if proxy_v.is_empty() {
@@ -440,10 +470,9 @@ impl GpuScene {
                 &frame_buffer,
                 &instance_buffer,
                 &lod_buffer,
-                &voxel_buffer,
-                &page_table_buffer,
-                &page_buffer,
-                &coarse_buffer,
+                &color_buffer,
+                &normal_buffer,
+                &lookup_buffer,
                 &bvh_buffer,
             ],
         );
@@ -455,10 +484,9 @@ impl GpuScene {
             instance_buffer,
             bvh_buffer,
             lod_buffer,
-            voxel_buffer,
-            page_table_buffer,
-            page_buffer,
-            coarse_buffer,
+            color_buffer,
+            normal_buffer,
+            lookup_buffer,
             proxy_vertices,
             proxy_indices,
             lod_base,
@@ -484,7 +512,7 @@ impl GpuScene {
     fn make_bind_group(
         ctx: &GpuContext,
         layout: &wgpu::BindGroupLayout,
-        bufs: [&wgpu::Buffer; 8],
+        bufs: [&wgpu::Buffer; 7],
     ) -> wgpu::BindGroup {
         let entries: Vec<_> = bufs
             .iter()

@@ -248,7 +248,7 @@ fn inside_resident_page(lookup: &ssbvb_voxel::asset::SparseLookup, p: DVec3) -> 
     let cell = ((p + 1.0) * 0.5 * n).floor();
     let ps = ssbvb_voxel::asset::PAGE_SIZE as f64;
     let page = (cell / ps).floor();
-    lookup.page_resident([page.x as u32, page.y as u32, page.z as u32])
+    lookup.page_occupied([page.x as u32, page.y as u32, page.z as u32])
 }
 
 /// The four side planes of the view frustum through the eye (origin), as (inward normal, d).

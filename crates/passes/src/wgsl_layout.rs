@@ -88,13 +88,11 @@ pub fn shared_structs() -> Vec<StructLayout> {
             "LodInfo",
             LodInfo {
                 level,
-                pages_per_axis,
-                coarse_per_axis,
+                depth,
                 voxel_offset,
-                page_table_offset,
-                page_offset,
-                coarse_offset,
-                object
+                node_offset,
+                object,
+                pad
             }
         ),
         layout!(

@@ -20,16 +20,11 @@ use ssbvb_voxel::proxy::{build_proxy, build_proxy_bricks};
 use ssbvb_voxel::reference::{Instance, render};
 use ssbvb_voxel::shading::Light;
 
-/// A LOD level from packed voxels (voxel id = index), with its page proxy.
-fn lod(level: u32, voxels: Vec<PackedVoxel>) -> LodLevel {
-    let lookup = SparseLookup::from_cells(
-        level,
-        voxels
-            .iter()
-            .map(|v| v.cell())
-            .collect::<Vec<_>>()
-            .into_iter(),
-    );
+/// A LOD level from packed voxels (sorted into Morton order: voxel id = Morton rank), with
+/// its page proxy.
+fn lod(level: u32, mut voxels: Vec<PackedVoxel>) -> LodLevel {
+    voxels.sort_by_key(|v| ssbvb_voxel::svo::morton_encode(v.cell()));
+    let lookup = SparseLookup::from_cells(level, voxels.iter().map(|v| v.cell()));
     let proxy = build_proxy(&lookup);
     LodLevel {
         level,
@@ -115,7 +110,7 @@ fn main() -> std::io::Result<()> {
     println!(
         "built ball (level {level}, {} voxels, {} pages) and floor in {:.2?}",
         ball.point_cloud.voxels.len(),
-        ball.lookup.resident_pages(),
+        ball.lookup.occupied_pages(),
         t.elapsed()
     );
     for brick in [16, 8, 4] {

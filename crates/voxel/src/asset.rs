@@ -8,14 +8,16 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::model::ObjectSpace;
 
-/// Edge length of a sparse-lookup page in cells (pages are `PAGE_SIZE³` cells).
-pub const PAGE_SIZE: u32 = 16;
-/// Cells per page (`16³ = 4096`).
-pub const PAGE_CELLS: usize = (PAGE_SIZE * PAGE_SIZE * PAGE_SIZE) as usize;
-/// Page-table entry of a page that holds no voxel.
-pub const EMPTY_PAGE: u32 = u32::MAX;
-/// Highest supported grid level (positions are packed in 16 bits per axis).
-pub const MAX_LEVEL: u32 = 16;
+pub use crate::lookup::{MAX_LEVEL, PAGE_SIZE, SparseLookup};
+
+/// GPU bytes of a voxel's colour (linear RGBA8).
+pub const GPU_COLOR_BYTES: u64 = 4;
+/// GPU bytes of a voxel's normal (16-bit octahedral).
+pub const GPU_NORMAL_BYTES: u64 = 2;
+/// GPU bytes per voxel of the attribute streams the renderer uploads: colour and normal.
+/// The cell is implied by the sparse lookup (voxel id = Morton rank) and texture
+/// coordinates are not uploaded (no pass reads them).
+pub const GPU_VOXEL_BYTES: u64 = GPU_COLOR_BYTES + GPU_NORMAL_BYTES;
 
 /// One voxel of a point cloud, packed into 16 bytes for the GPU.
 ///
@@ -47,34 +49,6 @@ pub struct PointCloud {
     pub voxels: Vec<PackedVoxel>,
 }
 
-/// The paper's sparse 3D lookup texture of one LOD level, as a virtual texture.
-///
-/// The grid of `2^level` cells per axis is cut into pages of `PAGE_SIZE³` cells. The page
-/// table has one entry per page (`pages_per_axis³`, x fastest, then y, then z): the index
-/// of the page in `pool`, or [`EMPTY_PAGE`]. Only pages holding at least one voxel are
-/// resident. A resident page is `PAGE_CELLS` consecutive `u32`s in `pool` (cell x fastest,
-/// then y, then z, coordinates local to the page), each `voxel id + 1`, or 0 when empty.
-/// For levels below 4 the grid is smaller than a page: one page, cells outside the grid 0.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct SparseLookup {
-    /// Grid level (2^level cells per axis).
-    pub level: u32,
-    /// Pages per axis: `max(1, 2^level / PAGE_SIZE)`.
-    pub pages_per_axis: u32,
-    /// One entry per page: pool page index or [`EMPTY_PAGE`].
-    pub page_table: Vec<u32>,
-    /// Resident pages, `PAGE_CELLS` entries each: voxel id + 1, or 0.
-    pub pool: Vec<u32>,
-    /// Coarse occupancy for skipping large empty regions: one bit per block of
-    /// `COARSE_PAGES³` pages (x fastest), set when any page of the block is resident.
-    pub coarse: Vec<u32>,
-    /// Blocks per axis of `coarse`: `ceil(pages_per_axis / COARSE_PAGES)`.
-    pub coarse_per_axis: u32,
-}
-
-/// Pages per axis in one block of [`SparseLookup::coarse`].
-pub const COARSE_PAGES: u32 = 4;
-
 /// A closed triangle mesh in object space that encloses every voxel of the asset.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ProxyMesh {
@@ -91,7 +65,7 @@ pub struct LodLevel {
     pub level: u32,
     /// The voxel point cloud.
     pub point_cloud: PointCloud,
-    /// The sparse lookup: voxel id + 1 per cell.
+    /// The sparse lookup: cell → voxel id (the cell's Morton rank).
     pub lookup: SparseLookup,
     /// Conservative proxy mesh enclosing every voxel box of this level.
     pub proxy: ProxyMesh,
@@ -183,107 +157,6 @@ fn decode_octahedral(u: u32, v: u32) -> [f32; 3] {
     [x / len, y / len, z / len]
 }
 
-impl SparseLookup {
-    /// Builds the lookup of a level from its voxels' cells; voxel id = index in `cells`.
-    /// Cells must be distinct and inside the grid (`< 2^level`).
-    pub fn from_cells(level: u32, cells: impl ExactSizeIterator<Item = [u32; 3]>) -> Self {
-        assert!(level <= MAX_LEVEL, "level {level} above MAX_LEVEL");
-        let pages_per_axis = ((1u32 << level) / PAGE_SIZE).max(1);
-        let ppa = pages_per_axis as usize;
-        let mut page_table = vec![EMPTY_PAGE; ppa * ppa * ppa];
-        let mut pool: Vec<u32> = Vec::new();
-        for (id, c) in cells.enumerate() {
-            let p = [c[0] / PAGE_SIZE, c[1] / PAGE_SIZE, c[2] / PAGE_SIZE];
-            let pi = p[0] as usize + ppa * (p[1] as usize + ppa * p[2] as usize);
-            if page_table[pi] == EMPTY_PAGE {
-                page_table[pi] = (pool.len() / PAGE_CELLS) as u32;
-                pool.resize(pool.len() + PAGE_CELLS, 0);
-            }
-            let base = page_table[pi] as usize * PAGE_CELLS;
-            pool[base + local_index(c)] = id as u32 + 1;
-        }
-        let coarse_per_axis = pages_per_axis.div_ceil(COARSE_PAGES);
-        let cpa = coarse_per_axis as usize;
-        let mut coarse = vec![0u32; (cpa * cpa * cpa).div_ceil(32)];
-        for z in 0..ppa {
-            for y in 0..ppa {
-                for x in 0..ppa {
-                    if page_table[x + ppa * (y + ppa * z)] != EMPTY_PAGE {
-                        let b = x / COARSE_PAGES as usize
-                            + cpa * (y / COARSE_PAGES as usize + cpa * (z / COARSE_PAGES as usize));
-                        coarse[b / 32] |= 1 << (b % 32);
-                    }
-                }
-            }
-        }
-        Self {
-            level,
-            pages_per_axis,
-            page_table,
-            pool,
-            coarse,
-            coarse_per_axis,
-        }
-    }
-
-    /// The voxel id at `cell`, or `None` when the cell is empty or outside the grid.
-    pub fn get(&self, cell: [u32; 3]) -> Option<u32> {
-        let n = 1u32 << self.level;
-        if cell.iter().any(|&c| c >= n) {
-            return None;
-        }
-        let ppa = self.pages_per_axis as usize;
-        let p = cell.map(|c| (c / PAGE_SIZE) as usize);
-        let page = self.page_table[p[0] + ppa * (p[1] + ppa * p[2])];
-        if page == EMPTY_PAGE {
-            return None;
-        }
-        let v = self.pool[page as usize * PAGE_CELLS + local_index(cell)];
-        v.checked_sub(1)
-    }
-
-    /// Whether the page containing `cell` is resident (cells outside the grid: `false`).
-    pub fn page_resident(&self, page: [u32; 3]) -> bool {
-        if page.iter().any(|&p| p >= self.pages_per_axis) {
-            return false;
-        }
-        let ppa = self.pages_per_axis as usize;
-        self.page_table[page[0] as usize + ppa * (page[1] as usize + ppa * page[2] as usize)]
-            != EMPTY_PAGE
-    }
-
-    /// Whether the coarse block `block` (in units of `COARSE_PAGES` pages) holds any page.
-    pub fn coarse_occupied(&self, block: [u32; 3]) -> bool {
-        if block.iter().any(|&b| b >= self.coarse_per_axis) {
-            return false;
-        }
-        let cpa = self.coarse_per_axis as usize;
-        let b = block[0] as usize + cpa * (block[1] as usize + cpa * block[2] as usize);
-        self.coarse[b / 32] & (1 << (b % 32)) != 0
-    }
-
-    /// Number of resident pages.
-    pub fn resident_pages(&self) -> usize {
-        self.pool.len() / PAGE_CELLS
-    }
-
-    /// Bytes of page table + pool + coarse occupancy.
-    pub fn bytes(&self) -> usize {
-        4 * (self.page_table.len() + self.pool.len() + self.coarse.len())
-    }
-
-    /// Bytes a dense `u32` texture of the whole grid would take.
-    pub fn dense_bytes(&self) -> u64 {
-        4 * (1u64 << (3 * self.level))
-    }
-}
-
-/// Index of a cell inside its page (x fastest).
-fn local_index(c: [u32; 3]) -> usize {
-    let l = c.map(|v| (v % PAGE_SIZE) as usize);
-    l[0] + PAGE_SIZE as usize * (l[1] + PAGE_SIZE as usize * l[2])
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -316,26 +189,5 @@ mod tests {
             let dot: f32 = (0..3).map(|k| n[k] * d[k]).sum();
             assert!(dot > 1.0f32.to_radians().cos(), "{d:?} -> {n:?}");
         }
-    }
-
-    #[test]
-    fn sparse_lookup_finds_every_cell_and_nothing_else() {
-        let cells = vec![[0, 0, 0], [17, 3, 40], [63, 63, 63], [16, 16, 16]];
-        let l = SparseLookup::from_cells(6, cells.clone().into_iter());
-        assert_eq!(l.pages_per_axis, 4);
-        assert_eq!(l.resident_pages(), 4);
-        for (i, c) in cells.iter().enumerate() {
-            assert_eq!(l.get(*c), Some(i as u32));
-        }
-        assert_eq!(l.get([1, 0, 0]), None);
-        assert_eq!(l.get([64, 0, 0]), None);
-        assert!(l.page_resident([1, 0, 2]));
-        assert!(!l.page_resident([2, 2, 2]));
-        assert!(l.coarse_occupied([0, 0, 0]));
-        // Levels below a page still work: one page.
-        let small = SparseLookup::from_cells(1, [[1, 1, 0]].into_iter());
-        assert_eq!(small.pages_per_axis, 1);
-        assert_eq!(small.get([1, 1, 0]), Some(0));
-        assert_eq!(small.get([2, 0, 0]), None);
     }
 }

@@ -4,7 +4,7 @@
 //! load a model ([`load`]) → fit it into object space [-1, 1]³ ([`model::ObjectSpace`]) →
 //! voxelize it on a 2^L grid ([`voxelize`]) → sparse voxel octree whose every level is a
 //! LOD ([`svo`]) → per LOD a packed point cloud ([`asset::PointCloud`]) and a sparse lookup
-//! of 16³ pages ([`asset::SparseLookup`]) → a conservative proxy mesh ([`proxy`]). The exact CPU
+//! (a 64-ary occupancy tree, [`lookup::SparseLookup`]) → a conservative proxy mesh ([`proxy`]). The exact CPU
 //! reference ray caster ([`mod@reference`]) is the ground truth every GPU technique is
 //! measured against (over many instances through an [`instance_bvh`]); [`cache`] stores a prepared asset on disk. [`cube_list`] builds the
 //! instance data of the cube rasterization baseline.
@@ -16,6 +16,7 @@ pub mod camera;
 pub mod cube_list;
 pub mod instance_bvh;
 pub mod load;
+pub mod lookup;
 pub mod model;
 pub mod prepare;
 pub mod procedural;

@@ -12,8 +12,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::asset::{
-    COARSE_PAGES, EMPTY_PAGE, LodLevel, MAX_LEVEL, PAGE_CELLS, PAGE_SIZE, PackedVoxel, PointCloud,
-    SparseLookup, VoxelAsset,
+    GPU_COLOR_BYTES, GPU_NORMAL_BYTES, GPU_VOXEL_BYTES, LodLevel, MAX_LEVEL, PackedVoxel,
+    PointCloud, SparseLookup, VoxelAsset,
 };
 use crate::model::Model;
 use crate::progress::Progress;
@@ -69,12 +69,25 @@ pub struct LevelStats {
     pub level: u32,
     /// Voxels (point-cloud entries).
     pub voxels: u64,
-    /// Resident 16³ pages of the sparse lookup.
+    /// Occupied 16³ regions (the bricks of the proxy mesh).
     pub resident_pages: u64,
-    /// Bytes of the packed point cloud (16 per voxel).
+    /// Nodes of the sparse lookup's occupancy tree (12 bytes each).
+    pub lookup_nodes: u64,
+    /// GPU bytes of the voxel attributes: colour plus normal, [`GPU_VOXEL_BYTES`] per
+    /// voxel (the cell is implied by the lookup).
     pub point_cloud_bytes: u64,
-    /// Bytes of the sparse lookup (page table + resident pages + coarse occupancy).
+    /// Of `point_cloud_bytes`: the colours.
+    pub color_bytes: u64,
+    /// Of `point_cloud_bytes`: the normals.
+    pub normal_bytes: u64,
+    /// Bytes of the CPU-side packed point cloud (16 per voxel, with cell and uv).
+    pub cpu_point_cloud_bytes: u64,
+    /// GPU bytes of the sparse lookup (the occupancy tree's nodes).
     pub lookup_bytes: u64,
+    /// `(lookup_bytes + point_cloud_bytes) / voxels`: what a voxel costs the renderer.
+    pub bytes_per_voxel: f64,
+    /// `lookup_bytes / voxels`.
+    pub lookup_bytes_per_voxel: f64,
     /// Bytes a dense `u32` lookup texture of the level would take.
     pub dense_lookup_bytes: u64,
     /// `lookup_bytes` as a percentage of `dense_lookup_bytes`.
@@ -114,12 +127,26 @@ impl LevelStats {
     pub fn of(lod: &LodLevel, octree_nodes: u64, seconds: Option<f64>) -> LevelStats {
         let lookup_bytes = lod.lookup.bytes() as u64;
         let dense = lod.lookup.dense_bytes();
+        let voxels = lod.point_cloud.voxels.len() as u64;
+        let per_voxel = |b: u64| {
+            if voxels == 0 {
+                0.0
+            } else {
+                b as f64 / voxels as f64
+            }
+        };
         LevelStats {
             level: lod.level,
-            voxels: lod.point_cloud.voxels.len() as u64,
-            resident_pages: lod.lookup.resident_pages() as u64,
-            point_cloud_bytes: std::mem::size_of_val(lod.point_cloud.voxels.as_slice()) as u64,
+            voxels,
+            resident_pages: lod.lookup.occupied_pages(),
+            lookup_nodes: lod.lookup.node_count() as u64,
+            point_cloud_bytes: voxels * GPU_VOXEL_BYTES,
+            color_bytes: voxels * GPU_COLOR_BYTES,
+            normal_bytes: voxels * GPU_NORMAL_BYTES,
+            cpu_point_cloud_bytes: std::mem::size_of_val(lod.point_cloud.voxels.as_slice()) as u64,
             lookup_bytes,
+            bytes_per_voxel: per_voxel(lookup_bytes + voxels * GPU_VOXEL_BYTES),
+            lookup_bytes_per_voxel: per_voxel(lookup_bytes),
             dense_lookup_bytes: dense,
             lookup_percent_of_dense: 100.0 * lookup_bytes as f64 / dense as f64,
             octree_nodes,
@@ -277,61 +304,9 @@ pub fn point_cloud_of(voxels: &LevelVoxels) -> PointCloud {
 }
 
 /// Builds the sparse lookup of a level from its strictly increasing Morton codes (voxel id
-/// = index), in parallel. The result equals [`SparseLookup::from_cells`] on the same cells.
-///
-/// Morton order is hierarchical: the page of a cell is `code >> 12` (16³ = 2^12 cells), so
-/// the voxels of one page are a contiguous run of the codes and pages appear in Morton
-/// order — the order `from_cells` assigns pool slots in. Each page's run is then filled
-/// independently, and the pool is allocated once at its final size.
-///
-/// # Panics
-///
-/// When `level > MAX_LEVEL` (as [`SparseLookup::from_cells`] does). Codes must be strictly
-/// increasing and inside the grid; [`crate::cache::read_cache`] checks that before calling.
+/// = index): [`SparseLookup::from_codes`].
 pub fn lookup_from_codes(level: u32, codes: &[u64]) -> SparseLookup {
-    assert!(level <= MAX_LEVEL, "level {level} above MAX_LEVEL");
-    let pages_per_axis = ((1u32 << level) / PAGE_SIZE).max(1);
-    let ppa = pages_per_axis as usize;
-    let page_bits = 3 * PAGE_SIZE.trailing_zeros();
-
-    let mut runs: Vec<(u64, usize)> = Vec::new(); // (page Morton code, first voxel id)
-    for (i, &c) in codes.iter().enumerate() {
-        let page = c >> page_bits;
-        if runs.last().is_none_or(|r| r.0 != page) {
-            runs.push((page, i));
-        }
-    }
-    let mut pool = vec![0u32; runs.len() * PAGE_CELLS];
-    pool.par_chunks_mut(PAGE_CELLS)
-        .enumerate()
-        .for_each(|(p, page)| {
-            let end = runs.get(p + 1).map_or(codes.len(), |r| r.1);
-            for (id, &code) in codes.iter().enumerate().take(end).skip(runs[p].1) {
-                let c = morton_decode(code);
-                let l = c.map(|v| (v % PAGE_SIZE) as usize);
-                page[l[0] + PAGE_SIZE as usize * (l[1] + PAGE_SIZE as usize * l[2])] =
-                    id as u32 + 1;
-            }
-        });
-    let mut page_table = vec![EMPTY_PAGE; ppa * ppa * ppa];
-    let coarse_per_axis = pages_per_axis.div_ceil(COARSE_PAGES);
-    let cpa = coarse_per_axis as usize;
-    let mut coarse = vec![0u32; (cpa * cpa * cpa).div_ceil(32)];
-    for (p, &(page, _)) in runs.iter().enumerate() {
-        let [x, y, z] = morton_decode(page).map(|v| v as usize);
-        page_table[x + ppa * (y + ppa * z)] = p as u32;
-        let c = COARSE_PAGES as usize;
-        let b = x / c + cpa * (y / c + cpa * (z / c));
-        coarse[b / 32] |= 1 << (b % 32);
-    }
-    SparseLookup {
-        level,
-        pages_per_axis,
-        page_table,
-        pool,
-        coarse,
-        coarse_per_axis,
-    }
+    SparseLookup::from_codes(level, codes)
 }
 
 #[cfg(test)]
@@ -353,39 +328,6 @@ mod tests {
             triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
             ..Default::default()
         })
-    }
-
-    #[test]
-    fn lookup_from_codes_equals_from_cells() {
-        for level in [0u32, 1, 3, 4, 5, 7] {
-            let n = 1u32 << level;
-            let mut codes: Vec<u64> = (0..500u32)
-                .map(|i| morton_encode([(i * 7) % n, (i * 13 + 1) % n, (i * 31 + 2) % n]))
-                .collect();
-            codes.sort_unstable();
-            codes.dedup();
-            let fast = lookup_from_codes(level, &codes);
-            let reference = SparseLookup::from_cells(
-                level,
-                codes
-                    .iter()
-                    .map(|&c| morton_decode(c))
-                    .collect::<Vec<_>>()
-                    .into_iter(),
-            );
-            assert_eq!(fast, reference, "level {level}");
-        }
-        let empty = lookup_from_codes(6, &[]);
-        assert_eq!(empty.resident_pages(), 0);
-        assert_eq!(
-            empty,
-            SparseLookup::from_cells(
-                6,
-                std::iter::empty::<[u32; 3]>()
-                    .collect::<Vec<_>>()
-                    .into_iter()
-            )
-        );
     }
 
     #[test]

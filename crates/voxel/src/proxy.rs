@@ -35,7 +35,7 @@ use std::collections::{HashMap, HashSet};
 
 use glam::DVec3;
 
-use crate::asset::{EMPTY_PAGE, PAGE_CELLS, PAGE_SIZE, ProxyMesh, SparseLookup};
+use crate::asset::{PAGE_SIZE, ProxyMesh, SparseLookup};
 use crate::model::cell_size;
 
 /// The proxy of a level: the boundary of the union of its resident pages (see the module
@@ -56,32 +56,16 @@ pub fn build_proxy_bricks(lookup: &SparseLookup, brick: u32) -> ProxyMesh {
     triangulate(&rects, brick, cell_size(lookup.level))
 }
 
-/// Every occupied brick (coordinates in bricks).
+/// Every occupied brick (coordinates in bricks): the occupied regions of the largest
+/// tree node size `4^m ≤ brick`, merged by the remaining factor (1 or 2).
 fn occupied_bricks(lookup: &SparseLookup, brick: i64) -> HashSet<[i64; 3]> {
-    let ppa = lookup.pages_per_axis as usize;
-    let page_cells = PAGE_SIZE as i64;
-    let mut set = HashSet::new();
-    for (i, &entry) in lookup.page_table.iter().enumerate() {
-        if entry == EMPTY_PAGE {
-            continue;
-        }
-        let page = [
-            (i % ppa) as i64,
-            ((i / ppa) % ppa) as i64,
-            (i / (ppa * ppa)) as i64,
-        ];
-        if brick >= page_cells || brick >= 1i64 << lookup.level {
-            // A page (or the whole grid) is one brick: it is resident, so it holds a voxel.
-            set.insert(page.map(|p| p * page_cells / brick));
-            continue;
-        }
-        let cells = &lookup.pool[entry as usize * PAGE_CELLS..][..PAGE_CELLS];
-        for (local, _) in cells.iter().enumerate().filter(|&(_, &v)| v != 0) {
-            let l = [local % 16, (local / 16) % 16, local / 256].map(|v| v as i64);
-            set.insert([0, 1, 2].map(|a| (page[a] * page_cells + l[a]) / brick));
-        }
-    }
-    set
+    let m = brick.ilog2() / 2;
+    let factor = brick >> (2 * m);
+    lookup
+        .occupied_regions(m)
+        .into_iter()
+        .map(|r| r.map(|v| v as i64 / factor))
+        .collect()
 }
 
 /// A merged boundary rectangle, in brick units: normal axis `axis`, `positive` when the
@@ -391,29 +375,20 @@ pub fn proxy_encloses(lookup: &SparseLookup, proxy: &ProxyMesh) -> Result<(), St
     check_closed(proxy)?;
     let q = WindingQuery::new(proxy);
     let s = cell_size(lookup.level);
-    let ppa = lookup.pages_per_axis as usize;
-    for (i, &entry) in lookup.page_table.iter().enumerate() {
-        if entry == EMPTY_PAGE {
-            continue;
+    for c in lookup.cells() {
+        let cell = c.map(|v| v as f64);
+        let lo = DVec3::from(cell) * s - DVec3::ONE;
+        let mut points = vec![lo + DVec3::splat(0.5 * s)];
+        for corner in 0..8 {
+            let f = |bit: usize| if corner & bit == 0 { 0.25 } else { 0.75 };
+            points.push(lo + DVec3::new(f(1), f(2), f(4)) * s);
         }
-        let page = [i % ppa, (i / ppa) % ppa, i / (ppa * ppa)];
-        let cells = &lookup.pool[entry as usize * PAGE_CELLS..][..PAGE_CELLS];
-        for (local, _) in cells.iter().enumerate().filter(|&(_, &v)| v != 0) {
-            let l = [local % 16, (local / 16) % 16, local / 256];
-            let cell = [0, 1, 2].map(|a| (page[a] * PAGE_SIZE as usize + l[a]) as f64);
-            let lo = DVec3::from(cell) * s - DVec3::ONE;
-            let mut points = vec![lo + DVec3::splat(0.5 * s)];
-            for c in 0..8 {
-                let f = |bit: usize| if c & bit == 0 { 0.25 } else { 0.75 };
-                points.push(lo + DVec3::new(f(1), f(2), f(4)) * s);
-            }
-            for p in points {
-                let w = q.winding(p);
-                if w != 1 {
-                    return Err(format!(
-                        "voxel at cell {cell:?}: point {p} has winding number {w} (expected 1)"
-                    ));
-                }
+        for p in points {
+            let w = q.winding(p);
+            if w != 1 {
+                return Err(format!(
+                    "voxel at cell {cell:?}: point {p} has winding number {w} (expected 1)"
+                ));
             }
         }
     }

@@ -302,7 +302,7 @@ fn shared_models_proxies_enclose_every_voxel() {
             eprintln!(
                 "{name} level {level}: {} voxels, {} pages, proxy {} triangles",
                 finest.point_cloud.voxels.len(),
-                finest.lookup.resident_pages(),
+                finest.lookup.occupied_pages(),
                 finest.proxy.triangles.len()
             );
             // Rays through the model from two sides cross the proxy before any voxel.

@@ -36,7 +36,8 @@ pub fn synthetic_asset(level: u32, cells: &[[u32; 3]]) -> Arc<VoxelAsset> {
     let mut lods = Vec::new();
     let mut current: Vec<[u32; 3]> = cells.to_vec();
     for l in (0..=level).rev() {
-        current.sort();
+        // Morton order: the lookup implies voxel ids as Morton ranks.
+        current.sort_by_key(|&c| ssbvb_voxel::svo::morton_encode(c));
         current.dedup();
         let n = (1u64 << l) as f32;
         let voxels: Vec<PackedVoxel> = current
@@ -177,8 +178,9 @@ fn entry_covers_every_reference_hit_and_lies_on_the_proxy_and_the_ray() {
                         let mut q = p;
                         q[a] += s * page * 0.5;
                         let c = ((q + 1.0) / page).floor();
-                        (0..3).all(|k| c[k] >= 0.0 && c[k] < lookup.pages_per_axis as f64)
-                            && lookup.page_resident([c.x as u32, c.y as u32, c.z as u32])
+                        let pages = ((1u32 << lookup.level) / 16).max(1) as f64;
+                        (0..3).all(|k| c[k] >= 0.0 && c[k] < pages)
+                            && lookup.page_occupied([c.x as u32, c.y as u32, c.z as u32])
                     };
                     side(-1.0) != side(1.0)
                 });

@@ -23,9 +23,9 @@
 //!   (XXH3-64 of kind, lod, length and the payload), then the payload.
 //! ```
 //!
-//! The sparse lookups are not stored: they are a pure function of the point clouds
-//! (rebuilt with [`lookup_from_codes`] on read, which costs about as much as reading the
-//! pages would) and would make the file several times larger at high levels.
+//! The sparse lookups are not stored: they are a pure function of the point clouds'
+//! Morton codes, rebuilt with [`lookup_from_codes`] on read in one linear pass per tree
+//! depth (cheaper than reading and checksumming them).
 //!
 //! Reading never trusts the file: every length is checked against the bytes left in the
 //! file before anything is allocated, every section's checksum is verified, and the point

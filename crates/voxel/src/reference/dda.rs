@@ -46,22 +46,22 @@
 //!
 //! Axes with `d_a < 0` are mirrored (`x → -x`, cell `i → 2^level - 1 - i`): with dyadic
 //! boundaries this is exact and keeps every crossing time bit-identical, so the loop only
-//! ever steps forward. The hierarchical traversal additionally jumps over non-resident
-//! pages and unoccupied coarse blocks (`COARSE_PAGES³` pages): when every cell the ray can
-//! touch before leaving the current page (block) lies in empty pages, it advances to the
+//! ever steps forward. The hierarchical traversal additionally jumps over the empty nodes
+//! of the lookup's 64-ary tree (regions of 4³, 16³, 64³, ... cells): when every cell the
+//! ray can touch before leaving the current region is empty, it advances to the
 //! first crossing time at which the ray reaches the page's far boundary, binary-searching
 //! each axis' next plane. The state it lands in is exactly the state the cell-by-cell loop
 //! reaches at that time, so both report identical hits (a test checks it on random rays).
 
 use glam::DVec3;
 
-use crate::asset::{COARSE_PAGES, PAGE_SIZE, SparseLookup};
+use crate::asset::SparseLookup;
 use crate::model::cell_size;
 
 /// How [`trace_object_ray`] walks empty space. Both give bit-identical results.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Traversal {
-    /// Skip non-resident pages and empty coarse blocks in one step (the default).
+    /// Skip the empty nodes of the lookup tree in one step each (the default).
     Hierarchical,
     /// Visit every cell (the plain Amanatides–Woo DDA; the test oracle).
     CellByCell,
@@ -331,22 +331,23 @@ fn best_touched(
     })
 }
 
-/// Remembers the last page / coarse block region found occupied, so the hierarchical
-/// traversal queries the occupancy structures only when the ray enters a new region.
+/// Remembers, per node size of the lookup's tree, the last region found occupied, so the
+/// hierarchical traversal queries the tree only when the ray enters a new region.
 #[derive(Default)]
 struct SkipCache {
-    block: Option<[[i64; 2]; 3]>,
-    page: Option<[[i64; 2]; 3]>,
+    /// `occupied[m]`: the last occupied region of `4^m` cells per axis.
+    occupied: Vec<Option<[[i64; 2]; 3]>>,
 }
 
 impl SkipCache {
-    /// If every cell the ray can touch before leaving the current coarse block (else
-    /// page) is in an empty one, advance `st` to the first crossing time at which the ray
-    /// reaches that region's far boundary. Returns whether it skipped.
+    /// If every cell the ray can touch before leaving the current region of `4^m` cells
+    /// (largest `m` first, down to 4³ bricks) is empty, advance `st` to the first crossing
+    /// time at which the ray reaches that region's far boundary. Returns whether it skipped.
     fn try_skip(&mut self, f: &Frame, st: &mut State, lookup: &SparseLookup) -> bool {
-        const BLOCK: i64 = (COARSE_PAGES * PAGE_SIZE) as i64;
-        const PAGE: i64 = PAGE_SIZE as i64;
-        for (unit, coarse) in [(BLOCK, true), (PAGE, false)] {
+        let depth = lookup.depth as usize;
+        self.occupied.resize(depth, None);
+        for m in (1..depth).rev() {
+            let unit = 1i64 << (2 * m);
             // The region (in units, original coordinates) holding the current cells.
             let mut region = [[0i64; 2]; 3];
             for (a, r) in region.iter_mut().enumerate() {
@@ -357,25 +358,14 @@ impl SkipCache {
                     [st.lo[a] / unit, st.hi[a] / unit]
                 };
             }
-            let cached = if coarse {
-                &mut self.block
-            } else {
-                &mut self.page
-            };
-            if *cached == Some(region) {
+            if self.occupied[m] == Some(region) {
                 continue;
             }
             let mut empty = true;
             'scan: for z in region[2][0]..=region[2][1] {
                 for y in region[1][0]..=region[1][1] {
                     for x in region[0][0]..=region[0][1] {
-                        let u = [x as u32, y as u32, z as u32];
-                        let occupied = if coarse {
-                            lookup.coarse_occupied(u)
-                        } else {
-                            lookup.page_resident(u)
-                        };
-                        if occupied {
+                        if lookup.region_occupied(m as u32, [x as u32, y as u32, z as u32]) {
                             empty = false;
                             break 'scan;
                         }
@@ -383,7 +373,7 @@ impl SkipCache {
                 }
             }
             if !empty {
-                *cached = Some(region);
+                self.occupied[m] = Some(region);
                 continue;
             }
             // Far plane of the region per moving axis, in the mirrored frame.

@@ -17,14 +17,18 @@ use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::model::cell_size;
 use ssbvb_voxel::reference::{Instance, ReferenceImage, render};
 use ssbvb_voxel::shading::Light;
+use ssbvb_voxel::svo::morton_encode;
 
 // ---------------------------------------------------------------------------------------
 // Helpers
 // ---------------------------------------------------------------------------------------
 
-/// A LOD level from cells (voxel id = index), normals pointing away from the origin.
+/// A LOD level from cells, normals pointing away from the origin. Voxel ids are Morton
+/// ranks (the lookup implies them), so the point cloud is sorted: see [`id_of`].
 fn lod(level: u32, cells: &[[u32; 3]]) -> LodLevel {
     let s = cell_size(level);
+    let mut cells = cells.to_vec();
+    cells.sort_by_key(|&c| morton_encode(c));
     let voxels = cells
         .iter()
         .map(|&c| {
@@ -38,6 +42,11 @@ fn lod(level: u32, cells: &[[u32; 3]]) -> LodLevel {
         lookup: SparseLookup::from_cells(level, cells.iter().copied()),
         proxy: ProxyMesh::default(),
     }
+}
+
+/// The voxel id of `cell` in a level built by [`lod`].
+fn id_of(lod: &LodLevel, cell: [u32; 3]) -> u32 {
+    lod.lookup.get(cell).expect("cell is a voxel")
 }
 
 /// Lower boundary of cell `k` (exact for the levels used here).

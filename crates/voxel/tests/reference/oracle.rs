@@ -131,7 +131,10 @@ fn random_sparse_cells(rng: &mut Rng, level: u32, count: usize) -> Vec<[u32; 3]>
             set.insert(cell);
         }
     }
-    set.into_iter().collect()
+    // Morton order: voxel ids are Morton ranks, so the brute force's index is the id.
+    let mut cells: Vec<[u32; 3]> = set.into_iter().collect();
+    cells.sort_by_key(|&c| ssbvb_voxel::svo::morton_encode(c));
+    cells
 }
 
 /// A random ray: generic, lattice-aligned (exact ties: origins on planes and edges,
