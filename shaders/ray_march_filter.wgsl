@@ -63,10 +63,6 @@ const C_MARCHES: u32 = 5u;
 const C_HISTOGRAM: u32 = 8u;
 
 var<private> marches: u32;
-var<workgroup> wg_rays: atomic<u32>;
-var<workgroup> wg_steps: atomic<u32>;
-var<workgroup> wg_boxes: atomic<u32>;
-var<workgroup> wg_marches: atomic<u32>;
 
 //#include "sparse_march.inc.wgsl"
 //#include "instance_bvh.inc.wgsl"
@@ -263,7 +259,7 @@ fn steps_bin(s: u32) -> u32 {
     return 32u + (e - 5u) * 8u + ((s >> (e - 3u)) & 7u);
 }
 
-// Adds a workgroup's sum to a (low, high) pair of words.
+// Adds to a (low, high) pair of words.
 fn add_wide(word: u32, v: u32) {
     if v == 0u {
         return;
@@ -275,32 +271,15 @@ fn add_wide(word: u32, v: u32) {
 }
 
 @compute @workgroup_size(8, 8)
-fn main(
-    @builtin(global_invocation_id) gid: vec3<u32>,
-    @builtin(local_invocation_index) li: u32,
-) {
-    if li == 0u {
-        atomicStore(&wg_rays, 0u);
-        atomicStore(&wg_steps, 0u);
-        atomicStore(&wg_boxes, 0u);
-        atomicStore(&wg_marches, 0u);
-    }
-    workgroupBarrier();
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     march_steps = 0u;
     boxes_tested = 0u;
     marches = 0u;
     if filter_pixel(vec2<i32>(gid.xy)) {
-        atomicAdd(&wg_rays, 1u);
-        atomicAdd(&wg_steps, march_steps);
-        atomicAdd(&wg_boxes, boxes_tested);
-        atomicAdd(&wg_marches, marches);
+        atomicAdd(&filter_counters[C_RAYS], 1u);
+        add_wide(C_STEPS, march_steps);
+        add_wide(C_BOXES, boxes_tested);
+        add_wide(C_MARCHES, marches);
         atomicAdd(&filter_counters[C_HISTOGRAM + steps_bin(march_steps)], 1u);
-    }
-    workgroupBarrier();
-    if li == 0u {
-        atomicAdd(&filter_counters[C_RAYS], atomicLoad(&wg_rays));
-        add_wide(C_STEPS, atomicLoad(&wg_steps));
-        add_wide(C_BOXES, atomicLoad(&wg_boxes));
-        add_wide(C_MARCHES, atomicLoad(&wg_marches));
     }
 }

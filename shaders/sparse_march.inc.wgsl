@@ -225,8 +225,10 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32) -> Hit {
             path_len = 1u;
         }
         path_cell = co;
-        // Descend: an absent child of size 4^m (m > 0) is an empty region to skip; an
-        // absent cell is an ordinary DDA step; a present cell is the hit.
+        // Descend: an absent child of 2^shift cells per axis is an empty region to skip,
+        // twice as wide when its whole 2^3 octant of children is absent (the octant's eight
+        // bits are one byte of the mask); an absent single cell is an ordinary DDA step; a
+        // present cell is the hit.
         var unit = 0;
         loop {
             let k = path_len - 1u;
@@ -234,7 +236,8 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32) -> Hit {
             let shift = 2u * (depth - 1u - k);
             let b = child_bit((co >> vec3(shift)) & vec3(3u));
             if !node_has(n, b) {
-                unit = select(0, 1 << shift, shift > 0u);
+                let octant_empty = ((select(n.lo, n.hi, b >= 32u) >> (b & 24u)) & 0xffu) == 0u;
+                unit = select(select(0, 1 << shift, shift > 0u), 2 << shift, octant_empty);
                 break;
             }
             if shift == 0u {

@@ -103,10 +103,10 @@ pub(super) fn fastest(rows: &[Row]) -> Vec<Fastest> {
 /// sweeps and the plots.
 fn markdown(r: &Report) -> String {
     let mut s = format!("adapter: {}\ntiming: {}\n\n", r.adapter, r.timing);
-    s.push_str("| technique | model | level | size | frame ms (median [min, max]) | fill / covered | voxels | GPU MiB | IoU | same voxel | depth err (vox) | PSNR dB | SSIM |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    s.push_str("| technique | model | level | size | frame ms (median [min, max]) | fill / covered | voxels | GPU MiB | IoU | same voxel | depth err (vox) | PSNR dB | SSIM | steps / ray |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for x in &r.rows {
         s.push_str(&format!(
-            "| {} | {} | {} | {}x{} | {:.2} [{:.2}, {:.2}] | {} | {} | {:.1} | {:.4} | {} | {:.3} | {} | {} |\n",
+            "| {} | {} | {} | {}x{} | {:.2} [{:.2}, {:.2}] | {} | {} | {:.1} | {:.4} | {} | {:.3} | {} | {} | {} |\n",
             x.technique,
             x.model,
             x.level,
@@ -126,7 +126,8 @@ fn markdown(r: &Report) -> String {
             x.same_voxel_rate.map_or("-".into(), |v| format!("{v:.4}")),
             x.depth_error_voxels_median,
             x.psnr_db.map_or("-".into(), |p| format!("{p:.2}")),
-            x.ssim.map_or("-".into(), |v| format!("{v:.4}"))
+            x.ssim.map_or("-".into(), |v| format!("{v:.4}")),
+            x.steps_per_ray().map_or("-".into(), |v| format!("{v:.1}"))
         ));
     }
     for k in &r.skipped {
@@ -191,11 +192,11 @@ fn fastest_markdown(f: &[Fastest]) -> String {
 pub(super) fn write_outputs(dir: &Path, r: &Report) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let mut csv = String::from(
-        "technique,model,level,width,height,frames,frame_ms_median,frame_ms_min,frame_ms_max,fill_count,covered_pixels,voxels,gpu_memory_bytes,coverage_iou,same_voxel_rate,depth_error_voxels_median,normal_error_deg_median,psnr_db,ssim\n",
+        "technique,model,level,width,height,frames,frame_ms_median,frame_ms_min,frame_ms_max,fill_count,covered_pixels,voxels,gpu_memory_bytes,coverage_iou,same_voxel_rate,depth_error_voxels_median,normal_error_deg_median,psnr_db,ssim,steps_per_ray\n",
     );
     for x in &r.rows {
         csv.push_str(&format!(
-            "{},{},{},{},{},{},{:.4},{:.4},{:.4},{},{},{},{},{:.6},{},{:.6},{:.4},{},{}\n",
+            "{},{},{},{},{},{},{:.4},{:.4},{:.4},{},{},{},{},{:.6},{},{:.6},{:.4},{},{},{}\n",
             x.technique,
             x.model,
             x.level,
@@ -215,7 +216,9 @@ pub(super) fn write_outputs(dir: &Path, r: &Report) -> Result<()> {
             x.depth_error_voxels_median,
             x.normal_error_deg_median,
             x.psnr_db.map_or(String::new(), |p| format!("{p:.4}")),
-            x.ssim.map_or(String::new(), |v| format!("{v:.5}"))
+            x.ssim.map_or(String::new(), |v| format!("{v:.5}")),
+            x.steps_per_ray()
+                .map_or(String::new(), |v| format!("{v:.3}"))
         ));
     }
     let mut files = vec![

@@ -44,6 +44,19 @@ pub(super) struct Row {
     pub(super) psnr_db: Option<f64>,
     /// Mean SSIM of the composite (see `sweep::Measured::ssim`).
     pub(super) ssim: Option<f64>,
+    /// Hardware-independent counts of the profiled frame.
+    pub(super) counters: ssbvb_passes::FrameCounters,
+}
+
+impl Row {
+    /// Traversal steps per ray of the technique's ray walk: march steps of the filter,
+    /// DDA cells or octree nodes of the ray casters (`None` for rasterizers).
+    pub(super) fn steps_per_ray(&self) -> Option<f64> {
+        let c = &self.counters;
+        c.march_steps_mean
+            .or(c.dda_steps_per_ray)
+            .or(c.octree_nodes_per_ray)
+    }
 }
 
 /// The median of `v` (sorts it; the upper one of an even count).
@@ -226,5 +239,6 @@ fn run_one(ctx: &ssbvb_gpu::GpuContext, t: &Technique, c: &Cell) -> Result<Row> 
         normal_error_deg_median: acc.normal_error_deg.median,
         psnr_db: m.psnr.map(|p| p.0).filter(|p| p.is_finite()),
         ssim: m.ssim,
+        counters: m.counters,
     })
 }

@@ -33,6 +33,8 @@ pub(crate) struct Measured {
     /// reference over the whole image, with pixels neither covers set to black in both
     /// (their backgrounds differ by design); only when asked for.
     pub ssim: Option<f64>,
+    /// Hardware-independent counts of the profiled frame (steps per ray, ...).
+    pub counters: ssbvb_passes::FrameCounters,
 }
 
 /// Everything [`measure`] needs besides the pipeline.
@@ -88,6 +90,7 @@ pub(crate) fn measure(s: &Setup, pipeline: ResolvedPipeline, with_psnr: bool) ->
     };
     let stats = renderer.render(ctx, &mut gpu_scene, s.camera, profiling)?;
     let fill = renderer.fill_count(ctx)?;
+    let counters = renderer.counters(ctx)?;
     let hits = ssbvb_passes::measure::gbuffer_hits(ctx, &renderer)?;
     let acc = ssbvb_voxel::accuracy::compare(s.reference, &hits, &[2.0 / (1u64 << s.level) as f64])
         .map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -153,6 +156,7 @@ pub(crate) fn measure(s: &Setup, pipeline: ResolvedPipeline, with_psnr: bool) ->
         gpu_memory: gpu_scene.total_memory(),
         psnr,
         ssim,
+        counters,
     })
 }
 
