@@ -53,7 +53,7 @@ struct Instance {
 }
 
 // A node of the hierarchy over the visible instances' camera-relative world boxes (group 0,
-// binding 6), rebuilt every frame (ssbvb-voxel instance_bvh.rs; node 0 is the root).
+// binding 11), rebuilt every frame (ssbvb-voxel instance_bvh.rs; node 0 is the root).
 struct BvhNode {
     lo: vec3<f32>,
     // Left child, or BVH_LEAF | index into `instances`.
@@ -75,15 +75,17 @@ struct LodInfo {
     // Depth of the lookup's 64-ary tree (ssbvb-voxel lookup.rs): the root covers 4^depth
     // cells per axis, its leaves 4^3.
     depth: u32,
-    // First voxel of this LOD in `voxel_colors` / `voxel_normals`.
+    // First voxel of this LOD in the colour and normal streams.
     voxel_offset: u32,
-    // This LOD's root in `lookup_nodes`; child indices are relative to it.
+    // This LOD's root in the lookup-node stream; child indices are relative to it.
     node_offset: u32,
     // The scene object this LOD belongs to.
     object: u32,
-    pad0: u32,
-    pad1: u32,
-    pad2: u32,
+    // log2 of the words per binding of the colour and normal streams, and of the nodes per
+    // binding of the lookup-node stream (the same for every LOD of a scene).
+    chunk_bits: u32,
+    node_chunk_bits: u32,
+    pad: u32,
 }
 
 // One node of a lookup tree: a 64-bit mask of the present 4^3 children (bit = Morton
@@ -125,11 +127,52 @@ const STENCIL_TRIANGLE: u32 = 2u;
 @group(0) @binding(2) var<storage, read> lods: array<LodInfo>;
 // Per voxel: linear RGBA8 colour, and the 16-bit octahedral normal two to a word (low
 // half = even voxel). Positions are implied by the lookup (the voxel id is the Morton rank
-// of its cell), so nothing else is uploaded.
-@group(0) @binding(3) var<storage, read> voxel_colors: array<u32>;
-@group(0) @binding(4) var<storage, read> voxel_normals: array<u32>;
-@group(0) @binding(5) var<storage, read> lookup_nodes: array<LookupNode>;
-@group(0) @binding(6) var<storage, read> instance_bvh: array<BvhNode>;
+// of its cell), so nothing else is uploaded. No binding may exceed the device's storage
+// binding size (128 MiB on lavapipe), so each stream is split into chunks of
+// 2^LodInfo.chunk_bits words (2^node_chunk_bits nodes) over several bindings; unused
+// chunks are bound to a small empty buffer.
+@group(0) @binding(3) var<storage, read> voxel_colors_0: array<u32>;
+@group(0) @binding(4) var<storage, read> voxel_colors_1: array<u32>;
+@group(0) @binding(5) var<storage, read> voxel_colors_2: array<u32>;
+@group(0) @binding(6) var<storage, read> voxel_colors_3: array<u32>;
+@group(0) @binding(7) var<storage, read> voxel_normals_0: array<u32>;
+@group(0) @binding(8) var<storage, read> voxel_normals_1: array<u32>;
+@group(0) @binding(9) var<storage, read> lookup_nodes_0: array<LookupNode>;
+@group(0) @binding(10) var<storage, read> lookup_nodes_1: array<LookupNode>;
+@group(0) @binding(11) var<storage, read> instance_bvh: array<BvhNode>;
+
+// Colour word of voxel `g` (index over all LODs).
+fn voxel_color_word(lod: LodInfo, g: u32) -> u32 {
+    let i = g & ((1u << lod.chunk_bits) - 1u);
+    switch g >> lod.chunk_bits {
+        case 0u: { return voxel_colors_0[i]; }
+        case 1u: { return voxel_colors_1[i]; }
+        case 2u: { return voxel_colors_2[i]; }
+        default: { return voxel_colors_3[i]; }
+    }
+}
+
+// 16-bit normal of voxel `g` (index over all LODs).
+fn voxel_normal_bits(lod: LodInfo, g: u32) -> u32 {
+    let w = g >> 1u;
+    let i = w & ((1u << lod.chunk_bits) - 1u);
+    var word: u32;
+    if (w >> lod.chunk_bits) == 0u {
+        word = voxel_normals_0[i];
+    } else {
+        word = voxel_normals_1[i];
+    }
+    return (word >> (16u * (g & 1u))) & 0xffffu;
+}
+
+// Lookup node `n` (index over all LODs).
+fn lookup_node(lod: LodInfo, n: u32) -> LookupNode {
+    let i = n & ((1u << lod.node_chunk_bits) - 1u);
+    if (n >> lod.node_chunk_bits) == 0u {
+        return lookup_nodes_0[i];
+    }
+    return lookup_nodes_1[i];
+}
 
 fn voxel_cell(v: PackedVoxel) -> vec3<u32> {
     return vec3(v.xy & 0xffffu, v.xy >> 16u, v.z_normal & 0xffffu);
@@ -183,7 +226,7 @@ fn node_child(n: LookupNode, b: u32) -> u32 {
 fn lookup_cell(lod: LodInfo, cell: vec3<u32>) -> u32 {
     var node = lod.node_offset;
     for (var k = 0u; k < lod.depth; k++) {
-        let n = lookup_nodes[node];
+        let n = lookup_node(lod, node);
         let b = child_bit((cell >> vec3(2u * (lod.depth - 1u - k))) & vec3(3u));
         if !node_has(n, b) {
             return 0u;
@@ -201,13 +244,14 @@ fn lookup_cell(lod: LodInfo, cell: vec3<u32>) -> u32 {
 // the voxel id within the LOD.
 fn packed_voxel(lod: LodInfo, cell: vec3<u32>, id: u32) -> PackedVoxel {
     let g = lod.voxel_offset + id;
-    let normal = (voxel_normals[g >> 1u] >> (16u * (g & 1u))) & 0xffffu;
-    return PackedVoxel(cell.x | (cell.y << 16u), cell.z | (normal << 16u), voxel_colors[g], 0u);
+    let normal = voxel_normal_bits(lod, g);
+    let color = voxel_color_word(lod, g);
+    return PackedVoxel(cell.x | (cell.y << 16u), cell.z | (normal << 16u), color, 0u);
 }
 
 // Linear RGBA colour of voxel `id` of a LOD.
 fn lod_voxel_color(lod: LodInfo, id: u32) -> vec4<f32> {
-    return unpack4x8unorm(voxel_colors[lod.voxel_offset + id]);
+    return unpack4x8unorm(voxel_color_word(lod, lod.voxel_offset + id));
 }
 
 // Normalized world (camera-relative) direction of the ray through pixel position `px`

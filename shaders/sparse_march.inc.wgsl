@@ -1,5 +1,5 @@
 // The sparse march: the first voxel along a ray through one LOD's sparse lookup (the
-// 64-ary occupancy tree `lookup_nodes`, common.inc.wgsl), the GPU side of the CPU reference's
+// 64-ary occupancy tree `lookup_nodes_*`, common.inc.wgsl), the GPU side of the CPU reference's
 // hierarchical DDA. Included by ray_march_filter.wgsl; the includer declares
 // `override MAX_STEPS: u32`.
 //
@@ -232,7 +232,7 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32) -> Hit {
         var unit = 0;
         loop {
             let k = path_len - 1u;
-            let n = lookup_nodes[path[k]];
+            let n = lookup_node(lod, path[k]);
             let shift = 2u * (depth - 1u - k);
             let b = child_bit((co >> vec3(shift)) & vec3(3u));
             if !node_has(n, b) {

@@ -9,7 +9,7 @@ use std::sync::{Arc, Mutex, OnceLock};
 use glam::DAffine3;
 use ssbvb_gpu::{ContextOptions, GpuContext, wgpu};
 use ssbvb_passes::frame::FrameResource;
-use ssbvb_passes::{GpuScene, LodPolicy, Profiling, Renderer, Scene};
+use ssbvb_passes::{GpuScene, LodPolicy, Profiling, Renderer, Scene, StreamChunks};
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::reference::{self, ReferenceImage};
@@ -76,10 +76,21 @@ pub struct Frame {
 
 /// Renders one frame of `scene` with the pipeline text `pipeline` at `size`.
 pub fn render(pipeline: &str, scene: Scene, camera: &Camera, size: (u32, u32)) -> Frame {
+    render_with_chunks(pipeline, scene, camera, size, StreamChunks::default())
+}
+
+/// [`render`] with the scene's streams split into bindings of the given sizes.
+pub fn render_with_chunks(
+    pipeline: &str,
+    scene: Scene,
+    camera: &Camera,
+    size: (u32, u32),
+    chunks: StreamChunks,
+) -> Frame {
     let c = ctx();
     let resolved =
         ssbvb_graph::resolve_str(pipeline, "test pipeline").unwrap_or_else(|e| panic!("{e}"));
-    let mut gpu_scene = GpuScene::new(c, scene).unwrap_or_else(|e| panic!("{e}"));
+    let mut gpu_scene = GpuScene::with_chunks(c, scene, chunks).unwrap_or_else(|e| panic!("{e}"));
     let mut renderer =
         Renderer::new(c, &gpu_scene, resolved, size).unwrap_or_else(|e| panic!("{e}"));
     renderer

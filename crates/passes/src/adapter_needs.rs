@@ -13,7 +13,7 @@ use crate::registry::registration;
 use wgpu::DownlevelFlags as F;
 
 /// Storage buffers of the scene's bind group (group 0), visible to every stage.
-const SCENE_STORAGE_BUFFERS: u64 = 7;
+const SCENE_STORAGE_BUFFERS: u64 = crate::gpu_scene::SCENE_STORAGE_BUFFERS as u64;
 
 /// What `pipeline` needs from an adapter: the scene's bindings, each live pass kind's
 /// needs, every texture resource's format with its usages, and the depth-stencil readback
@@ -121,8 +121,9 @@ mod tests {
             .iter()
             .find(|(n, _)| n.name == "max_storage_buffers_per_shader_stage")
             .unwrap();
-        // 7 of the scene (group 0) and 5 of the filter.
-        assert_eq!(storage.0.at_least, 12, "{storage:?}");
+        // 11 of the scene (group 0: instances, LODs, 4 + 2 + 2 stream chunks, the
+        // hierarchy) and 5 of the filter.
+        assert_eq!(storage.0.at_least, 16, "{storage:?}");
         assert!(storage.1.contains("RayMarchFilter"), "{storage:?}");
     }
 }

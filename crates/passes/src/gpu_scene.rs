@@ -97,8 +97,12 @@ pub struct LodInfo {
     pub node_offset: u32,
     /// The scene object this LOD belongs to (which octree the octree baseline reads).
     pub object: u32,
+    /// log2 of the words per binding of the colour and normal streams.
+    pub chunk_bits: u32,
+    /// log2 of the nodes per binding of the lookup-node stream.
+    pub node_chunk_bits: u32,
     /// Padding to 32 bytes.
-    pub pad: [u32; 3],
+    pub pad: u32,
 }
 
 /// Where a proxy mesh lives in the shared proxy buffers.
@@ -203,12 +207,12 @@ pub struct GpuScene {
     pub bvh_buffer: wgpu::Buffer,
     /// LOD table.
     pub lod_buffer: wgpu::Buffer,
-    /// Voxel colours (linear RGBA8, one word per voxel).
-    pub color_buffer: wgpu::Buffer,
-    /// Voxel normals (16-bit octahedral, two per word).
-    pub normal_buffer: wgpu::Buffer,
-    /// The lookup trees' nodes (12 bytes each).
-    pub lookup_buffer: wgpu::Buffer,
+    /// Voxel colours (linear RGBA8, one word per voxel), in [`COLOR_CHUNKS`] bindings.
+    pub color_buffers: Vec<wgpu::Buffer>,
+    /// Voxel normals (16-bit octahedral, two per word), in [`NORMAL_CHUNKS`] bindings.
+    pub normal_buffers: Vec<wgpu::Buffer>,
+    /// The lookup trees' nodes (12 bytes each), in [`NODE_CHUNKS`] bindings.
+    pub lookup_buffers: Vec<wgpu::Buffer>,
     /// Proxy vertices (object space, vec4).
     pub proxy_vertices: wgpu::Buffer,
     /// Proxy indices.
@@ -259,6 +263,63 @@ fn storage(ctx: &GpuContext, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer, 
         }))
 }
 
+/// Storage bindings of group 0: instances, LODs, the chunked streams, the hierarchy.
+pub const SCENE_STORAGE_BUFFERS: usize = 3 + COLOR_CHUNKS + NORMAL_CHUNKS + NODE_CHUNKS;
+
+/// How the scene's streams are split over bindings (`LodInfo.chunk_bits` in
+/// `common.inc.wgsl`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StreamChunks {
+    /// log2 of the words per binding of the colour and normal streams.
+    pub word_bits: u32,
+    /// log2 of the nodes per binding of the lookup-node stream.
+    pub node_bits: u32,
+}
+
+impl Default for StreamChunks {
+    /// 2^25 words (128 MiB, the smallest storage binding size a device may have) and
+    /// 2^23 nodes (96 MiB).
+    fn default() -> Self {
+        Self {
+            word_bits: 25,
+            node_bits: 23,
+        }
+    }
+}
+/// Bindings of the colour stream: up to 2^27 voxels over all LODs of the scene.
+pub const COLOR_CHUNKS: usize = 4;
+/// Bindings of the normal stream: up to 2^26 words (2^27 voxels).
+pub const NORMAL_CHUNKS: usize = 2;
+/// Bindings of the lookup-node stream: up to 2^24 nodes.
+pub const NODE_CHUNKS: usize = 2;
+
+/// A stream split over `chunks` bindings of at most `chunk_bytes` each (unused ones get a
+/// 16-byte buffer); an error when it needs more.
+fn chunked(
+    ctx: &GpuContext,
+    label: &str,
+    bytes: &[u8],
+    chunk_bytes: usize,
+    chunks: usize,
+) -> Result<Vec<wgpu::Buffer>, PassError> {
+    let needed = bytes.len().div_ceil(chunk_bytes);
+    if needed > chunks {
+        return Err(PassError::TooLarge(format!(
+            "the scene's {label} take {} bytes; the renderer binds at most {chunks} × {} \
+             bytes of them: use a coarser level or fewer objects",
+            bytes.len(),
+            chunk_bytes
+        )));
+    }
+    (0..chunks)
+        .map(|i| {
+            let part = bytes.get(i * chunk_bytes..).unwrap_or(&[]);
+            let part = &part[..part.len().min(chunk_bytes)];
+            storage(ctx, &format!("{label} {i}"), part)
+        })
+        .collect()
+}
+
 /// The object-space box of a level's voxels (their cells' union), `None` when it has none.
 fn voxel_bounds(lod: &ssbvb_voxel::asset::LodLevel) -> Option<(DVec3, DVec3)> {
     let mut lo = [u32::MAX; 3];
@@ -287,6 +348,21 @@ fn checked_u32(v: usize, what: &str) -> Result<u32, PassError> {
 impl GpuScene {
     /// Uploads every LOD of every object's asset and the triangle meshes.
     pub fn new(ctx: &GpuContext, scene: Scene) -> Result<Self, PassError> {
+        Self::with_chunks(ctx, scene, StreamChunks::default())
+    }
+
+    /// [`Self::new`] with the streams split into bindings of the given sizes (smaller
+    /// chunks let tests cross chunk boundaries with small scenes).
+    pub fn with_chunks(
+        ctx: &GpuContext,
+        scene: Scene,
+        chunks: StreamChunks,
+    ) -> Result<Self, PassError> {
+        if !(4..=30).contains(&chunks.word_bits) || !(4..=28).contains(&chunks.node_bits) {
+            return Err(PassError::BadScene(format!(
+                "unusable stream chunks {chunks:?}"
+            )));
+        }
         let mut lods: Vec<LodInfo> = Vec::new();
         let mut colors: Vec<u32> = Vec::new();
         let mut normals: Vec<u16> = Vec::new();
@@ -324,7 +400,9 @@ impl GpuScene {
                     voxel_offset: checked_u32(colors.len(), "voxel count")?,
                     node_offset: checked_u32(nodes.len() / NODE_WORDS, "lookup nodes")?,
                     object: checked_u32(lod_base.len() - 1, "object count")?,
-                    pad: [0; 3],
+                    chunk_bits: chunks.word_bits,
+                    node_chunk_bits: chunks.node_bits,
+                    pad: 0,
                 });
                 lod_bounds.push(voxel_bounds(lod));
                 // Only what the GPU reads: the cell is implied by the lookup (id = Morton
@@ -382,7 +460,7 @@ impl GpuScene {
             },
             count: None,
         }];
-        entries.extend((1..=6).map(ro));
+        entries.extend((1..=SCENE_STORAGE_BUFFERS as u32).map(ro));
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scene"),
             entries: &entries,
@@ -411,9 +489,31 @@ impl GpuScene {
         if normals.len() % 2 == 1 {
             normals.push(0);
         }
-        let color_buffer = storage(ctx, "voxel colours", bytemuck::cast_slice(&colors))?;
-        let normal_buffer = storage(ctx, "voxel normals", bytemuck::cast_slice(&normals))?;
-        let lookup_buffer = storage(ctx, "lookup nodes", bytemuck::cast_slice(&nodes))?;
+        let words = 4usize << chunks.word_bits;
+        let color_buffers = chunked(
+            ctx,
+            "voxel colours",
+            bytemuck::cast_slice(&colors),
+            words,
+            COLOR_CHUNKS,
+        )?;
+        drop(colors);
+        let normal_buffers = chunked(
+            ctx,
+            "voxel normals",
+            bytemuck::cast_slice(&normals),
+            words,
+            NORMAL_CHUNKS,
+        )?;
+        drop(normals);
+        let lookup_buffers = chunked(
+            ctx,
+            "lookup nodes",
+            bytemuck::cast_slice(&nodes),
+            (4 * NODE_WORDS) << chunks.node_bits,
+            NODE_CHUNKS,
+        )?;
+        drop(nodes);
         let proxy_vertices = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("proxy vertices"),
             contents: bytemuck::cast_slice(if proxy_v.is_empty() {
@@ -466,15 +566,13 @@ impl GpuScene {
         let bind_group = Self::make_bind_group(
             ctx,
             &layout,
-            [
-                &frame_buffer,
-                &instance_buffer,
-                &lod_buffer,
-                &color_buffer,
-                &normal_buffer,
-                &lookup_buffer,
-                &bvh_buffer,
-            ],
+            &[&frame_buffer, &instance_buffer, &lod_buffer]
+                .into_iter()
+                .chain(&color_buffers)
+                .chain(&normal_buffers)
+                .chain(&lookup_buffers)
+                .chain([&bvh_buffer])
+                .collect::<Vec<_>>(),
         );
         Ok(Self {
             scene,
@@ -484,9 +582,9 @@ impl GpuScene {
             instance_buffer,
             bvh_buffer,
             lod_buffer,
-            color_buffer,
-            normal_buffer,
-            lookup_buffer,
+            color_buffers,
+            normal_buffers,
+            lookup_buffers,
             proxy_vertices,
             proxy_indices,
             lod_base,
@@ -512,7 +610,7 @@ impl GpuScene {
     fn make_bind_group(
         ctx: &GpuContext,
         layout: &wgpu::BindGroupLayout,
-        bufs: [&wgpu::Buffer; 7],
+        bufs: &[&wgpu::Buffer],
     ) -> wgpu::BindGroup {
         let entries: Vec<_> = bufs
             .iter()

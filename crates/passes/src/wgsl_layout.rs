@@ -92,6 +92,8 @@ pub fn shared_structs() -> Vec<StructLayout> {
                 voxel_offset,
                 node_offset,
                 object,
+                chunk_bits,
+                node_chunk_bits,
                 pad
             }
         ),

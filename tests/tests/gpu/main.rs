@@ -3,6 +3,7 @@
 
 mod all_models;
 mod billboards;
+mod chunks;
 mod cube_raster;
 mod dense_dda;
 mod embed;

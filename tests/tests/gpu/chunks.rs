@@ -1,0 +1,86 @@
+//! Streams split over several bindings (`GpuScene::with_chunks`): no scene buffer may
+//! exceed the device's storage binding size, so colours, normals and lookup nodes are cut
+//! into chunks. Tiny chunks make a small model span every binding of every stream; each
+//! technique that reads the streams must then draw exactly what it draws from one chunk
+//! per stream (which other tests check against the CPU reference), and the image must not
+//! be empty.
+
+use glam::DVec3;
+use ssbvb_passes::StreamChunks;
+use ssbvb_voxel::camera::Camera;
+
+const SIZE: (u32, u32) = (96, 72);
+
+#[test]
+fn every_chunk_of_every_stream_is_read_like_a_single_binding() {
+    // A model with a colour per voxel (the bunny is one colour: a mixed-up colour chunk
+    // would not show).
+    let asset = ssbvb_tests::model_asset("chr_knight.vox", 6);
+    let voxels: usize = asset.lods.iter().map(|l| l.point_cloud.voxels.len()).sum();
+    let nodes: usize = asset.lods.iter().map(|l| l.lookup.node_count()).sum();
+    // The smallest chunks that still fit every stream in its bindings (4 colour, 2 normal
+    // and 2 node chunks): the colours then fill at least 3 chunks, the normals and nodes
+    // both of theirs.
+    let word_bits = voxels.div_ceil(4).next_power_of_two().trailing_zeros();
+    let node_bits = nodes.div_ceil(2).next_power_of_two().trailing_zeros();
+    let small = StreamChunks {
+        word_bits,
+        node_bits,
+    };
+    assert!(
+        voxels > 2 << word_bits,
+        "{voxels} voxels, chunks of 2^{word_bits}"
+    );
+    assert!(voxels.div_ceil(2) > 1 << word_bits);
+    assert!(
+        nodes > 1 << node_bits,
+        "{nodes} nodes, chunks of 2^{node_bits}"
+    );
+    let cam = Camera::new(DVec3::new(1.6, 0.9, 2.2), DVec3::new(0.0, 0.05, 0.0));
+    for (name, pipeline) in [
+        ("ssbvb", include_str!("../../../assets/pipelines/ssbvb.ron")),
+        (
+            "octree",
+            include_str!("../../../assets/pipelines/octree_ray_cast.ron"),
+        ),
+        (
+            "cube raster",
+            include_str!("../../../assets/pipelines/cube_raster.ron"),
+        ),
+    ] {
+        let render = |chunks: StreamChunks| {
+            // Level 6 and a coarser LOD, so LOD offsets into later chunks are exercised.
+            [6, 4].map(|level| {
+                let scene = ssbvb_tests::single_object_scene(asset.clone(), level);
+                let f = ssbvb_tests::render_with_chunks(pipeline, scene, &cam, SIZE, chunks);
+                let bytes_in_use = |bufs: &[ssbvb_gpu::wgpu::Buffer]| {
+                    bufs.iter().filter(|b| b.size() > 16).count()
+                };
+                (
+                    [f.read("gbuffer_albedo"), f.read("color")],
+                    [
+                        bytes_in_use(&f.scene.color_buffers),
+                        bytes_in_use(&f.scene.normal_buffers),
+                        bytes_in_use(&f.scene.lookup_buffers),
+                    ],
+                )
+            })
+        };
+        let one = render(StreamChunks::default());
+        let split = render(small);
+        for (level, (a, b)) in [6, 4].iter().zip(one.iter().zip(&split)) {
+            assert_eq!(a.1, [1, 1, 1], "{name} L{level}: default chunks");
+            assert!(
+                b.1[0] >= 3 && b.1[1] == 2 && b.1[2] == 2,
+                "{name}: {:?}",
+                b.1
+            );
+            let covered = a.0[0].chunks(4).filter(|p| p[3] > 0).count();
+            assert!(covered > 500, "{name} L{level}: {covered} px");
+            assert!(
+                a.0 == b.0,
+                "{name} L{level}: split streams draw another image"
+            );
+        }
+    }
+}
