@@ -25,7 +25,7 @@ use crate::progress::BarProgress;
 pub struct VoxelizeArgs {
     /// Model file (.obj, .ply, .gltf, .glb, .vox, .raw).
     pub model: PathBuf,
-    /// Octree level of the finest grid (2^level cells per axis), 0..=12.
+    /// Octree level of the finest grid (2^level cells per axis), 0..=13.
     #[arg(long)]
     pub level: u32,
     /// Also write the prepared asset (cache format) to this file.

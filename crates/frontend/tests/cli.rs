@@ -580,3 +580,23 @@ fn bench_scale_preset_writes_rows_per_view() {
         "{frame_plot}"
     );
 }
+
+#[test]
+fn levels_above_13_are_refused_with_the_limit_named() {
+    let out = ssbvb()
+        .args([
+            "voxelize",
+            "assets/models/bunny.obj",
+            "--level",
+            "14",
+            "--no-cache",
+        ])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        text.contains("level 14") && text.contains("maximum level 13"),
+        "{text}"
+    );
+}

@@ -276,6 +276,18 @@ pub struct StreamChunks {
     pub node_bits: u32,
 }
 
+impl StreamChunks {
+    /// The largest power-of-two chunks a device binding at most `max_binding` bytes holds
+    /// (at least 2^4 words or nodes, at most 2^30 words and 2^28 nodes).
+    pub fn for_device(max_binding: u64) -> Self {
+        let bits = |unit: u64, max: u32| (max_binding / unit).max(16).ilog2().min(max);
+        Self {
+            word_bits: bits(4, 30),
+            node_bits: bits(4 * NODE_WORDS as u64, 28),
+        }
+    }
+}
+
 impl Default for StreamChunks {
     /// 2^25 words (128 MiB, the smallest storage binding size a device may have) and
     /// 2^23 nodes (96 MiB).
@@ -286,11 +298,12 @@ impl Default for StreamChunks {
         }
     }
 }
-/// Bindings of the colour stream: up to 2^27 voxels over all LODs of the scene.
+/// Bindings of the colour stream (with 128 MiB bindings: up to 2^27 voxels over all LODs
+/// of the scene).
 pub const COLOR_CHUNKS: usize = 4;
-/// Bindings of the normal stream: up to 2^26 words (2^27 voxels).
+/// Bindings of the normal stream (with 128 MiB bindings: 2^26 words, 2^27 voxels).
 pub const NORMAL_CHUNKS: usize = 2;
-/// Bindings of the lookup-node stream: up to 2^24 nodes.
+/// Bindings of the lookup-node stream (with 128 MiB bindings: 2^24 nodes).
 pub const NODE_CHUNKS: usize = 2;
 
 /// A stream split over `chunks` bindings of at most `chunk_bytes` each (unused ones get a
@@ -346,9 +359,11 @@ fn checked_u32(v: usize, what: &str) -> Result<u32, PassError> {
 }
 
 impl GpuScene {
-    /// Uploads every LOD of every object's asset and the triangle meshes.
+    /// Uploads every LOD of every object's asset and the triangle meshes, the streams cut
+    /// into the largest chunks the device binds ([`StreamChunks::for_device`]).
     pub fn new(ctx: &GpuContext, scene: Scene) -> Result<Self, PassError> {
-        Self::with_chunks(ctx, scene, StreamChunks::default())
+        let limit = ctx.device.limits().max_storage_buffer_binding_size;
+        Self::with_chunks(ctx, scene, StreamChunks::for_device(limit))
     }
 
     /// [`Self::new`] with the streams split into bindings of the given sizes (smaller
@@ -689,5 +704,22 @@ impl GpuScene {
     /// Bytes of the shared voxel buffers (all objects).
     pub fn total_memory(&self) -> u64 {
         self.memory.iter().map(ObjectMemory::total).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::StreamChunks;
+
+    #[test]
+    fn chunks_follow_the_device_binding_size() {
+        // lavapipe and WebGPU's default: 128 MiB.
+        assert_eq!(StreamChunks::for_device(128 << 20), StreamChunks::default());
+        let big = StreamChunks::for_device(u64::from(u32::MAX));
+        assert_eq!((big.word_bits, big.node_bits), (29, 28));
+        let odd = StreamChunks::for_device(100 << 20);
+        assert_eq!((odd.word_bits, odd.node_bits), (24, 23));
+        let tiny = StreamChunks::for_device(0);
+        assert_eq!((tiny.word_bits, tiny.node_bits), (4, 4));
     }
 }

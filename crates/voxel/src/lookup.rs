@@ -84,20 +84,18 @@ impl SparseLookup {
     /// increasing or lie outside the grid; [`crate::cache::read_cache`] checks both before
     /// calling.
     pub fn from_codes(level: u32, codes: &[u64]) -> Self {
-        assert!(level <= MAX_LEVEL, "level {level} above MAX_LEVEL");
-        debug_assert!(
-            codes.windows(2).all(|w| w[0] < w[1]),
-            "codes not increasing"
-        );
-        debug_assert!(codes.last().is_none_or(|&c| c < 1u64 << (3 * level)));
+        let mut b = LookupBuilder::new(level);
+        b.extend(codes);
+        b.finish()
+    }
+
+    /// Builds the tree from its leaves (key, mask, first voxel), in key order.
+    fn from_leaves(level: u32, leaves: Vec<(u64, u64, u32)>) -> Self {
         let depth = tree_depth(level);
         // Per depth, from the leaves up: (key, mask, first child or voxel).
         let mut per_depth: Vec<Vec<(u64, u64, u32)>> = Vec::with_capacity(depth as usize);
         let mut children: Vec<u64> = Vec::new();
-        let mut level_nodes: Vec<(u64, u64, u32)> = Vec::new();
-        for (i, &c) in codes.iter().enumerate() {
-            group(&mut level_nodes, c, i as u32);
-        }
+        let mut level_nodes = leaves;
         for _ in 0..depth {
             children.clear();
             children.extend(level_nodes.iter().map(|n| n.0));
@@ -286,6 +284,51 @@ impl SparseLookup {
     /// Bytes a dense `u32` texture of the whole grid would take.
     pub fn dense_bytes(&self) -> u64 {
         4 * (1u64 << (3 * self.level))
+    }
+}
+
+/// Builds a [`SparseLookup`] from a level's Morton codes fed in increasing order, a chunk
+/// at a time (the streaming preparation never holds a level's codes at once): only the
+/// leaves (24 bytes per 4³ brick) are kept until [`LookupBuilder::finish`].
+#[derive(Debug, Clone)]
+pub struct LookupBuilder {
+    level: u32,
+    leaves: Vec<(u64, u64, u32)>,
+    count: u32,
+    last: Option<u64>,
+}
+
+impl LookupBuilder {
+    /// An empty builder of a level-`level` lookup.
+    ///
+    /// # Panics
+    ///
+    /// When `level > MAX_LEVEL`.
+    pub fn new(level: u32) -> Self {
+        assert!(level <= MAX_LEVEL, "level {level} above MAX_LEVEL");
+        Self {
+            level,
+            leaves: Vec::new(),
+            count: 0,
+            last: None,
+        }
+    }
+
+    /// Adds the next codes (strictly increasing, continuing the previous ones, inside the
+    /// grid; checked in debug builds).
+    pub fn extend(&mut self, codes: &[u64]) {
+        for &c in codes {
+            debug_assert!(self.last.is_none_or(|l| l < c), "codes not increasing");
+            debug_assert!(c < 1u64 << (3 * self.level), "code outside the grid");
+            self.last = Some(c);
+            group(&mut self.leaves, c, self.count);
+            self.count += 1;
+        }
+    }
+
+    /// The lookup of every code added.
+    pub fn finish(self) -> SparseLookup {
+        SparseLookup::from_leaves(self.level, self.leaves)
     }
 }
 

@@ -32,12 +32,17 @@ pub struct Material {
     pub base_color_texture: Option<Texture>,
 }
 
+impl Material {
+    /// The material of triangles that name none: light grey, untextured.
+    pub const DEFAULT: Material = Material {
+        base_color: [0.8, 0.8, 0.8, 1.0],
+        base_color_texture: None,
+    };
+}
+
 impl Default for Material {
     fn default() -> Self {
-        Self {
-            base_color: [0.8, 0.8, 0.8, 1.0],
-            base_color_texture: None,
-        }
+        Self::DEFAULT
     }
 }
 

@@ -323,3 +323,26 @@ fn an_unwritable_cache_is_reported_not_fatal() {
         );
     }
 }
+
+#[test]
+fn region_by_region_preparation_equals_the_whole_grid() {
+    // Regions of 32³ cells (the smallest: one brick) at level 8 are 512 regions, so every
+    // level from 8 down to 3 is built inside regions and levels 3..0 from their roots.
+    for name in ["bunny.obj", "cow.obj"] {
+        let Model::Mesh(mesh) = load_model(&models_dir().join(name)).unwrap() else {
+            panic!("{name} is a mesh");
+        };
+        let level = 8;
+        let set = ssbvb_voxel::voxelize::voxelize_mesh(&mesh, level, &NoProgress).unwrap();
+        let report = set.report.clone();
+        let (whole, _) = ssbvb_voxel::prepare::prepare_voxel_set(set, &NoProgress);
+        let (regions, stats) =
+            ssbvb_voxel::prepare::prepare_mesh_in_regions(&mesh, level, 5, &NoProgress).unwrap();
+        assert_eq!(stats.voxelize, report, "{name}");
+        assert_eq!(whole.object_space, regions.object_space, "{name}");
+        for (a, b) in whole.lods.iter().zip(&regions.lods) {
+            assert!(a == b, "{name}: LOD {} differs", a.level);
+        }
+        assert_eq!(whole.lods.len(), regions.lods.len());
+    }
+}

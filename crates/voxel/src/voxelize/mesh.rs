@@ -82,7 +82,7 @@ impl Scratch {
 
 /// Voxels emitted by a run of bricks (structure of arrays, Morton-sorted).
 #[derive(Default)]
-struct Chunk {
+pub(super) struct Chunk {
     codes: Vec<u64>,
     normals: Vec<[f32; 3]>,
     colors: Vec<[f32; 4]>,
@@ -101,132 +101,10 @@ pub fn voxelize_mesh(
     level: u32,
     progress: &dyn Progress,
 ) -> Result<VoxelSet, VoxelizeError> {
-    check_level(level)?;
-    let mut report = VoxelizeReport {
-        triangles: mesh.triangles.len() as u64,
-        ..Default::default()
-    };
-    let object_space = mesh_object_space(mesh)
-        .ok_or_else(|| VoxelizeError::Empty("no triangle references a finite vertex".into()))?;
-
-    // Vertices in grid units (f64): cell i covers [i, i+1].
-    let hc = half_cells(level);
-    let grid: Vec<DVec3> = mesh
-        .positions
-        .par_iter()
-        .map(|p| (object_space.to_object(p.as_dvec3()) + DVec3::ONE) * hc)
-        .collect();
-
-    // Valid triangles (indices in range, all vertices finite).
-    let mut valid: Vec<u32> = Vec::with_capacity(mesh.triangles.len());
-    for (t, idx) in mesh.triangles.iter().enumerate() {
-        if idx.iter().any(|&i| i as usize >= grid.len()) {
-            report.skipped_bad_index += 1;
-            continue;
-        }
-        let v = idx.map(|i| grid[i as usize]);
-        if !v.iter().all(|p| p.is_finite()) {
-            report.skipped_non_finite += 1;
-            continue;
-        }
-        if (v[1] - v[0]).cross(v[2] - v[0]) == DVec3::ZERO {
-            report.degenerate += 1;
-        }
-        valid.push(t as u32);
-    }
-    if valid.is_empty() {
-        return Err(VoxelizeError::Empty(
-            "no triangle with finite vertices".into(),
-        ));
-    }
-    let tri = |t: u32| mesh.triangles[t as usize].map(|i| grid[i as usize]);
-
-    // Refuse requests that cannot fit before allocating anything per voxel.
-    let estimate: f64 = valid.par_iter().map(|&t| cell_estimate(&tri(t))).sum();
-    let cells_total = (1u128 << (3 * level)) as f64;
-    let estimate = estimate.min(cells_total) as u64;
-    if estimate > MAX_VOXELS {
-        return Err(VoxelizeError::TooLarge {
-            level,
-            estimate,
-            limit: MAX_VOXELS,
-        });
-    }
-
-    // Bin triangles into bricks.
-    let brick_log = level.min(BRICK_LOG);
-    let brick_cells = 1i64 << brick_log;
-    let bricks_per_axis = 1i64 << (level - brick_log);
-    let inv_brick = 1.0 / brick_cells as f64;
-    progress.begin("binning triangles", valid.len() as u64);
-    let mut pairs: Vec<(u64, u32)> = valid
-        .par_chunks(4096)
-        .flat_map_iter(|ts| {
-            let mut out = Vec::new();
-            for &t in ts {
-                let v = tri(t).map(|p| p * inv_brick);
-                for_each_cell(&v, [0; 3], [bricks_per_axis - 1; 3], |b, _| {
-                    out.push((morton_encode(b.map(|c| c as u32)), t));
-                });
-            }
-            progress.advance(ts.len() as u64);
-            out
-        })
-        .collect();
-    pairs.par_sort_unstable();
-    progress.end();
-
-    // Group pairs by brick.
-    let mut bricks: Vec<(u64, Range<usize>)> = Vec::new();
-    let mut start = 0;
-    for i in 1..=pairs.len() {
-        if i == pairs.len() || pairs[i].0 != pairs[start].0 {
-            bricks.push((pairs[start].0, start..i));
-            start = i;
-        }
-    }
-
-    let default_material = Material::default();
-    let attrs = |t: u32| -> TriAttrs<'_> {
-        let idx = mesh.triangles[t as usize];
-        let m = mesh
-            .triangle_materials
-            .get(t as usize)
-            .copied()
-            .unwrap_or(0);
-        let material = mesh.materials.get(m as usize).unwrap_or(&default_material);
-        let n = mesh.positions.len();
-        TriAttrs {
-            material,
-            uv: (mesh.uvs.len() == n).then(|| idx.map(|i| mesh.uvs[i as usize])),
-            color: (mesh.colors.len() == n).then(|| idx.map(|i| mesh.colors[i as usize])),
-        }
-    };
-
-    let local_cells = 1usize << (3 * brick_log);
-    let brick = BrickGeometry {
-        log: brick_log,
-        cells: brick_cells,
-    };
-    let process = |run: &[(u64, Range<usize>)]| -> Chunk {
-        SCRATCH.with(|cell| {
-            let mut scratch = cell.borrow_mut();
-            scratch.ensure(local_cells);
-            let mut chunk = Chunk::default();
-            for (code, range) in run {
-                let tris = pairs[range.clone()]
-                    .iter()
-                    .map(|&(_, t)| (tri(t), attrs(t)));
-                voxelize_brick(&mut scratch, &brick, *code, tris, &mut chunk);
-            }
-            progress.advance(run.len() as u64);
-            chunk
-        })
-    };
-
+    let bricks = MeshBricks::new(mesh, level, progress)?;
     // Bricks go in batches so that only one batch of per-chunk output exists next to the
     // result, which is reserved from the estimate (untouched capacity costs no memory).
-    let capacity = (estimate as usize).min(1 << 26);
+    let capacity = (bricks.estimate as usize).min(1 << 26);
     let mut voxels = LevelVoxels {
         level,
         codes: Vec::with_capacity(capacity),
@@ -235,33 +113,233 @@ pub fn voxelize_mesh(
         uvs: Vec::with_capacity(capacity),
     };
     let mut missing: Vec<usize> = Vec::new();
-    progress.begin("voxelizing", bricks.len() as u64);
-    for batch in bricks.chunks(4096) {
-        let chunks: Vec<Chunk> = batch.par_chunks(16).map(process).collect();
+    progress.begin("voxelizing", bricks.bricks.len() as u64);
+    for batch in bricks.bricks.chunks(4096) {
+        let chunks: Vec<Chunk> = batch
+            .par_chunks(16)
+            .map(|run| {
+                let c = bricks.voxelize_run(run);
+                progress.advance(run.len() as u64);
+                c
+            })
+            .collect();
         for c in chunks {
-            let base = voxels.codes.len();
-            missing.extend(c.missing_normal.iter().map(|i| base + i));
-            voxels.codes.extend_from_slice(&c.codes);
-            voxels.normals.extend_from_slice(&c.normals);
-            voxels.colors.extend_from_slice(&c.colors);
-            voxels.uvs.extend_from_slice(&c.uvs);
+            c.append_to(&mut voxels, &mut missing);
         }
     }
     progress.end();
-    drop(pairs);
     voxels.codes.shrink_to_fit();
     voxels.normals.shrink_to_fit();
     voxels.colors.shrink_to_fit();
     voxels.uvs.shrink_to_fit();
 
+    let mut report = bricks.report.clone();
     report.normal_fallbacks = missing.len() as u64;
-    fill_gradient_normals(&mut voxels, &missing);
+    let object_space = bricks.object_space;
+    let fixed = gradient_normals(&voxels, &missing, |q| voxels.find(q).is_some());
+    for (i, normal) in fixed {
+        voxels.normals[i] = normal;
+    }
     Ok(VoxelSet {
         object_space,
         voxels,
         report,
     })
 }
+
+impl Chunk {
+    /// Appends the chunk's voxels to `voxels` and the indices of those missing a normal to
+    /// `missing`.
+    pub(super) fn append_to(self, voxels: &mut LevelVoxels, missing: &mut Vec<usize>) {
+        let base = voxels.codes.len();
+        missing.extend(self.missing_normal.iter().map(|i| base + i));
+        voxels.codes.extend_from_slice(&self.codes);
+        voxels.normals.extend_from_slice(&self.normals);
+        voxels.colors.extend_from_slice(&self.colors);
+        voxels.uvs.extend_from_slice(&self.uvs);
+    }
+}
+
+/// A mesh binned into the bricks of one voxelization: everything needed to voxelize any
+/// run of bricks on its own (the whole grid at once, or region by region).
+pub(crate) struct MeshBricks<'a> {
+    mesh: &'a Mesh,
+    /// Vertices in grid units.
+    grid: Vec<DVec3>,
+    /// (brick Morton code, triangle), sorted.
+    pairs: Vec<(u64, u32)>,
+    /// Every brick that some triangle overlaps, in Morton order, with its pairs.
+    pub(super) bricks: Vec<(u64, Range<usize>)>,
+    brick: BrickGeometry,
+    /// Upper bound of the voxel count.
+    pub(super) estimate: u64,
+    /// Skipped and degenerate triangles (`normal_fallbacks` is left to the caller).
+    pub(super) report: VoxelizeReport,
+    /// The mesh's object space.
+    pub(super) object_space: ObjectSpace,
+}
+
+impl<'a> MeshBricks<'a> {
+    /// Maps the vertices to grid units, checks the triangles and the size, and bins the
+    /// triangles into bricks.
+    pub(super) fn new(
+        mesh: &'a Mesh,
+        level: u32,
+        progress: &dyn Progress,
+    ) -> Result<Self, VoxelizeError> {
+        check_level(level)?;
+        let mut report = VoxelizeReport {
+            triangles: mesh.triangles.len() as u64,
+            ..Default::default()
+        };
+        let object_space = mesh_object_space(mesh)
+            .ok_or_else(|| VoxelizeError::Empty("no triangle references a finite vertex".into()))?;
+
+        // Vertices in grid units (f64): cell i covers [i, i+1].
+        let hc = half_cells(level);
+        let grid: Vec<DVec3> = mesh
+            .positions
+            .par_iter()
+            .map(|p| (object_space.to_object(p.as_dvec3()) + DVec3::ONE) * hc)
+            .collect();
+
+        // Valid triangles (indices in range, all vertices finite).
+        let mut valid: Vec<u32> = Vec::with_capacity(mesh.triangles.len());
+        for (t, idx) in mesh.triangles.iter().enumerate() {
+            if idx.iter().any(|&i| i as usize >= grid.len()) {
+                report.skipped_bad_index += 1;
+                continue;
+            }
+            let v = idx.map(|i| grid[i as usize]);
+            if !v.iter().all(|p| p.is_finite()) {
+                report.skipped_non_finite += 1;
+                continue;
+            }
+            if (v[1] - v[0]).cross(v[2] - v[0]) == DVec3::ZERO {
+                report.degenerate += 1;
+            }
+            valid.push(t as u32);
+        }
+        if valid.is_empty() {
+            return Err(VoxelizeError::Empty(
+                "no triangle with finite vertices".into(),
+            ));
+        }
+        let tri = |t: u32| mesh.triangles[t as usize].map(|i| grid[i as usize]);
+
+        // Refuse requests that cannot fit before allocating anything per voxel.
+        let estimate: f64 = valid.par_iter().map(|&t| cell_estimate(&tri(t))).sum();
+        let cells_total = (1u128 << (3 * level)) as f64;
+        let estimate = estimate.min(cells_total) as u64;
+        if estimate > MAX_VOXELS {
+            return Err(VoxelizeError::TooLarge {
+                level,
+                estimate,
+                limit: MAX_VOXELS,
+            });
+        }
+
+        // Bin triangles into bricks.
+        let brick_log = level.min(BRICK_LOG);
+        let brick_cells = 1i64 << brick_log;
+        let bricks_per_axis = 1i64 << (level - brick_log);
+        let inv_brick = 1.0 / brick_cells as f64;
+        progress.begin("binning triangles", valid.len() as u64);
+        let mut pairs: Vec<(u64, u32)> = valid
+            .par_chunks(4096)
+            .flat_map_iter(|ts| {
+                let mut out = Vec::new();
+                for &t in ts {
+                    let v = tri(t).map(|p| p * inv_brick);
+                    for_each_cell(&v, [0; 3], [bricks_per_axis - 1; 3], |b, _| {
+                        out.push((morton_encode(b.map(|c| c as u32)), t));
+                    });
+                }
+                progress.advance(ts.len() as u64);
+                out
+            })
+            .collect();
+        pairs.par_sort_unstable();
+        progress.end();
+
+        // Group pairs by brick.
+        let mut bricks: Vec<(u64, Range<usize>)> = Vec::new();
+        let mut start = 0;
+        for i in 1..=pairs.len() {
+            if i == pairs.len() || pairs[i].0 != pairs[start].0 {
+                bricks.push((pairs[start].0, start..i));
+                start = i;
+            }
+        }
+        Ok(Self {
+            mesh,
+            grid,
+            pairs,
+            bricks,
+            brick: BrickGeometry {
+                log: brick_log,
+                cells: brick_cells,
+            },
+            estimate,
+            report,
+            object_space,
+        })
+    }
+
+    /// Log2 of the brick edge in cells.
+    pub(super) fn brick_log(&self) -> u32 {
+        self.brick.log
+    }
+
+    fn tri(&self, t: u32) -> [DVec3; 3] {
+        self.mesh.triangles[t as usize].map(|i| self.grid[i as usize])
+    }
+
+    fn attrs(&self, t: u32) -> TriAttrs<'a> {
+        let mesh = self.mesh;
+        let idx = mesh.triangles[t as usize];
+        let m = mesh
+            .triangle_materials
+            .get(t as usize)
+            .copied()
+            .unwrap_or(0);
+        let material = mesh.materials.get(m as usize).unwrap_or(&DEFAULT_MATERIAL);
+        let n = mesh.positions.len();
+        TriAttrs {
+            material,
+            uv: (mesh.uvs.len() == n).then(|| idx.map(|i| mesh.uvs[i as usize])),
+            color: (mesh.colors.len() == n).then(|| idx.map(|i| mesh.colors[i as usize])),
+        }
+    }
+
+    /// Voxelizes a run of bricks (in Morton order) on the calling thread.
+    pub(super) fn voxelize_run(&self, run: &[(u64, Range<usize>)]) -> Chunk {
+        let local_cells = 1usize << (3 * self.brick.log);
+        SCRATCH.with(|cell| {
+            let mut scratch = cell.borrow_mut();
+            scratch.ensure(local_cells);
+            let mut chunk = Chunk::default();
+            for (code, range) in run {
+                let tris = self.pairs[range.clone()]
+                    .iter()
+                    .map(|&(_, t)| (self.tri(t), self.attrs(t)));
+                voxelize_brick(&mut scratch, &self.brick, *code, tris, &mut chunk);
+            }
+            chunk
+        })
+    }
+
+    /// The Morton codes of the voxels of one brick (none when no triangle overlaps it).
+    pub(super) fn brick_codes(&self, brick: u64) -> Vec<u64> {
+        match self.bricks.binary_search_by_key(&brick, |b| b.0) {
+            Ok(i) => self.voxelize_run(&self.bricks[i..=i]).codes,
+            Err(_) => Vec::new(),
+        }
+    }
+}
+
+/// The material of triangles without one.
+static DEFAULT_MATERIAL: Material = Material::DEFAULT;
 
 /// Size of the bricks of one voxelization.
 struct BrickGeometry {
@@ -364,25 +442,26 @@ fn voxelize_brick<'a>(
     }
 }
 
-/// Gives each voxel in `missing` the normal of the occupancy gradient of its
-/// 26-neighbourhood (pointing away from the occupied side); where that is zero, the
-/// direction from the grid centre; last resort +Z.
-fn fill_gradient_normals(voxels: &mut LevelVoxels, missing: &[usize]) {
+/// The normal of each voxel in `missing`: the occupancy gradient of its 26-neighbourhood
+/// (pointing away from the occupied side); where that is zero, the direction from the grid
+/// centre; last resort +Z. `occupied` says whether a cell inside the grid is a voxel.
+pub(super) fn gradient_normals(
+    voxels: &LevelVoxels,
+    missing: &[usize],
+    occupied: impl Fn([u32; 3]) -> bool + Sync,
+) -> Vec<(usize, [f32; 3])> {
     let n = 1i64 << voxels.level;
-    let fixed: Vec<(usize, [f32; 3])> = missing
+    missing
         .par_iter()
         .map(|&i| {
             let c = voxels.cell(i).map(i64::from);
             let occupied = |d: [i64; 3]| {
                 let q = [c[0] + d[0], c[1] + d[1], c[2] + d[2]];
-                q.iter().all(|&x| (0..n).contains(&x)) && voxels.find(q.map(|x| x as u32)).is_some()
+                q.iter().all(|&x| (0..n).contains(&x)) && occupied(q.map(|x| x as u32))
             };
             let g = gradient_26(occupied);
             let from_center = c.map(|x| x as f64 + 0.5 - n as f64 * 0.5);
             (i, normalize_or(g, || from_center))
         })
-        .collect();
-    for (i, normal) in fixed {
-        voxels.normals[i] = normal;
-    }
+        .collect()
 }

@@ -46,12 +46,14 @@
 //! # Layout
 //!
 //! [`triangle_box_overlap`] and the clipped cell walk live in `geometry`, the mesh
-//! pipeline (binning, bricks, per-cell sums) in `mesh`, colour and normal sampling in
-//! `attributes`, and the resampling of voxel models in `resample`.
+//! pipeline (binning, bricks, per-cell sums) in `mesh`, its region-by-region driver for
+//! bounded memory in `regions`, colour and normal sampling in `attributes`, and the
+//! resampling of voxel models in `resample`.
 
 mod attributes;
 mod geometry;
 mod mesh;
+mod regions;
 mod resample;
 #[cfg(test)]
 mod tests;
@@ -65,6 +67,7 @@ use crate::svo::LevelVoxels;
 pub(crate) use attributes::gradient_26;
 pub use geometry::triangle_box_overlap;
 pub use mesh::{mesh_object_space, voxelize_mesh};
+pub use regions::voxelize_mesh_regions;
 pub use resample::{voxel_model_object_space, voxelize_voxels, voxelize_voxels_with};
 
 /// Most voxels (or candidate cells) one voxelization may produce. Above it the request is

@@ -6,6 +6,10 @@
 //! then each level, finest first, is turned into its point cloud and lookup and its
 //! floating-point attributes are dropped before the next level is converted.
 
+mod regions;
+
+pub use regions::{REGION_LOG, prepare_mesh_in_regions};
+
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -19,13 +23,12 @@ use crate::model::Model;
 use crate::progress::Progress;
 use crate::proxy::build_proxy;
 use crate::svo::{LevelVoxels, build_lod_chain, morton_decode, octree_bytes};
-use crate::voxelize::{
-    VoxelFill, VoxelSet, VoxelizeError, VoxelizeReport, voxelize_mesh, voxelize_voxels_with,
-};
+use crate::voxelize::{VoxelFill, VoxelSet, VoxelizeError, VoxelizeReport, voxelize_voxels_with};
 
-/// Highest level [`prepare_asset`] accepts unless [`PrepareOptions::max_level`] raises it
-/// (level 12 of a scanned model is already ~57 M voxels and several GiB while building).
-pub const DEFAULT_MAX_LEVEL: u32 = 12;
+/// Highest level [`prepare_asset`] accepts unless [`PrepareOptions::max_level`] raises it.
+/// Meshes are prepared region by region, so memory is the asset's own (16 bytes per voxel
+/// on the CPU): level 13 of a scanned model is ~230 M voxels, ~5 GiB.
+pub const DEFAULT_MAX_LEVEL: u32 = 13;
 
 /// Knobs of [`prepare_asset_with`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -196,7 +199,8 @@ pub fn prepare_asset_with(
     let mut stages = StageTimes::default();
 
     let set = match model {
-        Model::Mesh(mesh) => voxelize_mesh(mesh, level, progress)?,
+        // Meshes go region by region: the same asset in bounded memory.
+        Model::Mesh(mesh) => return prepare_mesh_in_regions(mesh, level, REGION_LOG, progress),
         Model::Voxels(voxels) => voxelize_voxels_with(voxels, level, options.voxel_fill, progress)?,
     };
     stages.voxelize_s = start.elapsed().as_secs_f64();
@@ -254,9 +258,7 @@ fn prepare_from_set(
         drop(codes);
         let t_lookup = t.elapsed().as_secs_f64();
         stages.lookups_s += t_lookup;
-        let t = Instant::now();
-        let proxy = build_proxy(&lookup);
-        let t_proxy = t.elapsed().as_secs_f64();
+        let (proxy, t_proxy) = build_proxy_timed(&lookup);
         stages.proxies_s += t_proxy;
         seconds[l] = t_pc + t_lookup + t_proxy;
         lods.push(LodLevel {
@@ -272,10 +274,7 @@ fn prepare_from_set(
 
     let asset = VoxelAsset { object_space, lods };
     stages.total_s = start.elapsed().as_secs_f64();
-    let mut levels = asset_level_stats(&asset);
-    for (s, secs) in levels.iter_mut().zip(seconds) {
-        s.seconds = Some(secs);
-    }
+    let levels = stats_with_seconds(asset_level_stats(&asset), seconds);
     let stats = PrepareStats {
         level,
         object_space_center: object_space.center.to_array(),
@@ -285,6 +284,21 @@ fn prepare_from_set(
         levels,
     };
     (asset, stats)
+}
+
+/// The proxy of a lookup and the seconds it took.
+fn build_proxy_timed(lookup: &SparseLookup) -> (crate::asset::ProxyMesh, f64) {
+    let t = Instant::now();
+    let proxy = build_proxy(lookup);
+    (proxy, t.elapsed().as_secs_f64())
+}
+
+/// `levels` with each level's preparation seconds filled in.
+fn stats_with_seconds(mut levels: Vec<LevelStats>, seconds: Vec<f64>) -> Vec<LevelStats> {
+    for (s, secs) in levels.iter_mut().zip(seconds) {
+        s.seconds = Some(secs);
+    }
+    levels
 }
 
 /// Packs a level's voxels (Morton order is kept: voxel id = index).
@@ -380,11 +394,57 @@ mod tests {
         }
     }
 
+    /// The tetrahedron plus degenerate triangles (segments) through the grid's centre,
+    /// where every region border meets: cells only they touch get gradient normals from
+    /// neighbours in other regions.
+    fn tetra_with_segments() -> Mesh {
+        let Model::Mesh(mut mesh) = tetra() else {
+            unreachable!()
+        };
+        let n = mesh.positions.len() as u32;
+        mesh.positions.extend([
+            Vec3::new(0.15, 0.9, 0.2),
+            Vec3::new(0.8, 0.3, 0.7),
+            Vec3::new(0.5, 0.2, 0.1),
+            Vec3::new(0.52, 0.75, 0.6),
+        ]);
+        mesh.triangles
+            .extend([[n, n + 1, n], [n + 2, n + 3, n + 3], [n, n + 3, n + 1]]);
+        mesh
+    }
+
+    #[test]
+    fn regions_with_gradient_normals_on_their_borders_equal_the_whole_grid() {
+        let mesh = tetra_with_segments();
+        for (level, region_log) in [(5, 5), (6, 5), (7, 5), (7, 6), (2, 8)] {
+            let set = crate::voxelize::voxelize_mesh(&mesh, level, &NoProgress).unwrap();
+            let fallbacks = set.report.normal_fallbacks;
+            let (whole, _) = prepare_voxel_set(set, &NoProgress);
+            let (regions, stats) =
+                prepare_mesh_in_regions(&mesh, level, region_log, &NoProgress).unwrap();
+            assert_eq!(stats.voxelize.normal_fallbacks, fallbacks, "level {level}");
+            assert!(
+                level < 5 || fallbacks > 0,
+                "level {level}: no gradient normal"
+            );
+            assert_eq!(regions.object_space, whole.object_space);
+            assert_eq!(regions.lods.len(), whole.lods.len());
+            for (a, b) in regions.lods.iter().zip(&whole.lods) {
+                // Not assert_eq: the Debug of a level is thousands of lines.
+                assert!(
+                    a == b,
+                    "level {level}, regions of 2^{region_log}: LOD {} differs",
+                    a.level
+                );
+            }
+        }
+    }
+
     #[test]
     fn levels_are_validated() {
         assert!(matches!(
-            prepare_asset(&tetra(), 13, &NoProgress),
-            Err(VoxelizeError::LevelTooHigh { level: 13, max: 12 })
+            prepare_asset(&tetra(), 14, &NoProgress),
+            Err(VoxelizeError::LevelTooHigh { level: 14, max: 13 })
         ));
         let opts = PrepareOptions {
             max_level: 99,
