@@ -101,7 +101,7 @@ pub fn voxelize_mesh(
     level: u32,
     progress: &dyn Progress,
 ) -> Result<VoxelSet, VoxelizeError> {
-    let bricks = MeshBricks::new(mesh, level, progress)?;
+    let bricks = MeshBricks::new(mesh, level, MAX_VOXELS, progress)?;
     // Bricks go in batches so that only one batch of per-chunk output exists next to the
     // result, which is reserved from the estimate (untouched capacity costs no memory).
     let capacity = (bricks.estimate as usize).min(1 << 26);
@@ -180,11 +180,12 @@ pub(crate) struct MeshBricks<'a> {
 }
 
 impl<'a> MeshBricks<'a> {
-    /// Maps the vertices to grid units, checks the triangles and the size, and bins the
-    /// triangles into bricks.
+    /// Maps the vertices to grid units, checks the triangles and the size (at most
+    /// `max_voxels` by the upper-bound estimate), and bins the triangles into bricks.
     pub(super) fn new(
         mesh: &'a Mesh,
         level: u32,
+        max_voxels: u64,
         progress: &dyn Progress,
     ) -> Result<Self, VoxelizeError> {
         check_level(level)?;
@@ -231,11 +232,11 @@ impl<'a> MeshBricks<'a> {
         let estimate: f64 = valid.par_iter().map(|&t| cell_estimate(&tri(t))).sum();
         let cells_total = (1u128 << (3 * level)) as f64;
         let estimate = estimate.min(cells_total) as u64;
-        if estimate > MAX_VOXELS {
+        if estimate > max_voxels {
             return Err(VoxelizeError::TooLarge {
                 level,
                 estimate,
-                limit: MAX_VOXELS,
+                limit: max_voxels,
             });
         }
 

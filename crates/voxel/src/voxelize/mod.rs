@@ -75,6 +75,11 @@ pub use resample::{voxel_model_object_space, voxelize_voxels, voxelize_voxels_wi
 /// built, plus its point cloud and lookup).
 pub const MAX_VOXELS: u64 = 1 << 28;
 
+/// [`MAX_VOXELS`] of the region-by-region voxelization ([`voxelize_mesh_regions`]), which
+/// keeps no float attributes of the whole level: the asset's 16 bytes per voxel bound it
+/// (the estimate is an upper bound: about twice the bunny's real count).
+pub const MAX_REGION_VOXELS: u64 = 1 << 30;
+
 /// A voxelization result: the finest level of an asset before the LOD chain is built.
 #[derive(Debug, Clone, PartialEq)]
 pub struct VoxelSet {
@@ -133,7 +138,7 @@ pub enum VoxelizeError {
     /// Nothing to voxelize.
     #[error("the model has nothing to voxelize: {0}")]
     Empty(String),
-    /// The result would exceed [`MAX_VOXELS`].
+    /// The result would exceed [`MAX_VOXELS`] (or [`MAX_REGION_VOXELS`]).
     #[error(
         "level {level} would produce about {estimate} voxels, more than the limit of {limit}; choose a lower level"
     )]

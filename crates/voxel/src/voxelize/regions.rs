@@ -15,7 +15,7 @@ use std::sync::Mutex;
 use rayon::prelude::*;
 
 use super::mesh::{Chunk, MeshBricks, gradient_normals};
-use super::{VoxelizeError, VoxelizeReport};
+use super::{MAX_REGION_VOXELS, VoxelizeError, VoxelizeReport};
 use crate::model::{Mesh, ObjectSpace};
 use crate::progress::Progress;
 use crate::svo::{LevelVoxels, morton_encode};
@@ -31,7 +31,7 @@ pub fn voxelize_mesh_regions(
     progress: &dyn Progress,
     mut sink: impl FnMut(LevelVoxels),
 ) -> Result<(ObjectSpace, VoxelizeReport), VoxelizeError> {
-    let bricks = MeshBricks::new(mesh, level, progress)?;
+    let bricks = MeshBricks::new(mesh, level, MAX_REGION_VOXELS, progress)?;
     let brick_log = bricks.brick_log();
     let region_log = region_log.clamp(brick_log, level);
     // A brick's region: its code without the brick digits below the region.
