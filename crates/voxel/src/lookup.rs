@@ -131,13 +131,14 @@ impl SparseLookup {
         }
     }
 
-    /// Builds the lookup of a level from its voxels' cells, which must be distinct and
-    /// inside the grid. Voxel ids are Morton ranks (see the module docs): the index of the
-    /// cell in `cells` only when `cells` is in Morton order, as every prepared point cloud
-    /// is.
+    /// Builds the lookup of a level from its voxels' cells, which must lie inside the grid
+    /// (a repeated cell counts once). Voxel ids are Morton ranks (see the module docs): the
+    /// index of the cell in `cells` only when `cells` is in Morton order without repeats,
+    /// as every prepared point cloud is.
     pub fn from_cells(level: u32, cells: impl Iterator<Item = [u32; 3]>) -> Self {
         let mut codes: Vec<u64> = cells.map(morton_encode).collect();
         codes.sort_unstable();
+        codes.dedup();
         Self::from_codes(level, &codes)
     }
 
