@@ -12,16 +12,25 @@
 //!   lod_count       u32       level + 1
 //!   center          [f64; 3]  ObjectSpace::center
 //!   scale           f64       ObjectSpace::scale
-//!   section_count   u32       3 · lod_count
+//!   section_count   u32       4 · lod_count
 //!   reserved        u32       0
 //!   header_checksum u64       XXH3-64 of the 80 bytes above
 //! sections, for each LOD l = 0 ..= level, in this order:
+//!   page_index (kind 4): PageEntry[]      (24 bytes each, one per occupied 16³ page)
 //!   point_cloud (kind 1): PackedVoxel[]   (16 bytes each, Morton order)
 //!   proxy_positions (kind 2): [f32; 3][]
 //!   proxy_triangles (kind 3): [u32; 3][]
 //! each section = kind u32, lod u32, length u64 (payload bytes), checksum u64
 //!   (XXH3-64 of kind, lod, length and the payload), then the payload.
+//! PageEntry = page u64 (Morton code of the page: a voxel's cell code >> 12),
+//!   first_voxel u64 (its first voxel in the point cloud; it runs to the next entry's),
+//!   checksum u64 (XXH3-64 of the page's voxels as stored).
 //! ```
+//!
+//! In Morton order the voxels of a 16³ page are one run of the point cloud, so the page
+//! index lets [`read_page`] read one page of one level — the header, the section headers
+//! (skipped by seeking), the level's index and that page's bytes — without reading the
+//! rest of the file, and check it on its own checksum.
 //!
 //! The sparse lookups are not stored: they are a pure function of the point clouds'
 //! Morton codes, rebuilt with [`lookup_from_codes`] on read in one linear pass per tree
@@ -37,6 +46,7 @@
 //! [`load_or_prepare`] (in `prepare`) puts the cache in front of the preparation stage.
 
 mod deps;
+mod pages;
 mod prepare;
 
 use std::fs::File;
@@ -51,13 +61,14 @@ use crate::model::ObjectSpace;
 use crate::prepare::lookup_from_codes;
 use crate::svo::morton_encode;
 
+pub use pages::{PageEntry, page_index, read_page};
 pub use prepare::{CacheStatus, PrepareError, PrepareOutcome, load_or_prepare};
 
 /// File magic.
 pub const MAGIC: [u8; 8] = *b"SSBVBAST";
 /// Version of the file format and of the preparation that produced it. Bump it whenever
 /// either changes, so stale caches are rebuilt instead of read.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 /// Bytes of the fixed header.
 const HEADER_BYTES: usize = 88;
 /// Bytes of a section header.
@@ -66,9 +77,11 @@ const SECTION_HEADER_BYTES: usize = 24;
 const KIND_POINT_CLOUD: u32 = 1;
 const KIND_PROXY_POSITIONS: u32 = 2;
 const KIND_PROXY_TRIANGLES: u32 = 3;
+const KIND_PAGE_INDEX: u32 = 4;
 
 fn kind_name(kind: u32) -> &'static str {
     match kind {
+        KIND_PAGE_INDEX => "page_index",
         KIND_POINT_CLOUD => "point_cloud",
         KIND_PROXY_POSITIONS => "proxy_positions",
         KIND_PROXY_TRIANGLES => "proxy_triangles",
@@ -269,14 +282,16 @@ pub fn write_cache(
             h.extend_from_slice(&c.to_le_bytes());
         }
         h.extend_from_slice(&asset.object_space.scale.to_le_bytes());
-        h.extend_from_slice(&(3 * asset.lods.len() as u32).to_le_bytes());
+        h.extend_from_slice(&(4 * asset.lods.len() as u32).to_le_bytes());
         h.extend_from_slice(&0u32.to_le_bytes());
         let checksum = xxh3_64(&h);
         h.extend_from_slice(&checksum.to_le_bytes());
         debug_assert_eq!(h.len(), HEADER_BYTES);
         w.write_all(&h)?;
         for lod in &asset.lods {
-            let sections: [(u32, std::borrow::Cow<'_, [u8]>); 3] = [
+            let index = page_index(&lod.point_cloud.voxels);
+            let sections: [(u32, std::borrow::Cow<'_, [u8]>); 4] = [
+                (KIND_PAGE_INDEX, le_bytes(&index)),
                 (KIND_POINT_CLOUD, le_bytes(&lod.point_cloud.voxels)),
                 (KIND_PROXY_POSITIONS, le_bytes(&lod.proxy.positions)),
                 (KIND_PROXY_TRIANGLES, le_bytes(&lod.proxy.triangles)),
@@ -319,7 +334,88 @@ struct Source<'a> {
     remaining: u64,
 }
 
-impl Source<'_> {
+impl<'a> Source<'a> {
+    /// Opens a cache file for reading with a buffer of `buffer` bytes.
+    fn open(path: &'a Path, buffer: usize) -> Result<Self, CacheError> {
+        let file = File::open(path).map_err(|e| CacheError::io(path, e))?;
+        let size = file.metadata().map_err(|e| CacheError::io(path, e))?.len();
+        Ok(Source {
+            path,
+            reader: BufReader::with_capacity(buffer, file),
+            remaining: size,
+        })
+    }
+
+    /// Reads and checks the header (magic, version, checksum, source hash, level, counts):
+    /// the asset's object space.
+    fn header(
+        &mut self,
+        expected_source_hash: u128,
+        level: u32,
+    ) -> Result<ObjectSpace, CacheError> {
+        let path = self.path;
+        let size = self.remaining;
+        let mut h = [0u8; HEADER_BYTES];
+        if size < MAGIC.len() as u64 {
+            return Err(CacheError::BadMagic {
+                path: path.to_path_buf(),
+            });
+        }
+        self.read_exact(&mut h[..MAGIC.len()], "header")?;
+        if h[..8] != MAGIC {
+            return Err(CacheError::BadMagic {
+                path: path.to_path_buf(),
+            });
+        }
+        self.read_exact(&mut h[MAGIC.len()..], "header")?;
+        let u32_at = |o: usize| u32::from_le_bytes(h[o..o + 4].try_into().unwrap_or_default());
+        let f64_at = |o: usize| f64::from_le_bytes(h[o..o + 8].try_into().unwrap_or_default());
+        let version = u32_at(8);
+        if version != FORMAT_VERSION {
+            return Err(CacheError::UnsupportedVersion {
+                path: path.to_path_buf(),
+                found: version,
+                expected: FORMAT_VERSION,
+            });
+        }
+        let stored_checksum = u64::from_le_bytes(h[80..88].try_into().unwrap_or_default());
+        if xxh3_64(&h[..80]) != stored_checksum {
+            return Err(CacheError::Checksum {
+                path: path.to_path_buf(),
+                section: "header".into(),
+            });
+        }
+        let source_hash = u128::from_le_bytes(h[16..32].try_into().unwrap_or_default());
+        if source_hash != expected_source_hash {
+            return Err(CacheError::SourceMismatch {
+                path: path.to_path_buf(),
+            });
+        }
+        let found_level = u32_at(32);
+        if found_level != level {
+            return Err(CacheError::LevelMismatch {
+                path: path.to_path_buf(),
+                found: found_level,
+                expected: level,
+            });
+        }
+        if level > MAX_LEVEL || u32_at(36) != level + 1 || u32_at(72) != 4 * (level + 1) {
+            return Err(CacheError::corrupt(
+                path,
+                "inconsistent level / section counts",
+            ));
+        }
+        let object_space = ObjectSpace {
+            center: glam::DVec3::new(f64_at(40), f64_at(48), f64_at(56)),
+            scale: f64_at(64),
+        };
+        let scale_ok = object_space.scale.is_finite() && object_space.scale > 0.0;
+        if !(object_space.center.is_finite() && scale_ok) {
+            return Err(CacheError::corrupt(path, "non-finite object space"));
+        }
+        Ok(object_space)
+    }
+
     fn read_exact(&mut self, buf: &mut [u8], what: &str) -> Result<(), CacheError> {
         if (buf.len() as u64) > self.remaining {
             return Err(CacheError::Truncated {
@@ -341,8 +437,9 @@ impl Source<'_> {
         Ok(())
     }
 
-    /// Reads one section, which must be of `kind` for `lod`, as a vector of `T`.
-    fn section<T: Pod + Zeroable>(&mut self, kind: u32, lod: u32) -> Result<Vec<T>, CacheError> {
+    /// Reads the header of the next section, which must be of `kind` for `lod` and fit in
+    /// the file: its payload length and checksum.
+    fn section_header(&mut self, kind: u32, lod: u32) -> Result<(u64, u64), CacheError> {
         let name = format!("{} of level {lod}", kind_name(kind));
         let mut head = [0u8; SECTION_HEADER_BYTES];
         self.read_exact(&mut head, &name)?;
@@ -358,18 +455,42 @@ impl Source<'_> {
                 ),
             ));
         }
+        if len > self.remaining {
+            return Err(CacheError::Truncated {
+                path: self.path.to_path_buf(),
+                what: name,
+            });
+        }
+        Ok((len, checksum))
+    }
+
+    /// Skips the next section (of `kind` for `lod`) without reading its payload.
+    fn skip_section(&mut self, kind: u32, lod: u32) -> Result<(), CacheError> {
+        let (len, _) = self.section_header(kind, lod)?;
+        self.skip(len)
+    }
+
+    /// Skips `len` bytes (at most what is left).
+    fn skip(&mut self, len: u64) -> Result<(), CacheError> {
+        let jump =
+            i64::try_from(len).map_err(|_| CacheError::corrupt(self.path, "absurd length"))?;
+        self.reader
+            .seek_relative(jump)
+            .map_err(|e| CacheError::io(self.path, e))?;
+        self.remaining -= len;
+        Ok(())
+    }
+
+    /// Reads one section, which must be of `kind` for `lod`, as a vector of `T`.
+    fn section<T: Pod + Zeroable>(&mut self, kind: u32, lod: u32) -> Result<Vec<T>, CacheError> {
+        let name = format!("{} of level {lod}", kind_name(kind));
+        let (len, checksum) = self.section_header(kind, lod)?;
         let size = std::mem::size_of::<T>() as u64;
         if !len.is_multiple_of(size) {
             return Err(CacheError::corrupt(
                 self.path,
                 format!("section {name} has {len} bytes, not a multiple of {size}"),
             ));
-        }
-        if len > self.remaining {
-            return Err(CacheError::Truncated {
-                path: self.path.to_path_buf(),
-                what: name,
-            });
         }
         let mut data: Vec<T> = vec![T::zeroed(); (len / size) as usize];
         self.read_exact(bytemuck::cast_slice_mut(&mut data), &name)?;
@@ -395,77 +516,14 @@ pub fn read_cache(
     expected_source_hash: u128,
     level: u32,
 ) -> Result<VoxelAsset, CacheError> {
-    let file = File::open(path).map_err(|e| CacheError::io(path, e))?;
-    let size = file.metadata().map_err(|e| CacheError::io(path, e))?.len();
-    let mut src = Source {
-        path,
-        reader: BufReader::with_capacity(1 << 20, file),
-        remaining: size,
-    };
-
-    let mut h = [0u8; HEADER_BYTES];
-    if size < MAGIC.len() as u64 {
-        return Err(CacheError::BadMagic {
-            path: path.to_path_buf(),
-        });
-    }
-    src.read_exact(&mut h[..MAGIC.len()], "header")?;
-    if h[..8] != MAGIC {
-        return Err(CacheError::BadMagic {
-            path: path.to_path_buf(),
-        });
-    }
-    src.read_exact(&mut h[MAGIC.len()..], "header")?;
-    let u32_at = |o: usize| u32::from_le_bytes(h[o..o + 4].try_into().unwrap_or_default());
-    let f64_at = |o: usize| f64::from_le_bytes(h[o..o + 8].try_into().unwrap_or_default());
-    let version = u32_at(8);
-    if version != FORMAT_VERSION {
-        return Err(CacheError::UnsupportedVersion {
-            path: path.to_path_buf(),
-            found: version,
-            expected: FORMAT_VERSION,
-        });
-    }
-    let stored_checksum = u64::from_le_bytes(h[80..88].try_into().unwrap_or_default());
-    if xxh3_64(&h[..80]) != stored_checksum {
-        return Err(CacheError::Checksum {
-            path: path.to_path_buf(),
-            section: "header".into(),
-        });
-    }
-    let source_hash = u128::from_le_bytes(h[16..32].try_into().unwrap_or_default());
-    if source_hash != expected_source_hash {
-        return Err(CacheError::SourceMismatch {
-            path: path.to_path_buf(),
-        });
-    }
-    let found_level = u32_at(32);
-    if found_level != level {
-        return Err(CacheError::LevelMismatch {
-            path: path.to_path_buf(),
-            found: found_level,
-            expected: level,
-        });
-    }
-    if level > MAX_LEVEL || u32_at(36) != level + 1 || u32_at(72) != 3 * (level + 1) {
-        return Err(CacheError::corrupt(
-            path,
-            "inconsistent level / section counts",
-        ));
-    }
-    let object_space = ObjectSpace {
-        center: glam::DVec3::new(f64_at(40), f64_at(48), f64_at(56)),
-        scale: f64_at(64),
-    };
-    let scale_ok = object_space.scale.is_finite() && object_space.scale > 0.0;
-    if !(object_space.center.is_finite() && scale_ok) {
-        return Err(CacheError::corrupt(path, "non-finite object space"));
-    }
-
+    let mut src = Source::open(path, 1 << 20)?;
+    let object_space = src.header(expected_source_hash, level)?;
     let mut lods = Vec::with_capacity(level as usize + 1);
     for l in 0..=level {
+        let index: Vec<PageEntry> = src.section(KIND_PAGE_INDEX, l)?;
         let voxels: Vec<PackedVoxel> = src.section(KIND_POINT_CLOUD, l)?;
         let codes = validated_codes(path, l, &voxels)?;
+        pages::check_index(path, l, &index, &voxels, &codes)?;
         let positions: Vec<[f32; 3]> = src.section(KIND_PROXY_POSITIONS, l)?;
         let triangles: Vec<[u32; 3]> = src.section(KIND_PROXY_TRIANGLES, l)?;
         if !positions.iter().flatten().all(|c| c.is_finite()) {
@@ -540,179 +598,4 @@ fn validated_codes(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::model::{Mesh, Model};
-    use crate::prepare::prepare_asset;
-    use crate::progress::NoProgress;
-    use glam::Vec3;
-
-    fn asset() -> VoxelAsset {
-        let mesh = Mesh {
-            positions: vec![
-                Vec3::new(0.1, 0.2, 0.3),
-                Vec3::new(1.0, 0.0, 0.0),
-                Vec3::new(0.0, 1.3, 0.1),
-                Vec3::new(0.2, 0.1, 0.9),
-            ],
-            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
-            ..Default::default()
-        };
-        let (mut asset, _) = prepare_asset(&Model::Mesh(mesh), 5, &NoProgress).unwrap();
-        // A proxy in every level, so the proxy sections are exercised too.
-        for lod in &mut asset.lods {
-            lod.proxy = ProxyMesh {
-                positions: vec![[-1.0, -1.0, -1.0], [1.0, -1.0, -1.0], [0.0, 1.0, 0.5]],
-                triangles: vec![[0, 1, 2]],
-            };
-        }
-        asset
-    }
-
-    #[test]
-    fn round_trip_is_exact() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("sub/dir/a.ssbvbast");
-        let a = asset();
-        write_cache(&path, &a, 0xdead_beef_u128 << 64 | 42, 5).unwrap();
-        let b = read_cache(&path, 0xdead_beef_u128 << 64 | 42, 5).unwrap();
-        assert_eq!(a, b);
-        // Only the cache file is left in the folder (the temporary file was renamed).
-        assert_eq!(
-            std::fs::read_dir(path.parent().unwrap()).unwrap().count(),
-            1
-        );
-        assert!(matches!(
-            read_cache(&path, 7, 5),
-            Err(CacheError::SourceMismatch { .. })
-        ));
-        assert!(matches!(
-            read_cache(&path, 0xdead_beef_u128 << 64 | 42, 4),
-            Err(CacheError::LevelMismatch {
-                found: 5,
-                expected: 4,
-                ..
-            })
-        ));
-        assert!(write_cache(&path, &a, 1, 4).is_err());
-    }
-
-    #[test]
-    fn damaged_files_are_errors() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("a.ssbvbast");
-        write_cache(&path, &asset(), 99, 5).unwrap();
-        let good = std::fs::read(&path).unwrap();
-        let bad = dir.path().join("bad.ssbvbast");
-        // Truncation at many offsets, including inside every section.
-        let step = (good.len() / 300).max(1);
-        for cut in (0..good.len())
-            .step_by(step)
-            .chain([good.len() - 1, HEADER_BYTES, 87, 89])
-        {
-            std::fs::write(&bad, &good[..cut]).unwrap();
-            let e = read_cache(&bad, 99, 5).unwrap_err();
-            assert!(e.to_string().contains("bad.ssbvbast"), "{e}");
-        }
-        // A flipped byte anywhere is caught.
-        for pos in (0..good.len()).step_by(step) {
-            let mut b = good.clone();
-            b[pos] ^= 0x40;
-            std::fs::write(&bad, &b).unwrap();
-            assert!(read_cache(&bad, 99, 5).is_err(), "flip at {pos} accepted");
-        }
-        // A flip in the point-cloud payload of level 5 is a checksum error naming it.
-        let mut b = good.clone();
-        let last_pc = good.len() - 200;
-        b[last_pc] ^= 1;
-        std::fs::write(&bad, &b).unwrap();
-        let e = read_cache(&bad, 99, 5).unwrap_err();
-        assert!(matches!(e, CacheError::Checksum { .. }), "{e}");
-        // Magic and version.
-        let mut b = good.clone();
-        b[0] = b'X';
-        std::fs::write(&bad, &b).unwrap();
-        assert!(matches!(
-            read_cache(&bad, 99, 5),
-            Err(CacheError::BadMagic { .. })
-        ));
-        let mut b = good.clone();
-        b[8..12].copy_from_slice(&0u32.to_le_bytes());
-        std::fs::write(&bad, &b).unwrap();
-        assert!(matches!(
-            read_cache(&bad, 99, 5),
-            Err(CacheError::UnsupportedVersion { found: 0, .. })
-        ));
-        // An absurd section length is refused before allocating.
-        let mut b = good.clone();
-        b[HEADER_BYTES + 8..HEADER_BYTES + 16].copy_from_slice(&(u64::MAX - 15).to_le_bytes());
-        std::fs::write(&bad, &b).unwrap();
-        assert!(matches!(
-            read_cache(&bad, 99, 5),
-            Err(CacheError::Truncated { .. })
-        ));
-        // Trailing garbage.
-        let mut b = good.clone();
-        b.extend_from_slice(b"junk");
-        std::fs::write(&bad, &b).unwrap();
-        assert!(matches!(
-            read_cache(&bad, 99, 5),
-            Err(CacheError::Corrupt { .. })
-        ));
-        assert!(matches!(
-            read_cache(&dir.path().join("none"), 99, 5),
-            Err(CacheError::Io { .. })
-        ));
-    }
-
-    #[test]
-    fn load_or_prepare_reports_what_it_did() {
-        let dir = tempfile::tempdir().unwrap();
-        let model = dir.path().join("tri.obj");
-        std::fs::write(
-            &model,
-            "v 0 0 0\nv 1 0 0\nv 0 1 0.5\nv 0.3 0.2 1\nf 1 2 3\nf 1 2 4\n",
-        )
-        .unwrap();
-        let cache = dir.path().join("cache");
-        let (a, first) = load_or_prepare(&model, 4, Some(&cache), &NoProgress).unwrap();
-        assert_eq!(
-            first.status,
-            CacheStatus::Rebuilt {
-                reason: "cache missing".into()
-            }
-        );
-        assert!(first.stats.is_some() && first.cache_write_error.is_none());
-        let (b, second) = load_or_prepare(&model, 4, Some(&cache), &NoProgress).unwrap();
-        assert_eq!(second.status, CacheStatus::Hit);
-        assert_eq!(a, b);
-        // Corrupt the cache: rebuilt, with the reason.
-        let mut bytes = std::fs::read(&second.cache_path).unwrap();
-        let n = bytes.len();
-        bytes[n - 49] ^= 0xff; // last byte of the level-4 point cloud (two empty proxy sections follow)
-        std::fs::write(&second.cache_path, &bytes).unwrap();
-        let (c, third) = load_or_prepare(&model, 4, Some(&cache), &NoProgress).unwrap();
-        match &third.status {
-            CacheStatus::Rebuilt { reason } => {
-                assert!(
-                    reason.starts_with("cache corrupt (checksum mismatch in section"),
-                    "{reason}"
-                )
-            }
-            s => panic!("{s:?}"),
-        }
-        assert!(third.to_string().contains("rebuilt"));
-        assert_eq!(a, c);
-        assert_eq!(
-            load_or_prepare(&model, 4, Some(&cache), &NoProgress)
-                .unwrap()
-                .1
-                .status,
-            CacheStatus::Hit
-        );
-        // A missing model is a load error naming it.
-        let e = load_or_prepare(&dir.path().join("nope.obj"), 4, Some(&cache), &NoProgress)
-            .unwrap_err();
-        assert!(e.to_string().contains("nope.obj"), "{e}");
-    }
-}
+mod tests;

@@ -1,0 +1,275 @@
+//! Round trips and damaged files of the asset cache.
+use super::*;
+use crate::model::{Mesh, Model};
+use crate::prepare::prepare_asset;
+use crate::progress::NoProgress;
+use glam::Vec3;
+
+fn asset() -> VoxelAsset {
+    let mesh = Mesh {
+        positions: vec![
+            Vec3::new(0.1, 0.2, 0.3),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.3, 0.1),
+            Vec3::new(0.2, 0.1, 0.9),
+        ],
+        triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        ..Default::default()
+    };
+    let (mut asset, _) = prepare_asset(&Model::Mesh(mesh), 5, &NoProgress).unwrap();
+    // A proxy in every level, so the proxy sections are exercised too.
+    for lod in &mut asset.lods {
+        lod.proxy = ProxyMesh {
+            positions: vec![[-1.0, -1.0, -1.0], [1.0, -1.0, -1.0], [0.0, 1.0, 0.5]],
+            triangles: vec![[0, 1, 2]],
+        };
+    }
+    asset
+}
+
+#[test]
+fn round_trip_is_exact() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("sub/dir/a.ssbvbast");
+    let a = asset();
+    write_cache(&path, &a, 0xdead_beef_u128 << 64 | 42, 5).unwrap();
+    let b = read_cache(&path, 0xdead_beef_u128 << 64 | 42, 5).unwrap();
+    assert_eq!(a, b);
+    // Only the cache file is left in the folder (the temporary file was renamed).
+    assert_eq!(
+        std::fs::read_dir(path.parent().unwrap()).unwrap().count(),
+        1
+    );
+    assert!(matches!(
+        read_cache(&path, 7, 5),
+        Err(CacheError::SourceMismatch { .. })
+    ));
+    assert!(matches!(
+        read_cache(&path, 0xdead_beef_u128 << 64 | 42, 4),
+        Err(CacheError::LevelMismatch {
+            found: 5,
+            expected: 4,
+            ..
+        })
+    ));
+    assert!(write_cache(&path, &a, 1, 4).is_err());
+}
+
+#[test]
+fn damaged_files_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("a.ssbvbast");
+    write_cache(&path, &asset(), 99, 5).unwrap();
+    let good = std::fs::read(&path).unwrap();
+    let bad = dir.path().join("bad.ssbvbast");
+    // Truncation at many offsets, including inside every section.
+    let step = (good.len() / 300).max(1);
+    for cut in (0..good.len())
+        .step_by(step)
+        .chain([good.len() - 1, HEADER_BYTES, 87, 89])
+    {
+        std::fs::write(&bad, &good[..cut]).unwrap();
+        let e = read_cache(&bad, 99, 5).unwrap_err();
+        assert!(e.to_string().contains("bad.ssbvbast"), "{e}");
+    }
+    // A flipped byte anywhere is caught.
+    for pos in (0..good.len()).step_by(step) {
+        let mut b = good.clone();
+        b[pos] ^= 0x40;
+        std::fs::write(&bad, &b).unwrap();
+        assert!(read_cache(&bad, 99, 5).is_err(), "flip at {pos} accepted");
+    }
+    // A flip in the point-cloud payload of level 5 is a checksum error naming it.
+    let mut b = good.clone();
+    let last_pc = good.len() - 200;
+    b[last_pc] ^= 1;
+    std::fs::write(&bad, &b).unwrap();
+    let e = read_cache(&bad, 99, 5).unwrap_err();
+    assert!(matches!(e, CacheError::Checksum { .. }), "{e}");
+    // Magic and version.
+    let mut b = good.clone();
+    b[0] = b'X';
+    std::fs::write(&bad, &b).unwrap();
+    assert!(matches!(
+        read_cache(&bad, 99, 5),
+        Err(CacheError::BadMagic { .. })
+    ));
+    let mut b = good.clone();
+    b[8..12].copy_from_slice(&0u32.to_le_bytes());
+    std::fs::write(&bad, &b).unwrap();
+    assert!(matches!(
+        read_cache(&bad, 99, 5),
+        Err(CacheError::UnsupportedVersion { found: 0, .. })
+    ));
+    // An absurd section length is refused before allocating.
+    let mut b = good.clone();
+    b[HEADER_BYTES + 8..HEADER_BYTES + 16].copy_from_slice(&(u64::MAX - 15).to_le_bytes());
+    std::fs::write(&bad, &b).unwrap();
+    assert!(matches!(
+        read_cache(&bad, 99, 5),
+        Err(CacheError::Truncated { .. })
+    ));
+    // Trailing garbage.
+    let mut b = good.clone();
+    b.extend_from_slice(b"junk");
+    std::fs::write(&bad, &b).unwrap();
+    assert!(matches!(
+        read_cache(&bad, 99, 5),
+        Err(CacheError::Corrupt { .. })
+    ));
+    assert!(matches!(
+        read_cache(&dir.path().join("none"), 99, 5),
+        Err(CacheError::Io { .. })
+    ));
+}
+
+#[test]
+fn load_or_prepare_reports_what_it_did() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("tri.obj");
+    std::fs::write(
+        &model,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0.5\nv 0.3 0.2 1\nf 1 2 3\nf 1 2 4\n",
+    )
+    .unwrap();
+    let cache = dir.path().join("cache");
+    let (a, first) = load_or_prepare(&model, 4, Some(&cache), &NoProgress).unwrap();
+    assert_eq!(
+        first.status,
+        CacheStatus::Rebuilt {
+            reason: "cache missing".into()
+        }
+    );
+    assert!(first.stats.is_some() && first.cache_write_error.is_none());
+    let (b, second) = load_or_prepare(&model, 4, Some(&cache), &NoProgress).unwrap();
+    assert_eq!(second.status, CacheStatus::Hit);
+    assert_eq!(a, b);
+    // Corrupt the cache: rebuilt, with the reason.
+    let mut bytes = std::fs::read(&second.cache_path).unwrap();
+    let n = bytes.len();
+    bytes[n - 49] ^= 0xff; // last byte of the level-4 point cloud (two empty proxy sections follow)
+    std::fs::write(&second.cache_path, &bytes).unwrap();
+    let (c, third) = load_or_prepare(&model, 4, Some(&cache), &NoProgress).unwrap();
+    match &third.status {
+        CacheStatus::Rebuilt { reason } => {
+            assert!(
+                reason.starts_with("cache corrupt (checksum mismatch in section"),
+                "{reason}"
+            )
+        }
+        s => panic!("{s:?}"),
+    }
+    assert!(third.to_string().contains("rebuilt"));
+    assert_eq!(a, c);
+    assert_eq!(
+        load_or_prepare(&model, 4, Some(&cache), &NoProgress)
+            .unwrap()
+            .1
+            .status,
+        CacheStatus::Hit
+    );
+    // A missing model is a load error naming it.
+    let e =
+        load_or_prepare(&dir.path().join("nope.obj"), 4, Some(&cache), &NoProgress).unwrap_err();
+    assert!(e.to_string().contains("nope.obj"), "{e}");
+}
+
+#[test]
+fn one_page_reads_alone_and_is_checked_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("p.ssbvbast");
+    let a = asset();
+    write_cache(&path, &a, 5, 5).unwrap();
+    let mut pages = 0;
+    for lod in &a.lods {
+        let index = page_index(&lod.point_cloud.voxels);
+        // Level 5 (32³ cells) has up to 8 pages; every voxel lies in exactly one of them.
+        let mut seen = 0;
+        for e in &index {
+            let p = crate::svo::morton_decode(e.page);
+            let got = read_page(&path, 5, 5, lod.level, p).unwrap();
+            let start = e.first_voxel as usize;
+            assert_eq!(got, lod.point_cloud.voxels[start..start + got.len()]);
+            assert!(got.iter().all(|v| v.cell().map(|c| c / 16) == p));
+            seen += got.len();
+            pages += 1;
+        }
+        assert_eq!(seen, lod.point_cloud.voxels.len(), "level {}", lod.level);
+        // An unoccupied page is empty, not an error.
+        let occupied: Vec<[u32; 3]> = index
+            .iter()
+            .map(|e| crate::svo::morton_decode(e.page))
+            .collect();
+        if let Some(free) = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 1], [7, 7, 7]]
+            .into_iter()
+            .find(|p| !occupied.contains(p))
+        {
+            assert!(read_page(&path, 5, 5, lod.level, free).unwrap().is_empty());
+        }
+    }
+    assert!(pages > 8);
+    assert!(read_page(&path, 5, 5, 6, [0; 3]).is_err());
+    assert!(matches!(
+        read_page(&path, 6, 5, 5, [0; 3]),
+        Err(CacheError::SourceMismatch { .. })
+    ));
+
+    // Flip a byte inside one page of level 5: that page fails on its own checksum, naming
+    // it; the other pages still read; the whole file is refused.
+    let finest = &a.lods[5];
+    let index = page_index(&finest.point_cloud.voxels);
+    assert!(index.len() >= 2);
+    let good = std::fs::read(&path).unwrap();
+    let needle: &[u8] = bytemuck::cast_slice(&finest.point_cloud.voxels);
+    let pc = good
+        .windows(needle.len())
+        .position(|w| w == needle)
+        .expect("level-5 point cloud in the file");
+    let victim = index[1];
+    let mut bad = good.clone();
+    bad[pc + victim.first_voxel as usize * 16 + 5] ^= 0x10;
+    std::fs::write(&path, &bad).unwrap();
+    let p = crate::svo::morton_decode(victim.page);
+    let e = read_page(&path, 5, 5, 5, p).unwrap_err();
+    assert!(
+        matches!(&e, CacheError::Checksum { section, .. } if section.contains("page")),
+        "{e}"
+    );
+    let other = crate::svo::morton_decode(index[0].page);
+    assert!(!read_page(&path, 5, 5, 5, other).unwrap().is_empty());
+    assert!(read_cache(&path, 5, 5).is_err());
+    // Truncated inside the page: an error, never a short page.
+    std::fs::write(&path, &good[..pc + victim.first_voxel as usize * 16 + 8]).unwrap();
+    assert!(matches!(
+        read_page(&path, 5, 5, 5, p),
+        Err(CacheError::Truncated { .. })
+    ));
+}
+
+#[test]
+fn a_page_index_that_disagrees_with_its_point_cloud_is_refused() {
+    let a = asset();
+    let voxels = &a.lods[5].point_cloud.voxels;
+    let codes: Vec<u64> = voxels
+        .iter()
+        .map(|v| crate::svo::morton_encode(v.cell()))
+        .collect();
+    let path = Path::new("x.ssbvbast");
+    let index = page_index(voxels);
+    assert!(pages::check_index(path, 5, &index, voxels, &codes).is_ok());
+    let mut shifted = index.clone();
+    shifted[1].first_voxel += 1;
+    assert!(pages::check_index(path, 5, &shifted, voxels, &codes).is_err());
+    let mut short = index.clone();
+    short.pop();
+    assert!(pages::check_index(path, 5, &short, voxels, &codes).is_err());
+    let mut long = index.clone();
+    long.push(*index.last().unwrap());
+    assert!(pages::check_index(path, 5, &long, voxels, &codes).is_err());
+    let mut sum = index.clone();
+    sum[0].checksum ^= 1;
+    assert!(matches!(
+        pages::check_index(path, 5, &sum, voxels, &codes),
+        Err(CacheError::Checksum { .. })
+    ));
+}
