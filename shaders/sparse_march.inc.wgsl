@@ -206,45 +206,59 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32) -> Hit {
             c[a] = clamp(i32(floor((r.o[a] + 1.0) / r.s)), 0, r.n - 1);
         }
     }
-    // The lookup nodes containing the cell last visited, root first: `path[k]` (absolute
-    // index) covers that cell's 4^(depth - k) region for k < `path_len`. A step re-reads
-    // only the nodes below the deepest one that still contains the new cell.
-    var path: array<u32, 8>;
-    var path_len = 0u;
-    var path_cell = vec3(0u);
+    // The leaf (4^3 cells) and its parent (16^3) that held the last cell visited, kept in
+    // registers (a per-lane array would live in memory): most steps stay in the leaf, and
+    // most of the others in its parent, so a step reads at most the nodes below the
+    // parent, and the root path only when the ray enters a new 16^3 region.
     let depth = lod.depth;
+    var leaf_key = vec3(0xffffffffu);
+    var leaf: LookupNode;
+    var parent_key = vec3(0xffffffffu);
+    var parent = 0u;
     for (var step = 0u; step < MAX_STEPS; step++) {
         march_steps += 1u;
         let co = orig_cell(r, c);
-        let diff = (co.x ^ path_cell.x) | (co.y ^ path_cell.y) | (co.z ^ path_cell.z);
-        if diff != 0u {
-            path_len = min(path_len, depth - min(depth - 1u, firstLeadingBit(diff) / 2u));
-        }
-        if path_len == 0u {
-            path[0] = lod.node_offset;
-            path_len = 1u;
-        }
-        path_cell = co;
         // Descend: an absent child of 2^shift cells per axis is an empty region to skip,
         // twice as wide when its whole 2^3 octant of children is absent (the octant's eight
         // bits are one byte of the mask); an absent single cell is an ordinary DDA step; a
         // present cell is the hit.
         var unit = 0;
-        loop {
-            let k = path_len - 1u;
-            let n = lookup_node(lod, path[k]);
-            let shift = 2u * (depth - 1u - k);
-            let b = child_bit((co >> vec3(shift)) & vec3(3u));
-            if !node_has(n, b) {
-                let octant_empty = ((select(n.lo, n.hi, b >= 32u) >> (b & 24u)) & 0xffu) == 0u;
-                unit = select(select(0, 1 << shift, shift > 0u), 2 << shift, octant_empty);
-                break;
+        if any(co >> vec3(2u) != leaf_key) {
+            var node = lod.node_offset;
+            var k = 0u;
+            if depth >= 2u && all(co >> vec3(4u) == parent_key) {
+                node = parent;
+                k = depth - 2u;
             }
-            if shift == 0u {
-                return cell_hit(r, c, node_child(n, b));
+            loop {
+                let n = lookup_node(lod, node);
+                if k + 1u == depth {
+                    leaf = n;
+                    leaf_key = co >> vec3(2u);
+                    break;
+                }
+                let shift = 2u * (depth - 1u - k);
+                let b = child_bit((co >> vec3(shift)) & vec3(3u));
+                if !node_has(n, b) {
+                    let octant_empty = ((select(n.lo, n.hi, b >= 32u) >> (b & 24u)) & 0xffu) == 0u;
+                    unit = select(1 << shift, 2 << shift, octant_empty);
+                    break;
+                }
+                node = lod.node_offset + node_child(n, b);
+                k += 1u;
+                if k + 2u == depth {
+                    parent = node;
+                    parent_key = co >> vec3(4u);
+                }
             }
-            path[path_len] = lod.node_offset + node_child(n, b);
-            path_len += 1u;
+        }
+        if unit == 0 {
+            let b = child_bit(co & vec3(3u));
+            if node_has(leaf, b) {
+                return cell_hit(r, c, node_child(leaf, b));
+            }
+            let octant_empty = ((select(leaf.lo, leaf.hi, b >= 32u) >> (b & 24u)) & 0xffu) == 0u;
+            unit = select(0, 2, octant_empty);
         }
         if unit != 0 {
             // Empty region: its far plane per moving axis (mirrored frame), the first time
