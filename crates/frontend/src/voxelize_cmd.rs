@@ -13,7 +13,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use serde::Serialize;
-use ssbvb_voxel::cache::{CacheStatus, hash_source, load_or_prepare, write_cache};
+use ssbvb_voxel::cache::{CacheStatus, hash_source, prepare_into_cache, read_cache, write_cache};
 use ssbvb_voxel::load::load_model;
 use ssbvb_voxel::prepare::{LevelStats, StageTimes, asset_level_stats, prepare_asset};
 use ssbvb_voxel::voxelize::VoxelizeReport;
@@ -72,7 +72,7 @@ pub fn run(args: &VoxelizeArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let progress = BarProgress::new(!args.json && std::io::stderr().is_terminal());
 
-    let (asset, cache, stats) = if args.no_cache {
+    let (asset, cache, stats, streamed) = if args.no_cache {
         let model = load_model(&args.model)?;
         let (asset, stats) = prepare_asset(&model, args.level, &progress)
             .with_context(|| format!("{}: preparation failed", args.model.display()))?;
@@ -82,9 +82,12 @@ pub fn run(args: &VoxelizeArgs) -> anyhow::Result<()> {
             path: None,
             write_error: None,
         };
-        (asset, cache, Some(stats))
+        (Some(asset), cache, Some(stats), None)
     } else {
-        let (asset, outcome) = load_or_prepare(&args.model, args.level, None, &progress)?;
+        // A miss prepares a mesh straight into the cache file, never holding a level.
+        let (asset, outcome) = prepare_into_cache(&args.model, args.level, None, &progress)?;
+        let streamed = (asset.is_none() && args.out.is_some())
+            .then(|| (outcome.cache_path.clone(), outcome.cache_key));
         let (status, reason) = match outcome.status {
             CacheStatus::Hit => ("hit", None),
             CacheStatus::Rebuilt { reason } => ("rebuilt", Some(reason)),
@@ -95,26 +98,37 @@ pub fn run(args: &VoxelizeArgs) -> anyhow::Result<()> {
             path: Some(outcome.cache_path),
             write_error: outcome.cache_write_error,
         };
-        (asset, cache, outcome.stats)
+        (asset, cache, outcome.stats, streamed)
     };
     progress.finish();
+    // Streamed into the cache and asked for a copy: read it back.
+    let asset = match streamed {
+        Some((path, key)) => Some(read_cache(&path, key, args.level)?),
+        None => asset,
+    };
 
-    if let Some(out) = &args.out {
+    if let (Some(out), Some(asset)) = (&args.out, &asset) {
         let hash = hash_source(&args.model)?;
-        write_cache(out, &asset, hash, args.level)?;
+        write_cache(out, asset, hash, args.level)?;
     }
 
-    let levels = match &stats {
-        Some(s) => s.levels.clone(),
-        None => asset_level_stats(&asset),
+    let levels = match (&stats, &asset) {
+        (Some(s), _) => s.levels.clone(),
+        (None, Some(a)) => asset_level_stats(a),
+        (None, None) => Vec::new(),
+    };
+    let (center, scale) = match (&stats, &asset) {
+        (Some(s), _) => (s.object_space_center, s.object_space_scale),
+        (None, Some(a)) => (a.object_space.center.to_array(), a.object_space.scale),
+        (None, None) => ([0.0; 3], 1.0),
     };
     let report = Report {
         model: args.model.clone(),
         level: args.level,
         cache,
         output: args.out.clone(),
-        object_space_center: asset.object_space.center.to_array(),
-        object_space_scale: asset.object_space.scale,
+        object_space_center: center,
+        object_space_scale: scale,
         stages: stats.as_ref().map(|s| s.stages.clone()),
         voxelize: stats.map(|s| s.voxelize),
         total_s: start.elapsed().as_secs_f64(),

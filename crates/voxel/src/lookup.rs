@@ -333,6 +333,45 @@ impl LookupBuilder {
     }
 }
 
+/// Counts the nodes of the lookup of codes fed in increasing order without building it
+/// (what the streaming preparation reports for a level it never holds).
+#[derive(Debug, Clone)]
+pub struct NodeCounter {
+    depth: u32,
+    last: Option<u64>,
+    nodes: u64,
+}
+
+impl NodeCounter {
+    /// A counter for a level-`level` lookup.
+    pub fn new(level: u32) -> Self {
+        Self {
+            depth: tree_depth(level),
+            last: None,
+            nodes: 0,
+        }
+    }
+
+    /// Adds the next codes (strictly increasing, continuing the previous ones).
+    pub fn extend(&mut self, codes: &[u64]) {
+        for &c in codes {
+            // A new node at every depth whose key (the code without its lower digits)
+            // changes; the root (key 0) counts once.
+            for j in 1..=self.depth {
+                if self.last.is_none_or(|l| l >> (6 * j) != c >> (6 * j)) {
+                    self.nodes += 1;
+                }
+            }
+            self.last = Some(c);
+        }
+    }
+
+    /// The node count of [`SparseLookup::from_codes`] on the codes added.
+    pub fn nodes(&self) -> u64 {
+        self.nodes.max(1)
+    }
+}
+
 /// Appends `code` to the nodes being grouped by `code >> 6`: a new node when its key
 /// differs from the last one (codes arrive in increasing order).
 fn group(nodes: &mut Vec<(u64, u64, u32)>, code: u64, index: u32) {
@@ -397,6 +436,25 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn the_node_counter_counts_what_the_builder_builds() {
+        for level in [0u32, 1, 2, 3, 5, 8] {
+            let n = 1u32 << level;
+            let mut codes: Vec<u64> = (0..700u32)
+                .map(|i| morton_encode([(i * 7) % n, (i * i * 13 + 1) % n, (i * 31 + 2) % n]))
+                .collect();
+            codes.sort_unstable();
+            codes.dedup();
+            let mut counter = NodeCounter::new(level);
+            for chunk in codes.chunks(17) {
+                counter.extend(chunk);
+            }
+            let built = SparseLookup::from_codes(level, &codes);
+            assert_eq!(counter.nodes(), built.node_count() as u64, "level {level}");
+        }
+        assert_eq!(NodeCounter::new(6).nodes(), 1);
     }
 
     #[test]

@@ -56,6 +56,15 @@ pub fn build_proxy_bricks(lookup: &SparseLookup, brick: u32) -> ProxyMesh {
     triangulate(&rects, brick, cell_size(lookup.level))
 }
 
+/// [`build_proxy`] from the occupied 16³ pages alone (page coordinates; the whole grid
+/// for levels below 4): what the streaming preparation has of a level it never holds.
+pub fn build_proxy_of_pages(level: u32, pages: &[[u32; 3]]) -> ProxyMesh {
+    let brick = i64::from(PAGE_SIZE).min(1i64 << level);
+    let bricks: HashSet<[i64; 3]> = pages.iter().map(|p| p.map(i64::from)).collect();
+    let rects = merged_faces(&bricks);
+    triangulate(&rects, brick, cell_size(level))
+}
+
 /// Every occupied brick (coordinates in bricks): the occupied regions of the largest
 /// tree node size `4^m ≤ brick`, merged by the remaining factor (1 or 2).
 fn occupied_bricks(lookup: &SparseLookup, brick: i64) -> HashSet<[i64; 3]> {

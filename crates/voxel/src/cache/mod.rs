@@ -48,6 +48,7 @@
 mod deps;
 mod pages;
 mod prepare;
+mod stream;
 
 use std::fs::File;
 use std::io::{self, BufReader, BufWriter, Read, Write};
@@ -62,7 +63,8 @@ use crate::prepare::lookup_from_codes;
 use crate::svo::morton_encode;
 
 pub use pages::{PageEntry, page_index, read_page};
-pub use prepare::{CacheStatus, PrepareError, PrepareOutcome, load_or_prepare};
+pub use prepare::{CacheStatus, PrepareError, PrepareOutcome, load_or_prepare, prepare_into_cache};
+pub use stream::{CacheStream, StreamedLevel};
 
 /// File magic.
 pub const MAGIC: [u8; 8] = *b"SSBVBAST";
@@ -259,6 +261,82 @@ pub fn write_cache(
             format!("asset to write does not hold levels 0..={level}"),
         ));
     }
+    write_atomically(path, |w| {
+        w.write_all(&header_bytes(source_hash, level, &asset.object_space))?;
+        for lod in &asset.lods {
+            let index = page_index(&lod.point_cloud.voxels);
+            write_section(w, KIND_PAGE_INDEX, lod.level, &le_bytes(&index))?;
+            write_section(
+                w,
+                KIND_POINT_CLOUD,
+                lod.level,
+                &le_bytes(&lod.point_cloud.voxels),
+            )?;
+            write_proxy(w, lod.level, &lod.proxy)?;
+        }
+        Ok(())
+    })
+}
+
+/// The file header of a cache of levels `0..=level`.
+fn header_bytes(source_hash: u128, level: u32, object_space: &ObjectSpace) -> Vec<u8> {
+    let mut h = Vec::with_capacity(HEADER_BYTES);
+    h.extend_from_slice(&MAGIC);
+    h.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+    h.extend_from_slice(&0u32.to_le_bytes());
+    h.extend_from_slice(&source_hash.to_le_bytes());
+    h.extend_from_slice(&level.to_le_bytes());
+    h.extend_from_slice(&(level + 1).to_le_bytes());
+    for c in object_space.center.to_array() {
+        h.extend_from_slice(&c.to_le_bytes());
+    }
+    h.extend_from_slice(&object_space.scale.to_le_bytes());
+    h.extend_from_slice(&(4 * (level + 1)).to_le_bytes());
+    h.extend_from_slice(&0u32.to_le_bytes());
+    let checksum = xxh3_64(&h);
+    h.extend_from_slice(&checksum.to_le_bytes());
+    debug_assert_eq!(h.len(), HEADER_BYTES);
+    h
+}
+
+/// Writes a section header and its payload.
+fn write_section(w: &mut impl Write, kind: u32, lod: u32, payload: &[u8]) -> io::Result<()> {
+    write_section_header(
+        w,
+        kind,
+        lod,
+        payload.len() as u64,
+        section_checksum(kind, lod, payload),
+    )?;
+    w.write_all(payload)
+}
+
+/// Writes a section header.
+fn write_section_header(
+    w: &mut impl Write,
+    kind: u32,
+    lod: u32,
+    len: u64,
+    checksum: u64,
+) -> io::Result<()> {
+    w.write_all(&kind.to_le_bytes())?;
+    w.write_all(&lod.to_le_bytes())?;
+    w.write_all(&len.to_le_bytes())?;
+    w.write_all(&checksum.to_le_bytes())
+}
+
+/// Writes a level's two proxy sections.
+fn write_proxy(w: &mut impl Write, lod: u32, proxy: &ProxyMesh) -> io::Result<()> {
+    write_section(w, KIND_PROXY_POSITIONS, lod, &le_bytes(&proxy.positions))?;
+    write_section(w, KIND_PROXY_TRIANGLES, lod, &le_bytes(&proxy.triangles))
+}
+
+/// Creates `path` atomically: `write` fills a temporary file in the same folder (created
+/// if needed), which is synced and renamed over `path`.
+fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<&File>) -> io::Result<()>,
+) -> Result<(), CacheError> {
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
@@ -269,45 +347,6 @@ pub fn write_cache(
         .suffix(".tmp")
         .tempfile_in(&dir)
         .map_err(|e| CacheError::io(&dir, e))?;
-    let write = |file: &File| -> io::Result<()> {
-        let mut w = BufWriter::with_capacity(1 << 20, file);
-        let mut h = Vec::with_capacity(HEADER_BYTES);
-        h.extend_from_slice(&MAGIC);
-        h.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-        h.extend_from_slice(&0u32.to_le_bytes());
-        h.extend_from_slice(&source_hash.to_le_bytes());
-        h.extend_from_slice(&level.to_le_bytes());
-        h.extend_from_slice(&(asset.lods.len() as u32).to_le_bytes());
-        for c in asset.object_space.center.to_array() {
-            h.extend_from_slice(&c.to_le_bytes());
-        }
-        h.extend_from_slice(&asset.object_space.scale.to_le_bytes());
-        h.extend_from_slice(&(4 * asset.lods.len() as u32).to_le_bytes());
-        h.extend_from_slice(&0u32.to_le_bytes());
-        let checksum = xxh3_64(&h);
-        h.extend_from_slice(&checksum.to_le_bytes());
-        debug_assert_eq!(h.len(), HEADER_BYTES);
-        w.write_all(&h)?;
-        for lod in &asset.lods {
-            let index = page_index(&lod.point_cloud.voxels);
-            let sections: [(u32, std::borrow::Cow<'_, [u8]>); 4] = [
-                (KIND_PAGE_INDEX, le_bytes(&index)),
-                (KIND_POINT_CLOUD, le_bytes(&lod.point_cloud.voxels)),
-                (KIND_PROXY_POSITIONS, le_bytes(&lod.proxy.positions)),
-                (KIND_PROXY_TRIANGLES, le_bytes(&lod.proxy.triangles)),
-            ];
-            for (kind, payload) in sections {
-                w.write_all(&kind.to_le_bytes())?;
-                w.write_all(&lod.level.to_le_bytes())?;
-                w.write_all(&(payload.len() as u64).to_le_bytes())?;
-                w.write_all(&section_checksum(kind, lod.level, &payload).to_le_bytes())?;
-                w.write_all(&payload)?;
-            }
-        }
-        w.flush()?;
-        drop(w);
-        file.sync_all()
-    };
     // Temporary files are created private (0600); a cache is ordinary data.
     #[cfg(unix)]
     {
@@ -316,7 +355,14 @@ pub fn write_cache(
             .as_file()
             .set_permissions(std::fs::Permissions::from_mode(0o644));
     }
-    write(tmp.as_file()).map_err(|e| CacheError::io(tmp.path(), e))?;
+    let fill = |file: &File| -> io::Result<()> {
+        let mut w = BufWriter::with_capacity(1 << 20, file);
+        write(&mut w)?;
+        w.flush()?;
+        drop(w);
+        file.sync_all()
+    };
+    fill(tmp.as_file()).map_err(|e| CacheError::io(tmp.path(), e))?;
     tmp.persist(path)
         .map_err(|e| CacheError::io(path, e.error))?;
     // Make the rename itself durable (best effort: not every platform can sync a folder).

@@ -13,7 +13,11 @@ use super::{
 };
 use crate::asset::VoxelAsset;
 use crate::load::{LoadError, LoadOptions, load_model_with};
-use crate::prepare::{PrepareStats, prepare_asset};
+use crate::model::Model;
+use crate::prepare::{
+    DEFAULT_MAX_LEVEL, PrepareStats, PrepareToFileError, REGION_LOG, prepare_asset,
+    prepare_mesh_to_cache,
+};
 use crate::progress::Progress;
 use crate::voxelize::VoxelizeError;
 
@@ -35,6 +39,10 @@ pub enum CacheStatus {
 pub struct PrepareOutcome {
     /// The cache file read or written.
     pub cache_path: PathBuf,
+    /// The source key the cache file was written with (model and dependency hashes: what
+    /// [`super::read_cache`] expects).
+    #[serde(skip)]
+    pub cache_key: u128,
     /// Hit or rebuilt (with the reason).
     pub status: CacheStatus,
     /// Preparation statistics when the asset was rebuilt.
@@ -92,6 +100,39 @@ pub fn load_or_prepare(
     cache_dir: Option<&Path>,
     progress: &dyn Progress,
 ) -> Result<(VoxelAsset, PrepareOutcome), PrepareError> {
+    let (asset, outcome) = obtain(model_path, level, cache_dir, progress, false)?;
+    match asset {
+        Some(a) => Ok((a, outcome)),
+        // `obtain` only leaves the asset out when asked to stream.
+        None => Err(PrepareError::Cache(CacheError::corrupt(
+            &outcome.cache_path,
+            "prepared without an asset",
+        ))),
+    }
+}
+
+/// [`load_or_prepare`] for callers that need the cache file rather than the asset (e.g.
+/// `ssbvb voxelize`): on a miss a mesh is prepared straight into the cache file, region
+/// by region, without ever holding a level in memory
+/// ([`crate::prepare::prepare_mesh_to_cache`]), and no asset is returned; a hit, or a
+/// voxel model, returns the asset as [`load_or_prepare`] does. The cache file must be
+/// writable here: it is where the result goes.
+pub fn prepare_into_cache(
+    model_path: &Path,
+    level: u32,
+    cache_dir: Option<&Path>,
+    progress: &dyn Progress,
+) -> Result<(Option<VoxelAsset>, PrepareOutcome), PrepareError> {
+    obtain(model_path, level, cache_dir, progress, true)
+}
+
+fn obtain(
+    model_path: &Path,
+    level: u32,
+    cache_dir: Option<&Path>,
+    progress: &dyn Progress,
+    stream: bool,
+) -> Result<(Option<VoxelAsset>, PrepareOutcome), PrepareError> {
     let model_hash = hash_source(model_path)?;
     let dir = cache_dir.map_or_else(default_cache_dir, Path::to_path_buf);
     let list = deps::list_path(&dir, model_hash);
@@ -104,11 +145,12 @@ pub fn load_or_prepare(
                 Ok(asset) => {
                     let outcome = PrepareOutcome {
                         cache_path,
+                        cache_key: key,
                         status: CacheStatus::Hit,
                         stats: None,
                         cache_write_error: None,
                     };
-                    return Ok((asset, outcome));
+                    return Ok((Some(asset), outcome));
                 }
                 Err(_) if !changed.is_empty() => format!(
                     "changed since the cache was written: {}",
@@ -127,11 +169,6 @@ pub fn load_or_prepare(
     for w in &loaded.warnings {
         log::warn!("{w}");
     }
-    let (asset, stats) =
-        prepare_asset(&loaded.model, level, progress).map_err(|error| PrepareError::Voxelize {
-            path: model_path.to_path_buf(),
-            error,
-        })?;
     // The model file itself is the first source; its hash is the list's name.
     let now: Vec<Dependency> = loaded
         .sources
@@ -139,20 +176,58 @@ pub fn load_or_prepare(
         .skip(1)
         .map(|p| Dependency::now(p))
         .collect();
-    drop(loaded);
     let key = deps::combined_key(model_hash, &now);
     let cache_path = dir.join(cache_file_name(key, level));
+    if let (true, Model::Mesh(mesh)) = (stream, &loaded.model) {
+        check_level(model_path, level)?;
+        let stats = prepare_mesh_to_cache(mesh, level, REGION_LOG, &cache_path, key, progress)
+            .map_err(|e| match e {
+                PrepareToFileError::Voxelize(error) => PrepareError::Voxelize {
+                    path: model_path.to_path_buf(),
+                    error,
+                },
+                PrepareToFileError::Cache(e) => PrepareError::Cache(e),
+            })?;
+        deps::write_list(&list, &now).map_err(|e| CacheError::io(&list, e))?;
+        let outcome = PrepareOutcome {
+            cache_path,
+            cache_key: key,
+            status: CacheStatus::Rebuilt { reason },
+            stats: Some(stats),
+            cache_write_error: None,
+        };
+        return Ok((None, outcome));
+    }
+    let (asset, stats) =
+        prepare_asset(&loaded.model, level, progress).map_err(|error| PrepareError::Voxelize {
+            path: model_path.to_path_buf(),
+            error,
+        })?;
+    drop(loaded);
     let cache_write_error = write_cache(&cache_path, &asset, key, level)
         .and_then(|()| deps::write_list(&list, &now).map_err(|e| CacheError::io(&list, e)))
         .err()
         .map(|e| e.to_string());
     let outcome = PrepareOutcome {
         cache_path,
+        cache_key: key,
         status: CacheStatus::Rebuilt { reason },
         stats: Some(stats),
         cache_write_error,
     };
-    Ok((asset, outcome))
+    Ok((Some(asset), outcome))
+}
+
+/// The level limit [`prepare_asset`] applies, for the streaming path that bypasses it.
+fn check_level(model_path: &Path, level: u32) -> Result<(), PrepareError> {
+    let max = DEFAULT_MAX_LEVEL.min(crate::asset::MAX_LEVEL);
+    if level > max {
+        return Err(PrepareError::Voxelize {
+            path: model_path.to_path_buf(),
+            error: VoxelizeError::LevelTooHigh { level, max },
+        });
+    }
+    Ok(())
 }
 
 impl CacheError {

@@ -273,3 +273,52 @@ fn a_page_index_that_disagrees_with_its_point_cloud_is_refused() {
         Err(CacheError::Checksum { .. })
     ));
 }
+
+#[test]
+fn preparing_into_the_cache_writes_what_load_or_prepare_reads() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("tri.obj");
+    std::fs::write(
+        &model,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0.5\nv 0.3 0.2 1\nf 1 2 3\nf 1 2 4\n",
+    )
+    .unwrap();
+    let cache = dir.path().join("cache");
+    // A miss streams the mesh into the cache file: no asset, statistics of every level.
+    let (none, first) = prepare_into_cache(&model, 6, Some(&cache), &NoProgress).unwrap();
+    assert!(none.is_none());
+    assert!(matches!(first.status, CacheStatus::Rebuilt { .. }));
+    let stats = first.stats.clone().unwrap();
+    assert_eq!(stats.levels.len(), 7);
+    // The file it wrote is a hit for load_or_prepare, with the asset a fresh preparation
+    // gives.
+    let (asset, second) = load_or_prepare(&model, 6, Some(&cache), &NoProgress).unwrap();
+    assert_eq!(second.status, CacheStatus::Hit);
+    assert_eq!(second.cache_path, first.cache_path);
+    let loaded = crate::load::load_model(&model).unwrap();
+    let (fresh, fresh_stats) = prepare_asset(&loaded, 6, &NoProgress).unwrap();
+    assert_eq!(asset, fresh);
+    for (a, b) in stats.levels.iter().zip(&fresh_stats.levels) {
+        assert_eq!(
+            (
+                a.voxels,
+                a.lookup_bytes,
+                a.resident_pages,
+                a.proxy_triangles
+            ),
+            (
+                b.voxels,
+                b.lookup_bytes,
+                b.resident_pages,
+                b.proxy_triangles
+            )
+        );
+    }
+    // A hit returns the asset.
+    let (hit, third) = prepare_into_cache(&model, 6, Some(&cache), &NoProgress).unwrap();
+    assert_eq!(third.status, CacheStatus::Hit);
+    assert_eq!(hit.as_ref(), Some(&fresh));
+    // Levels above the maximum are refused, as by prepare_asset.
+    let e = prepare_into_cache(&model, 14, Some(&cache), &NoProgress).unwrap_err();
+    assert!(e.to_string().contains("maximum level 13"), "{e}");
+}

@@ -8,7 +8,7 @@
 
 mod regions;
 
-pub use regions::{REGION_LOG, prepare_mesh_in_regions};
+pub use regions::{PrepareToFileError, REGION_LOG, prepare_mesh_in_regions, prepare_mesh_to_cache};
 
 use std::time::Instant;
 
@@ -125,6 +125,45 @@ pub struct PrepareStats {
 }
 
 impl LevelStats {
+    /// Statistics of a level written by a streaming preparation (only its counts exist);
+    /// `octree_nodes` counts the nodes of levels `0..=level`.
+    pub fn from_counts(
+        level: u32,
+        w: &crate::cache::StreamedLevel,
+        octree_nodes: u64,
+        seconds: Option<f64>,
+    ) -> LevelStats {
+        let voxels = w.voxels;
+        let lookup_bytes = w.lookup_nodes * 4 * crate::lookup::NODE_WORDS as u64;
+        let dense = 4 * (1u64 << (3 * level));
+        let per_voxel = |b: u64| {
+            if voxels == 0 {
+                0.0
+            } else {
+                b as f64 / voxels as f64
+            }
+        };
+        LevelStats {
+            level,
+            voxels,
+            resident_pages: w.pages,
+            lookup_nodes: w.lookup_nodes,
+            point_cloud_bytes: voxels * GPU_VOXEL_BYTES,
+            color_bytes: voxels * GPU_COLOR_BYTES,
+            normal_bytes: voxels * GPU_NORMAL_BYTES,
+            cpu_point_cloud_bytes: voxels * std::mem::size_of::<PackedVoxel>() as u64,
+            lookup_bytes,
+            bytes_per_voxel: per_voxel(lookup_bytes + voxels * GPU_VOXEL_BYTES),
+            lookup_bytes_per_voxel: per_voxel(lookup_bytes),
+            dense_lookup_bytes: dense,
+            lookup_percent_of_dense: 100.0 * lookup_bytes as f64 / dense as f64,
+            octree_nodes,
+            octree_bytes: octree_bytes(octree_nodes),
+            proxy_triangles: w.proxy_triangles,
+            seconds,
+        }
+    }
+
     /// Statistics of a prepared level; `octree_nodes` counts the nodes of levels
     /// `0..=lod.level`.
     pub fn of(lod: &LodLevel, octree_nodes: u64, seconds: Option<f64>) -> LevelStats {
@@ -437,6 +476,58 @@ mod tests {
                     a.level
                 );
             }
+        }
+    }
+
+    #[test]
+    fn streaming_into_a_file_writes_the_bytes_of_the_prepared_asset() {
+        let mesh = tetra_with_segments();
+        let dir = tempfile::tempdir().unwrap();
+        for (level, region_log) in [(7, 5), (6, 6), (3, 8)] {
+            let (asset, stats) =
+                prepare_mesh_in_regions(&mesh, level, region_log, &NoProgress).unwrap();
+            let a = dir.path().join(format!("a{level}.ssbvbast"));
+            let b = dir.path().join(format!("b{level}.ssbvbast"));
+            crate::cache::write_cache(&a, &asset, 77, level).unwrap();
+            let streamed =
+                prepare_mesh_to_cache(&mesh, level, region_log, &b, 77, &NoProgress).unwrap();
+            assert!(
+                std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap(),
+                "level {level}: the streamed file differs"
+            );
+            // Only the two cache files are left (spill files and temporaries are gone).
+            let left: Vec<_> = std::fs::read_dir(dir.path())
+                .unwrap()
+                .map(|e| e.unwrap().file_name())
+                .collect();
+            assert_eq!(
+                left.len(),
+                2 * [7, 6, 3]
+                    .iter()
+                    .position(|&l| l == level)
+                    .map_or(0, |i| i + 1),
+                "{left:?}"
+            );
+            let key = |l: &LevelStats| {
+                (
+                    l.voxels,
+                    l.resident_pages,
+                    l.lookup_nodes,
+                    l.lookup_bytes,
+                    l.proxy_triangles,
+                    l.octree_nodes,
+                    l.point_cloud_bytes,
+                )
+            };
+            let want: Vec<_> = stats.levels.iter().map(key).collect();
+            let got: Vec<_> = streamed.levels.iter().map(key).collect();
+            assert_eq!(got, want, "level {level}");
+            assert_eq!(streamed.voxelize, stats.voxelize);
+            assert_eq!(
+                crate::cache::read_cache(&b, 77, level).unwrap(),
+                asset,
+                "level {level}"
+            );
         }
     }
 
