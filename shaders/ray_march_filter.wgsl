@@ -270,7 +270,7 @@ fn add_wide(word: u32, v: u32) {
     }
 }
 
-@compute @workgroup_size(8, 8)
+@compute @workgroup_size(16, 16)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     march_steps = 0u;
     boxes_tested = 0u;

@@ -298,10 +298,11 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32) -> Hit {
         if u32(cross.x) + u32(cross.y) + u32(cross.z) > 1u {
             // Through an edge or corner: the diagonal cell, then the cells touched only
             // along the edge, in the reference's rank order (differ on x, y, z, xy, xz, yz).
-            var order = array(0u, 1u, 2u, 4u, 3u, 5u, 6u);
+            // Masks 0, 1, 2, 4, 3, 5, 6: i with 3 and 4 swapped (no array: llvmpipe would
+            // zero a per-lane copy of it for every invocation of the includer).
             let crossed = select(0u, 1u, cross.x) | select(0u, 2u, cross.y) | select(0u, 4u, cross.z);
             for (var i = 0u; i < 7u; i++) {
-                let mask = order[i];
+                let mask = select(i, 7u - i, i == 3u || i == 4u);
                 if (mask & crossed) != mask {
                     continue;
                 }
