@@ -195,6 +195,9 @@ pub struct MeshUniform {
 pub struct GpuScene {
     /// The CPU scene (transforms are read each frame).
     pub scene: Scene,
+    /// How the streams are split over bindings (passes that upload their own large
+    /// buffers split them alike).
+    pub chunks: StreamChunks,
     /// Group 0 layout shared by every pass.
     pub layout: wgpu::BindGroupLayout,
     /// Group 0 of the current frame.
@@ -274,6 +277,8 @@ pub struct StreamChunks {
     pub word_bits: u32,
     /// log2 of the nodes per binding of the lookup-node stream.
     pub node_bits: u32,
+    /// log2 of the nodes per binding of the octree baseline's 8-byte nodes.
+    pub octree_bits: u32,
 }
 
 impl StreamChunks {
@@ -284,17 +289,19 @@ impl StreamChunks {
         Self {
             word_bits: bits(4, 30),
             node_bits: bits(4 * NODE_WORDS as u64, 28),
+            octree_bits: bits(8, 28),
         }
     }
 }
 
 impl Default for StreamChunks {
-    /// 2^25 words (128 MiB, the smallest storage binding size a device may have) and
-    /// 2^23 nodes (96 MiB).
+    /// 2^25 words (128 MiB, the smallest storage binding size a device may have), 2^23
+    /// lookup nodes (96 MiB) and 2^24 octree nodes (128 MiB).
     fn default() -> Self {
         Self {
             word_bits: 25,
             node_bits: 23,
+            octree_bits: 24,
         }
     }
 }
@@ -373,7 +380,10 @@ impl GpuScene {
         scene: Scene,
         chunks: StreamChunks,
     ) -> Result<Self, PassError> {
-        if !(4..=30).contains(&chunks.word_bits) || !(4..=28).contains(&chunks.node_bits) {
+        if !(4..=30).contains(&chunks.word_bits)
+            || !(4..=28).contains(&chunks.node_bits)
+            || !(4..=28).contains(&chunks.octree_bits)
+        {
             return Err(PassError::BadScene(format!(
                 "unusable stream chunks {chunks:?}"
             )));
@@ -591,6 +601,7 @@ impl GpuScene {
         );
         Ok(Self {
             scene,
+            chunks,
             layout,
             bind_group,
             frame_buffer,
@@ -716,10 +727,19 @@ mod tests {
         // lavapipe and WebGPU's default: 128 MiB.
         assert_eq!(StreamChunks::for_device(128 << 20), StreamChunks::default());
         let big = StreamChunks::for_device(u64::from(u32::MAX));
-        assert_eq!((big.word_bits, big.node_bits), (29, 28));
+        assert_eq!(
+            (big.word_bits, big.node_bits, big.octree_bits),
+            (29, 28, 28)
+        );
         let odd = StreamChunks::for_device(100 << 20);
-        assert_eq!((odd.word_bits, odd.node_bits), (24, 23));
+        assert_eq!(
+            (odd.word_bits, odd.node_bits, odd.octree_bits),
+            (24, 23, 23)
+        );
         let tiny = StreamChunks::for_device(0);
-        assert_eq!((tiny.word_bits, tiny.node_bits), (4, 4));
+        assert_eq!(
+            (tiny.word_bits, tiny.node_bits, tiny.octree_bits),
+            (4, 4, 4)
+        );
     }
 }

@@ -11,8 +11,9 @@
 //! composite run after it unchanged.
 //!
 //! The octrees of every object of the scene are built with [`Svo::from_asset`] the first
-//! frame, concatenated into two storage buffers (`svo_nodes`: `SvoNode`s, each object's
-//! child indices shifted by where it starts; `svo_level_offsets`: per object
+//! frame, concatenated (`svo_nodes_*`: `SvoNode`s of every level but each object's finest,
+//! which no traversal reads, each object's child indices shifted by where it starts;
+//! `svo_level_offsets`: per object
 //! [`SVO_STRIDE`] entries, the first node of each level and then the end) and bound for
 //! every later frame; an instance finds its object's octree through its LOD's
 //! `LodInfo::object`. Node `i` of level `l` is voxel `i` of LOD `l`, so the hit node's
@@ -21,8 +22,9 @@
 //! # Limits
 //!
 //! - Levels above [`MAX_OCTREE_LEVEL`] (16, the shader's stack depth) and octrees larger
-//!   than the device's storage-binding limit together are refused with
-//!   [`PassError::TooLarge`].
+//!   than [`NODE_CHUNKS`] bindings of the scene's chunk size are refused with
+//!   [`PassError::TooLarge`]; below that the nodes are split over the bindings, so no
+//!   binding exceeds the device's limit.
 //! - Cost per pixel: the instances whose boxes its ray enters before its best hit (the
 //!   instance hierarchy) × the nodes visited along the ray, bounded by `max_steps`.
 
@@ -48,9 +50,15 @@ pub const MAX_OCTREE_LEVEL: u32 = 16;
 /// the WGSL).
 pub const SVO_STRIDE: usize = MAX_OCTREE_LEVEL as usize + 2;
 
+/// Bindings the octree nodes are split over (`svo_nodes_0` … `svo_nodes_7`): with 128 MiB
+/// bindings, 2^27 nodes (bunny level 12 has 77 M).
+pub const NODE_CHUNKS: usize = 8;
+
 /// The compiled octree pass and the uploaded octrees of the scene.
 pub struct OctreeRayCast {
     pipeline: PulledPipeline,
+    /// log2 of the nodes per binding (`NODE_CHUNK_BITS` in the WGSL).
+    chunk_bits: u32,
     /// The bind group of every object's octree (which keeps its buffers alive), made the
     /// first frame.
     octrees: Option<wgpu::BindGroup>,
@@ -60,7 +68,35 @@ pub struct OctreeRayCast {
 /// What the octree pass binds itself: the uploaded octree of the visible object.
 pub const OWN: &[OwnBinding] = &[
     OwnBinding {
-        name: "svo_nodes",
+        name: "svo_nodes_0",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "svo_nodes_1",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "svo_nodes_2",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "svo_nodes_3",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "svo_nodes_4",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "svo_nodes_5",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "svo_nodes_6",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "svo_nodes_7",
         kind: OwnKind::StorageRead,
     },
     OwnBinding {
@@ -89,23 +125,31 @@ impl OctreeRayCast {
     /// Builds every object's octree and uploads them together.
     fn upload(&self, ctx: &GpuContext, assets: &[&VoxelAsset]) -> Result<wgpu::BindGroup, PassError> {
         let (nodes, offsets) = concatenated_octrees(assets)?;
-        let limit = ctx.device.limits().max_storage_buffer_binding_size;
-        let bytes = (nodes.len() * std::mem::size_of::<SvoNode>()) as u64;
-        if bytes > limit {
+        let chunk = 1usize << self.chunk_bits;
+        let node_bytes = std::mem::size_of::<SvoNode>();
+        if nodes.len() > NODE_CHUNKS * chunk {
             return Err(PassError::TooLarge(format!(
-                "OctreeRayCast: the octrees take {} MiB, above the device's storage binding \
-                 limit of {} MiB",
-                bytes >> 20,
-                limit >> 20
+                "OctreeRayCast: the octrees take {} MiB; the pass binds at most {NODE_CHUNKS} \
+                 × {} MiB of them",
+                (nodes.len() * node_bytes) >> 20,
+                (chunk * node_bytes) >> 20
             )));
         }
         let label = "octree_ray_cast octree";
         let bind_group = ctx.validated(label, |d| {
-            let node_buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("octree_ray_cast svo_nodes"),
-                contents: bytemuck::cast_slice(&nodes),
-                usage: wgpu::BufferUsages::STORAGE,
-            });
+            let node_buffers: Vec<wgpu::Buffer> = (0..NODE_CHUNKS)
+                .map(|i| {
+                    let part = nodes.get(i * chunk..).unwrap_or(&[]);
+                    let part = &part[..part.len().min(chunk)];
+                    // Empty bindings are invalid: an unused chunk gets one node.
+                    let zero = [SvoNode::default()];
+                    d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("octree_ray_cast svo_nodes"),
+                        contents: bytemuck::cast_slice(if part.is_empty() { &zero } else { part }),
+                        usage: wgpu::BufferUsages::STORAGE,
+                    })
+                })
+                .collect();
             let offset_buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("octree_ray_cast svo_level_offsets"),
                 contents: bytemuck::cast_slice(&offsets),
@@ -115,7 +159,14 @@ impl OctreeRayCast {
                 d,
                 "octree_ray_cast",
                 &[
-                    ("svo_nodes", node_buffer.as_entire_binding()),
+                    ("svo_nodes_0", node_buffers[0].as_entire_binding()),
+                    ("svo_nodes_1", node_buffers[1].as_entire_binding()),
+                    ("svo_nodes_2", node_buffers[2].as_entire_binding()),
+                    ("svo_nodes_3", node_buffers[3].as_entire_binding()),
+                    ("svo_nodes_4", node_buffers[4].as_entire_binding()),
+                    ("svo_nodes_5", node_buffers[5].as_entire_binding()),
+                    ("svo_nodes_6", node_buffers[6].as_entire_binding()),
+                    ("svo_nodes_7", node_buffers[7].as_entire_binding()),
                     ("svo_level_offsets", offset_buffer.as_entire_binding()),
                     ("ray_counters", self.counters.binding()),
                 ],
@@ -143,7 +194,13 @@ pub fn concatenated_octrees(assets: &[&VoxelAsset]) -> Result<(Vec<SvoNode>, Vec
         }
         let base = u32::try_from(nodes.len())
             .map_err(|_| PassError::TooLarge("OctreeRayCast: over 2^32 octree nodes".into()))?;
-        nodes.extend(svo.nodes.iter().map(|n| SvoNode {
+        // The finest level's nodes are never read (a hit is found in its parent's mask, and
+        // level 0 is a hit without a read): they are left out, ~3/4 of a surface's nodes.
+        // Their indices remain (virtual, past this object's nodes): ids are `node -
+        // offset[level]`.
+        let levels = svo.level_offsets.len() - 1;
+        let kept = svo.level_offsets[(levels - 1).max(1).min(levels)] as usize;
+        nodes.extend(svo.nodes[..kept.min(svo.nodes.len())].iter().map(|n| SvoNode {
             child_mask: n.child_mask,
             first_child: if n.child_mask == 0 { 0 } else { n.first_child + base },
         }));
@@ -166,14 +223,25 @@ impl PassImpl for OctreeRayCast {
     const SHADER: &'static str = "octree_ray_cast.wgsl";
     const OWN: &'static [OwnBinding] = OWN;
     // The counters are written in the fragment shader.
-    const NEEDS: KindNeeds = KindNeeds::new(wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE, 3);
+    const NEEDS: KindNeeds = KindNeeds::new(
+        wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE,
+        NODE_CHUNKS as u64 + 2,
+    );
 
     /// Compiles the pipeline for the formats bound to `pass`; `max_steps` becomes the WGSL
     /// override `MAX_STEPS`.
     fn new(init: &PassInit<'_>, params: &OctreeRayCastParams) -> Result<Self, PassError> {
         let max_steps = params.max_steps;
+        let chunk_bits = init.scene.chunks.octree_bits;
         Ok(Self {
-            pipeline: PulledPipeline::new::<Self>(init, &[("MAX_STEPS", f64::from(max_steps))])?,
+            pipeline: PulledPipeline::new::<Self>(
+                init,
+                &[
+                    ("MAX_STEPS", f64::from(max_steps)),
+                    ("NODE_CHUNK_BITS", f64::from(chunk_bits)),
+                ],
+            )?,
+            chunk_bits,
             octrees: None,
             counters: RayCastCounters::new(init.ctx),
         })
