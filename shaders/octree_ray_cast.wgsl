@@ -42,8 +42,10 @@ struct SvoNode {
     first_child: u32,
 }
 
-// The nodes, split over bindings of 2^NODE_CHUNK_BITS nodes (octree_ray_cast.rs).
+// The nodes, split over bindings of 2^NODE_CHUNK_BITS nodes (octree_ray_cast.rs); a
+// pipeline for octrees within one binding has NODE_CHUNKS_USED = 1 and reads it directly.
 override NODE_CHUNK_BITS: u32 = 24u;
+override NODE_CHUNKS_USED: u32 = 8u;
 @group(1) @binding(0) var<storage, read> svo_nodes_0: array<SvoNode>;
 @group(1) @binding(1) var<storage, read> svo_nodes_1: array<SvoNode>;
 @group(1) @binding(2) var<storage, read> svo_nodes_2: array<SvoNode>;
@@ -58,6 +60,9 @@ override NODE_CHUNK_BITS: u32 = 24u;
 @group(1) @binding(9) var<storage, read_write> ray_counters: array<atomic<u32>>;
 
 fn svo_node(n: u32) -> SvoNode {
+    if NODE_CHUNKS_USED == 1u {
+        return svo_nodes_0[n];
+    }
     let i = n & ((1u << NODE_CHUNK_BITS) - 1u);
     switch n >> NODE_CHUNK_BITS {
         case 0u: { return svo_nodes_0[i]; }
