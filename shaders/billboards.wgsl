@@ -23,7 +23,9 @@
 //   (likewise for y): exact also off the view axis, where the projection is an ellipse
 //   stretched radially, and close to the camera, where it is wider than r / |cz|.
 // The rectangle is scaled by SIZE_SCALE about its middle and widened by 1/1024 pixel so an
-// edge through a pixel centre still covers it (each quad must cover its own pixel). Both
+// edge through a pixel centre still covers it (each quad must cover its own pixel); the
+// rasterized quad is RASTER_MARGIN wider still, and fs_main trims its fragments back to
+// the rectangle (vertex snapping would otherwise move its edges by more). Both
 // bounds need the sphere in front of the near plane (cz + r < -near); otherwise ("near
 // field": the camera is within about a cell of the voxel) the quad covers the whole screen
 // and every fragment intersects its pixel's ray with the voxel's box, in both modes.
@@ -50,6 +52,10 @@ struct VsOut {
     @location(1) @interpolate(flat) slot: u32,
     // 1 for a near-field (screen-covering) quad: the fragment intersects the voxel box.
     @location(2) @interpolate(flat) near_field: u32,
+    // The quad's own rectangle before RASTER_MARGIN: middle and half size (xy, zw) in the
+    // frame of `axis`, for trimming the fragments back to it.
+    @location(3) @interpolate(flat) rect: vec4<f32>,
+    @location(4) @interpolate(flat) axis: vec2<f32>,
 }
 
 struct GBuffer {
@@ -95,7 +101,11 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
         out.clip = vec4(uv * 2.0 - 1.0, ndc_depth(q.c), 1.0);
         return out;
     }
-    let corner_view = quad_point_view(q, uv);
+    out.rect = vec4(q.mid, q.half);
+    out.axis = q.axis;
+    var wide = q;
+    wide.half += RASTER_MARGIN * 2.0 * length(frame.cam_up.xyz) * frame.screen.w;
+    let corner_view = quad_point_view(wide, uv);
     let view3 = mat3x3(frame.view[0].xyz, frame.view[1].xyz, frame.view[2].xyz);
     // The view matrix is a rotation: its transpose takes view space back to world.
     out.world = transpose(view3) * corner_view;
@@ -109,6 +119,12 @@ fn fs_main(in: VsOut) -> GBuffer {
     let slot = ssbvb[in.slot];
     var q: Quad;
     q.near_field = in.near_field != 0u;
+    q.mid = in.rect.xy;
+    q.half = in.rect.zw;
+    q.axis = in.axis;
+    if !q.near_field && !quad_covers(q, in.clip.xy) {
+        discard;
+    }
     let f = flat_fragment(slot, q, in.clip.xy, in.world);
     if !f.covered {
         discard;

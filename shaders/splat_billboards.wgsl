@@ -39,17 +39,12 @@ fn fragment_at(slot: VoxelSlot, q: Quad, px: vec2<f32>) -> Fragment {
     if q.near_field {
         return flat_fragment(slot, q, px, vec3(0.0));
     }
-    // Inside the quad? Its rectangle in slope space, in the frame (axis, perp(axis)). The
-    // pixel's slope comes straight from its NDC position (not from a normalized direction,
-    // whose f32 components cannot resolve the slopes of a 0.0002-degree lens).
     var f: Fragment;
     f.covered = false;
-    let ndc = vec2(px.x * frame.screen.z * 2.0 - 1.0, 1.0 - px.y * frame.screen.w * 2.0);
-    let s = ndc * vec2(length(frame.cam_right.xyz), length(frame.cam_up.xyz));
-    let local = vec2(dot(s, q.axis), dot(s, vec2(-q.axis.y, q.axis.x))) - q.mid;
-    if any(abs(local) > q.half) {
+    if !quad_covers(q, px) {
         return f;
     }
+    let s = pixel_slope(px);
     // The quad plane's point under the pixel (view space (s * -cz, cz), taken to world).
     let view3 = mat3x3(frame.view[0].xyz, frame.view[1].xyz, frame.view[2].xyz);
     let world = transpose(view3) * vec3(s * -q.cz, q.cz);

@@ -259,9 +259,11 @@ fn the_far_narrow_view_of_two_bunnies_matches_the_reference() {
         let hits = ssbvb_tests::gbuffer_hits(&f, "far two");
         let r = ssbvb_voxel::accuracy::compare(&reference, &hits, &[cell, cell]).unwrap();
         eprintln!("{name} far two bunnies: {r:?}");
-        // Measured: 0.9964 (SSBVB: flat quads at the silhouettes), 1.0 (ray casters); with
-        // the second bunny marched from the camera: 0.988, 0.974, 0.973.
-        let bound = if name == "ssbvb" { 0.993 } else { 0.995 };
+        // Measured: 0.9927 (SSBVB: the flat quads' overhang at the silhouettes, exactly
+        // their rectangles since fragments are trimmed to them; 0.9964 while vertex
+        // snapping trimmed some of it, and cost sub-pixel voxels their pixels), 1.0 (ray
+        // casters); with the second bunny marched from the camera: 0.988, 0.974, 0.973.
+        let bound = if name == "ssbvb" { 0.99 } else { 0.995 };
         assert!(r.coverage_iou >= bound, "{name}: {r:?}");
     }
 }
