@@ -439,6 +439,32 @@ mod tests {
     }
 
     #[test]
+    fn pages_are_the_occupied_16_cubed_regions() {
+        for level in [2u32, 4, 5, 7] {
+            let n = 1u32 << level;
+            let cells: HashSet<[u32; 3]> = (0..200u32)
+                .map(|i| [(i * 5) % n, (i * 11 + 3) % n, (i * i) % n])
+                .collect();
+            let l = SparseLookup::from_cells(level, cells.iter().copied());
+            let pages: HashSet<[u32; 3]> = cells.iter().map(|c| c.map(|v| v / 16)).collect();
+            assert_eq!(l.occupied_pages(), pages.len() as u64, "level {level}");
+            let per_axis = (n / 16).max(1);
+            for z in 0..per_axis + 1 {
+                for y in 0..per_axis {
+                    for x in 0..per_axis {
+                        let p = [x, y, z];
+                        assert_eq!(
+                            l.page_occupied(p),
+                            pages.contains(&p),
+                            "level {level} {p:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn the_node_counter_counts_what_the_builder_builds() {
         for level in [0u32, 1, 2, 3, 5, 8] {
             let n = 1u32 << level;
