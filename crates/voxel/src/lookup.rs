@@ -487,6 +487,9 @@ mod tests {
     fn nodes_cost_twelve_bytes_and_an_empty_lookup_is_one_empty_root() {
         let empty = SparseLookup::from_codes(6, &[]);
         assert_eq!(empty.nodes, vec![0, 0, 0]);
+        // A dense `u32` texture of the grid, what the lookup is compared with.
+        assert_eq!(empty.dense_bytes(), 4 * 64 * 64 * 64);
+        assert_eq!(SparseLookup::from_codes(0, &[0]).dense_bytes(), 4);
         assert_eq!(empty.get([0, 0, 0]), None);
         assert!(!empty.region_occupied(3, [0, 0, 0]));
         assert!(empty.cells().is_empty());
