@@ -133,8 +133,42 @@ impl LevelStats {
         octree_nodes: u64,
         seconds: Option<f64>,
     ) -> LevelStats {
-        let voxels = w.voxels;
-        let lookup_bytes = w.lookup_nodes * 4 * crate::lookup::NODE_WORDS as u64;
+        Self::from_parts(
+            level,
+            w.voxels,
+            w.pages,
+            w.lookup_nodes,
+            w.proxy_triangles,
+            octree_nodes,
+            seconds,
+        )
+    }
+
+    /// Statistics of a prepared level; `octree_nodes` counts the nodes of levels
+    /// `0..=lod.level`.
+    pub fn of(lod: &LodLevel, octree_nodes: u64, seconds: Option<f64>) -> LevelStats {
+        Self::from_parts(
+            lod.level,
+            lod.point_cloud.voxels.len() as u64,
+            lod.lookup.occupied_pages(),
+            lod.lookup.node_count() as u64,
+            lod.proxy.triangles.len() as u64,
+            octree_nodes,
+            seconds,
+        )
+    }
+
+    /// Every statistic from the counts of a level.
+    fn from_parts(
+        level: u32,
+        voxels: u64,
+        pages: u64,
+        lookup_nodes: u64,
+        proxy_triangles: u64,
+        octree_nodes: u64,
+        seconds: Option<f64>,
+    ) -> LevelStats {
+        let lookup_bytes = lookup_nodes * 4 * crate::lookup::NODE_WORDS as u64;
         let dense = 4 * (1u64 << (3 * level));
         let per_voxel = |b: u64| {
             if voxels == 0 {
@@ -146,8 +180,8 @@ impl LevelStats {
         LevelStats {
             level,
             voxels,
-            resident_pages: w.pages,
-            lookup_nodes: w.lookup_nodes,
+            resident_pages: pages,
+            lookup_nodes,
             point_cloud_bytes: voxels * GPU_VOXEL_BYTES,
             color_bytes: voxels * GPU_COLOR_BYTES,
             normal_bytes: voxels * GPU_NORMAL_BYTES,
@@ -159,42 +193,28 @@ impl LevelStats {
             lookup_percent_of_dense: 100.0 * lookup_bytes as f64 / dense as f64,
             octree_nodes,
             octree_bytes: octree_bytes(octree_nodes),
-            proxy_triangles: w.proxy_triangles,
+            proxy_triangles,
             seconds,
         }
     }
+}
 
-    /// Statistics of a prepared level; `octree_nodes` counts the nodes of levels
-    /// `0..=lod.level`.
-    pub fn of(lod: &LodLevel, octree_nodes: u64, seconds: Option<f64>) -> LevelStats {
-        let lookup_bytes = lod.lookup.bytes() as u64;
-        let dense = lod.lookup.dense_bytes();
-        let voxels = lod.point_cloud.voxels.len() as u64;
-        let per_voxel = |b: u64| {
-            if voxels == 0 {
-                0.0
-            } else {
-                b as f64 / voxels as f64
-            }
-        };
-        LevelStats {
-            level: lod.level,
-            voxels,
-            resident_pages: lod.lookup.occupied_pages(),
-            lookup_nodes: lod.lookup.node_count() as u64,
-            point_cloud_bytes: voxels * GPU_VOXEL_BYTES,
-            color_bytes: voxels * GPU_COLOR_BYTES,
-            normal_bytes: voxels * GPU_NORMAL_BYTES,
-            cpu_point_cloud_bytes: std::mem::size_of_val(lod.point_cloud.voxels.as_slice()) as u64,
-            lookup_bytes,
-            bytes_per_voxel: per_voxel(lookup_bytes + voxels * GPU_VOXEL_BYTES),
-            lookup_bytes_per_voxel: per_voxel(lookup_bytes),
-            dense_lookup_bytes: dense,
-            lookup_percent_of_dense: 100.0 * lookup_bytes as f64 / dense as f64,
-            octree_nodes,
-            octree_bytes: octree_bytes(octree_nodes),
-            proxy_triangles: lod.proxy.triangles.len() as u64,
-            seconds,
+impl PrepareStats {
+    /// The statistics of a preparation of `level` into `object_space`.
+    fn new(
+        level: u32,
+        object_space: &crate::model::ObjectSpace,
+        voxelize: VoxelizeReport,
+        stages: StageTimes,
+        levels: Vec<LevelStats>,
+    ) -> Self {
+        Self {
+            level,
+            object_space_center: object_space.center.to_array(),
+            object_space_scale: object_space.scale,
+            voxelize,
+            stages,
+            levels,
         }
     }
 }
@@ -314,14 +334,7 @@ fn prepare_from_set(
     let asset = VoxelAsset { object_space, lods };
     stages.total_s = start.elapsed().as_secs_f64();
     let levels = stats_with_seconds(asset_level_stats(&asset), seconds);
-    let stats = PrepareStats {
-        level,
-        object_space_center: object_space.center.to_array(),
-        object_space_scale: object_space.scale,
-        voxelize: report,
-        stages,
-        levels,
-    };
+    let stats = PrepareStats::new(level, &object_space, report, stages, levels);
     (asset, stats)
 }
 

@@ -171,14 +171,7 @@ pub fn prepare_mesh_in_regions(
     let asset = VoxelAsset { object_space, lods };
     stages.total_s = start.elapsed().as_secs_f64();
     let levels = stats_with_seconds(asset_level_stats(&asset), seconds);
-    let stats = PrepareStats {
-        level,
-        object_space_center: object_space.center.to_array(),
-        object_space_scale: object_space.scale,
-        voxelize: streamed.report,
-        stages,
-        levels,
-    };
+    let stats = PrepareStats::new(level, &object_space, streamed.report, stages, levels);
     Ok((asset, stats))
 }
 
@@ -232,13 +225,11 @@ pub fn prepare_mesh_to_cache(
             LevelStats::from_counts(l as u32, w, nodes, Some(streamed.seconds[l]))
         })
         .collect();
-    let object_space = streamed.object_space;
-    Ok(PrepareStats {
+    Ok(PrepareStats::new(
         level,
-        object_space_center: object_space.center.to_array(),
-        object_space_scale: object_space.scale,
-        voxelize: streamed.report,
+        &streamed.object_space,
+        streamed.report,
         stages,
         levels,
-    })
+    ))
 }
