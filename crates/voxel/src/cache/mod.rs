@@ -46,6 +46,7 @@
 //! [`load_or_prepare`] (in `prepare`) puts the cache in front of the preparation stage.
 
 mod deps;
+mod page_file;
 mod pages;
 mod prepare;
 mod stream;
@@ -62,6 +63,7 @@ use crate::model::ObjectSpace;
 use crate::prepare::lookup_from_codes;
 use crate::svo::morton_encode;
 
+pub use page_file::PageFile;
 pub use pages::{PageEntry, page_index, read_page};
 pub use prepare::{CacheStatus, PrepareError, PrepareOutcome, load_or_prepare, prepare_into_cache};
 pub use stream::{CacheStream, StreamedLevel};
@@ -377,6 +379,7 @@ fn write_atomically(
 struct Source<'a> {
     path: &'a Path,
     reader: BufReader<File>,
+    size: u64,
     remaining: u64,
 }
 
@@ -388,8 +391,14 @@ impl<'a> Source<'a> {
         Ok(Source {
             path,
             reader: BufReader::with_capacity(buffer, file),
+            size,
             remaining: size,
         })
+    }
+
+    /// Bytes read or skipped so far: the file offset of what comes next.
+    fn position(&self) -> u64 {
+        self.size - self.remaining
     }
 
     /// Reads and checks the header (magic, version, checksum, source hash, level, counts):

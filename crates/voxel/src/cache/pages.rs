@@ -15,7 +15,7 @@ use crate::asset::{PAGE_SIZE, PackedVoxel};
 use crate::svo::morton_encode;
 
 /// Bits of a cell's Morton code inside its 16³ page.
-const PAGE_BITS: u32 = 3 * PAGE_SIZE.trailing_zeros();
+pub(super) const PAGE_BITS: u32 = 3 * PAGE_SIZE.trailing_zeros();
 
 /// One occupied page of a cached level.
 #[repr(C)]
@@ -144,22 +144,36 @@ pub fn read_page(
     src.skip(e.first_voxel * size)?;
     let mut out = vec![PackedVoxel::zeroed(); (end - e.first_voxel) as usize];
     src.read_exact(bytemuck::cast_slice_mut(&mut out), &name)?;
-    if xxh3_64(bytemuck::cast_slice(&out)) != e.checksum {
+    check_page(path, lod, &e, &mut out)?;
+    Ok(out)
+}
+
+/// Checks the voxels of one page as read from `path` (little-endian, `entry` its index
+/// entry in level `lod`): its checksum, then that every voxel lies in the page, inside the
+/// grid, in strict Morton order; converts them to native byte order.
+pub(super) fn check_page(
+    path: &Path,
+    lod: u32,
+    entry: &PageEntry,
+    voxels: &mut [PackedVoxel],
+) -> Result<(), CacheError> {
+    let name = format!("page {:?} of level {lod}", page_coords(entry.page));
+    if xxh3_64(bytemuck::cast_slice(voxels)) != entry.checksum {
         return Err(CacheError::Checksum {
             path: path.to_path_buf(),
             section: name,
         });
     }
     if cfg!(target_endian = "big") {
-        let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
+        let bytes: &mut [u8] = bytemuck::cast_slice_mut(voxels);
         bytes.chunks_exact_mut(4).for_each(|w| w.reverse());
     }
-    let n = 1u32 << lod;
+    let n = 1u32 << lod.min(16);
     let mut last = None;
-    for v in &out {
+    for v in voxels.iter() {
         let c = v.cell();
         let code = morton_encode(c);
-        if c.iter().any(|&x| x >= n) || code >> PAGE_BITS != e.page || last >= Some(code) {
+        if c.iter().any(|&x| x >= n) || code >> PAGE_BITS != entry.page || last >= Some(code) {
             return Err(CacheError::corrupt(
                 path,
                 format!("{name}: voxel {c:?} out of place"),
@@ -167,5 +181,10 @@ pub fn read_page(
         }
         last = Some(code);
     }
-    Ok(out)
+    Ok(())
+}
+
+/// The page coordinates (a cell divided by 16) of a page's Morton code.
+pub fn page_coords(code: u64) -> [u32; 3] {
+    crate::svo::morton_decode(code)
 }

@@ -322,3 +322,57 @@ fn preparing_into_the_cache_writes_what_load_or_prepare_reads() {
     let e = prepare_into_cache(&model, 14, Some(&cache), &NoProgress).unwrap_err();
     assert!(e.to_string().contains("maximum level 13"), "{e}");
 }
+
+#[test]
+fn a_page_file_reads_every_page_and_refuses_a_damaged_one_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("p.ssbvbast");
+    let a = asset();
+    write_cache(&path, &a, 5, 5).unwrap();
+    let file = PageFile::open(&path, 5, 5).unwrap();
+    for lod in &a.lods {
+        let index = page_index(&lod.point_cloud.voxels);
+        assert_eq!(file.pages(lod.level), &index[..]);
+        assert_eq!(file.voxels(lod.level), lod.point_cloud.voxels.len() as u64);
+        let mut joined = Vec::new();
+        for k in 0..index.len() {
+            let got = file.read_page(lod.level, k).unwrap();
+            assert_eq!(got.len() as u64, file.page_voxels(lod.level, k));
+            joined.extend(got);
+        }
+        assert_eq!(joined, lod.point_cloud.voxels, "level {}", lod.level);
+    }
+    assert!(file.read_page(5, 10_000).is_err());
+    assert!(file.read_page(6, 0).is_err());
+    assert!(matches!(
+        PageFile::open(&path, 6, 5),
+        Err(CacheError::SourceMismatch { .. })
+    ));
+    // A page damaged after opening: that page is refused by its checksum, naming it; its
+    // neighbours still read.
+    let finest = &a.lods[5];
+    let good = std::fs::read(&path).unwrap();
+    let needle: &[u8] = bytemuck::cast_slice(&finest.point_cloud.voxels);
+    let pc = good
+        .windows(needle.len())
+        .position(|w| w == needle)
+        .unwrap();
+    let index = file.pages(5).to_vec();
+    let mut bad = good.clone();
+    bad[pc + index[1].first_voxel as usize * 16 + 3] ^= 0x01;
+    std::fs::write(&path, &bad).unwrap();
+    let file = PageFile::open(&path, 5, 5).unwrap();
+    let e = file.read_page(5, 1).unwrap_err();
+    assert!(
+        matches!(&e, CacheError::Checksum { section, .. } if section.starts_with("page [")),
+        "{e}"
+    );
+    assert!(file.read_page(5, 0).is_ok() && file.read_page(5, 2).is_ok());
+    // A damaged index is refused when the file is opened.
+    let ix: &[u8] = bytemuck::cast_slice(&index);
+    let at = good.windows(ix.len()).position(|w| w == ix).unwrap();
+    let mut bad = good.clone();
+    bad[at + 24 + 8] ^= 0x40;
+    std::fs::write(&path, &bad).unwrap();
+    assert!(PageFile::open(&path, 5, 5).is_err());
+}
