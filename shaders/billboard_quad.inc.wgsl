@@ -68,8 +68,10 @@ fn billboard_quad(slot: VoxelSlot) -> Quad {
         return q;
     }
     let inst = instances[slot.instance];
-    let size = cell_size(inst.level);
-    let centre_obj = cell_min(voxel_cell(slot.voxel), inst.level) + 0.5 * size;
+    // The voxel's level rides in the slot (a coarser LOD's voxel where a page was missing).
+    let level = slot.voxel.uv;
+    let size = cell_size(level);
+    let centre_obj = cell_min(voxel_cell(slot.voxel), level) + 0.5 * size;
     // The centre in view space straight from object space (f64-composed matrix): exact
     // lateral offsets however far the instance is; `c` (world) for what needs no more.
     let cv_exact = (inst.object_to_view * vec4(centre_obj, 1.0)).xyz;
@@ -246,8 +248,8 @@ fn slot_ray_box(slot: VoxelSlot, px: vec2<f32>) -> BoxHit {
     // Not renormalized: the object-space ray parameter is the world distance.
     let d = (m * vec4(dir, 0.0)).xyz;
     let o = m[3].xyz;
-    let lo = cell_min(voxel_cell(slot.voxel), inst.level);
-    return ray_box(o, d, lo, lo + cell_size(inst.level));
+    let lo = cell_min(voxel_cell(slot.voxel), slot.voxel.uv);
+    return ray_box(o, d, lo, lo + cell_size(slot.voxel.uv));
 }
 
 // What one pixel of a billboard writes into the G-buffer.

@@ -85,8 +85,16 @@ struct LodInfo {
     // binding of the lookup-node stream (the same for every LOD of a scene).
     chunk_bits: u32,
     node_chunk_bits: u32,
-    pad: u32,
+    // Under a GPU budget (gpu_scene.rs, `streaming.rs`): the global id of this LOD's first
+    // 16^3 page, or NO_PAGES when the LOD is wholly resident; and the first page node (the
+    // tree's nodes at depth - 2, one per occupied page, in Morton order), relative to the
+    // root. A page node whose page is not resident has base PAGE_MISSING.
+    page_base: u32,
+    first_page_node: u32,
 }
+
+const NO_PAGES: u32 = 0xffffffffu;
+const PAGE_MISSING: u32 = 0xffffffffu;
 
 // One node of a lookup tree: a 64-bit mask of the present 4^3 children (bit = Morton
 // order of the 2-bit local coordinates) and the index of the first child (inner nodes,
@@ -107,6 +115,7 @@ struct PackedVoxel {
 
 // One SSBVB entry: the hit voxel of one pixel and where it came from (32 bytes).
 struct VoxelSlot {
+    // `uv` holds the grid level of the voxel's LOD (ray_march_filter.rs, `VoxelSlot`).
     voxel: PackedVoxel,
     // Index into `instances`.
     instance: u32,
@@ -222,11 +231,15 @@ fn node_child(n: LookupNode, b: u32) -> u32 {
     return n.base + countOneBits(below_lo) + countOneBits(below_hi);
 }
 
-// Voxel id + 1 at a cell of a LOD (0 when empty); the cell must be inside the grid.
+// Voxel id + 1 at a cell of a LOD (0 when empty, or in a page that is not resident); the
+// cell must be inside the grid.
 fn lookup_cell(lod: LodInfo, cell: vec3<u32>) -> u32 {
     var node = lod.node_offset;
     for (var k = 0u; k < lod.depth; k++) {
         let n = lookup_node(lod, node);
+        if k + 2u == lod.depth && lod.page_base != NO_PAGES && n.base == PAGE_MISSING {
+            return 0u;
+        }
         let b = child_bit((cell >> vec3(2u * (lod.depth - 1u - k))) & vec3(3u));
         if !node_has(n, b) {
             return 0u;

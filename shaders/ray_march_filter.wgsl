@@ -104,19 +104,27 @@ fn march_prepass(k: u32, e: vec4<f32>, px: vec2<i32>, size: vec2<i32>, dir: vec3
     let inst = instances[k];
     let lod = lods[inst.lod];
     if (inst.flags & 1u) != 0u {
-        return march(make_ray(inst, lod.level, dir), lod, 0.0, BIG);
+        return march_resident(inst.camera_object.xyz, (inst.world_to_object * vec4(dir, 0.0)).xyz,
+            inst.lod, 0.0, BIG);
     }
     let d = (inst.world_to_object * vec4(dir, 0.0)).xyz;
     let dd = dot(d, d);
     // The entry's distance from the camera (its f32 rounding only shifts the depth).
     let tp = dot(e.xyz - inst.camera_object.xyz, d) / dd;
     let back = min(entry_margin(e, px, size, d, cell_size(lod.level)), max(tp, 0.0));
-    let r = make_ray_od(e.xyz - d * back, d, lod.level);
-    var h = march(r, lod, 0.0, BIG);
+    var h = march_resident(e.xyz - d * back, d, inst.lod, 0.0, BIG);
     if h.found {
         h.t = max(tp - back, 0.0) + h.t;
     }
     return h;
+}
+
+// The slot's voxel: `packed_voxel` with the grid level of its cell in `uv` (the billboard
+// pass sizes the voxel by it: a voxel of a coarser LOD is larger).
+fn slot_voxel(lod: LodInfo, cell: vec3<u32>, id: u32) -> PackedVoxel {
+    var v = packed_voxel(lod, cell, id);
+    v.uv = lod.level;
+    return v;
 }
 
 @compute @workgroup_size(1)
@@ -150,7 +158,7 @@ fn bvh_visit(j: u32, dir: vec3<f32>) -> f32 {
         return best.t;
     }
     marches += 1u;
-    var h = march(rj, lod_j, 0.0, limit);
+    var h = march_resident(ray.o, ray.d, inst_j.lod, 0.0, limit);
     h.t += ray.t_base;
     if h.found && (!best.found || h.t < best.t || (h.t == best.t && j < best_inst)) {
         best = h;
@@ -225,12 +233,16 @@ fn filter_pixel(px: vec2<i32>) -> bool {
     if !best.found {
         return true;
     }
-    let hit_lod = lods[instances[best_inst].lod];
+    // The voxel's own LOD: the instance's, or a coarser one where a page was not resident.
+    let hit_lod = lods[best.lod];
     if UNIQUE_VOXELS {
         // Instances of one object share voxel ids but are distinct billboards: each owns a
-        // range of keys. The first pixel to claim a key appends.
+        // range of keys. The first pixel to claim a key appends. Keys count from the
+        // instance's LOD's first voxel: its voxel ids, or (under a budget, where a hit may
+        // come from a coarser LOD) every voxel index of the scene (`claim_offsets`).
         let base = claim_offsets[best_inst];
-        if base != NO_DEDUP && !claim(base + best.id) {
+        let key = hit_lod.voxel_offset + best.id - lods[instances[best_inst].lod].voxel_offset;
+        if base != NO_DEDUP && !claim(base + key) {
             return true;
         }
     }
@@ -239,7 +251,7 @@ fn filter_pixel(px: vec2<i32>) -> bool {
     // (a pipeline may declare ScreenPixelsScaled), whose overflow is dropped.
     if idx < arrayLength(&ssbvb) {
         ssbvb[idx] = VoxelSlot(
-            packed_voxel(hit_lod, best.cell, best.id),
+            slot_voxel(hit_lod, best.cell, best.id),
             best_inst,
             u32(px.y) * u32(size.x) + u32(px.x),
             best.t,

@@ -28,6 +28,11 @@
 // - Hit: the voxel's touch time (the latest of its near-plane crossing times, at least 0)
 //   and the entered face (the axis crossed at that time; ties to the faster axis; a camera
 //   inside the voxel gets the dominant axis of the direction).
+// - Pages (under a GPU budget, LodInfo.page_base != NO_PAGES): a page node whose page is
+//   not resident ends the march with `missing` set and `t` the time the ray entered the
+//   cell it was in; `march_resident` goes on from there in the next coarser LOD. Every page
+//   node the march enters sets its page's bit in `page_feedback`: "missing" (only when
+//   `record`, i.e. in the instance's own LOD) or "touched" (for the page cache's LRU).
 // - Every loop iteration counts one step (cells and skipped regions alike); after
 //   MAX_STEPS the ray reports no hit.
 
@@ -41,6 +46,25 @@ const MAX_ORIGIN: f32 = 1e12;
 
 // Loop iterations of every march since the includer last reset it (its counters).
 var<private> march_steps: u32;
+
+// Page feedback of the frame (streaming.rs): a bit per page of every paged LOD, first the
+// pages a march needed and did not find, then the pages it entered; cleared every frame.
+@group(0) @binding(12) var<storage, read_write> page_feedback: array<atomic<u32>>;
+
+// Sets bit `page` of the missing (half 0) or touched (half 1) set, reading first so that a
+// page many rays enter costs one atomic write.
+fn note_page(half: u32, page: u32) {
+    let w = half * (arrayLength(&page_feedback) / 2u) + (page >> 5u);
+    let bit = 1u << (page & 31u);
+    if w < arrayLength(&page_feedback) && (atomicLoad(&page_feedback[w]) & bit) == 0u {
+        atomicOr(&page_feedback[w], bit);
+    }
+}
+
+// The global page id of page node `node` (absolute index) of a paged LOD.
+fn page_of(lod: LodInfo, node: u32) -> u32 {
+    return lod.page_base + (node - lod.node_offset - lod.first_page_node);
+}
 
 // An object-space ray in the mirrored frame of one instance's LOD grid.
 struct Ray {
@@ -69,10 +93,14 @@ struct Hit {
     face: u32,
     // The voxel's cell (grid coordinates).
     cell: vec3<u32>,
+    // The LOD-table index of the LOD the voxel belongs to (set by march_resident).
+    lod: u32,
+    // The march stopped at a page that is not resident (then `t` is where).
+    missing: bool,
 }
 
 fn no_hit() -> Hit {
-    return Hit(false, 0u, BIG, 0u, vec3(0u));
+    return Hit(false, 0u, BIG, 0u, vec3(0u), 0u, false);
 }
 
 fn make_ray(inst: Instance, level: u32, dir: vec3<f32>) -> Ray {
@@ -184,11 +212,47 @@ fn cell_hit(r: Ray, c: vec3<i32>, id: u32) -> Hit {
     }
     // The entered face's normal points against the ray: -axis (0..2) when moving towards
     // +axis, +axis (3..5) on mirrored axes.
-    return Hit(true, id, t, axis + select(0u, 3u, r.mirrored[axis]), orig_cell(r, c));
+    return Hit(true, id, t, axis + select(0u, 3u, r.mirrored[axis]), orig_cell(r, c), 0u, false);
 }
 
-// Marches `r` through `lod` from `t_from` (clamped to the box) up to `t_limit`.
-fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32) -> Hit {
+// The time the ray entered cell `c` (mirrored frame), at least `t0`.
+fn cell_entry_t(r: Ray, c: vec3<i32>, t0: f32) -> f32 {
+    var t = t0;
+    for (var a = 0u; a < 3u; a++) {
+        if r.moving[a] {
+            t = max(t, plane_t(r, a, c[a]));
+        }
+    }
+    return t;
+}
+
+// `lookup_cell` for the march: a cell in a page that is not resident is empty, and the
+// page is noted as missing when `record`.
+fn march_cell(lod: LodInfo, cell: vec3<u32>, record: bool) -> u32 {
+    var node = lod.node_offset;
+    for (var k = 0u; k < lod.depth; k++) {
+        let n = lookup_node(lod, node);
+        if k + 2u == lod.depth && lod.page_base != NO_PAGES && n.base == PAGE_MISSING {
+            if record {
+                note_page(0u, page_of(lod, node));
+            }
+            return 0u;
+        }
+        let b = child_bit((cell >> vec3(2u * (lod.depth - 1u - k))) & vec3(3u));
+        if !node_has(n, b) {
+            return 0u;
+        }
+        if k + 1u == lod.depth {
+            return node_child(n, b) + 1u;
+        }
+        node = lod.node_offset + node_child(n, b);
+    }
+    return 0u;
+}
+
+// Marches `r` through `lod` from `t_from` (clamped to the box) up to `t_limit`; a page that
+// is not resident is noted as missing when `record`.
+fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
     let t0 = max(max(r.t_enter, t_from), 0.0);
     let t_end = min(r.t_exit, t_limit);
     if !(t0 <= t_end) {
@@ -232,6 +296,15 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32) -> Hit {
             }
             loop {
                 let n = lookup_node(lod, node);
+                if k + 2u == depth && lod.page_base != NO_PAGES && n.base == PAGE_MISSING {
+                    if record {
+                        note_page(0u, page_of(lod, node));
+                    }
+                    var h = no_hit();
+                    h.missing = true;
+                    h.t = cell_entry_t(r, c, t0);
+                    return h;
+                }
                 if k + 1u == depth {
                     leaf = n;
                     leaf_key = co >> vec3(2u);
@@ -249,6 +322,9 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32) -> Hit {
                 if k + 2u == depth {
                     parent = node;
                     parent_key = co >> vec3(4u);
+                    if lod.page_base != NO_PAGES {
+                        note_page(1u, page_of(lod, node));
+                    }
                 }
             }
         }
@@ -309,7 +385,7 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32) -> Hit {
                 let back = vec3(i32(mask & 1u), i32((mask >> 1u) & 1u), i32((mask >> 2u) & 1u));
                 let cand = c - back;
                 if all(cand < vec3(r.n)) {
-                    let v = lookup_cell(lod, orig_cell(r, cand));
+                    let v = march_cell(lod, orig_cell(r, cand), record);
                     if v != 0u {
                         return cell_hit(r, cand, v - 1u);
                     }
@@ -319,6 +395,31 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32) -> Hit {
         if any(c >= vec3(r.n)) {
             return no_hit();
         }
+    }
+    return no_hit();
+}
+
+// Marches the ray `o + t * d` (object space) through LOD `first` (a LOD-table index) from
+// `t_from` up to `t_limit`. Where a page of that LOD is not resident, the rest of the ray is
+// marched in the next coarser LOD of the object (`first - 1`: an object's LODs are
+// consecutive, level 0 first), and so on: the coarsest levels are always resident, so a
+// frame shows coarser voxels where pages are streaming in, never a hole (a coarser level
+// covers every cell of a finer one). Only the first LOD's missing pages are requested.
+fn march_resident(o: vec3<f32>, d: vec3<f32>, first: u32, t_from: f32, t_limit: f32) -> Hit {
+    var li = first;
+    var t_start = t_from;
+    var record = true;
+    loop {
+        let lod = lods[li];
+        var h = march(make_ray_od(o, d, lod.level), lod, t_start, t_limit, record);
+        if !h.missing || lod.level == 0u {
+            h.lod = li;
+            h.missing = false;
+            return h;
+        }
+        t_start = h.t;
+        li -= 1u;
+        record = false;
     }
     return no_hit();
 }

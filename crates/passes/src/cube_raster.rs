@@ -134,6 +134,8 @@ impl PassImpl for CubeRaster {
     const NEEDS: KindNeeds = KindNeeds::new(wgpu::DownlevelFlags::empty(), 1);
 
     /// Compiles the pipeline for the formats bound to `pass`.
+    const WHOLE_LEVELS: bool = true;
+
     fn new(init: &PassInit<'_>, params: &CubeRasterParams) -> Result<Self, PassError> {
         let merge_full_nodes = params.merge_full_nodes;
         // No culling: faces that do not see the camera are collapsed in the vertex shader

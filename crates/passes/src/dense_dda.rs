@@ -232,6 +232,8 @@ impl PassImpl for DenseDda {
 
     /// Compiles the pipeline for the formats bound to `pass`; `max_steps` becomes the WGSL
     /// override `MAX_STEPS`.
+    const WHOLE_LEVELS: bool = true;
+
     fn new(init: &PassInit<'_>, params: &DenseDdaParams) -> Result<Self, PassError> {
         let max_steps = params.max_steps;
         Ok(Self {

@@ -489,15 +489,18 @@ impl Renderer {
             ctx.wait_idle().map_err(PassError::Gpu)?;
         }
         let start = Instant::now();
+        scene.stream_pages(ctx)?;
         scene.update(ctx, camera, self.screen);
         let use_ts = profiling != Profiling::Off && self.queries.is_some();
         let mut walls = vec![None; self.passes.len()];
-        let scene_ref: &GpuScene = scene;
         let mut encoder = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("frame"),
             });
+        scene.begin_frame(&mut encoder);
+        let scene_ref: &GpuScene = scene;
+        let visible_instances = scene_ref.visible.len();
         for (i, (node, pass)) in self
             .passes
             .iter_mut()
@@ -539,7 +542,9 @@ impl Renderer {
             let (set, buf) = self.queries.as_ref().expect("queries exist");
             encoder.resolve_query_set(set, 0..(self.passes.len() * 2) as u32, buf, 0);
         }
+        scene.end_frame(&mut encoder);
         ctx.queue.submit([encoder.finish()]);
+        scene.after_submit();
         let mut gpu_ms = vec![None; self.passes.len()];
         if use_ts {
             let (_, buf) = self.queries.as_ref().expect("queries exist");
@@ -578,7 +583,7 @@ impl Renderer {
         Ok(FrameStats {
             passes,
             frame_wall_ms: start.elapsed().as_secs_f64() * 1e3,
-            visible_instances: scene_ref.visible.len(),
+            visible_instances,
         })
     }
 }

@@ -12,6 +12,10 @@ use ssbvb_voxel::lookup::NODE_WORDS;
 
 use crate::PassError;
 use crate::scene::Scene;
+use crate::streaming::{
+    BLOCK_BYTES, MAX_PAGE_BYTES, PINNED_LEVEL, PagedLayoutBuilder, SLOT_BYTES, StreamBuffers,
+    Streaming, StreamingOptions, StreamingStats,
+};
 pub use crate::visibility::choose_level;
 use crate::visibility::{frame_uniform, instance_bvh, mat, visible_instances};
 
@@ -83,7 +87,10 @@ pub struct GpuBvhNode {
     pub right: u32,
 }
 
-/// Mirror of WGSL `LodInfo` (32 bytes).
+/// `LodInfo::page_base` of a LOD resident whole (WGSL `NO_PAGES`).
+pub const NO_PAGES: u32 = u32::MAX;
+
+/// Mirror of WGSL `LodInfo` (36 bytes).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq, Eq)]
 pub struct LodInfo {
@@ -101,8 +108,11 @@ pub struct LodInfo {
     pub chunk_bits: u32,
     /// log2 of the nodes per binding of the lookup-node stream.
     pub node_chunk_bits: u32,
-    /// Padding to 32 bytes.
-    pub pad: u32,
+    /// Under a budget: the global id of the LOD's first page, or `NO_PAGES` (`u32::MAX`)
+    /// when the LOD is resident whole.
+    pub page_base: u32,
+    /// Under a budget: the LOD's first page node, relative to its root.
+    pub first_page_node: u32,
 }
 
 /// Where a proxy mesh lives in the shared proxy buffers.
@@ -231,8 +241,14 @@ pub struct GpuScene {
     pub meshes: Vec<GpuTriangleMesh>,
     /// Instances drawn this frame, in instance-buffer order.
     pub visible: Vec<VisibleInstance>,
-    /// GPU memory per object.
+    /// GPU memory per object (the whole asset, as uploaded without a budget).
     pub memory: Vec<ObjectMemory>,
+    /// The page cache under a budget (`None`: every level resident).
+    pub streaming: Option<crate::streaming::Streaming>,
+    /// Page feedback binding (a small unused buffer without a budget).
+    _feedback_dummy: Option<wgpu::Buffer>,
+    /// Voxel indices of the colour stream (for unique-voxel keys under a budget).
+    voxel_slots: u64,
     /// The camera of the current frame.
     pub camera: Camera,
     /// Screen size of the current frame.
@@ -267,7 +283,7 @@ fn storage(ctx: &GpuContext, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer, 
 }
 
 /// Storage bindings of group 0: instances, LODs, the chunked streams, the hierarchy.
-pub const SCENE_STORAGE_BUFFERS: usize = 3 + COLOR_CHUNKS + NORMAL_CHUNKS + NODE_CHUNKS;
+pub const SCENE_STORAGE_BUFFERS: usize = 4 + COLOR_CHUNKS + NORMAL_CHUNKS + NODE_CHUNKS;
 
 /// How the scene's streams are split over bindings (`LodInfo.chunk_bits` in
 /// `common.inc.wgsl`).
@@ -359,6 +375,68 @@ fn voxel_bounds(lod: &ssbvb_voxel::asset::LodLevel) -> Option<(DVec3, DVec3)> {
     Some((corner(lo), corner(hi.map(|v| v + 1))))
 }
 
+/// The pools of a streamed scene.
+struct Pools {
+    node_pool_start: u32,
+    voxel_pool_start: u32,
+    slots: u32,
+    blocks: u32,
+    fixed_bytes: u64,
+}
+
+/// Sizes the page pools for a budget and appends them to the streams: the fixed part
+/// (`nodes`, the pinned levels' voxels, `other_bytes`) first, the rest split between node
+/// slots and voxel blocks in the proportion the paged levels' pages need on average.
+fn plan_pools(
+    budget: u64,
+    paged: &PagedLayoutBuilder,
+    nodes: &mut Vec<u32>,
+    colors: &mut Vec<u32>,
+    normals: &mut Vec<u16>,
+    other_bytes: u64,
+) -> Result<Pools, PassError> {
+    let slot_words = crate::page_cache::SLOT_NODES as usize * NODE_WORDS;
+    nodes.resize(nodes.len().next_multiple_of(slot_words), 0);
+    let block = crate::page_cache::BLOCK_VOXELS as usize;
+    colors.resize(colors.len().next_multiple_of(block), 0);
+    normals.resize(colors.len(), 0);
+    let fixed_bytes = nodes.len() as u64 * 4 + colors.len() as u64 * GPU_VOXEL_BYTES + other_bytes;
+    let pages = paged.pages() as u64;
+    let need = fixed_bytes + if pages > 0 { MAX_PAGE_BYTES } else { 0 };
+    if budget < need {
+        return Err(PassError::BudgetTooSmall {
+            budget,
+            minimum: need,
+        });
+    }
+    let pool = budget - fixed_bytes;
+    // Blocks per page: the voxels rounded up to blocks, plus half a block of packing loss.
+    let blocks_per_page = if pages == 0 {
+        1.0
+    } else {
+        paged.voxels() as f64 / pages as f64 / block as f64 + 1.0
+    };
+    let page_bytes = SLOT_BYTES as f64 + blocks_per_page * BLOCK_BYTES as f64;
+    let slots = ((pool as f64 / page_bytes) as u64).clamp(1, pages.max(1));
+    let blocks = ((pool - slots * SLOT_BYTES) / BLOCK_BYTES)
+        .min(pages * 17)
+        .max(16);
+    let node_pool_start = checked_u32(nodes.len() / NODE_WORDS, "lookup nodes")?;
+    let voxel_pool_start = checked_u32(colors.len(), "voxel count")?;
+    nodes.resize(nodes.len() + slots as usize * slot_words, 0);
+    colors.resize(colors.len() + blocks as usize * block, 0);
+    normals.resize(colors.len(), 0);
+    checked_u32(nodes.len() / NODE_WORDS, "lookup nodes")?;
+    checked_u32(colors.len(), "voxel count")?;
+    Ok(Pools {
+        node_pool_start,
+        voxel_pool_start,
+        slots: slots as u32,
+        blocks: blocks as u32,
+        fixed_bytes,
+    })
+}
+
 fn checked_u32(v: usize, what: &str) -> Result<u32, PassError> {
     u32::try_from(v).map_err(|_| {
         PassError::TooLarge(format!("{what}: {v} does not fit the GPU's 32-bit indices"))
@@ -380,6 +458,38 @@ impl GpuScene {
         scene: Scene,
         chunks: StreamChunks,
     ) -> Result<Self, PassError> {
+        Self::build(ctx, scene, chunks, None)
+    }
+
+    /// Uploads the scene under a GPU memory budget: levels up to
+    /// [`crate::streaming::PINNED_LEVEL`] whole, the finer ones page by page as rays need
+    /// them (`streaming.rs`). An error names the smallest budget that holds the parts that
+    /// never leave (lookup trees down to the pages, pinned levels, proxies) and one page.
+    pub fn streamed(
+        ctx: &GpuContext,
+        scene: Scene,
+        options: &StreamingOptions,
+    ) -> Result<Self, PassError> {
+        let limit = ctx.device.limits().max_storage_buffer_binding_size;
+        Self::build(ctx, scene, StreamChunks::for_device(limit), Some(options))
+    }
+
+    /// [`Self::streamed`] with the given stream chunks.
+    pub fn streamed_with_chunks(
+        ctx: &GpuContext,
+        scene: Scene,
+        chunks: StreamChunks,
+        options: &StreamingOptions,
+    ) -> Result<Self, PassError> {
+        Self::build(ctx, scene, chunks, Some(options))
+    }
+
+    fn build(
+        ctx: &GpuContext,
+        scene: Scene,
+        chunks: StreamChunks,
+        streaming: Option<&StreamingOptions>,
+    ) -> Result<Self, PassError> {
         if !(4..=30).contains(&chunks.word_bits)
             || !(4..=28).contains(&chunks.node_bits)
             || !(4..=28).contains(&chunks.octree_bits)
@@ -398,7 +508,9 @@ impl GpuScene {
         let mut lod_bounds = Vec::new();
         let mut proxies = Vec::new();
         let mut memory = Vec::new();
-        for obj in &scene.objects {
+        let mut paged = PagedLayoutBuilder::new();
+        let mut proxy_bytes = 0u64;
+        for (oi, obj) in scene.objects.iter().enumerate() {
             if obj.asset.lods.is_empty() {
                 return Err(PassError::BadScene(
                     "an object's asset has no LOD levels".into(),
@@ -419,7 +531,7 @@ impl GpuScene {
                         lod.point_cloud.voxels.len()
                     )));
                 }
-                lods.push(LodInfo {
+                let mut info = LodInfo {
                     level: lod.level,
                     depth: l.depth,
                     voxel_offset: checked_u32(colors.len(), "voxel count")?,
@@ -427,28 +539,62 @@ impl GpuScene {
                     object: checked_u32(lod_base.len() - 1, "object count")?,
                     chunk_bits: chunks.word_bits,
                     node_chunk_bits: chunks.node_bits,
-                    pad: 0,
-                });
+                    page_base: NO_PAGES,
+                    first_page_node: 0,
+                };
                 lod_bounds.push(voxel_bounds(lod));
-                // Only what the GPU reads: the cell is implied by the lookup (id = Morton
-                // rank), texture coordinates are not read by any pass.
-                colors.extend(lod.point_cloud.voxels.iter().map(|v| v.color));
-                normals.extend(
-                    lod.point_cloud
-                        .voxels
-                        .iter()
-                        .map(|v| (v.z_normal >> 16) as u16),
-                );
-                nodes.extend_from_slice(&l.nodes);
+                if streaming.is_some() && lod.level > PINNED_LEVEL {
+                    // Paged: the tree down to the page nodes; leaves and voxels by demand.
+                    let file = streaming.and_then(|o| o.page_files.get(oi).cloned().flatten());
+                    let entries = match &file {
+                        Some(f) => {
+                            if f.voxels(lod.level) != lod.point_cloud.voxels.len() as u64 {
+                                return Err(PassError::BadScene(format!(
+                                    "{}: level {} has {} voxels, the asset {}",
+                                    f.path().display(),
+                                    lod.level,
+                                    f.voxels(lod.level),
+                                    lod.point_cloud.voxels.len()
+                                )));
+                            }
+                            f.pages(lod.level).to_vec()
+                        }
+                        None => ssbvb_voxel::cache::page_index(&lod.point_cloud.voxels),
+                    };
+                    let (page_base, first) = paged.push_lod(
+                        oi,
+                        lod.level,
+                        entries,
+                        lod.point_cloud.voxels.len() as u64,
+                        &mut nodes,
+                    )?;
+                    info.voxel_offset = 0;
+                    info.page_base = page_base;
+                    info.first_page_node = first;
+                } else {
+                    // Only what the GPU reads: the cell is implied by the lookup (id =
+                    // Morton rank), texture coordinates are not read by any pass.
+                    colors.extend(lod.point_cloud.voxels.iter().map(|v| v.color));
+                    normals.extend(
+                        lod.point_cloud
+                            .voxels
+                            .iter()
+                            .map(|v| (v.z_normal >> 16) as u16),
+                    );
+                    nodes.extend_from_slice(&l.nodes);
+                }
                 checked_u32(nodes.len(), "lookup size")?;
+                lods.push(info);
                 let n = lod.point_cloud.voxels.len() as u64;
                 mem.voxels += n;
                 mem.color_bytes += n * GPU_COLOR_BYTES;
                 mem.normal_bytes += n * GPU_NORMAL_BYTES;
                 mem.point_cloud_bytes += n * GPU_VOXEL_BYTES;
                 mem.lookup_bytes += l.bytes() as u64;
-                mem.proxy_bytes +=
+                let proxy =
                     (lod.proxy.positions.len() * 16 + lod.proxy.triangles.len() * 12) as u64;
+                mem.proxy_bytes += proxy;
+                proxy_bytes += proxy;
                 ranges.push(ProxyRange {
                     first_index: checked_u32(proxy_i.len(), "proxy indices")?,
                     index_count: checked_u32(lod.proxy.triangles.len() * 3, "proxy indices")?,
@@ -460,6 +606,18 @@ impl GpuScene {
             proxies.push(ranges);
             memory.push(mem);
         }
+        let pools = match streaming {
+            Some(o) => Some(plan_pools(
+                o.budget_bytes,
+                &paged,
+                &mut nodes,
+                &mut colors,
+                &mut normals,
+                proxy_bytes + (lods.len() * std::mem::size_of::<LodInfo>()) as u64,
+            )?),
+            None => None,
+        };
+        let voxel_slots = colors.len() as u64;
         let d = &ctx.device;
         let ro = |binding: u32| wgpu::BindGroupLayoutEntry {
             binding,
@@ -485,7 +643,17 @@ impl GpuScene {
             },
             count: None,
         }];
-        entries.extend((1..=SCENE_STORAGE_BUFFERS as u32).map(ro));
+        entries.extend((1..SCENE_STORAGE_BUFFERS as u32).map(ro));
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: SCENE_STORAGE_BUFFERS as u32,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: false },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        });
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scene"),
             entries: &entries,
@@ -539,6 +707,33 @@ impl GpuScene {
             NODE_CHUNKS,
         )?;
         drop(nodes);
+        let streaming = match (streaming, pools) {
+            (Some(options), Some(p)) => Some(Streaming::new(
+                ctx,
+                paged,
+                scene.objects.iter().map(|o| o.asset.clone()).collect(),
+                options,
+                p.node_pool_start,
+                p.voxel_pool_start,
+                p.slots,
+                p.blocks,
+                p.fixed_bytes,
+            )),
+            _ => None,
+        };
+        let feedback_dummy = streaming.is_none().then(|| {
+            d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("page feedback (unused)"),
+                size: 16,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            })
+        });
+        let feedback = streaming
+            .as_ref()
+            .map(|s| &s.feedback)
+            .or(feedback_dummy.as_ref())
+            .expect("one of the two exists");
         let proxy_vertices = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("proxy vertices"),
             contents: bytemuck::cast_slice(if proxy_v.is_empty() {
@@ -596,7 +791,7 @@ impl GpuScene {
                 .chain(&color_buffers)
                 .chain(&normal_buffers)
                 .chain(&lookup_buffers)
-                .chain([&bvh_buffer])
+                .chain([&bvh_buffer, feedback])
                 .collect::<Vec<_>>(),
         );
         Ok(Self {
@@ -619,6 +814,9 @@ impl GpuScene {
             meshes,
             visible: Vec::new(),
             memory,
+            streaming,
+            _feedback_dummy: feedback_dummy,
+            voxel_slots,
             camera: Camera::default(),
             screen: (1, 1),
         })
@@ -701,6 +899,101 @@ impl GpuScene {
                 .write_buffer(&mesh.uniform, 0, bytemuck::bytes_of(&u));
         }
         self.visible = visible;
+    }
+
+    /// The streams the page cache writes into.
+    fn stream_buffers(&self) -> StreamBuffers<'_> {
+        StreamBuffers {
+            colors: &self.color_buffers,
+            normals: &self.normal_buffers,
+            nodes: &self.lookup_buffers,
+            word_chunk_bytes: 4u64 << self.chunks.word_bits,
+            node_chunk_bytes: (4 * NODE_WORDS as u64) << self.chunks.node_bits,
+        }
+    }
+
+    /// Under a budget: reads the page feedback of earlier frames that is ready and streams
+    /// the pages it asks for (never waits; [`Self::sync_streaming`] does). Called by the
+    /// renderer before each frame.
+    pub fn stream_pages(&mut self, ctx: &GpuContext) -> Result<(), PassError> {
+        self.service(ctx, false)
+    }
+
+    /// Under a budget: waits for the GPU, then reads the latest frame's page feedback and
+    /// streams what it asks for (offline rendering converges frame by frame with it).
+    pub fn sync_streaming(&mut self, ctx: &GpuContext) -> Result<(), PassError> {
+        self.service(ctx, true)
+    }
+
+    fn service(&mut self, ctx: &GpuContext, wait: bool) -> Result<(), PassError> {
+        let Some(mut s) = self.streaming.take() else {
+            return Ok(());
+        };
+        let r = s.service(ctx, &self.stream_buffers(), wait);
+        self.streaming = Some(s);
+        r
+    }
+
+    /// Under a budget: evicts every page (tests and the viewer's budget changes).
+    pub fn evict_all_pages(&mut self, ctx: &GpuContext) {
+        if let Some(mut s) = self.streaming.take() {
+            s.evict_all(ctx, &self.stream_buffers());
+            self.streaming = Some(s);
+        }
+    }
+
+    /// What the page cache did (`None` without a budget).
+    pub fn streaming_stats(&self) -> Option<&StreamingStats> {
+        self.streaming.as_ref().map(Streaming::stats)
+    }
+
+    /// Pages refused so far under a budget, with why.
+    pub fn page_errors(&self) -> Vec<String> {
+        self.streaming
+            .as_ref()
+            .map(Streaming::errors)
+            .unwrap_or_default()
+    }
+
+    /// Records the start of a frame's commands (clears the page feedback).
+    pub fn begin_frame(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(s) = &mut self.streaming {
+            s.begin_frame(encoder);
+        }
+    }
+
+    /// Records the end of a frame's commands (copies the page feedback out).
+    pub fn end_frame(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(s) = &mut self.streaming {
+            s.end_frame(encoder);
+        }
+    }
+
+    /// After the frame's submission: maps the feedback copy without waiting.
+    pub fn after_submit(&mut self) {
+        if let Some(s) = &mut self.streaming {
+            s.after_submit();
+        }
+    }
+
+    /// Whether `level` of the scene's objects is paged (under a budget, above the pinned
+    /// levels).
+    pub fn is_paged(&self, level: u32) -> bool {
+        self.streaming.is_some() && level > PINNED_LEVEL
+    }
+
+    /// How many unique-voxel keys an instance at `level` of `object` needs: its level's
+    /// voxels, or under a budget (where its hits may come from coarser LODs and its voxel
+    /// ids are pool indices) every voxel index of the scene.
+    pub fn voxel_key_range(&self, object: usize, level: u32) -> u64 {
+        if self.is_paged(level) {
+            self.voxel_slots
+        } else {
+            self.scene.objects[object].asset.lods[level as usize]
+                .point_cloud
+                .voxels
+                .len() as u64
+        }
     }
 
     /// Visible instances of the current frame per chosen level.

@@ -16,11 +16,13 @@ pub mod frame;
 pub mod gbuffer;
 pub mod gpu_scene;
 pub mod measure;
+pub mod page_cache;
 pub mod pipelines;
 pub mod ray_cast_counters;
 pub mod registry;
 pub mod scene;
 pub mod shaders;
+pub mod streaming;
 pub mod visibility;
 pub mod wgsl_layout;
 
@@ -44,6 +46,7 @@ pub use frame::{FrameStats, PassTiming, Profiling, Recorder, Renderer};
 pub use gpu_scene::{GpuScene, ObjectMemory, StreamChunks};
 pub use registry::{PassImpl, PassInit, Registration};
 pub use scene::{LodPolicy, Scene, TriangleObject, VoxelObject};
+pub use streaming::{StreamingOptions, StreamingStats};
 
 use ssbvb_gpu::{GpuContext, GpuError, wgpu};
 use ssbvb_graph::{PassKind, ResolvedPipeline, ScheduledPass};
@@ -71,6 +74,30 @@ pub enum PassError {
     /// A shader could not be assembled.
     #[error("shader {0}")]
     Shader(String),
+    /// A GPU budget smaller than what never leaves the GPU plus one page.
+    #[error(
+        "a GPU budget of {} MiB is too small for this scene: the lookup trees, the pinned \
+         coarse levels and the proxies take {} MiB with one page; use --gpu-budget {} or more",
+        .budget.div_ceil(1 << 20), .minimum.div_ceil(1 << 20), .minimum.div_ceil(1 << 20)
+    )]
+    BudgetTooSmall {
+        /// The budget asked for (bytes).
+        budget: u64,
+        /// The smallest budget that works (bytes).
+        minimum: u64,
+    },
+    /// A pass reads whole levels and cannot run on paged ones.
+    #[error(
+        "pass `{pass}` (kind {kind}) reads every voxel of a level and cannot run under a GPU budget (--gpu-budget pages levels above {pinned}); only the SSBVB filter's pipelines stream"
+    )]
+    NeedsWholeLevels {
+        /// Pass name.
+        pass: String,
+        /// Kind name.
+        kind: &'static str,
+        /// The finest level resident whole.
+        pinned: u32,
+    },
 }
 
 /// A pass ready to record: pipelines compiled once, bind groups made per frame.

@@ -246,6 +246,8 @@ impl PassImpl for OctreeRayCast {
 
     /// Compiles the pipeline for the formats bound to `pass`; `max_steps` becomes the WGSL
     /// override `MAX_STEPS`.
+    const WHOLE_LEVELS: bool = true;
+
     fn new(init: &PassInit<'_>, params: &OctreeRayCastParams) -> Result<Self, PassError> {
         let max_steps = params.max_steps;
         let chunk_bits = init.scene.chunks.octree_bits;

@@ -60,7 +60,10 @@ pub const WORKGROUP: u32 = 16;
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct VoxelSlot {
-    /// The hit voxel, copied from its LOD's point cloud.
+    /// The hit voxel: its cell, normal and colour as in its LOD's point cloud, and in
+    /// place of texture coordinates (`uv`) the grid level of that LOD (the instance's, or
+    /// under a GPU budget a coarser one where a page was not resident). The billboard
+    /// passes size the voxel by it.
     pub voxel: PackedVoxel,
     /// Index of the instance in the frame's visible instances.
     pub instance: u32,
@@ -313,12 +316,12 @@ impl RayMarchFilter {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), PassError> {
         let scene = rec.scene;
-        let offsets = claim_offsets(scene.visible.iter().map(|v| {
-            scene.scene.objects[v.object].asset.lods[v.level as usize]
-                .point_cloud
-                .voxels
-                .len() as u64
-        }));
+        let offsets = claim_offsets(
+            scene
+                .visible
+                .iter()
+                .map(|v| scene.voxel_key_range(v.object, v.level)),
+        );
         let entry = &rec.texture("entry").texture;
         let words = claim_table_words(entry.width() as u64 * entry.height() as u64);
         let max = rec.gpu.device.limits().max_storage_buffer_binding_size;

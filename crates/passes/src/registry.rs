@@ -78,6 +78,9 @@ pub trait PassImpl: PassNode + Sized + 'static {
     const OWN: &'static [OwnBinding] = &[];
     /// What it needs from an adapter.
     const NEEDS: KindNeeds = KindNeeds::NONE;
+    /// It reads every voxel of a level (its own structures built from whole levels), so
+    /// it cannot run on a scene paged under a GPU budget.
+    const WHOLE_LEVELS: bool = false;
 
     /// Compiles the pass for `init.pass` with its typed parameters.
     fn new(init: &PassInit<'_>, params: &Self::Params) -> Result<Self, PassError>;
@@ -102,6 +105,13 @@ fn create<P: PassImpl>(init: &PassInit<'_>) -> Result<Box<dyn PassNode>, PassErr
         pass: init.pass.name.clone(),
         kind: init.pass.kind.name(),
     })?;
+    if P::WHOLE_LEVELS && init.scene.streaming.is_some() {
+        return Err(PassError::NeedsWholeLevels {
+            pass: init.pass.name.clone(),
+            kind: init.pass.kind.name(),
+            pinned: crate::streaming::PINNED_LEVEL,
+        });
+    }
     Ok(Box::new(P::new(init, params)?))
 }
 

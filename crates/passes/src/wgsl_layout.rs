@@ -94,7 +94,8 @@ pub fn shared_structs() -> Vec<StructLayout> {
                 object,
                 chunk_bits,
                 node_chunk_bits,
-                pad
+                page_base,
+                first_page_node
             }
         ),
         layout!(

@@ -201,9 +201,11 @@ pub(crate) fn slots_from_reference(
                 .expect("every instance the reference hits is visible on the GPU");
             let v = &gpu.visible[visible];
             assert_eq!(v.object, objects[h.instance as usize]);
-            let voxel = scene.objects[v.object].asset.lods[v.level as usize]
+            let mut voxel = scene.objects[v.object].asset.lods[v.level as usize]
                 .point_cloud
                 .voxels[h.voxel as usize];
+            // A slot carries its voxel's level where a point cloud has texture coordinates.
+            voxel.uv = v.level;
             let n = h.face_normal;
             let axis = (0..3)
                 .max_by(|&a, &b| n[a].abs().total_cmp(&n[b].abs()))
