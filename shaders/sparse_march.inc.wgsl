@@ -30,9 +30,12 @@
 //   inside the voxel gets the dominant axis of the direction).
 // - Pages (under a GPU budget, LodInfo.page_base != NO_PAGES): a page node whose page is
 //   not resident ends the march with `missing` set and `t` the time the ray entered the
-//   cell it was in; `march_resident` goes on from there in the next coarser LOD. Every page
-//   node the march enters sets its page's bit in `page_feedback`: "missing" (only when
-//   `record`, i.e. in the instance's own LOD) or "touched" (for the page cache's LRU).
+//   cell it was in; `march_resident` goes on from there in the next coarser LOD. In the
+//   instance's own LOD the march first looks past it (up to MISSING_LOOKAHEAD missing
+//   pages, skipped as if empty) only to request those pages too, as "ahead" (loaded when
+//   there is room, first to leave). Every page node the march enters sets its page's bit
+//   in `page_feedback`: "missing" (only when `record`, i.e. in the instance's own LOD) or
+//   "touched" (for the page cache's LRU).
 // - Every loop iteration counts one step (cells and skipped regions alike); after
 //   MAX_STEPS the ray reports no hit.
 
@@ -47,14 +50,20 @@ const MAX_ORIGIN: f32 = 1e12;
 // Loop iterations of every march since the includer last reset it (its counters).
 var<private> march_steps: u32;
 
-// Page feedback of the frame (streaming.rs): a bit per page of every paged LOD, first the
-// pages a march needed and did not find, then the pages it entered; cleared every frame.
+// Page feedback of the frame (streaming.rs): three sets of a bit per page of every paged
+// LOD: the pages a march needed and did not find (FB_MISSING), the pages it entered
+// (FB_TOUCHED), and the missing pages it found looking past the first (FB_AHEAD); cleared
+// every frame.
 @group(0) @binding(12) var<storage, read_write> page_feedback: array<atomic<u32>>;
 
-// Sets bit `page` of the missing (half 0) or touched (half 1) set, reading first so that a
-// page many rays enter costs one atomic write.
-fn note_page(half: u32, page: u32) {
-    let w = half * (arrayLength(&page_feedback) / 2u) + (page >> 5u);
+const FB_MISSING: u32 = 0u;
+const FB_TOUCHED: u32 = 1u;
+const FB_AHEAD: u32 = 2u;
+
+// Sets bit `page` of set `which`, reading first so that a page many rays enter costs one
+// atomic write.
+fn note_page(which: u32, page: u32) {
+    let w = which * (arrayLength(&page_feedback) / 3u) + (page >> 5u);
     let bit = 1u << (page & 31u);
     if w < arrayLength(&page_feedback) && (atomicLoad(&page_feedback[w]) & bit) == 0u {
         atomicOr(&page_feedback[w], bit);
@@ -234,7 +243,7 @@ fn march_cell(lod: LodInfo, cell: vec3<u32>, record: bool) -> u32 {
         let n = lookup_node(lod, node);
         if k + 2u == lod.depth && lod.page_base != NO_PAGES && n.base == PAGE_MISSING {
             if record {
-                note_page(0u, page_of(lod, node));
+                note_page(FB_MISSING, page_of(lod, node));
             }
             return 0u;
         }
@@ -248,6 +257,25 @@ fn march_cell(lod: LodInfo, cell: vec3<u32>, record: bool) -> u32 {
         node = lod.node_offset + node_child(n, b);
     }
     return 0u;
+}
+
+// Missing pages one ray of an instance's own LOD requests per frame at most (it marches
+// past the first ones to find them).
+const MISSING_LOOKAHEAD: u32 = 4u;
+
+fn missing_hit(t: f32) -> Hit {
+    var h = no_hit();
+    h.missing = true;
+    h.t = t;
+    return h;
+}
+
+// `h`, unless a missing page came first (`missing_t >= 0`): then that.
+fn found_or_missing(h: Hit, missing_t: f32) -> Hit {
+    if missing_t >= 0.0 {
+        return missing_hit(missing_t);
+    }
+    return h;
 }
 
 // Marches `r` through `lod` from `t_from` (clamped to the box) up to `t_limit`; a page that
@@ -275,6 +303,9 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
     // most of the others in its parent, so a step reads at most the nodes below the
     // parent, and the root path only when the ray enters a new 16^3 region.
     let depth = lod.depth;
+    // Where the first missing page was entered (-1: none yet), and how many were met.
+    var missing_t = -1.0;
+    var missing_pages = 0u;
     var leaf_key = vec3(0xffffffffu);
     var leaf: LookupNode;
     var parent_key = vec3(0xffffffffu);
@@ -297,13 +328,22 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
             loop {
                 let n = lookup_node(lod, node);
                 if k + 2u == depth && lod.page_base != NO_PAGES && n.base == PAGE_MISSING {
-                    if record {
-                        note_page(0u, page_of(lod, node));
+                    if !(missing_t >= 0.0) {
+                        missing_t = cell_entry_t(r, c, t0);
                     }
-                    var h = no_hit();
-                    h.missing = true;
-                    h.t = cell_entry_t(r, c, t0);
-                    return h;
+                    if !record {
+                        return missing_hit(missing_t);
+                    }
+                    // Request it, and look past it (as if it were empty) for the next
+                    // missing pages of this ray, so that the pages a ray needs arrive in
+                    // fewer frames; what lies past it is not a hit.
+                    note_page(select(FB_AHEAD, FB_MISSING, missing_pages == 0u), page_of(lod, node));
+                    missing_pages += 1u;
+                    if missing_pages >= MISSING_LOOKAHEAD {
+                        return missing_hit(missing_t);
+                    }
+                    unit = 16;
+                    break;
                 }
                 if k + 1u == depth {
                     leaf = n;
@@ -323,7 +363,7 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
                     parent = node;
                     parent_key = co >> vec3(4u);
                     if lod.page_base != NO_PAGES {
-                        note_page(1u, page_of(lod, node));
+                        note_page(FB_TOUCHED, page_of(lod, node));
                     }
                 }
             }
@@ -331,7 +371,7 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
         if unit == 0 {
             let b = child_bit(co & vec3(3u));
             if node_has(leaf, b) {
-                return cell_hit(r, c, node_child(leaf, b));
+                return found_or_missing(cell_hit(r, c, node_child(leaf, b)), missing_t);
             }
             let octant_empty = ((select(leaf.lo, leaf.hi, b >= 32u) >> (b & 24u)) & 0xffu) == 0u;
             unit = select(0, 2, octant_empty);
@@ -349,7 +389,7 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
                 }
             }
             if t_out > t_end {
-                return no_hit();
+                return found_or_missing(no_hit(), missing_t);
             }
             for (var a = 0u; a < 3u; a++) {
                 if r.moving[a] {
@@ -362,7 +402,7 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
         // Step to the next event: every axis whose next plane is crossed first.
         let tm = min(t_next.x, min(t_next.y, t_next.z));
         if tm > t_end {
-            return no_hit();
+            return found_or_missing(no_hit(), missing_t);
         }
         let cross = r.moving & (t_next == vec3(tm));
         c += select(vec3(0), vec3(1), cross);
@@ -387,16 +427,16 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
                 if all(cand < vec3(r.n)) {
                     let v = march_cell(lod, orig_cell(r, cand), record);
                     if v != 0u {
-                        return cell_hit(r, cand, v - 1u);
+                        return found_or_missing(cell_hit(r, cand, v - 1u), missing_t);
                     }
                 }
             }
         }
         if any(c >= vec3(r.n)) {
-            return no_hit();
+            return found_or_missing(no_hit(), missing_t);
         }
     }
-    return no_hit();
+    return found_or_missing(no_hit(), missing_t);
 }
 
 // Marches the ray `o + t * d` (object space) through LOD `first` (a LOD-table index) from

@@ -13,8 +13,8 @@ use ssbvb_voxel::lookup::NODE_WORDS;
 use crate::PassError;
 use crate::scene::Scene;
 use crate::streaming::{
-    BLOCK_BYTES, MAX_PAGE_BYTES, PINNED_LEVEL, PagedLayoutBuilder, SLOT_BYTES, StreamBuffers,
-    Streaming, StreamingOptions, StreamingStats,
+    BLOCK_BYTES, MAX_PAGE_BYTES, PINNED_LEVEL, PagedLayoutBuilder, RUN_BYTES, SLOT_BYTES,
+    StreamBuffers, Streaming, StreamingOptions, StreamingStats,
 };
 pub use crate::visibility::choose_level;
 use crate::visibility::{frame_uniform, instance_bvh, mat, visible_instances};
@@ -410,17 +410,15 @@ fn plan_pools(
         });
     }
     let pool = budget - fixed_bytes;
-    // Blocks per page: the voxels rounded up to blocks, plus half a block of packing loss.
-    let blocks_per_page = if pages == 0 {
-        1.0
-    } else {
-        paged.voxels() as f64 / pages as f64 / block as f64 + 1.0
-    };
-    let page_bytes = SLOT_BYTES as f64 + blocks_per_page * BLOCK_BYTES as f64;
-    let slots = ((pool as f64 / page_bytes) as u64).clamp(1, pages.max(1));
-    let blocks = ((pool - slots * SLOT_BYTES) / BLOCK_BYTES)
-        .min(pages * 17)
-        .max(16);
+    // Split the pool in the proportion all pages need (node runs against voxel blocks):
+    // a view's pages need about the same.
+    let (runs, blocks) = paged.need();
+    let node_bytes = runs as f64 * RUN_BYTES as f64;
+    let total = node_bytes + blocks as f64 * BLOCK_BYTES as f64;
+    let node_share = if total > 0.0 { node_bytes / total } else { 0.5 };
+    let slots =
+        ((pool as f64 * node_share / SLOT_BYTES as f64).ceil() as u64).clamp(1, pages.max(1));
+    let blocks = ((pool.saturating_sub(slots * SLOT_BYTES)) / BLOCK_BYTES).clamp(64, blocks + 64);
     let node_pool_start = checked_u32(nodes.len() / NODE_WORDS, "lookup nodes")?;
     let voxel_pool_start = checked_u32(colors.len(), "voxel count")?;
     nodes.resize(nodes.len() + slots as usize * slot_words, 0);
@@ -561,13 +559,9 @@ impl GpuScene {
                         }
                         None => ssbvb_voxel::cache::page_index(&lod.point_cloud.voxels),
                     };
-                    let (page_base, first) = paged.push_lod(
-                        oi,
-                        lod.level,
-                        entries,
-                        lod.point_cloud.voxels.len() as u64,
-                        &mut nodes,
-                    )?;
+                    let need = crate::streaming::pool_need(l, &entries);
+                    let (page_base, first) =
+                        paged.push_lod(oi, lod.level, entries, need, &mut nodes)?;
                     info.voxel_offset = 0;
                     info.page_base = page_base;
                     info.first_page_node = first;

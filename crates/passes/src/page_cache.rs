@@ -1,10 +1,12 @@
 //! The CPU side of the GPU page cache: which 16³ pages are resident where, which leave
 //! first (least recently used), and how one page's voxels are laid out in the pools.
 //!
-//! A resident page owns one slot of [`SLOT_NODES`] lookup nodes (its 4³ leaves) and as
-//! many blocks of [`BLOCK_VOXELS`] voxels as its leaves need. Fixed-size slots and blocks
-//! never fragment; a leaf never straddles two blocks, so each leaf's `base` is the pool
-//! index of its first voxel and blocks need not be contiguous. The GPU side (uploads,
+//! A resident page owns 1–8 consecutive runs of [`NODE_RUN`] lookup nodes in one slot of
+//! [`SLOT_NODES`] (its 4³ leaves, which must be contiguous) and as many blocks of
+//! [`BLOCK_VOXELS`] voxels as its leaves need. Small fixed units keep the space a page
+//! wastes to a fraction of a run and of a block (a surface page at level 8 holds ~25
+//! leaves and ~175 voxels); a leaf never straddles two blocks, so each leaf's `base` is
+//! the pool index of its first voxel and blocks need not be contiguous. The GPU side (uploads,
 //! feedback) is `streaming.rs`.
 
 use std::collections::BTreeSet;
@@ -12,10 +14,13 @@ use std::collections::BTreeSet;
 use ssbvb_voxel::asset::PackedVoxel;
 use ssbvb_voxel::svo::morton_encode;
 
-/// Lookup nodes of a page slot: a 16³ page has at most 64 leaves of 4³ cells.
+/// Lookup nodes of a node-pool slot: a 16³ page has at most 64 leaves of 4³ cells.
 pub const SLOT_NODES: u32 = 64;
-/// Voxels of a pool block (a power of two, so no block straddles a binding chunk).
-pub const BLOCK_VOXELS: u32 = 256;
+/// Nodes of a run, the unit of node allocation (a page with up to 8 leaves takes one).
+pub const NODE_RUN: u32 = 8;
+const RUNS_PER_SLOT: usize = (SLOT_NODES / NODE_RUN) as usize;
+/// Voxels of a pool block: a leaf's voxels (at most 4³) always fit in one.
+pub const BLOCK_VOXELS: u32 = 64;
 
 /// One page's leaves and voxels, packed for the pools but not yet placed.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -47,14 +52,18 @@ pub fn pack_page(voxels: &[PackedVoxel]) -> PackedPage {
             j += 1;
         }
         let n = j - i;
-        if page
+        // First fit: a leaf's voxels go to the first block with room for all of them.
+        let b = match page
             .blocks
-            .last()
-            .is_none_or(|b| b.len() + n > BLOCK_VOXELS as usize)
+            .iter()
+            .position(|b| b.len() + n <= BLOCK_VOXELS as usize)
         {
-            page.blocks.push(Vec::with_capacity(BLOCK_VOXELS as usize));
-        }
-        let b = page.blocks.len() - 1;
+            Some(b) => b,
+            None => {
+                page.blocks.push(Vec::with_capacity(BLOCK_VOXELS as usize));
+                page.blocks.len() - 1
+            }
+        };
         let block = &mut page.blocks[b];
         page.leaves.push((mask, b as u32, block.len() as u32));
         block.extend(
@@ -71,8 +80,10 @@ pub fn pack_page(voxels: &[PackedVoxel]) -> PackedPage {
 /// Where a resident page lives.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Residence {
-    /// Its slot in the node pool.
-    pub slot: u32,
+    /// Its leaves: the first node (a multiple of [`NODE_RUN`]) in the node pool.
+    pub first_node: u32,
+    /// Node runs it holds (consecutive).
+    pub runs: u32,
     /// Its blocks in the voxel pool.
     pub blocks: Vec<u32>,
 }
@@ -84,11 +95,79 @@ struct PageState {
     failed: bool,
 }
 
-/// Residency of every page of the scene's paged LODs in pools of `slots` node slots and
-/// `blocks` voxel blocks, with least-recently-used eviction.
+/// The node pool: slots of [`SLOT_NODES`] nodes, each cut into eight runs of [`NODE_RUN`];
+/// a page takes 1–8 consecutive runs of one slot (its leaves must be contiguous).
+#[derive(Debug, Clone)]
+struct NodePool {
+    /// Per slot, a bit per taken run.
+    taken: Vec<u8>,
+    /// Slots by their longest free stretch of runs (index 0..=8).
+    by_room: [BTreeSet<u32>; RUNS_PER_SLOT + 1],
+}
+
+/// `k` consecutive run bits (k ≤ 8).
+fn run_mask(k: u32) -> u8 {
+    ((1u16 << k) - 1) as u8
+}
+
+/// The longest stretch of free runs in a slot's eight.
+fn room(taken: u8) -> usize {
+    let mut best = 0;
+    let mut cur = 0;
+    for i in 0..RUNS_PER_SLOT {
+        if taken >> i & 1 == 0 {
+            cur += 1;
+            best = best.max(cur);
+        } else {
+            cur = 0;
+        }
+    }
+    best
+}
+
+impl NodePool {
+    fn new(slots: u32) -> Self {
+        let mut by_room: [BTreeSet<u32>; RUNS_PER_SLOT + 1] = Default::default();
+        by_room[RUNS_PER_SLOT] = (0..slots).collect();
+        Self {
+            taken: vec![0; slots as usize],
+            by_room,
+        }
+    }
+
+    fn take(&mut self, runs: u32) -> Option<u32> {
+        let k = runs as usize;
+        let slot = (k..=RUNS_PER_SLOT).find_map(|r| self.by_room[r].first().copied())?;
+        let t = self.taken[slot as usize];
+        let at = (0..=RUNS_PER_SLOT - k).find(|&p| (0..k).all(|i| t >> (p + i) & 1 == 0))?;
+        self.set(slot, t | (run_mask(k as u32) << at));
+        Some(slot * SLOT_NODES + at as u32 * NODE_RUN)
+    }
+
+    fn give(&mut self, first_node: u32, runs: u32) {
+        let slot = first_node / SLOT_NODES;
+        let at = (first_node % SLOT_NODES) / NODE_RUN;
+        let t = self.taken[slot as usize];
+        self.set(slot, t & !(run_mask(runs) << at));
+    }
+
+    fn set(&mut self, slot: u32, taken: u8) {
+        let old = room(self.taken[slot as usize]);
+        self.by_room[old].remove(&slot);
+        self.taken[slot as usize] = taken;
+        self.by_room[room(taken)].insert(slot);
+    }
+
+    fn runs_taken(&self) -> u32 {
+        self.taken.iter().map(|t| t.count_ones()).sum()
+    }
+}
+
+/// Residency of every page of the scene's paged LODs in a node pool of `slots` slots and
+/// a voxel pool of `blocks` blocks, with least-recently-used eviction.
 #[derive(Debug, Clone)]
 pub struct PageCache {
-    free_slots: Vec<u32>,
+    nodes: NodePool,
     free_blocks: Vec<u32>,
     slots: u32,
     blocks: u32,
@@ -100,18 +179,13 @@ impl PageCache {
     /// An empty cache for `pages` pages.
     pub fn new(pages: usize, slots: u32, blocks: u32) -> Self {
         Self {
-            free_slots: (0..slots).rev().collect(),
+            nodes: NodePool::new(slots),
             free_blocks: (0..blocks).rev().collect(),
             slots,
             blocks,
             pages: vec![PageState::default(); pages],
             lru: BTreeSet::new(),
         }
-    }
-
-    /// Pages known.
-    pub fn page_count(&self) -> usize {
-        self.pages.len()
     }
 
     /// Whether `page` is resident.
@@ -138,11 +212,13 @@ impl PageCache {
         let Some(p) = self.pages.get_mut(page as usize) else {
             return;
         };
-        if p.residence.is_some() && p.last_used < frame {
-            self.lru.remove(&(p.last_used, page));
-            p.last_used = frame;
-            self.lru.insert((frame, page));
-        } else if p.residence.is_none() {
+        if p.residence.is_some() {
+            if p.last_used < frame {
+                self.lru.remove(&(p.last_used, page));
+                p.last_used = frame;
+                self.lru.insert((frame, page));
+            }
+        } else {
             p.last_used = p.last_used.max(frame);
         }
     }
@@ -152,10 +228,10 @@ impl PageCache {
         self.lru.len()
     }
 
-    /// Node slots and voxel blocks in use.
+    /// Node runs and voxel blocks in use.
     pub fn used(&self) -> (u32, u32) {
         (
-            self.slots - self.free_slots.len() as u32,
+            self.nodes.runs_taken(),
             self.blocks - self.free_blocks.len() as u32,
         )
     }
@@ -165,74 +241,69 @@ impl PageCache {
         (self.slots, self.blocks)
     }
 
-    /// Makes `page` resident with `blocks` blocks, used in frame `frame`: takes free slots
-    /// and blocks, evicting the least recently used pages last used before `keep_from`
-    /// (pages the latest frames needed stay). Returns where it goes and the pages evicted
-    /// (whose page nodes must be marked missing), or `None` when even evicting every
-    /// evictable page would not make room (nothing is evicted then).
+    /// Makes `page` resident with `leaves` leaf nodes and `blocks` voxel blocks, as last
+    /// used in frame `frame` (0: never, the first to leave), evicting least recently used pages last used before `keep_from`
+    /// (pages the latest frame needed stay) until it fits. Returns where it goes and the
+    /// pages evicted (whose page nodes must be marked missing), or `None` (with the pages
+    /// evicted on the way, if any) when it does not fit.
     pub fn admit(
         &mut self,
         page: u32,
+        leaves: u32,
         blocks: u32,
         frame: u64,
         keep_from: u64,
-    ) -> Option<(Residence, Vec<u32>)> {
-        if self.is_resident(page) || page as usize >= self.pages.len() {
-            return None;
+    ) -> (Option<Residence>, Vec<u32>) {
+        let mut evicted = Vec::new();
+        if self.is_resident(page) || page as usize >= self.pages.len() || leaves > SLOT_NODES {
+            return (None, evicted);
         }
-        // Room: free, plus what the evictable pages hold.
-        let mut slots_room = self.free_slots.len() as u64;
-        let mut blocks_room = self.free_blocks.len() as u64;
-        let mut victims = 0;
-        for &(used, p) in &self.lru {
-            if slots_room >= 1 && blocks_room >= blocks as u64 {
-                break;
+        let runs = leaves.div_ceil(NODE_RUN).max(1);
+        if blocks > self.blocks || self.slots == 0 {
+            return (None, evicted);
+        }
+        loop {
+            if self.free_blocks.len() >= blocks as usize {
+                if let Some(first_node) = self.nodes.take(runs) {
+                    let taken = self.free_blocks.len() - blocks as usize;
+                    let residence = Residence {
+                        first_node,
+                        runs,
+                        blocks: self.free_blocks.split_off(taken),
+                    };
+                    let state = &mut self.pages[page as usize];
+                    state.residence = Some(residence.clone());
+                    state.last_used = frame;
+                    self.lru.insert((state.last_used, page));
+                    return (Some(residence), evicted);
+                }
             }
-            if used >= keep_from {
-                return None;
+            match self.lru.first() {
+                Some(&(used, p)) if used < keep_from => {
+                    self.evict(p);
+                    evicted.push(p);
+                }
+                _ => return (None, evicted),
             }
-            let r = self.pages[p as usize].residence.as_ref()?;
-            slots_room += 1;
-            blocks_room += r.blocks.len() as u64;
-            victims += 1;
         }
-        if slots_room < 1 || blocks_room < blocks as u64 {
-            return None;
-        }
-        let mut evicted = Vec::with_capacity(victims);
-        for _ in 0..victims {
-            let (used, p) = self.lru.pop_first()?;
-            debug_assert!(used < keep_from);
-            if let Some(r) = self.pages[p as usize].residence.take() {
-                self.free_slots.push(r.slot);
-                self.free_blocks.extend(r.blocks);
-            }
-            evicted.push(p);
-        }
-        let slot = self.free_slots.pop()?;
-        let taken = self.free_blocks.len() - blocks as usize;
-        let residence = Residence {
-            slot,
-            blocks: self.free_blocks.split_off(taken),
-        };
-        let state = &mut self.pages[page as usize];
-        state.residence = Some(residence.clone());
-        state.last_used = state.last_used.max(frame);
-        self.lru.insert((state.last_used, page));
-        Some((residence, evicted))
     }
 
-    /// Evicts every page (pinned pages are not in the cache at all).
-    pub fn clear(&mut self) -> Vec<u32> {
-        let mut out = Vec::new();
-        while let Some((_, p)) = self.lru.pop_first() {
-            if let Some(r) = self.pages[p as usize].residence.take() {
-                self.free_slots.push(r.slot);
-                self.free_blocks.extend(r.blocks);
-            }
-            out.push(p);
+    fn evict(&mut self, p: u32) {
+        let state = &mut self.pages[p as usize];
+        self.lru.remove(&(state.last_used, p));
+        if let Some(r) = state.residence.take() {
+            self.nodes.give(r.first_node, r.runs);
+            self.free_blocks.extend(r.blocks);
         }
-        out
+    }
+
+    /// Evicts every page.
+    pub fn clear(&mut self) -> Vec<u32> {
+        let all: Vec<u32> = self.lru.iter().map(|&(_, p)| p).collect();
+        for &p in &all {
+            self.evict(p);
+        }
+        all
     }
 }
 
@@ -303,7 +374,8 @@ mod tests {
                     .iter()
                     .all(|b| b.len() <= BLOCK_VOXELS as usize)
             );
-            assert!(packed.blocks.len() <= page_voxels.len().div_ceil(64) + 1);
+            // First fit fills blocks at least half on average.
+            assert!(packed.blocks.len() <= 2 * page_voxels.len().div_ceil(64));
             seen += n;
         }
         assert_eq!(seen, voxels.len());
@@ -312,35 +384,52 @@ mod tests {
 
     #[test]
     fn least_recently_used_pages_leave_first_and_recent_ones_stay() {
-        let mut c = PageCache::new(10, 3, 6);
-        // Frames 1..3 admit pages 0, 1, 2 (two blocks each): the pools are full.
-        for p in 0..3 {
-            let (r, ev) = c.admit(p, 2, p as u64 + 1, 0).unwrap();
+        // One slot (8 runs of 8 nodes), 6 blocks.
+        let mut c = PageCache::new(10, 1, 6);
+        // Frames 1..3 admit pages 0 and 1 (20 leaves: three runs) and 2 (16: two runs),
+        // two blocks each: runs and blocks are full.
+        for p in 0..2 {
+            let (r, ev) = c.admit(p, 20, 2, p as u64 + 1, 0);
             assert!(ev.is_empty());
-            assert_eq!(r.blocks.len(), 2);
+            let r = r.unwrap();
+            assert_eq!(
+                (r.runs, r.blocks.len(), r.first_node),
+                (3, 2, 3 * NODE_RUN * p)
+            );
         }
-        assert_eq!(c.used(), (3, 6));
+        assert_eq!(c.used(), (6, 4));
+        let (r, ev) = c.admit(2, 16, 2, 3, 0);
+        assert_eq!((r.unwrap().runs, ev), (2, vec![]));
+        assert_eq!(c.used(), (8, 6));
         // Page 0 is used again in frame 4: page 1 is now the oldest.
         c.touch(0, 4);
-        let (_, ev) = c.admit(3, 2, 5, 5).unwrap();
+        let (r, ev) = c.admit(3, 16, 2, 5, 5);
+        assert!(r.is_some());
         assert_eq!(ev, vec![1]);
         assert!(!c.is_resident(1) && c.is_resident(0) && c.is_resident(3));
-        // A page needing more blocks evicts as many as it needs, oldest first (2, then 0).
-        let (r, ev) = c.admit(4, 4, 6, 6).unwrap();
-        assert_eq!(ev, vec![2, 0]);
-        assert_eq!(r.blocks.len(), 4);
+        // A page with 40 leaves needs five consecutive runs: it evicts the oldest pages
+        // until five free runs are adjacent (2, then 0: runs 0..=2 and 6..=7 free, not
+        // adjacent; then 3).
+        let (r, ev) = c.admit(4, 40, 2, 6, 6);
+        let r = r.unwrap();
+        assert_eq!(r.runs, 5);
+        assert_eq!(ev, vec![2, 0, 3]);
+        assert_eq!(c.used(), (5, 2));
         // Pages used in the frames to keep are never evicted: no room, nothing evicted.
-        assert!(c.admit(5, 1, 7, 5).is_none());
-        assert!(c.is_resident(3) && c.is_resident(4));
-        assert_eq!(c.resident(), 2);
-        // A page larger than the whole pool never fits.
-        assert!(c.admit(6, 7, 8, 100).is_none());
-        assert_eq!(c.resident(), 2);
-        // Slots and blocks are conserved.
+        assert!(c.admit(5, 30, 1, 7, 6).0.is_none());
+        assert!(c.is_resident(4));
+        // A page with more blocks than the pool never fits, and evicts nothing.
+        assert_eq!(c.admit(6, 1, 7, 8, 100), (None, vec![]));
+        // Runs and blocks are conserved.
         let evicted = c.clear();
-        assert_eq!(evicted.len(), 2);
         assert_eq!(c.used(), (0, 0));
+        assert_eq!(evicted, vec![4]);
+        assert_eq!(c.resident(), 0);
         c.mark_failed(7);
         assert!(c.is_failed(7) && !c.is_failed(6));
+        assert_eq!(room(0), 8);
+        assert_eq!(room(0b0110_0110), 2);
+        assert_eq!(room(0b1000_0000), 7);
+        assert_eq!(run_mask(8), 0xff);
     }
 }

@@ -28,7 +28,7 @@ use ssbvb_voxel::cache::{PageEntry, PageFile};
 use ssbvb_voxel::lookup::NODE_WORDS;
 
 use crate::PassError;
-use crate::page_cache::{BLOCK_VOXELS, PageCache, SLOT_NODES, pack_page};
+use crate::page_cache::{BLOCK_VOXELS, NODE_RUN, PageCache, SLOT_NODES, pack_page};
 
 /// Levels up to this one are resident whole under a budget (a level-5 grid is 32³ cells:
 /// its pages are few and small), so every ray has a resident level to fall back to.
@@ -36,11 +36,13 @@ pub const PINNED_LEVEL: u32 = 5;
 
 /// Bytes of a node slot.
 pub const SLOT_BYTES: u64 = SLOT_NODES as u64 * NODE_WORDS as u64 * 4;
+/// Bytes of a node run (the node pool's unit of allocation).
+pub const RUN_BYTES: u64 = NODE_RUN as u64 * NODE_WORDS as u64 * 4;
 /// Bytes of a voxel block (colour and normal).
 pub const BLOCK_BYTES: u64 = BLOCK_VOXELS as u64 * ssbvb_voxel::asset::GPU_VOXEL_BYTES;
-/// Most pool bytes one page can need: a slot and 16 blocks (64 leaves of at most 64
-/// voxels, packed at least four to a block).
-pub const MAX_PAGE_BYTES: u64 = SLOT_BYTES + 16 * BLOCK_BYTES;
+/// Most pool bytes one page can need: a slot and 64 blocks (64 leaves, one per block
+/// at worst).
+pub const MAX_PAGE_BYTES: u64 = SLOT_BYTES + 64 * BLOCK_BYTES;
 
 /// How a scene is uploaded under a budget.
 #[derive(Debug, Clone)]
@@ -93,6 +95,10 @@ pub struct StreamingStats {
     /// The latest feedback asked for more than fits in the budget beside what its frame
     /// used: some pages stay coarser.
     pub over_budget: bool,
+    /// Node pool: runs of 16 nodes in use, and its capacity.
+    pub node_runs: [u64; 2],
+    /// Voxel pool: blocks of 64 voxels in use, and its capacity.
+    pub voxel_blocks: [u64; 2],
 }
 
 /// Where one object's pages come from.
@@ -110,7 +116,8 @@ struct PagedLod {
     /// Absolute index of its first page node.
     first_page_node: u32,
     entries: Vec<PageEntry>,
-    voxels: u64,
+    /// Node runs and voxel blocks all its pages take.
+    need: (u64, u64),
 }
 
 /// A staging buffer of the feedback ring.
@@ -126,6 +133,10 @@ const RECORDED: u8 = 1;
 const MAPPING: u8 = 2;
 const MAPPED: u8 = 3;
 const FAILED: u8 = 4;
+/// Frames whose pages are never evicted for another page (see `load`).
+const KEEP_FRAMES: u64 = 2;
+/// Bit sets of the feedback: missing, touched, ahead (`sparse_march.inc.wgsl`).
+const FEEDBACK_SETS: u64 = 3;
 /// Staging buffers: feedback of this many frames can be in flight.
 const RING: usize = 3;
 
@@ -150,7 +161,7 @@ impl PagedLayoutBuilder {
         object: usize,
         level: u32,
         entries: Vec<PageEntry>,
-        voxels: u64,
+        need: (u64, u64),
         nodes: &mut Vec<u32>,
     ) -> Result<(u32, u32), PassError> {
         let codes: Vec<u64> = entries.iter().map(|e| e.page).collect();
@@ -189,14 +200,16 @@ impl PagedLayoutBuilder {
             node_offset: root as u32,
             first_page_node: root as u32 + top_nodes,
             entries,
-            voxels,
+            need,
         });
         Ok((page_base, top_nodes))
     }
 
-    /// Voxels of every paged LOD.
-    pub(crate) fn voxels(&self) -> u64 {
-        self.lods.iter().map(|l| l.voxels).sum()
+    /// Node runs and voxel blocks all pages of every paged LOD take.
+    pub(crate) fn need(&self) -> (u64, u64) {
+        self.lods
+            .iter()
+            .fold((0, 0), |a, l| (a.0 + l.need.0, a.1 + l.need.1))
     }
 
     /// Pages of every paged LOD.
@@ -209,9 +222,14 @@ impl PagedLayoutBuilder {
 const MISSING_PAGE_NODE: [u32; 3] = [u32::MAX, u32::MAX, u32::MAX];
 
 /// Index of the first node at the deepest depth of a lookup tree (breadth-first order).
-fn leaf_start(l: &ssbvb_voxel::lookup::SparseLookup) -> usize {
+pub(crate) fn leaf_start(l: &ssbvb_voxel::lookup::SparseLookup) -> usize {
+    depth_range(l, l.depth - 1).start
+}
+
+/// The nodes at tree depth `d` (0 = the root) of a lookup tree (breadth-first order).
+fn depth_range(l: &ssbvb_voxel::lookup::SparseLookup, d: u32) -> std::ops::Range<usize> {
     let (mut start, mut count) = (0usize, 1usize);
-    for _ in 1..l.depth {
+    for _ in 0..d {
         let next: usize = l.nodes[start * NODE_WORDS..(start + count) * NODE_WORDS]
             .chunks_exact(NODE_WORDS)
             .map(|n| (n[0].count_ones() + n[1].count_ones()) as usize)
@@ -219,7 +237,32 @@ fn leaf_start(l: &ssbvb_voxel::lookup::SparseLookup) -> usize {
         start += count;
         count = next;
     }
-    start
+    start..start + count
+}
+
+/// Node runs and voxel blocks all pages of a level take (blocks estimated: first fit
+/// leaves a block about a tenth empty).
+pub(crate) fn pool_need(
+    l: &ssbvb_voxel::lookup::SparseLookup,
+    entries: &[PageEntry],
+) -> (u64, u64) {
+    let runs = if l.depth >= 2 {
+        l.nodes[depth_range(l, l.depth - 2).start * NODE_WORDS..]
+            .chunks_exact(NODE_WORDS)
+            .take(entries.len())
+            .map(|n| ((n[0].count_ones() + n[1].count_ones()) as u64).div_ceil(NODE_RUN as u64))
+            .sum()
+    } else {
+        0
+    };
+    let voxels = l.voxel_count();
+    let blocks: u64 = (0..entries.len())
+        .map(|k| {
+            let end = entries.get(k + 1).map_or(voxels, |n| n.first_voxel);
+            (end - entries[k].first_voxel).div_ceil(BLOCK_VOXELS as u64)
+        })
+        .sum();
+    (runs, blocks + blocks / 10)
 }
 
 /// The page cache of a scene on the GPU.
@@ -296,11 +339,11 @@ impl Streaming {
                 },
             )
             .collect();
-        // Two bit sets; at least one word each.
+        // Three bit sets (missing, touched, ahead); at least one word each.
         let feedback_words = (layout.pages as u64).div_ceil(32).max(1);
         let feedback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("page feedback"),
-            size: 8 * feedback_words,
+            size: FEEDBACK_SETS * 4 * feedback_words,
             usage: wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::COPY_SRC
                 | wgpu::BufferUsages::COPY_DST,
@@ -310,7 +353,7 @@ impl Streaming {
             .map(|_| Staging {
                 buffer: ctx.device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("page feedback readback"),
-                    size: 8 * feedback_words,
+                    size: FEEDBACK_SETS * 4 * feedback_words,
                     usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 }),
@@ -367,7 +410,13 @@ impl Streaming {
             .iter_mut()
             .find(|s| s.state.load(Ordering::Acquire) == FREE)
         {
-            encoder.copy_buffer_to_buffer(&self.feedback, 0, &s.buffer, 0, 8 * self.feedback_words);
+            encoder.copy_buffer_to_buffer(
+                &self.feedback,
+                0,
+                &s.buffer,
+                0,
+                FEEDBACK_SETS * 4 * self.feedback_words,
+            );
             s.frame = self.frame;
             s.state.store(RECORDED, Ordering::Release);
         }
@@ -462,21 +511,35 @@ impl Streaming {
             out
         };
         let total = self.pages.len() as u32;
+        if words.len() < 3 * half {
+            return;
+        }
         for p in bits(&words[half..2 * half]) {
             if p < total {
                 self.cache.touch(p, frame);
             }
         }
-        let missing: Vec<u32> = bits(&words[..half])
-            .into_iter()
-            .filter(|&p| p < total && !self.cache.is_failed(p) && !self.cache.is_resident(p))
-            .collect();
+        let wanted = |w: &[u32], cache: &PageCache| -> Vec<u32> {
+            bits(w)
+                .into_iter()
+                .filter(|&p| p < total && !cache.is_failed(p) && !cache.is_resident(p))
+                .collect()
+        };
+        let missing = wanted(&words[..half], &self.cache);
+        let ahead = wanted(&words[2 * half..3 * half], &self.cache);
         self.stats.pages_missing = missing.len() as u64;
         self.stats.over_budget = false;
-        for &p in missing.iter().take(self.max_pages_per_frame) {
-            self.cache.touch(p, frame);
-            match self.load(ctx, buffers, p, frame) {
+        // Needed pages first, as used in `frame`; then pages found looking ahead, as never
+        // used (the first to leave, and they evict only each other), while they fit.
+        let needed = missing.iter().map(|&p| (p, frame));
+        let later = ahead.iter().map(|&p| (p, 0));
+        for (p, used) in needed.chain(later).take(self.max_pages_per_frame) {
+            if self.cache.is_resident(p) {
+                continue;
+            }
+            match self.load(ctx, buffers, p, used, frame) {
                 Ok(true) => {}
+                Ok(false) if used == 0 => break,
                 Ok(false) => {
                     self.stats.over_budget = true;
                     break;
@@ -490,10 +553,13 @@ impl Streaming {
                 }
             }
         }
-        let (slots, blocks) = self.cache.used();
+        let (runs, blocks) = self.cache.used();
+        let (slots, capacity) = self.cache.capacity();
+        self.stats.node_runs = [runs as u64, slots as u64 * (SLOT_NODES / NODE_RUN) as u64];
+        self.stats.voxel_blocks = [blocks as u64, capacity as u64];
         self.stats.pages_resident = self.cache.resident() as u64;
         self.stats.bytes_resident =
-            self.stats.fixed_bytes + slots as u64 * SLOT_BYTES + blocks as u64 * BLOCK_BYTES;
+            self.stats.fixed_bytes + runs as u64 * RUN_BYTES + blocks as u64 * BLOCK_BYTES;
     }
 
     /// Reads, packs and uploads page `p`: `Ok(false)` when it does not fit beside the
@@ -503,6 +569,7 @@ impl Streaming {
         ctx: &GpuContext,
         buffers: &StreamBuffers<'_>,
         p: u32,
+        used: u64,
         frame: u64,
     ) -> Result<bool, String> {
         let (li, k) = self.pages[p as usize];
@@ -522,22 +589,33 @@ impl Streaming {
             }
         };
         let packed = pack_page(&voxels);
-        let Some((res, evicted)) = self
-            .cache
-            .admit(p, packed.blocks.len() as u32, frame, frame)
-        else {
-            return Ok(false);
-        };
+        // Pages used in the last KEEP_FRAMES frames stay: a view needs pages its rays did
+        // not reach this frame (they stopped at a missing page before), and evicting them
+        // would make the view thrash instead of settling at coarser voxels.
+        let (res, evicted) = self.cache.admit(
+            p,
+            packed.leaves.len() as u32,
+            packed.blocks.len() as u32,
+            used,
+            if used == 0 {
+                1
+            } else {
+                frame.saturating_sub(KEEP_FRAMES)
+            },
+        );
         for q in evicted {
             self.write_page_node(ctx, buffers, q, MISSING_PAGE_NODE);
             self.stats.pages_evicted += 1;
         }
+        let Some(res) = res else {
+            return Ok(false);
+        };
         let lod = &self.lods[li as usize];
         let block_start = |b: u32| {
             self.voxel_pool_start as u64 + res.blocks[b as usize] as u64 * BLOCK_VOXELS as u64
         };
         // Leaves into the page's slot.
-        let slot_node = self.node_pool_start as u64 + res.slot as u64 * SLOT_NODES as u64;
+        let slot_node = self.node_pool_start as u64 + res.first_node as u64;
         let leaves: Vec<u32> = packed
             .leaves
             .iter()

@@ -15,4 +15,5 @@ mod ray_march_filter;
 mod scale;
 mod smooth_composite;
 mod splat;
+mod streaming;
 mod triangles;
