@@ -2,6 +2,7 @@
 
 mod adapter_cmd;
 mod bench;
+mod budget;
 mod bundled;
 mod pipeline_cmd;
 mod progress;

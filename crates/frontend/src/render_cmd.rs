@@ -60,6 +60,14 @@ pub struct RenderArgs {
     /// Print the report as one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
+    /// GPU memory budget in MiB for the voxel scene (default: the scene's
+    /// `gpu_budget_mib`, else none): levels above the coarsest are paged in as rays need
+    /// them, and frames are rendered until no page is missing (`--max-frames`).
+    #[arg(long, value_name = "MIB")]
+    pub gpu_budget: Option<u64>,
+    /// Most frames rendered to converge under a GPU budget.
+    #[arg(long, default_value_t = 64)]
+    pub max_frames: usize,
 }
 
 /// Parses `x,y,z`.
@@ -104,8 +112,11 @@ struct Report {
     counters: ssbvb_passes::FrameCounters,
     /// Visible instances per chosen level (JSON keys are the levels).
     lod_histogram: std::collections::BTreeMap<u32, usize>,
-    /// Why the image may be empty (nothing in view, everything beyond the far plane).
+    /// Why the image may be empty (nothing in view, everything beyond the far plane), or
+    /// coarser than asked (a budget too small for the view).
     warnings: Vec<String>,
+    /// Under a GPU budget: how streaming converged and what is resident (`null` without).
+    streaming: Option<crate::budget::StreamingReport>,
     gpu_memory_bytes: Vec<ObjectReport>,
     asset_notes: Vec<String>,
 }
@@ -130,6 +141,10 @@ pub struct LoadedInput {
     pub pipeline: Option<PathBuf>,
     /// One line per asset about the cache.
     pub notes: Vec<String>,
+    /// The scene's GPU budget (MiB), if it sets one.
+    pub gpu_budget_mib: Option<u64>,
+    /// Per object, the cache file its pages stream from under a budget.
+    pub page_sources: Vec<Option<crate::budget::PageSourceRef>>,
 }
 
 /// Loads a scene file (`.ron`) or prepares a model file at `level` (default 8), placed at
@@ -152,6 +167,8 @@ pub fn load_input(
             camera: s.camera,
             pipeline: Some(s.pipeline),
             notes: s.notes,
+            gpu_budget_mib: s.gpu_budget_mib,
+            page_sources: s.page_sources,
         });
     }
     let level = level.unwrap_or(8);
@@ -173,6 +190,8 @@ pub fn load_input(
         },
         pipeline: None,
         notes: vec![format!("{}: {outcome}", input.display())],
+        gpu_budget_mib: None,
+        page_sources: vec![crate::budget::PageSourceRef::of(&outcome, level)],
     })
 }
 
@@ -185,8 +204,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         scene,
         mut camera,
         pipeline: scene_pipeline,
-        notes,
+        mut notes,
+        gpu_budget_mib,
+        page_sources,
     } = load_input(&input, args.level, &progress)?;
+    let budget = args.gpu_budget.or(gpu_budget_mib);
     progress.finish();
     if let Some(p) = args.camera_pos {
         camera.position = p;
@@ -225,7 +247,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if camera.position == camera.look_at {
         bail!("the camera position and --look-at are the same point");
     }
-    let warnings = clipping_warnings(&scene, &camera);
+    let mut warnings = clipping_warnings(&scene, &camera);
     let (w, h) = args.size;
     let start = Instant::now();
     let report = if args.reference {
@@ -269,6 +291,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             counters: Default::default(),
             lod_histogram,
             warnings,
+            streaming: None,
             gpu_memory_bytes: Vec::new(),
             asset_notes: notes,
         }
@@ -280,15 +303,52 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             .unwrap_or_else(|| assets_dir().join("pipelines/ssbvb.ron"));
         let pipeline = crate::adapter_cmd::resolve(&pipeline_path)?;
         let ctx = crate::adapter_cmd::headless_context(&[&pipeline])?;
-        let mut gpu_scene = GpuScene::new(&ctx, scene)?;
+        let mut gpu_scene = match budget {
+            Some(mib) => {
+                // Offline: stream every page a frame asks for before the next one.
+                let options = crate::budget::options(mib, &page_sources, usize::MAX, &mut notes)?;
+                GpuScene::streamed(&ctx, scene, &options)?
+            }
+            None => GpuScene::new(&ctx, scene)?,
+        };
         let mut renderer = Renderer::new(&ctx, &gpu_scene, pipeline, args.size)?;
         let profiling = if ctx.report().is_software {
             Profiling::TimestampsAndWall
         } else {
             Profiling::Timestamps
         };
-        // One warm-up frame (pipeline caches, lazy allocations), then the measured one.
-        renderer.render(&ctx, &mut gpu_scene, &camera, Profiling::Off)?;
+        // Warm-up frames (pipeline caches, lazy allocations; under a budget, until no page
+        // is missing), then the measured one.
+        let (frames, converged) = crate::budget::converge(
+            &ctx,
+            &mut renderer,
+            &mut gpu_scene,
+            &camera,
+            args.max_frames,
+        )?;
+        let streaming = crate::budget::StreamingReport::of(&gpu_scene, frames, converged);
+        if let Some(s) = &streaming {
+            if !s.converged {
+                warnings.push(format!(
+                    "not converged in {frames} frames under a {} MiB GPU budget: {} pages \
+                     still missing{}; those rays show coarser voxels",
+                    s.stats.budget_bytes >> 20,
+                    s.stats.pages_missing,
+                    if s.stats.over_budget {
+                        " (the view needs more pages than the budget holds)"
+                    } else {
+                        " (raise --max-frames)"
+                    }
+                ));
+            }
+            if s.stats.pages_failed > 0 {
+                warnings.push(format!(
+                    "{} pages refused (damaged cache file?); their rays show coarser voxels: {}",
+                    s.stats.pages_failed,
+                    s.page_errors.first().map_or("", String::as_str)
+                ));
+            }
+        }
         let stats = renderer.render(&ctx, &mut gpu_scene, &camera, profiling)?;
         let out = ctx.read_texture(
             &renderer.output().texture,
@@ -316,6 +376,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             counters,
             lod_histogram: gpu_scene.lod_histogram(),
             warnings,
+            streaming,
             gpu_memory_bytes: gpu_scene
                 .memory
                 .iter()

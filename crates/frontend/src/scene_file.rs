@@ -43,6 +43,10 @@ pub struct SceneFile {
     /// Triangle objects.
     #[serde(default)]
     pub triangles: Vec<TriangleDesc>,
+    /// GPU memory budget in MiB: levels above the pinned coarse ones are paged in by
+    /// demand (`--gpu-budget` overrides it).
+    #[serde(default)]
+    pub gpu_budget_mib: Option<u64>,
 }
 
 /// A pinhole camera as written in a scene.
@@ -282,6 +286,14 @@ impl SceneFile {
                 bad_instances - MAX_LISTED
             ));
         }
+        if let Some(b) = self.gpu_budget_mib {
+            if b == 0 || b > crate::budget::MAX_BUDGET_MIB {
+                out.push(format!(
+                    "gpu_budget_mib must be 1..={} MiB, got {b}",
+                    crate::budget::MAX_BUDGET_MIB
+                ));
+            }
+        }
         for (i, t) in self.triangles.iter().enumerate() {
             let TriangleDesc::Plane {
                 center, half_size, ..
@@ -306,6 +318,10 @@ pub struct LoadedScene {
     pub pipeline: PathBuf,
     /// One line per object about its asset cache (hit or rebuilt and why).
     pub notes: Vec<String>,
+    /// The scene's GPU budget (MiB), if it sets one.
+    pub gpu_budget_mib: Option<u64>,
+    /// Per object, the cache file its pages stream from under a budget.
+    pub page_sources: Vec<Option<crate::budget::PageSourceRef>>,
 }
 
 /// Reads a scene file and prepares (or loads from cache) every object's asset.
@@ -343,12 +359,14 @@ fn load_with_cache(
         ..Default::default()
     };
     let mut notes = Vec::new();
+    let mut page_sources = Vec::new();
     for o in &file.objects {
         let model = dir.join(&o.model);
         let (asset, outcome) =
             ssbvb_voxel::cache::load_or_prepare(&model, o.level, cache, progress)
                 .with_context(|| format!("scene {}: object {}", path.display(), o.model))?;
         notes.push(format!("{}: {outcome}", o.model));
+        page_sources.push(crate::budget::PageSourceRef::of(&outcome, o.level));
         let lod = match o.lod {
             None => LodPolicy::Fixed(o.level),
             Some(LodDesc::Fixed(l)) => LodPolicy::Fixed(l),
@@ -388,6 +406,8 @@ fn load_with_cache(
             None => crate::bundled::assets_dir().join(crate::bundled::DEFAULT_PIPELINE),
         },
         notes,
+        gpu_budget_mib: file.gpu_budget_mib,
+        page_sources,
     })
 }
 

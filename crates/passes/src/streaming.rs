@@ -66,6 +66,12 @@ impl StreamingOptions {
             max_pages_per_frame: 1024,
         }
     }
+
+    /// The same with at most `n` pages streamed before a frame.
+    pub fn with_pages_per_frame(mut self, n: usize) -> Self {
+        self.max_pages_per_frame = n;
+        self
+    }
 }
 
 /// What streaming did, for reports (`render --json`'s `streaming`, the viewer, the bench).

@@ -78,7 +78,7 @@ pub(super) struct Matrix {
 pub(super) fn matrix(args: &BenchArgs) -> Matrix {
     let bunny = BenchModel::File(assets_dir().join("models/bunny.obj"));
     let mut m = match args.preset {
-        Preset::Quick | Preset::Scale => Matrix {
+        Preset::Quick | Preset::Scale | Preset::Memory => Matrix {
             models: vec![bunny],
             levels: vec![5, 6],
             sizes: vec![(160, 120)],
@@ -140,7 +140,7 @@ pub(super) fn matrix(args: &BenchArgs) -> Matrix {
 /// Sweep sizes of a preset.
 pub(super) fn sweep_config(preset: Preset) -> SweepConfig {
     match preset {
-        Preset::Quick | Preset::Study | Preset::Scale => SweepConfig {
+        Preset::Quick | Preset::Study | Preset::Scale | Preset::Memory => SweepConfig {
             size: (160, 120),
             level: 6,
             warmup: 1,

@@ -9,6 +9,7 @@
 //! `report` (JSON, CSV, Markdown) and `scale` (`--preset scale`, its own table).
 
 mod matrix;
+mod memory;
 mod plot;
 mod report;
 mod run;
@@ -43,6 +44,11 @@ pub enum Preset {
     /// (`--instances`) with Auto LOD, plus a near, a mid and a far camera on one bunny;
     /// writes scale.csv, scale.json and scale.md.
     Scale,
+    /// Pages by demand under a GPU budget: the bunny at levels 7-13 × budgets
+    /// (`--gpu-budget`, default 32,128,512 MiB) against the unbudgeted upload, and a
+    /// fly-through that measures streaming stalls; writes memory.csv, memory.json and
+    /// memory.md.
+    Memory,
 }
 
 /// Arguments of `ssbvb bench`.
@@ -78,6 +84,11 @@ pub struct BenchArgs {
     /// Instance counts of `--preset scale` (comma-separated; default 1,16,256,4096).
     #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(usize))]
     pub instances: Option<Vec<usize>>,
+    /// GPU memory budgets in MiB (comma-separated): the budgets of `--preset memory`;
+    /// with another preset, every cell is uploaded under the first one (techniques that
+    /// read whole levels are skipped).
+    #[arg(long, value_delimiter = ',', value_name = "MIB")]
+    pub gpu_budget: Option<Vec<u64>>,
 }
 
 /// Runs `ssbvb bench`.
@@ -93,11 +104,26 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         }
         return scale::run(args);
     }
+    if let Some(b) = args
+        .gpu_budget
+        .iter()
+        .flatten()
+        .find(|&&b| b == 0 || b > crate::budget::MAX_BUDGET_MIB)
+    {
+        anyhow::bail!(
+            "--gpu-budget: {b} is not a budget from 1 to {} MiB",
+            crate::budget::MAX_BUDGET_MIB
+        );
+    }
+    if matches!(args.preset, Preset::Memory) {
+        return memory::run(args);
+    }
     let m = matrix::matrix(args);
     let techniques = techniques::select(args)?;
     let ctx = open_context(&techniques)?;
     let software = ctx.report().is_software;
-    let results = run::run_matrix(&ctx, &m, &techniques, !args.json)?;
+    let budget = args.gpu_budget.as_ref().and_then(|b| b.first().copied());
+    let results = run::run_matrix(&ctx, &m, &techniques, budget, !args.json)?;
     let sweeps = sweeps(args, &ctx, &m.camera)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;

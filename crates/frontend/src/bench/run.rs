@@ -79,6 +79,7 @@ pub(super) fn run_matrix(
     ctx: &ssbvb_gpu::GpuContext,
     m: &Matrix,
     techniques: &[&Technique],
+    budget_mib: Option<u64>,
     log: bool,
 ) -> Result<Results> {
     let mut out = Results::default();
@@ -103,6 +104,7 @@ pub(super) fn run_matrix(
                     warmup: m.warmup,
                     frames: m.frames,
                     voxels,
+                    budget_mib,
                 };
                 run_cell(ctx, &cell, techniques, log, &mut out)?;
             }
@@ -135,7 +137,7 @@ fn run_cell(
         let row = match run_one(ctx, t, cell) {
             Ok(row) => row,
             // What the device cannot hold is a result, not a failure of the run.
-            Err(e) if too_large(&e) => {
+            Err(e) if too_large(&e) || needs_whole_levels(&e) => {
                 if log {
                     eprintln!("skipped {what}: {e:#}");
                 }
@@ -165,6 +167,16 @@ fn too_large(e: &anyhow::Error) -> bool {
     })
 }
 
+/// Whether `e` says a technique cannot run on a scene paged under a budget.
+fn needs_whole_levels(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        matches!(
+            c.downcast_ref::<ssbvb_passes::PassError>(),
+            Some(ssbvb_passes::PassError::NeedsWholeLevels { .. })
+        )
+    })
+}
+
 /// One cell of the matrix: a model at a level, seen at one size.
 struct Cell<'a> {
     model: String,
@@ -176,6 +188,8 @@ struct Cell<'a> {
     warmup: usize,
     frames: usize,
     voxels: usize,
+    /// Upload under this GPU budget (MiB).
+    budget_mib: Option<u64>,
 }
 
 /// Measures technique `t` on cell `c`.
@@ -184,6 +198,9 @@ fn run_one(ctx: &ssbvb_gpu::GpuContext, t: &Technique, c: &Cell) -> Result<Row> 
     if let Some(edit) = t.edit {
         pipeline = with_kind_edit(&pipeline, t.name, edit)?;
     }
+    let streaming = c
+        .budget_mib
+        .map(|mib| ssbvb_passes::StreamingOptions::mib(mib).with_pages_per_frame(usize::MAX));
     let setup = Setup {
         ctx,
         asset: c.asset,
@@ -194,6 +211,7 @@ fn run_one(ctx: &ssbvb_gpu::GpuContext, t: &Technique, c: &Cell) -> Result<Row> 
         reference: c.reference,
         warmup: c.warmup,
         frames: c.frames,
+        streaming: streaming.as_ref(),
     };
     // The cube rasterizer's instance buffer comes on top of the scene's buffers (whose
     // lookup it reads for voxel attributes).

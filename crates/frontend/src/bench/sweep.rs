@@ -49,6 +49,8 @@ pub(crate) struct Setup<'a> {
     pub reference: &'a ReferenceImage,
     pub warmup: usize,
     pub frames: usize,
+    /// Upload under a GPU budget (pages from memory), converged before the warm-up.
+    pub streaming: Option<&'a ssbvb_passes::StreamingOptions>,
 }
 
 /// The source text of a bundled pipeline file.
@@ -70,8 +72,12 @@ pub(crate) fn measure(s: &Setup, pipeline: ResolvedPipeline, with_psnr: bool) ->
         }],
         ..Default::default()
     };
-    let mut gpu_scene = GpuScene::new(ctx, scene)?;
+    let mut gpu_scene = match &s.streaming {
+        Some(o) => GpuScene::streamed(ctx, scene, o)?,
+        None => GpuScene::new(ctx, scene)?,
+    };
     let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, s.size)?;
+    crate::budget::converge(ctx, &mut renderer, &mut gpu_scene, s.camera, 64)?;
     for _ in 0..s.warmup {
         renderer.render(ctx, &mut gpu_scene, s.camera, Profiling::Off)?;
     }
@@ -357,6 +363,7 @@ pub(crate) fn run_sweeps(
         reference: &fixed_ref,
         warmup: cfg.warmup,
         frames: cfg.frames,
+        streaming: None,
     };
     for (knob, value, is_default, pipeline) in points {
         let m =

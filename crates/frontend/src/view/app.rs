@@ -51,6 +51,8 @@ pub struct Loaded {
     pub camera: Camera,
     /// The pipeline file, resolved once.
     pub watcher: PipelineWatcher,
+    /// Under a GPU budget: how the scene streams (the budget changes live).
+    pub streaming: Option<ssbvb_passes::StreamingOptions>,
 }
 
 /// The application: waiting for `resumed`, then running, or failed.
@@ -148,6 +150,8 @@ struct Viewer {
     scene: GpuScene,
     renderer: Renderer,
     watcher: PipelineWatcher,
+    /// Under a GPU budget: how the scene streams.
+    streaming: Option<ssbvb_passes::StreamingOptions>,
     /// Knob edits by pass name, applied over the file's pipeline.
     knob_edits: BTreeMap<String, PassKind>,
     rig: CameraRig,
@@ -190,7 +194,11 @@ impl Viewer {
         )?;
         let ctx = &gpu.ctx;
         let blit = Blit::new(ctx, gpu.config.format)?;
-        let scene = GpuScene::new(ctx, loaded.scene).context("uploading the scene")?;
+        let scene = match &loaded.streaming {
+            Some(o) => GpuScene::streamed(ctx, loaded.scene, o),
+            None => GpuScene::new(ctx, loaded.scene),
+        }
+        .context("uploading the scene")?;
         let renderer = Renderer::new(ctx, &scene, loaded.watcher.current().clone(), gpu.size())
             .with_context(|| format!("building {}", loaded.watcher.path().display()))?;
         let egui_ctx = egui::Context::default();
@@ -214,6 +222,7 @@ impl Viewer {
             scene,
             renderer,
             watcher: loaded.watcher,
+            streaming: loaded.streaming,
             knob_edits: BTreeMap::new(),
             rig: CameraRig::new(loaded.camera),
             initial_camera: loaded.camera,
@@ -414,6 +423,29 @@ impl Viewer {
                 self.rig.fly_speed = speed;
             }
             Action::Screenshot => self.screenshot_next = Some(capture::default_path()),
+            Action::Budget(mib) => self.set_budget(mib),
+        }
+    }
+
+    /// Re-uploads the scene under a budget of `mib` MiB (its pages stream in again over
+    /// the next frames); a budget too small is refused with the minimum, and the old
+    /// scene keeps drawing.
+    fn set_budget(&mut self, mib: u64) {
+        let Some(options) = &self.streaming else {
+            return;
+        };
+        let mut options = options.clone();
+        options.budget_bytes = mib << 20;
+        let scene = self.scene.scene.clone();
+        match GpuScene::streamed(&self.gpu.ctx, scene, &options) {
+            Ok(s) => {
+                self.scene = s;
+                self.streaming = Some(options);
+                if self.rebuild() {
+                    self.status = Some(format!("GPU budget {mib} MiB"));
+                }
+            }
+            Err(e) => self.error = Some(e.to_string()),
         }
     }
 
@@ -501,6 +533,7 @@ impl Viewer {
             error: self.error.as_deref(),
             status: self.status.as_deref(),
             size: self.gpu.size(),
+            streaming: self.scene.streaming_stats(),
         };
         let overlay_state = &mut self.overlay;
         let mut actions = Vec::new();

@@ -62,7 +62,15 @@ pub struct ViewArgs {
     /// --frames: the last of them; otherwise the frame on screen when the window closes).
     #[arg(long)]
     pub screenshot: Option<PathBuf>,
+    /// GPU memory budget in MiB for the voxel scene (default: the scene's
+    /// `gpu_budget_mib`, else none): pages stream in as rays need them; the overlay shows
+    /// residency and changes the budget live.
+    #[arg(long, value_name = "MIB")]
+    pub gpu_budget: Option<u64>,
 }
+
+/// Pages the viewer streams in before one frame at most.
+const VIEW_PAGES_PER_FRAME: usize = 512;
 
 /// Runs `ssbvb view`.
 pub fn run(args: &ViewArgs) -> Result<()> {
@@ -82,9 +90,22 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         scene,
         camera,
         pipeline,
-        notes,
+        mut notes,
+        gpu_budget_mib,
+        page_sources,
     } = load_input(&input, args.level, &progress)?;
     progress.finish();
+    // Pages streamed per frame at most: a camera cut fills the view over a few frames
+    // rather than stalling one.
+    let streaming = match args.gpu_budget.or(gpu_budget_mib) {
+        Some(mib) => Some(crate::budget::options(
+            mib,
+            &page_sources,
+            VIEW_PAGES_PER_FRAME,
+            &mut notes,
+        )?),
+        None => None,
+    };
     for n in &notes {
         eprintln!("asset: {n}");
     }
@@ -111,6 +132,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
             scene,
             camera,
             watcher,
+            streaming,
         },
     );
     event_loop

@@ -1,6 +1,6 @@
 //! The egui overlay: what the frame costs (adapter, frame time, per-pass timings, SSBVB
-//! fill count, visible instances) and the controls (technique, pass knobs, LOD, camera,
-//! screenshot). It only draws and reports [`Action`]s; the app applies them, so nothing
+//! fill count, visible instances, residency under a GPU budget) and the controls
+//! (technique, pass knobs, LOD, GPU budget, camera, screenshot). It only draws and reports [`Action`]s; the app applies them, so nothing
 //! here touches the GPU.
 
 use std::collections::HashMap;
@@ -46,6 +46,8 @@ pub enum Action {
     ResetCamera,
     /// Write a screenshot.
     Screenshot,
+    /// Re-upload the scene under this GPU budget (MiB).
+    Budget(u64),
 }
 
 /// One voxel object's LOD as the overlay shows it.
@@ -101,6 +103,8 @@ pub struct OverlayView<'a> {
     pub status: Option<&'a str>,
     /// Window size in pixels.
     pub size: (u32, u32),
+    /// Under a GPU budget: what the page cache holds and did.
+    pub streaming: Option<&'a ssbvb_passes::StreamingStats>,
 }
 
 /// Overlay state kept between frames: knob values being edited.
@@ -111,6 +115,8 @@ pub struct OverlayState {
     drafts: HashMap<String, Map<String, Value>>,
     /// Why the last knob edit was refused.
     knob_error: Option<String>,
+    /// The GPU budget being edited (MiB), applied with its button.
+    budget_draft: Option<u64>,
 }
 
 impl OverlayState {
@@ -139,6 +145,10 @@ pub fn draw(ctx: &egui::Context, view: &OverlayView<'_>, state: &mut OverlayStat
             ui.separator();
             lod(ui, view, &mut actions);
             ui.separator();
+            if let Some(s) = view.streaming {
+                budget(ui, s, state, &mut actions);
+                ui.separator();
+            }
             camera(ui, view, &mut actions);
             ui.separator();
             ui.horizontal(|ui| {
@@ -379,6 +389,55 @@ fn field_editor(
             false
         }
     }
+}
+
+/// Residency under a GPU budget, and the budget itself (changed live).
+fn budget(
+    ui: &mut egui::Ui,
+    s: &ssbvb_passes::StreamingStats,
+    state: &mut OverlayState,
+    actions: &mut Vec<Action>,
+) {
+    let mib = |b: u64| b as f64 / (1 << 20) as f64;
+    ui.label(RichText::new("GPU budget").strong());
+    ui.label(format!(
+        "resident {:.1} of {:.0} MiB ({:.1} MiB fixed: lookups down to pages, pinned levels, proxies)",
+        mib(s.bytes_resident),
+        mib(s.budget_bytes),
+        mib(s.fixed_bytes)
+    ));
+    ui.label(format!(
+        "pages: {} of {} resident, {} streamed last frame, {} missing, {} evicted in all",
+        s.pages_resident,
+        s.pages_total,
+        s.pages_streamed_last_frame,
+        s.pages_missing,
+        s.pages_evicted
+    ));
+    if s.over_budget {
+        ui.colored_label(
+            Color32::YELLOW,
+            "the view needs more pages than the budget holds: some show coarser voxels",
+        );
+    }
+    if s.pages_failed > 0 {
+        ui.colored_label(
+            Color32::LIGHT_RED,
+            format!("{} pages refused (damaged cache)", s.pages_failed),
+        );
+    }
+    let current = s.budget_bytes >> 20;
+    let draft = state.budget_draft.get_or_insert(current);
+    ui.horizontal(|ui| {
+        ui.add(
+            egui::DragValue::new(draft)
+                .range(1..=crate::budget::MAX_BUDGET_MIB)
+                .suffix(" MiB"),
+        );
+        if ui.button("Apply budget").clicked() && *draft != current {
+            actions.push(Action::Budget(*draft));
+        }
+    });
 }
 
 fn lod(ui: &mut egui::Ui, view: &OverlayView<'_>, actions: &mut Vec<Action>) {

@@ -1,0 +1,131 @@
+//! `--gpu-budget` and `gpu_budget_mib`: a scene uploaded under a GPU memory budget, its
+//! pages streamed from the assets' cache files (`ssbvb_passes::streaming`), and what the
+//! commands report about it.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use anyhow::Result;
+use serde::Serialize;
+use ssbvb_gpu::GpuContext;
+use ssbvb_passes::{GpuScene, Profiling, Renderer, StreamingOptions, StreamingStats};
+use ssbvb_voxel::cache::{PageFile, PrepareOutcome};
+use ssbvb_voxel::camera::Camera;
+
+/// Largest budget accepted (MiB): 1 TiB.
+pub const MAX_BUDGET_MIB: u64 = 1 << 20;
+
+/// Where one object's pages can be read: its asset's cache file.
+#[derive(Debug, Clone)]
+pub struct PageSourceRef {
+    path: PathBuf,
+    key: u128,
+    level: u32,
+}
+
+impl PageSourceRef {
+    /// The cache file an asset was read from or written to (`None` when it could not be
+    /// written: its pages then come from the asset in memory).
+    pub fn of(outcome: &PrepareOutcome, level: u32) -> Option<Self> {
+        outcome.cache_write_error.is_none().then(|| Self {
+            path: outcome.cache_path.clone(),
+            key: outcome.cache_key,
+            level,
+        })
+    }
+}
+
+/// Streaming options for a budget of `mib` MiB with pages from the objects' cache files
+/// (an object whose file cannot be opened streams from memory, and `notes` says why).
+pub fn options(
+    mib: u64,
+    sources: &[Option<PageSourceRef>],
+    max_pages_per_frame: usize,
+    notes: &mut Vec<String>,
+) -> Result<StreamingOptions> {
+    if mib == 0 || mib > MAX_BUDGET_MIB {
+        anyhow::bail!("--gpu-budget must be 1..={MAX_BUDGET_MIB} MiB, got {mib}");
+    }
+    let page_files = sources
+        .iter()
+        .map(|s| {
+            let s = s.as_ref()?;
+            match PageFile::open(&s.path, s.key, s.level) {
+                Ok(f) => Some(Arc::new(f)),
+                Err(e) => {
+                    notes.push(format!("pages streamed from memory: {e}"));
+                    None
+                }
+            }
+        })
+        .collect();
+    Ok(StreamingOptions {
+        budget_bytes: mib << 20,
+        page_files,
+        max_pages_per_frame,
+    })
+}
+
+/// `render --json`'s `streaming`.
+#[derive(Debug, Clone, Serialize)]
+pub struct StreamingReport {
+    /// Frames rendered until one needed no missing page (the image written is the next,
+    /// identical, measured frame); when `converged` is false, the frame limit.
+    pub frames_to_converge: usize,
+    /// Whether a frame needed no missing page within the frame limit.
+    pub converged: bool,
+    /// Pages resident at the end.
+    pub pages_resident: u64,
+    /// Pages streamed in, in all.
+    pub pages_streamed: u64,
+    /// GPU bytes of the voxel scene at the end (the fixed part plus the resident pages).
+    pub bytes_resident: u64,
+    /// Everything else the page cache counted.
+    #[serde(flatten)]
+    pub stats: StreamingStats,
+    /// Pages refused (failed to read or check), with why; their rays kept a coarser level.
+    pub page_errors: Vec<String>,
+}
+
+impl StreamingReport {
+    /// The report of a streamed scene after `frames` frames.
+    pub fn of(scene: &GpuScene, frames: usize, converged: bool) -> Option<Self> {
+        let stats = scene.streaming_stats()?.clone();
+        Some(Self {
+            frames_to_converge: frames,
+            converged,
+            pages_resident: stats.pages_resident,
+            pages_streamed: stats.pages_streamed,
+            bytes_resident: stats.bytes_resident,
+            stats,
+            page_errors: scene.page_errors(),
+        })
+    }
+}
+
+/// Renders frames of `camera` until one needs no missing page, at most `max_frames`,
+/// streaming between them (waiting for each frame's feedback: offline rendering). Returns
+/// how many frames it took and whether it converged. Without a budget: one frame.
+pub fn converge(
+    ctx: &GpuContext,
+    renderer: &mut Renderer,
+    scene: &mut GpuScene,
+    camera: &Camera,
+    max_frames: usize,
+) -> Result<(usize, bool)> {
+    let mut frames = 0;
+    loop {
+        renderer.render(ctx, scene, camera, Profiling::Off)?;
+        frames += 1;
+        scene.sync_streaming(ctx)?;
+        let Some(st) = scene.streaming_stats() else {
+            return Ok((frames, true));
+        };
+        if st.pages_missing == 0 {
+            return Ok((frames, true));
+        }
+        if frames >= max_frames.max(1) {
+            return Ok((frames, false));
+        }
+    }
+}
