@@ -451,6 +451,26 @@ mod tests {
     }
 
     #[test]
+    fn a_gpu_budget_is_read_with_each_objects_page_source() {
+        let s = load_text("Scene(objects: [(model: \"tri.obj\", level: 3)])").unwrap();
+        assert_eq!(s.gpu_budget_mib, None);
+        let s = load_text("Scene(gpu_budget_mib: 256, objects: [(model: \"tri.obj\", level: 3)])")
+            .unwrap();
+        assert_eq!(s.gpu_budget_mib, Some(256));
+        // The asset was written to the cache: its pages can stream from there.
+        assert_eq!(s.page_sources.len(), 1);
+        assert!(s.page_sources[0].is_some());
+        for bad in ["0", "2000000"] {
+            let e = err(&format!(
+                "Scene(gpu_budget_mib: {bad}, objects: [(model: \"tri.obj\", level: 3)])"
+            ));
+            assert!(e.contains("gpu_budget_mib must be 1..="), "{e}");
+        }
+        let e = err("Scene(gpu_budget_mib: -3, objects: [])");
+        assert!(e.contains("scene.ron:1:"), "{e}");
+    }
+
+    #[test]
     fn syntax_errors_and_unknown_fields_name_file_line_and_column() {
         let e = err("Scene(\n  objects: [(model: \"tri.obj\", level: 3,)],\n  bogus: 1,\n)");
         assert!(e.contains("scene.ron:3:"), "{e}");

@@ -600,3 +600,74 @@ fn levels_above_13_are_refused_with_the_limit_named() {
         "{text}"
     );
 }
+
+/// `render --gpu-budget`: frames until no page is missing, the `streaming` report of the
+/// CLI contract, and the same image as without a budget; bad budgets are clear errors.
+#[test]
+fn render_under_a_gpu_budget_converges_to_the_unbudgeted_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/models/bunny.obj");
+    let render = |extra: &[&str], png: &str| {
+        let out = ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+            .arg("render")
+            .arg(&model)
+            .args([
+                "--level",
+                "7",
+                "--size",
+                "96x72",
+                "--camera-pos",
+                "0.5,0.3,1.2",
+                "--json",
+                "-o",
+            ])
+            .arg(dir.path().join(png))
+            .args(extra)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+        let json = serde_json::from_slice::<serde_json::Value>(&out.stdout).ok();
+        (out.status.success(), json, stderr)
+    };
+    let (ok, full, err) = render(&[], "full.png");
+    assert!(ok, "{err}");
+    let full = full.unwrap();
+    assert!(full["streaming"].is_null(), "{full}");
+    let (ok, budget, err) = render(&["--gpu-budget", "1"], "budget.png");
+    assert!(ok, "{err}");
+    let budget = budget.unwrap();
+    let s = &budget["streaming"];
+    let frames = s["frames_to_converge"].as_u64().unwrap();
+    assert!((2..=64).contains(&frames), "{s}");
+    assert_eq!(s["converged"], true, "{s}");
+    let resident = s["pages_resident"].as_u64().unwrap();
+    let streamed = s["pages_streamed"].as_u64().unwrap();
+    assert!(resident > 10 && streamed >= resident, "{s}");
+    assert!(resident < s["pages_total"].as_u64().unwrap(), "{s}");
+    let bytes = s["bytes_resident"].as_u64().unwrap();
+    assert!(
+        bytes > s["fixed_bytes"].as_u64().unwrap() && bytes <= 1 << 20,
+        "{s}"
+    );
+    assert_eq!(budget["voxel_pixels"], full["voxel_pixels"]);
+    assert!(full["voxel_pixels"].as_u64().unwrap() > 1000, "{full}");
+    let png = |n: &str| std::fs::read(dir.path().join(n)).unwrap();
+    assert!(png("full.png") == png("budget.png"), "the images differ");
+
+    let (ok, _, err) = render(&["--gpu-budget", "0"], "zero.png");
+    assert!(!ok && err.contains("--gpu-budget must be"), "{err}");
+    let (ok, _, err) = render(
+        &[
+            "--gpu-budget",
+            "1",
+            "--pipeline",
+            "assets/pipelines/octree_ray_cast.ron",
+        ],
+        "octree.png",
+    );
+    assert!(
+        !ok && err.contains("cannot run under a GPU budget"),
+        "{err}"
+    );
+}
