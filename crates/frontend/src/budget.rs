@@ -129,3 +129,31 @@ pub fn converge(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn budgets_out_of_range_are_refused_and_unopenable_files_stream_from_memory() {
+        let mut notes = Vec::new();
+        for bad in [0, MAX_BUDGET_MIB + 1] {
+            let e = options(bad, &[], 8, &mut notes).unwrap_err().to_string();
+            assert!(e.contains("--gpu-budget must be 1..="), "{e}");
+        }
+        let missing = Some(PageSourceRef {
+            path: PathBuf::from("/nonexistent/ssbvb/x.ssbvbast"),
+            key: 1,
+            level: 5,
+        });
+        let o = options(64, &[missing, None], 8, &mut notes).unwrap();
+        assert_eq!(o.budget_bytes, 64 << 20);
+        assert_eq!(o.max_pages_per_frame, 8);
+        assert!(o.page_files.iter().all(Option::is_none));
+        assert_eq!(notes.len(), 1);
+        assert!(
+            notes[0].contains("/nonexistent/ssbvb/x.ssbvbast"),
+            "{notes:?}"
+        );
+    }
+}

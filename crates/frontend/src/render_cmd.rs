@@ -341,6 +341,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                     }
                 ));
             }
+            if let Some(cap) = s.stats.level_cap {
+                warnings.push(format!(
+                    "the view's pages do not fit a {} MiB GPU budget at the levels asked for: \
+                     drawn at level {cap} at most",
+                    s.stats.budget_bytes >> 20
+                ));
+            }
             if s.stats.pages_failed > 0 {
                 warnings.push(format!(
                     "{} pages refused (damaged cache file?); their rays show coarser voxels: {}",

@@ -154,3 +154,49 @@ fn view_under_xvfb_shows_the_scene_and_writes_a_screenshot() {
         "only {differing} pixels differ from the background"
     );
 }
+
+/// Under a GPU budget the viewer streams pages without waiting and converges to what
+/// `render --gpu-budget` writes (which itself equals the unbudgeted render, cli.rs).
+#[test]
+fn view_under_a_gpu_budget_streams_to_the_rendered_image() {
+    let xvfb = xvfb_run();
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("view.png");
+    let mut c = Command::new(xvfb);
+    ssbvb_env(&mut c);
+    let out = c
+        .args(["-a", "-s", "-screen 0 1280x800x24"])
+        .arg(env!("CARGO_BIN_EXE_ssbvb"))
+        .args([
+            "view",
+            "--size",
+            "320x240",
+            "--frames",
+            "30",
+            "--gpu-budget",
+            "2",
+        ])
+        .arg("--screenshot")
+        .arg(&shot)
+        .output()
+        .unwrap();
+    let log =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "ssbvb view failed under Xvfb:\n{log}");
+    let img = read_png(&shot);
+    let reference = render_default_scene(&dir.path().join("render.png"), &["--gpu-budget", "2"]);
+    let (mut scene, mut same) = (0usize, 0usize);
+    for (x, y, r) in reference.enumerate_pixels() {
+        if y < 60 || r[3] == 0 {
+            continue;
+        }
+        scene += 1;
+        let v = img.get_pixel(x, y);
+        same += (0..3).all(|c| (i32::from(v[c]) - i32::from(r[c])).abs() <= 3) as usize;
+    }
+    assert!(scene > 5000, "the render covers only {scene} pixels");
+    assert!(
+        same as f64 >= 0.97 * scene as f64,
+        "only {same} of {scene} scene pixels of the window match `ssbvb render --gpu-budget`"
+    );
+}

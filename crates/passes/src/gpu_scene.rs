@@ -845,15 +845,28 @@ impl GpuScene {
         })
     }
 
-    /// Culls instances against the view frustum, chooses each one's LOD and writes the frame
-    /// constants and the visible instances for `camera` at `screen`.
+    /// Culls instances against the view frustum, chooses each one's LOD (under a budget at
+    /// most the streaming level cap) and writes the frame constants and the visible
+    /// instances for `camera` at `screen`.
     pub fn update(&mut self, ctx: &GpuContext, camera: &Camera, screen: (u32, u32)) {
         self.camera = *camera;
         self.screen = screen;
         let eye = camera.position;
         let frame = frame_uniform(camera, screen, &self.scene.light);
-        let (visible, uniforms) =
-            visible_instances(&self.scene, &self.lod_base, &self.proxies, camera, screen);
+        // Under a budget too small for the view's pages: no instance finer than this.
+        let cap = self
+            .streaming
+            .as_ref()
+            .and_then(Streaming::level_cap)
+            .unwrap_or(u32::MAX);
+        let (visible, uniforms) = visible_instances(
+            &self.scene,
+            &self.lod_base,
+            &self.proxies,
+            camera,
+            screen,
+            cap,
+        );
         let mut bvh = instance_bvh(&uniforms, &self.lod_bounds);
         if bvh.is_empty() && !uniforms.is_empty() {
             // Visible instances without voxels: a root that no ray enters (an empty box), so

@@ -17,7 +17,8 @@
 //!    rays keep the coarser level.
 //!
 //! The coarsest levels (≤ [`PINNED_LEVEL`]) are always resident, so a missing page always
-//! has a resident coarser cover.
+//! has a resident coarser cover. A view whose pages do not fit the budget lowers the
+//! finest level instances may use ([`StreamingStats::level_cap`]) until they do.
 
 use std::sync::atomic::{AtomicU8, Ordering};
 use std::sync::{Arc, Mutex};
@@ -105,6 +106,11 @@ pub struct StreamingStats {
     pub node_runs: [u64; 2],
     /// Voxel pool: blocks of 64 voxels in use, and its capacity.
     pub voxel_blocks: [u64; 2],
+    /// The finest level instances may use now (`None`: their own choice). Lowered when a
+    /// view's pages do not fit the budget for several frames running, so the view shows
+    /// the next coarser level everywhere rather than far coarser fallbacks where pages did
+    /// not fit; raised again when the pools stay mostly empty.
+    pub level_cap: Option<u32>,
 }
 
 /// Where one object's pages come from.
@@ -139,6 +145,8 @@ const RECORDED: u8 = 1;
 const MAPPING: u8 = 2;
 const MAPPED: u8 = 3;
 const FAILED: u8 = 4;
+/// Converged feedbacks with mostly empty pools before the level cap rises by one.
+const RAISE_AFTER: u64 = 30;
 /// Frames whose pages are never evicted for another page (see `load`).
 const KEEP_FRAMES: u64 = 2;
 /// Bit sets of the feedback: missing, touched, ahead (`sparse_march.inc.wgsl`).
@@ -288,6 +296,11 @@ pub struct Streaming {
     max_pages_per_frame: usize,
     stats: StreamingStats,
     errors: Mutex<Vec<String>>,
+    /// Feedbacks in a row over budget, and converged with the pools mostly empty.
+    over_streak: u64,
+    roomy_streak: u64,
+    /// The finest paged level of the scene.
+    finest: u32,
 }
 
 /// Buffers the streamer writes into (the scene's streams).
@@ -331,6 +344,7 @@ impl Streaming {
         blocks: u32,
         fixed_bytes: u64,
     ) -> Self {
+        let finest = layout.lods.iter().map(|l| l.level).max().unwrap_or(0);
         let mut pages = Vec::with_capacity(layout.pages as usize);
         for (i, l) in layout.lods.iter().enumerate() {
             pages.extend((0..l.entries.len() as u32).map(|k| (i as u32, k)));
@@ -386,9 +400,17 @@ impl Streaming {
             ring,
             frame: 0,
             max_pages_per_frame: options.max_pages_per_frame.max(1),
+            finest,
             stats,
             errors: Mutex::new(Vec::new()),
+            over_streak: 0,
+            roomy_streak: 0,
         }
+    }
+
+    /// The finest level instances may use now (see [`StreamingStats::level_cap`]).
+    pub fn level_cap(&self) -> Option<u32> {
+        self.stats.level_cap
     }
 
     /// What streaming did so far.
@@ -559,6 +581,7 @@ impl Streaming {
                 }
             }
         }
+        self.adjust_level_cap(&missing);
         let (runs, blocks) = self.cache.used();
         let (slots, capacity) = self.cache.capacity();
         self.stats.node_runs = [runs as u64, slots as u64 * (SLOT_NODES / NODE_RUN) as u64];
@@ -566,6 +589,44 @@ impl Streaming {
         self.stats.pages_resident = self.cache.resident() as u64;
         self.stats.bytes_resident =
             self.stats.fixed_bytes + runs as u64 * RUN_BYTES + blocks as u64 * BLOCK_BYTES;
+    }
+
+    /// Lowers the level cap below the finest missing level after `KEEP_FRAMES + 1`
+    /// feedbacks in a row over budget (by then the pages of an earlier view have become
+    /// evictable, so the view itself does not fit); raises it one level after
+    /// `RAISE_AFTER` converged feedbacks with less than a quarter of the pools in use.
+    fn adjust_level_cap(&mut self, missing: &[u32]) {
+        let level_of = |p: u32| self.lods[self.pages[p as usize].0 as usize].level;
+        if self.stats.over_budget {
+            self.over_streak += 1;
+            self.roomy_streak = 0;
+            if self.over_streak > KEEP_FRAMES {
+                self.over_streak = 0;
+                if let Some(finest) = missing.iter().map(|&p| level_of(p)).max() {
+                    let cap = (finest - 1).max(PINNED_LEVEL);
+                    self.stats.level_cap = Some(self.stats.level_cap.map_or(cap, |c| c.min(cap)));
+                }
+            }
+            return;
+        }
+        self.over_streak = 0;
+        let (runs, blocks) = self.cache.used();
+        let (slots, capacity) = self.cache.capacity();
+        let used = runs as u64 * RUN_BYTES + blocks as u64 * BLOCK_BYTES;
+        let pool = slots as u64 * SLOT_BYTES + capacity as u64 * BLOCK_BYTES;
+        if missing.is_empty() && self.stats.level_cap.is_some() && used * 4 < pool {
+            self.roomy_streak += 1;
+            if self.roomy_streak >= RAISE_AFTER {
+                self.roomy_streak = 0;
+                self.stats.level_cap = self
+                    .stats
+                    .level_cap
+                    .map(|c| c + 1)
+                    .filter(|&c| c < self.finest);
+            }
+        } else {
+            self.roomy_streak = 0;
+        }
     }
 
     /// Reads, packs and uploads page `p`: `Ok(false)` when it does not fit beside the

@@ -67,6 +67,7 @@ pub(crate) fn visible_instances(
     proxies: &[Vec<ProxyRange>],
     camera: &Camera,
     screen: (u32, u32),
+    level_cap: u32,
 ) -> (Vec<VisibleInstance>, Vec<InstanceUniform>) {
     let (w, h) = (screen.0.max(1) as f64, screen.1.max(1) as f64);
     let aspect = w / h;
@@ -81,7 +82,7 @@ pub(crate) fn visible_instances(
     let mut uniforms = Vec::new();
     let mut scene_index = 0u32;
     for (oi, obj) in scene.objects.iter().enumerate() {
-        let max_level = obj.asset.lods.len() as u32 - 1;
+        let max_level = (obj.asset.lods.len() as u32 - 1).min(level_cap);
         for xf in &obj.instances {
             let si = scene_index;
             scene_index += 1;

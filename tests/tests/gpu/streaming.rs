@@ -187,6 +187,32 @@ fn turning_round_evicts_the_least_recently_used_pages_and_converges_each_time() 
 }
 
 #[test]
+fn a_view_that_does_not_fit_settles_at_a_coarser_level_exactly() {
+    let c = ssbvb_tests::ctx();
+    // A fifth of the object: the front view's level-8 pages (~45 % of them) do not fit;
+    // level 7 needs a quarter of that.
+    let (_, total) = unbudgeted(&front());
+    let mut options = StreamingOptions::mib(0);
+    options.budget_bytes = total / 5;
+    let (mut r, mut s) = streamed(&options);
+    let (got, frames) = converge(&mut r, &mut s, &front(), 40);
+    let st = s.streaming_stats().unwrap().clone();
+    println!("converged in {frames} frames: {st:?}");
+    let cap = st.level_cap.expect("the level-8 view does not fit");
+    assert!((LEVEL - 2..LEVEL).contains(&cap), "{st:?}");
+    assert!(st.bytes_resident <= options.budget_bytes);
+    // The oracle: the unbudgeted render of the same asset at that level, pixel for pixel.
+    let scene = ssbvb_tests::single_object_scene(asset(), cap);
+    let mut u = GpuScene::new(c, scene).unwrap();
+    let resolved = ssbvb_graph::resolve_str(PIPELINE, "ssbvb").unwrap();
+    let mut ur = Renderer::new(c, &u, resolved, SIZE).unwrap();
+    let want = frame(c, &mut ur, &mut u, &front());
+    assert!(count(&want.covered) > 1500);
+    assert_eq!(got.covered, want.covered);
+    assert_eq!(got.color, want.color);
+}
+
+#[test]
 fn a_budget_below_the_fixed_part_is_an_error_naming_the_minimum() {
     let c = ssbvb_tests::ctx();
     let scene = ssbvb_tests::single_object_scene(asset(), LEVEL);

@@ -53,6 +53,8 @@ struct MemoryRow {
     pages_streamed_per_frame: Option<f64>,
     pages_evicted: Option<u64>,
     over_budget: Option<bool>,
+    /// The finest level streaming let the bunny use (`None`: its own, `level`).
+    level_cap: Option<u32>,
     frame_ms_median: f64,
     /// Against the unbudgeted frame of the same level in this run.
     frame_ms_ratio: Option<f64>,
@@ -253,6 +255,7 @@ pub(super) fn run(args: &BenchArgs) -> Result<()> {
                 pages_streamed_per_frame: st.map(|s| s.pages_streamed as f64 / m.frames as f64),
                 pages_evicted: st.map(|s| s.pages_evicted),
                 over_budget: st.map(|s| s.over_budget),
+                level_cap: st.and_then(|s| s.level_cap),
                 frame_ms_median: ms,
                 frame_ms_ratio: base_ms.filter(|_| budget.is_some()).map(|b| ms / b),
                 coverage_iou: m.iou,
@@ -365,12 +368,12 @@ fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
 
 fn markdown(r: &MemoryReport) -> String {
     let mut s = format!(
-        "Adapter: {}. Bunny, {}x{}, camera {:?}.\n\n| level | budget MiB | full MiB | fixed MiB | resident MiB | frames to converge | pages streamed | per frame | evicted | frame ms | × unbudgeted | IoU |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "Adapter: {}. Bunny, {}x{}, camera {:?}.\n\n| level | budget MiB | full MiB | fixed MiB | resident MiB | frames to converge | pages streamed | per frame | evicted | drawn at | frame ms | × unbudgeted | IoU |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
         r.adapter, r.width, r.height, r.camera.position
     );
     for w in &r.rows {
         s.push_str(&format!(
-            "| {} | {} | {:.1} | {} | {:.1} | {}{} | {} | {} | {} | {:.1} | {} | {:.4} |\n",
+            "| {} | {} | {:.1} | {} | {:.1} | {}{} | {} | {} | {} | {} | {:.1} | {} | {:.4} |\n",
             w.level,
             opt(w.budget_mib),
             w.full_mib,
@@ -381,6 +384,7 @@ fn markdown(r: &MemoryReport) -> String {
             opt(w.pages_streamed),
             opt(w.pages_streamed_per_frame.map(|v| format!("{v:.0}"))),
             opt(w.pages_evicted),
+            w.level_cap.unwrap_or(w.level),
             w.frame_ms_median,
             opt(w.frame_ms_ratio.map(|v| format!("{v:.2}"))),
             w.coverage_iou
@@ -403,11 +407,11 @@ fn markdown(r: &MemoryReport) -> String {
 
 fn csv(r: &MemoryReport) -> String {
     let mut s = String::from(
-        "level,budget_mib,full_mib,fixed_mib,resident_mib,frames_to_converge,converged,pages_total,pages_resident,pages_streamed,pages_streamed_per_frame,pages_evicted,over_budget,frame_ms_median,frame_ms_ratio,coverage_iou\n",
+        "level,budget_mib,full_mib,fixed_mib,resident_mib,frames_to_converge,converged,pages_total,pages_resident,pages_streamed,pages_streamed_per_frame,pages_evicted,over_budget,level_cap,frame_ms_median,frame_ms_ratio,coverage_iou\n",
     );
     for w in &r.rows {
         s.push_str(&format!(
-            "{},{},{:.3},{},{:.3},{},{},{},{},{},{},{},{},{:.3},{},{:.6}\n",
+            "{},{},{:.3},{},{:.3},{},{},{},{},{},{},{},{},{},{:.3},{},{:.6}\n",
             w.level,
             opt(w.budget_mib),
             w.full_mib,
@@ -421,6 +425,7 @@ fn csv(r: &MemoryReport) -> String {
             opt(w.pages_streamed_per_frame.map(|v| format!("{v:.2}"))),
             opt(w.pages_evicted),
             opt(w.over_budget),
+            opt(w.level_cap),
             w.frame_ms_median,
             opt(w.frame_ms_ratio.map(|v| format!("{v:.3}"))),
             w.coverage_iou
