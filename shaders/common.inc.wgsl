@@ -231,25 +231,31 @@ fn node_child(n: LookupNode, b: u32) -> u32 {
     return n.base + countOneBits(below_lo) + countOneBits(below_hi);
 }
 
-// Voxel id + 1 at a cell of a LOD (0 when empty, or in a page that is not resident); the
-// cell must be inside the grid.
-fn lookup_cell(lod: LodInfo, cell: vec3<u32>) -> u32 {
+// Voxel id + 1 at a cell of a LOD (x: 0 when empty, or in a page that is not resident),
+// and the page node of the cell's page when that page is not resident (y; PAGE_MISSING
+// otherwise). The cell must be inside the grid.
+fn lookup_cell_paged(lod: LodInfo, cell: vec3<u32>) -> vec2<u32> {
     var node = lod.node_offset;
     for (var k = 0u; k < lod.depth; k++) {
         let n = lookup_node(lod, node);
         if k + 2u == lod.depth && lod.page_base != NO_PAGES && n.base == PAGE_MISSING {
-            return 0u;
+            return vec2(0u, node);
         }
         let b = child_bit((cell >> vec3(2u * (lod.depth - 1u - k))) & vec3(3u));
         if !node_has(n, b) {
-            return 0u;
+            break;
         }
         if k + 1u == lod.depth {
-            return node_child(n, b) + 1u;
+            return vec2(node_child(n, b) + 1u, PAGE_MISSING);
         }
         node = lod.node_offset + node_child(n, b);
     }
-    return 0u;
+    return vec2(0u, PAGE_MISSING);
+}
+
+// Voxel id + 1 at a cell of a LOD (0 when empty, or in a page that is not resident).
+fn lookup_cell(lod: LodInfo, cell: vec3<u32>) -> u32 {
+    return lookup_cell_paged(lod, cell).x;
 }
 
 // A voxel's attributes in the 16-byte layout the SSBVB slots carry (asset.rs

@@ -238,25 +238,11 @@ fn cell_entry_t(r: Ray, c: vec3<i32>, t0: f32) -> f32 {
 // `lookup_cell` for the march: a cell in a page that is not resident is empty, and the
 // page is noted as missing when `record`.
 fn march_cell(lod: LodInfo, cell: vec3<u32>, record: bool) -> u32 {
-    var node = lod.node_offset;
-    for (var k = 0u; k < lod.depth; k++) {
-        let n = lookup_node(lod, node);
-        if k + 2u == lod.depth && lod.page_base != NO_PAGES && n.base == PAGE_MISSING {
-            if record {
-                note_page(FB_MISSING, page_of(lod, node));
-            }
-            return 0u;
-        }
-        let b = child_bit((cell >> vec3(2u * (lod.depth - 1u - k))) & vec3(3u));
-        if !node_has(n, b) {
-            return 0u;
-        }
-        if k + 1u == lod.depth {
-            return node_child(n, b) + 1u;
-        }
-        node = lod.node_offset + node_child(n, b);
+    let v = lookup_cell_paged(lod, cell);
+    if record && v.y != PAGE_MISSING {
+        note_page(FB_MISSING, page_of(lod, v.y));
     }
-    return 0u;
+    return v.x;
 }
 
 // Missing pages one ray of an instance's own LOD requests per frame at most (it marches

@@ -80,24 +80,30 @@ fn render_default_scene(png: &Path, extra: &[&str]) -> image::RgbaImage {
     read_png(png)
 }
 
-#[test]
-fn view_under_xvfb_shows_the_scene_and_writes_a_screenshot() {
-    let xvfb = xvfb_run();
-    let dir = tempfile::tempdir().unwrap();
-    let shot = dir.path().join("view.png");
-    let mut c = Command::new(xvfb);
+/// `ssbvb view` of the default scene at 320x240 under Xvfb with `extra` flags, its
+/// screenshot written to `shot` and read back.
+fn view_screenshot(shot: &Path, extra: &[&str]) -> image::RgbaImage {
+    let mut c = Command::new(xvfb_run());
     ssbvb_env(&mut c);
     let out = c
         .args(["-a", "-s", "-screen 0 1280x800x24"])
         .arg(env!("CARGO_BIN_EXE_ssbvb"))
-        .args(["view", "--size", "320x240", "--frames", "5", "--screenshot"])
-        .arg(&shot)
+        .args(["view", "--size", "320x240"])
+        .args(extra)
+        .arg("--screenshot")
+        .arg(shot)
         .output()
         .unwrap();
     let log =
         String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "ssbvb view failed under Xvfb:\n{log}");
-    let img = read_png(&shot);
+    read_png(shot)
+}
+
+#[test]
+fn view_under_xvfb_shows_the_scene_and_writes_a_screenshot() {
+    let dir = tempfile::tempdir().unwrap();
+    let img = view_screenshot(&dir.path().join("view.png"), &["--frames", "5"]);
     assert_eq!(img.dimensions(), (320, 240), "the window's size");
     let first = *img.get_pixel(0, 0);
     assert!(img.pixels().any(|p| *p != first), "uniform screenshot");
@@ -159,31 +165,11 @@ fn view_under_xvfb_shows_the_scene_and_writes_a_screenshot() {
 /// `render --gpu-budget` writes (which itself equals the unbudgeted render, cli.rs).
 #[test]
 fn view_under_a_gpu_budget_streams_to_the_rendered_image() {
-    let xvfb = xvfb_run();
     let dir = tempfile::tempdir().unwrap();
-    let shot = dir.path().join("view.png");
-    let mut c = Command::new(xvfb);
-    ssbvb_env(&mut c);
-    let out = c
-        .args(["-a", "-s", "-screen 0 1280x800x24"])
-        .arg(env!("CARGO_BIN_EXE_ssbvb"))
-        .args([
-            "view",
-            "--size",
-            "320x240",
-            "--frames",
-            "30",
-            "--gpu-budget",
-            "2",
-        ])
-        .arg("--screenshot")
-        .arg(&shot)
-        .output()
-        .unwrap();
-    let log =
-        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "ssbvb view failed under Xvfb:\n{log}");
-    let img = read_png(&shot);
+    let img = view_screenshot(
+        &dir.path().join("view.png"),
+        &["--frames", "30", "--gpu-budget", "2"],
+    );
     let reference = render_default_scene(&dir.path().join("render.png"), &["--gpu-budget", "2"]);
     let (mut scene, mut same) = (0usize, 0usize);
     for (x, y, r) in reference.enumerate_pixels() {

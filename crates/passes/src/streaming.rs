@@ -314,6 +314,20 @@ pub(crate) struct StreamBuffers<'a> {
     pub node_chunk_bytes: u64,
 }
 
+impl StreamBuffers<'_> {
+    /// Writes lookup nodes (`NODE_WORDS` words each) from absolute node `first` on.
+    fn write_nodes(&self, ctx: &GpuContext, first: u64, words: &[u32]) {
+        let at = first * NODE_WORDS as u64 * 4;
+        write_stream(
+            ctx,
+            self.nodes,
+            self.node_chunk_bytes,
+            at,
+            bytemuck::cast_slice(words),
+        );
+    }
+}
+
 /// Writes `data` at byte `offset` of a stream split into bindings of `chunk` bytes.
 fn write_stream(ctx: &GpuContext, buffers: &[wgpu::Buffer], chunk: u64, offset: u64, data: &[u8]) {
     let mut at = offset;
@@ -694,13 +708,7 @@ impl Streaming {
                 ]
             })
             .collect();
-        write_stream(
-            ctx,
-            buffers.nodes,
-            buffers.node_chunk_bytes,
-            slot_node * NODE_WORDS as u64 * 4,
-            bytemuck::cast_slice(&leaves),
-        );
+        buffers.write_nodes(ctx, slot_node, &leaves);
         // Voxels into the blocks (a block starts at an even voxel: whole normal words).
         for (b, block) in packed.blocks.iter().enumerate() {
             let g = block_start(b as u32);
@@ -746,13 +754,7 @@ impl Streaming {
     ) {
         let (li, k) = self.pages[p as usize];
         let n = self.lods[li as usize].first_page_node as u64 + k as u64;
-        write_stream(
-            ctx,
-            buffers.nodes,
-            buffers.node_chunk_bytes,
-            n * NODE_WORDS as u64 * 4,
-            bytemuck::cast_slice(&node),
-        );
+        buffers.write_nodes(ctx, n, &node);
     }
 
     /// Evicts every page (the next frames stream them again).

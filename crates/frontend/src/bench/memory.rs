@@ -435,16 +435,12 @@ fn csv(r: &MemoryReport) -> String {
 }
 
 fn write(dir: &Path, r: &MemoryReport) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    for (name, body) in [
-        ("memory.csv", csv(r)),
-        ("memory.json", serde_json::to_string_pretty(r)?),
-        ("memory.md", markdown(r)),
-    ] {
-        let path = dir.join(name);
-        let tmp = dir.join(format!(".{name}.tmp"));
-        std::fs::write(&tmp, body).with_context(|| format!("writing {}", tmp.display()))?;
-        std::fs::rename(&tmp, &path).with_context(|| format!("writing {}", path.display()))?;
-    }
-    Ok(())
+    super::report::write_files(
+        dir,
+        vec![
+            ("memory.csv", csv(r)),
+            ("memory.json", serde_json::to_string_pretty(r)?),
+            ("memory.md", markdown(r)),
+        ],
+    )
 }

@@ -190,7 +190,6 @@ fn fastest_markdown(f: &[Fastest]) -> String {
 
 /// Writes bench.csv, bench.json and bench.md atomically into `dir`.
 pub(super) fn write_outputs(dir: &Path, r: &Report) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let mut csv = String::from(
         "technique,model,level,width,height,frames,frame_ms_median,frame_ms_min,frame_ms_max,fill_count,covered_pixels,voxels,gpu_memory_bytes,coverage_iou,same_voxel_rate,depth_error_voxels_median,normal_error_deg_median,psnr_db,ssim,steps_per_ray\n",
     );
@@ -229,6 +228,13 @@ pub(super) fn write_outputs(dir: &Path, r: &Report) -> Result<()> {
     if !r.sweeps.is_empty() {
         files.push(("sweeps.csv", super::sweep::csv(&r.sweeps)));
     }
+    write_files(dir, files)
+}
+
+/// Writes each `(name, body)` into `dir` (created if missing) atomically: a temporary
+/// file, then a rename, so a reader never sees half a report.
+pub(super) fn write_files(dir: &Path, files: Vec<(&str, String)>) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     for (name, body) in files {
         let path = dir.join(name);
         let tmp = dir.join(format!(".{name}.tmp"));

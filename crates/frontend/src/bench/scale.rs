@@ -518,18 +518,14 @@ fn csv(r: &ScaleReport) -> String {
 }
 
 fn write(dir: &Path, r: &ScaleReport) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    for (name, body) in [
-        ("scale.csv", csv(r)),
-        ("scale.json", serde_json::to_string_pretty(r)?),
-        ("scale.md", markdown(r)),
-    ] {
-        let path = dir.join(name);
-        let tmp = dir.join(format!(".{name}.tmp"));
-        std::fs::write(&tmp, body).with_context(|| format!("writing {}", tmp.display()))?;
-        std::fs::rename(&tmp, &path).with_context(|| format!("writing {}", path.display()))?;
-    }
-    Ok(())
+    super::report::write_files(
+        dir,
+        vec![
+            ("scale.csv", csv(r)),
+            ("scale.json", serde_json::to_string_pretty(r)?),
+            ("scale.md", markdown(r)),
+        ],
+    )
 }
 
 #[cfg(test)]
