@@ -213,6 +213,66 @@ fn a_view_that_does_not_fit_settles_at_a_coarser_level_exactly() {
 }
 
 #[test]
+fn objects_and_instances_share_the_pools_and_converge_to_the_unbudgeted_image() {
+    let c = ssbvb_tests::ctx();
+    // Two assets (the bunny at level 8, the knight at level 7), three instances each at
+    // different distances (per-instance Auto LOD: several levels of each in view).
+    let knight = ssbvb_tests::model_asset("chr_knight.vox", 7);
+    let place = |x: f64, z: f64, s: f64| {
+        glam::DAffine3::from_scale_rotation_translation(
+            DVec3::splat(s),
+            glam::DQuat::from_rotation_y(x * 0.7),
+            DVec3::new(x, 0.0, z),
+        )
+    };
+    let scene = ssbvb_passes::Scene {
+        objects: vec![
+            ssbvb_passes::VoxelObject {
+                asset: asset(),
+                instances: vec![
+                    place(-0.6, 0.0, 0.5),
+                    place(0.8, -2.0, 0.5),
+                    place(-1.5, -6.0, 0.5),
+                ],
+                lod: ssbvb_passes::LodPolicy::AUTO,
+            },
+            ssbvb_passes::VoxelObject {
+                asset: knight,
+                instances: vec![
+                    place(0.5, 0.3, 0.4),
+                    place(-0.9, -3.0, 0.4),
+                    place(1.6, -5.0, 0.4),
+                ],
+                lod: ssbvb_passes::LodPolicy::AUTO,
+            },
+        ],
+        ..Default::default()
+    };
+    let cam = Camera::new(DVec3::new(0.0, 0.6, 1.8), DVec3::new(0.0, 0.0, -2.0));
+    let resolved = || ssbvb_graph::resolve_str(PIPELINE, "ssbvb").unwrap();
+    let mut u = GpuScene::new(c, scene.clone()).unwrap();
+    let mut ur = Renderer::new(c, &u, resolved(), SIZE).unwrap();
+    let want = frame(c, &mut ur, &mut u, &cam);
+    let levels = u.lod_histogram();
+    assert!(levels.len() >= 3, "{levels:?}");
+    assert!(count(&want.covered) > 2000, "{}", count(&want.covered));
+    // A budget that holds the view but not every page the two objects have.
+    let mut options = StreamingOptions::mib(0);
+    options.budget_bytes = u.total_memory() / 2;
+    let mut s = GpuScene::streamed(c, scene, &options).unwrap();
+    let mut r = Renderer::new(c, &s, resolved(), SIZE).unwrap();
+    let first = frame(c, &mut r, &mut s, &cam);
+    assert!((0..want.covered.len()).all(|i| !want.covered[i] || first.covered[i]));
+    let (got, frames) = converge(&mut r, &mut s, &cam, 24);
+    let st = s.streaming_stats().unwrap().clone();
+    println!("converged in {frames} frames: {st:?}");
+    assert_eq!(st.level_cap, None);
+    assert!(st.pages_resident < st.pages_total);
+    assert_eq!(got.covered, want.covered);
+    assert_eq!(got.color, want.color);
+}
+
+#[test]
 fn a_budget_below_the_fixed_part_is_an_error_naming_the_minimum() {
     let c = ssbvb_tests::ctx();
     let scene = ssbvb_tests::single_object_scene(asset(), LEVEL);
