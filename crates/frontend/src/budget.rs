@@ -60,9 +60,8 @@ pub fn options(
         })
         .collect();
     Ok(StreamingOptions {
-        budget_bytes: mib << 20,
         page_files,
-        max_pages_per_frame,
+        ..StreamingOptions::mib(mib).with_pages_per_frame(max_pages_per_frame)
     })
 }
 

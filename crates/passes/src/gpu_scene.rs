@@ -588,6 +588,12 @@ impl GpuScene {
                 let proxy =
                     (lod.proxy.positions.len() * 16 + lod.proxy.triangles.len() * 12) as u64;
                 mem.proxy_bytes += proxy;
+                if let Some(o) = streaming.filter(|o| lod.level > o.proxy_level) {
+                    // Borrowed: see `StreamingOptions::proxy_level`.
+                    let borrowed = ranges[o.proxy_level as usize];
+                    ranges.push(borrowed);
+                    continue;
+                }
                 proxy_bytes += proxy;
                 ranges.push(ProxyRange {
                     first_index: checked_u32(proxy_i.len(), "proxy indices")?,
@@ -859,13 +865,20 @@ impl GpuScene {
             .as_ref()
             .and_then(Streaming::level_cap)
             .unwrap_or(u32::MAX);
+        let caps = crate::visibility::LevelCaps {
+            level: cap,
+            proxy: self
+                .streaming
+                .as_ref()
+                .map_or(u32::MAX, Streaming::proxy_level),
+        };
         let (visible, uniforms) = visible_instances(
             &self.scene,
             &self.lod_base,
             &self.proxies,
             camera,
             screen,
-            cap,
+            caps,
         );
         let mut bvh = instance_bvh(&uniforms, &self.lod_bounds);
         if bvh.is_empty() && !uniforms.is_empty() {

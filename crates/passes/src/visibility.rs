@@ -58,6 +58,14 @@ pub fn frame_uniform(camera: &Camera, screen: (u32, u32), light: &Light) -> Fram
     }
 }
 
+/// Caps on the levels of a frame: the finest level an instance may use, and the finest
+/// level whose proxy mesh is drawn (finer levels draw that one's).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LevelCaps {
+    pub level: u32,
+    pub proxy: u32,
+}
+
 /// The instances of `scene` inside the view frustum, in instance-buffer order, with the
 /// record of each for the GPU. `lod_base[object]` is the object's level 0 in the LOD table,
 /// `proxies[object][level]` its proxy mesh ranges.
@@ -67,7 +75,7 @@ pub(crate) fn visible_instances(
     proxies: &[Vec<ProxyRange>],
     camera: &Camera,
     screen: (u32, u32),
-    level_cap: u32,
+    caps: LevelCaps,
 ) -> (Vec<VisibleInstance>, Vec<InstanceUniform>) {
     let (w, h) = (screen.0.max(1) as f64, screen.1.max(1) as f64);
     let aspect = w / h;
@@ -82,7 +90,7 @@ pub(crate) fn visible_instances(
     let mut uniforms = Vec::new();
     let mut scene_index = 0u32;
     for (oi, obj) in scene.objects.iter().enumerate() {
-        let max_level = (obj.asset.lods.len() as u32 - 1).min(level_cap);
+        let max_level = (obj.asset.lods.len() as u32 - 1).min(caps.level);
         for xf in &obj.instances {
             let si = scene_index;
             scene_index += 1;
@@ -116,8 +124,10 @@ pub(crate) fn visible_instances(
             };
             let inv = rel.inverse();
             let cam_obj = inv.transform_point3(DVec3::ZERO);
-            let lod = &obj.asset.lods[level as usize];
-            let camera_inside = inside_resident_page(&lod.lookup, cam_obj);
+            // The proxy drawn is that of `proxy_level` (a coarser one under a budget).
+            let proxy_level = level.min(caps.proxy);
+            let camera_inside =
+                inside_resident_page(&obj.asset.lods[proxy_level as usize].lookup, cam_obj);
             let cell_world = 2.0 * scale_of(xf) / (1u64 << level) as f64;
             uniforms.push(InstanceUniform {
                 object_to_world: mat(DMat4::from(rel)),
