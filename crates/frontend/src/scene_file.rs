@@ -501,6 +501,10 @@ mod tests {
                 "camera.far (1) must be beyond camera.near (2)",
             ),
             (
+                "Scene(camera: (position: (0.0, 0.0, 3.0), near: 1.5, far: 1.5))",
+                "camera.far (1.5) must be beyond camera.near (1.5)",
+            ),
+            (
                 "Scene(camera: (position: (0.0, 0.0, 3.0), near: 0.0))",
                 "camera.near must be a positive number, got 0",
             ),

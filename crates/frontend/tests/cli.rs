@@ -194,8 +194,12 @@ fn render_json_and_bench_quick() {
             assert!(depth <= 1e-3 && normal <= 0.5, "{r:?}");
             assert!(psnr >= 14.5 && ssim >= 0.48, "{r:?}");
         }
-        if let Some(same) = num("same_voxel_rate") {
-            assert!(same >= 0.999, "{r:?}");
+        // Voxel ids per pixel come from the filter's per-pixel slots: the per-pixel SSBVB
+        // rows have them (measured 1.0), the others leave the column empty.
+        match (r[col("technique")], num("same_voxel_rate")) {
+            ("ssbvb-flat" | "ssbvb-raybox", Some(same)) => assert!(same >= 0.999, "{r:?}"),
+            ("ssbvb-flat" | "ssbvb-raybox", None) => panic!("no same-voxel rate: {r:?}"),
+            (_, same) => assert_eq!(same, None, "{r:?}"),
         }
         // The SSBVB draws one billboard per covered pixel (up to silhouette rays), or with
         // unique_voxels one per visible voxel (fewer: cells span more than a pixel here).
@@ -277,17 +281,18 @@ fn bench_quick_sweep_writes_sweeps_and_plots() {
         .iter()
         .find(|r| r[col("knob")] == "max_steps" && r[col("is_default")] == "true")
         .unwrap();
+    // Measured on lavapipe: IoU 0.9990, PSNR 29.9 dB, SSIM 0.979.
     let iou: f64 = default[col("coverage_iou")].parse().unwrap();
-    assert!(iou >= 0.97, "{csv}");
+    assert!(iou >= 0.995, "{csv}");
     let psnr: f64 = default[col("psnr_db")].parse().unwrap();
-    assert!(psnr > 15.0, "{csv}");
+    assert!(psnr >= 27.0, "{csv}");
     // SSIM falls when the march is cut short (holes in the bunny).
     let ssim = |r: &Vec<&str>| r[col("ssim")].parse::<f64>().unwrap();
     let short = rows
         .iter()
         .find(|r| r[col("knob")] == "max_steps" && r[col("value")] == "8")
         .unwrap();
-    assert!(ssim(default) > 0.9 && ssim(default) <= 1.0, "{csv}");
+    assert!(ssim(default) > 0.95 && ssim(default) <= 1.0, "{csv}");
     assert!(ssim(short) < ssim(default) - 0.05, "{csv}");
     let json: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(dir.path().join("bench/bench.json")).unwrap(),

@@ -148,6 +148,11 @@ fn view_under_xvfb_shows_the_scene_and_writes_a_screenshot() {
         bunny > 2000,
         "the reference shows only {bunny} bunny pixels"
     );
+    // Measured 99.4 % on lavapipe; smoothing moves some silhouette normals further.
+    assert!(
+        close as f64 >= 0.97 * bunny as f64,
+        "only {close} of {bunny} bunny pixels of the window are near the CPU reference"
+    );
     // And the scene is not the background: the bunny and the ground differ from the
     // empty top-right corner.
     let corner = *img.get_pixel(319, 60);

@@ -360,19 +360,73 @@ fn unknown_after_suggests_a_pass() {
     );
 }
 
+/// Checks an error report of `src` given as `file`: at least one error, each naming the
+/// file first and, where it has a line, a line of `src` (or just past its end).
+fn assert_located(e: &PipelineErrors, file: &str, src: &str) {
+    assert_eq!(e.file, file);
+    assert!(!e.errors.is_empty(), "an error report without errors");
+    let lines = src.lines().count().max(1) + 1;
+    for err in &e.errors {
+        let text = err.to_string();
+        let rest = text
+            .strip_prefix(file)
+            .unwrap_or_else(|| panic!("`{text}` does not start with {file}"));
+        assert!(!text.contains("panicked"), "{text}");
+        if let Some(pos) = rest.strip_prefix(':') {
+            let line: usize = pos
+                .split(':')
+                .next()
+                .and_then(|l| l.parse().ok())
+                .unwrap_or_else(|| panic!("`{text}`: no line after the file"));
+            assert!(
+                (1..=lines).contains(&line),
+                "`{text}`: line {line} of {lines}"
+            );
+        }
+    }
+}
+
 #[test]
 fn garbage_never_panics() {
-    // Truncations and byte edits of a real file give errors, never a panic.
+    // Truncations and byte edits of a real file give located errors, never a panic; a
+    // truncation resolves only when it cut nothing but trailing space.
     let bytes = SSBVB.as_bytes();
+    let whole = SSBVB.trim_end().len();
+    let (mut cut_ok, mut edit_ok, mut edit_err) = (0, 0, 0);
     for cut in (0..bytes.len()).step_by(7) {
         let s = String::from_utf8_lossy(&bytes[..cut]);
-        let _ = resolve_str(&s, "cut.ron");
+        match resolve_str(&s, "cut.ron") {
+            Ok(_) => {
+                assert!(cut >= whole, "a file cut at byte {cut} of {whole} resolved");
+                cut_ok += 1;
+            }
+            Err(e) => assert_located(&e, "cut.ron", &s),
+        }
     }
+    let full = resolve_str(SSBVB, "ssbvb.ron").unwrap();
     for i in (0..bytes.len()).step_by(13) {
         let mut b = bytes.to_vec();
         b[i] = b"(){}[]\":,x0"[i % 11];
-        let _ = resolve_str(&String::from_utf8_lossy(&b), "edit.ron");
+        let s = String::from_utf8_lossy(&b);
+        match resolve_str(&s, "edit.ron") {
+            // An edit inside a comment or a name can leave a valid pipeline: the same
+            // passes, or the same number of them.
+            Ok(p) => {
+                assert!(
+                    p.passes.len() + p.pruned_passes.len()
+                        == full.passes.len() + full.pruned_passes.len(),
+                    "byte {i}: a valid edit changed the number of passes"
+                );
+                edit_ok += 1;
+            }
+            Err(e) => {
+                assert_located(&e, "edit.ron", &s);
+                edit_err += 1;
+            }
+        }
     }
+    println!("truncations resolved: {cut_ok}; edits resolved: {edit_ok}, refused: {edit_err}");
+    assert!(edit_err > edit_ok, "most byte edits must be refused");
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! The dense-DDA, octree and cube-raster baselines beyond one object seen from outside:
-//! several instances of one object (rotated, scaled, mirrored, overlapping on screen) and a
-//! camera inside the grid, against the CPU reference.
+//! several instances of one object (rotated, scaled, mirrored, overlapping on screen), a
+//! camera inside the grid or inside a closed shell, grazing rays and extreme planes,
+//! against the CPU reference.
 
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 use ssbvb_voxel::accuracy;
@@ -13,10 +14,23 @@ const SIZE: (u32, u32) = (120, 90);
 const LEVEL: u32 = 5;
 
 fn check(name: &str, scene: &ssbvb_passes::Scene, cam: &Camera, min_px: usize) {
+    check_at(name, scene, cam, min_px, LEVEL, false);
+}
+
+/// `check` for a scene at `level`; `enclosed`: the camera is inside a closed shell, so
+/// every pixel is covered (elsewhere that means the camera sits inside a voxel).
+fn check_at(
+    name: &str,
+    scene: &ssbvb_passes::Scene,
+    cam: &Camera,
+    min_px: usize,
+    level: u32,
+    enclosed: bool,
+) {
     let cells: Vec<f64> = scene.objects[0]
         .instances
         .iter()
-        .map(|xf| 2.0 * xf.matrix3.determinant().abs().cbrt() / (1u64 << LEVEL) as f64)
+        .map(|xf| 2.0 * xf.matrix3.determinant().abs().cbrt() / (1u64 << level) as f64)
         .collect();
     let reference = ssbvb_tests::reference_of(scene, cam, SIZE);
     for (technique, src) in [
@@ -28,30 +42,41 @@ fn check(name: &str, scene: &ssbvb_passes::Scene, cam: &Camera, min_px: usize) {
         let hits = ssbvb_tests::gbuffer_hits(&f, name);
         let r = accuracy::compare(&reference, &hits, &cells).unwrap();
         eprintln!(
-            "{technique} {name}: IoU {:.4}, depth median {:.2e} p95 {:.2e} voxels, normal median {:.2}°, px {}",
+            "{technique} {name}: IoU {:.4}, depth median {:.2e} p95 {:.2e} voxels, normal median {:.2}° p95 {:.2}°, px {}",
             r.coverage_iou,
             r.depth_error_voxels.median,
             r.depth_error_voxels.p95,
             r.normal_error_deg.median,
+            r.normal_error_deg.p95,
             r.covered_reference
         );
         assert!(r.covered_reference >= min_px, "{technique} {name}: {r:?}");
+        let all = (SIZE.0 * SIZE.1) as usize;
+        if enclosed {
+            assert_eq!(
+                r.covered_reference, all,
+                "{technique} {name}: a gap in the shell"
+            );
+        } else {
+            assert!(
+                r.covered_reference < all,
+                "{technique} {name}: every pixel covered (camera inside a voxel?)"
+            );
+        }
+        // Exact techniques. Measured on lavapipe over these scenes: IoU ≥ 0.9994, depth p95
+        // ≤ 1.5e-5 voxels, normal p95 ≤ 0.01°; bounds with a margin for other adapters'
+        // f32 rounding (≥ 60×).
+        assert!(r.coverage_iou >= 0.995, "{technique} {name}: {r:?}");
         assert!(
-            r.covered_reference < (SIZE.0 * SIZE.1) as usize,
-            "{technique} {name}: every pixel covered (camera inside a voxel?)"
-        );
-        // Exact techniques: the bounds of dense_dda.rs and octree_ray_cast.rs.
-        assert!(r.coverage_iou >= 0.99, "{technique} {name}: {r:?}");
-        assert!(
-            r.depth_error_voxels.median <= 0.01,
+            r.depth_error_voxels.median <= 1e-3,
             "{technique} {name}: {r:?}"
         );
         assert!(
-            r.depth_error_voxels.p95 <= 0.05,
+            r.depth_error_voxels.p95 <= 1e-3,
             "{technique} {name}: {r:?}"
         );
         assert!(
-            r.normal_error_deg.median <= 0.5,
+            r.normal_error_deg.median <= 0.5 && r.normal_error_deg.p95 <= 0.5,
             "{technique} {name}: {r:?}"
         );
     }
@@ -195,5 +220,47 @@ fn ray_casters_and_cubes_draw_several_objects() {
             .filter(|h| (lo..hi).contains(&h.instance))
             .count();
         assert!(px > 400, "instances {lo}..{hi}: {px} px");
+    }
+}
+
+/// The extremes the filter is tested at, for the baselines: grazing rays along a voxel
+/// layer, a camera inside a closed shell of voxels (the cube raster draws the walls'
+/// inner faces, the ray casters start inside the grid), and near/far planes 1e-4 / 1e7.
+#[test]
+fn grazing_enclosed_and_extreme_planes_match_the_reference() {
+    let asset = ssbvb_tests::model_asset("bunny.obj", LEVEL);
+    let cell = 2.0 / (1u64 << LEVEL) as f64;
+    let min_y = asset.lods[LEVEL as usize]
+        .point_cloud
+        .voxels
+        .iter()
+        .map(|v| v.cell()[1])
+        .min()
+        .unwrap();
+    let scene = ssbvb_tests::single_object_scene(asset, LEVEL);
+    // Rays almost in the plane of the lowest layer's top faces.
+    let y = -1.0 + (min_y as f64 + 1.01) * cell;
+    let grazing = Camera::new(DVec3::new(3.0, y, 0.7), DVec3::new(0.0, y + 0.002, 0.0));
+    check("grazing", &scene, &grazing, 100);
+    let planes = Camera {
+        near: 1e-4,
+        far: 1e7,
+        ..Camera::new(DVec3::new(0.9, 0.6, 2.2), DVec3::ZERO)
+    };
+    check("near 1e-4 far 1e7", &scene, &planes, 2000);
+
+    let shell = crate::empty_space::synthetic_asset(LEVEL, &crate::empty_space::hollow_box(3, 28));
+    let scene = ssbvb_tests::single_object_scene(shell, LEVEL);
+    let eye = DVec3::new(-1.0 + 9.5 * cell, -1.0 + 17.5 * cell, -1.0 + 20.5 * cell);
+    for look in [
+        DVec3::new(1.0, 0.1, 0.2),
+        DVec3::new(-1.0, -0.2, 0.1),
+        DVec3::new(-1.0, 1.0, -1.0),
+    ] {
+        let cam = Camera {
+            near: 1e-3,
+            ..Camera::new(eye, eye + look)
+        };
+        check_at("inside a shell", &scene, &cam, 0, LEVEL, true);
     }
 }
