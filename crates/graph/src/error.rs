@@ -256,3 +256,29 @@ pub(crate) fn suggest<'a>(found: &str, known: impl IntoIterator<Item = &'a str>)
         _ => String::new(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::suggest;
+
+    #[test]
+    fn suggestions_within_a_third_of_the_name_or_three_edits() {
+        // 12 letters: up to 4 edits suggest (12 / 3), 5 or more only list.
+        let known = ["abcdefghwxyz", "zzzzzzzzzzzz"];
+        assert_eq!(
+            suggest("abcdefghijkl", known),
+            "; did you mean `abcdefghwxyz`? (known: `abcdefghwxyz`, `zzzzzzzzzzzz`)"
+        );
+        assert_eq!(
+            suggest("abcdefghijkl", ["abcdefgwxyzz"]),
+            " (known: `abcdefgwxyzz`)"
+        );
+        // Short names: three edits still suggest, case is ignored.
+        assert_eq!(
+            suggest("Flt", ["flat"]),
+            "; did you mean `flat`? (known: `flat`)"
+        );
+        assert_eq!(suggest("x", ["abcd"]), " (known: `abcd`)");
+        assert_eq!(suggest("x", []), "");
+    }
+}

@@ -353,4 +353,36 @@ mod tests {
             )
         );
     }
+
+    /// Duplicates, a binding list with another name first, and a pass whose `kind` follows
+    /// a closed list and precedes `name` (the enclosing pass is found across brackets).
+    const SRC2: &str = r#"Pipeline(
+  resources: {
+    "entry": Texture(format: Rgba8Unorm, size: Screen),
+    "entry": Texture(format: Rgba8Unorm, size: Screen),
+  },
+  passes: [
+    (name: "a", reads: ["y", "entry"], kind: Foo),
+    (reads: ["x"], kind: Baz, name: "c"),
+  ],
+  output: "entry",
+)"#;
+
+    #[test]
+    fn duplicates_lists_and_names_after_kinds() {
+        let l = Locator::new(SRC2);
+        let at = |line, col| Position { line, col };
+        assert_eq!(l.resource_declarations("entry"), vec![at(3, 5), at(4, 5)]);
+        assert_eq!(l.resource_declarations("a"), vec![]);
+        assert_eq!(l.in_pass("a", "entry"), Some(at(7, 30)));
+        assert_eq!(l.pass("c"), Some(at(8, 37)));
+        assert_eq!(l.pass_declarations("c"), vec![at(8, 37)]);
+        assert_eq!(
+            l.kinds(),
+            vec![
+                ("Foo".to_string(), at(7, 46), Some("a".to_string())),
+                ("Baz".to_string(), at(8, 26), Some("c".to_string())),
+            ]
+        );
+    }
 }

@@ -230,3 +230,58 @@ impl PassKind {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::schema::BufferLayout;
+
+    #[test]
+    fn attachments_and_indirect_buffers_are_not_shader_globals() {
+        let slot = |access, class| SlotDesc {
+            name: "s",
+            access,
+            class,
+        };
+        let f: &'static [Format] = &[];
+        for (access, class, global) in [
+            (Access::Write, SlotClass::ColorAttachment(f), false),
+            (Access::Read, SlotClass::ColorAttachment(f), false),
+            (
+                Access::Read,
+                SlotClass::IndirectBuffer(BufferLayout::DrawIndirect),
+                false,
+            ),
+            // A read-only depth-stencil is sampled; a written one is only an attachment.
+            (Access::Read, SlotClass::DepthStencilAttachment(f), true),
+            (Access::Write, SlotClass::DepthStencilAttachment(f), false),
+            (Access::Read, SlotClass::SampledTexture(f), true),
+            (Access::Write, SlotClass::StorageTexture(f), true),
+            (
+                Access::Write,
+                SlotClass::StorageBuffer(BufferLayout::DrawIndirect),
+                true,
+            ),
+        ] {
+            assert_eq!(
+                slot(access, class).is_shader_global(),
+                global,
+                "{class:?} {access:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn entry_points_follow_the_stage() {
+        let kinds = PassKind::all_defaults();
+        assert!(kinds.iter().any(|k| k.stage() == PassStage::Compute));
+        assert!(kinds.iter().any(|k| k.stage() == PassStage::Render));
+        for kind in kinds {
+            let want: &[&str] = match kind.stage() {
+                PassStage::Compute => &["clear_draw", "main"],
+                PassStage::Render => &["vs_main", "fs_main"],
+            };
+            assert_eq!(kind.entry_points(), want, "{}", kind.name());
+        }
+    }
+}

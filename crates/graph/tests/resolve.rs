@@ -64,7 +64,19 @@ fn ssbvb_pipeline_resolves_in_the_expected_order() {
     assert_eq!(m.unaliased - m.aliased, 640 * 480 * 16);
     // Usages are derived from the slots: entry is written as an attachment and sampled.
     let text = p.describe((640, 480));
-    assert!(text.contains("shares memory with"), "{text}");
+    for line in [
+        "  1. filter (RayMarchFilter) reads [entry] writes [ssbvb, billboard_draw]",
+        "  4. smooth (Smooth) reads [gbuffer_normal, depth_stencil] writes [smoothed_normal]",
+        "  entry: texture 640x480 Rgba32Float (4915200 bytes), passes 0..=1, shares memory with gbuffer_position",
+        "  prepass_depth: texture 640x480 Depth32Float (1228800 bytes), passes 0..=0",
+        "  color: texture 640x480 Rgba8UnormSrgb (1228800 bytes), passes 5..=5, output",
+        "memory: 25804816 bytes in 9 physical resources (30720016 bytes without aliasing, 4915200 saved)",
+    ] {
+        assert!(
+            text.lines().any(|l| l == line),
+            "no line `{line}` in:\n{text}"
+        );
+    }
 }
 
 #[test]
@@ -513,7 +525,8 @@ fn the_cube_raster_pipeline_resolves_and_merging_defaults_to_on() {
 fn bad_parameters_name_pass_kind_rule_and_line() {
     const DENSE: &str = include_str!("../../../assets/pipelines/dense_dda.ron");
     const OCTREE: &str = include_str!("../../../assets/pipelines/octree_ray_cast.ron");
-    let cases: [(&str, &str, &str, &str, &str); 8] = [
+    const SPLAT: &str = include_str!("../../../assets/pipelines/ssbvb_splat.ron");
+    let cases: [(&str, &str, &str, &str, &str); 9] = [
         (
             SSBVB,
             "RayMarchFilter(max_steps: 1024, unique_voxels: true)",
@@ -569,6 +582,13 @@ fn bad_parameters_name_pass_kind_rule_and_line() {
             "OctreeRayCast(max_steps: 0)",
             "OctreeRayCast",
             "max_steps must be at least 1",
+        ),
+        (
+            SPLAT,
+            "SplatBillboards(mode: Flat, size_scale: 1.0)",
+            "SplatBillboards(mode: Flat, size_scale: 0.0)",
+            "SplatBillboards",
+            "size_scale must be a positive number, got 0",
         ),
     ];
     for (base, from, to, kind, rule) in cases {
@@ -684,5 +704,23 @@ fn raw_identifier_kinds_are_read_as_their_names() {
     assert_mentions(
         &e,
         &["unknown pass kind `Compost`", "did you mean `Composite`"],
+    );
+}
+
+#[test]
+fn a_binding_list_of_the_wrong_type_says_what_is_expected() {
+    let src = SSBVB.replacen(r#"reads: ["entry"],"#, "reads: 5,", 1);
+    assert_ne!(src, SSBVB);
+    let e = err(&src);
+    assert_mentions(
+        &e,
+        &[
+            r#"Expected a list of names ["a", "b"] or a map {"slot": "resource"}"#,
+            "the unsigned integer `5`",
+        ],
+    );
+    assert_eq!(
+        e.errors[0].loc().pos.map(|p| p.line),
+        Some(line_of(&src, "reads: 5"))
     );
 }
