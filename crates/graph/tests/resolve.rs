@@ -283,7 +283,21 @@ fn unknown_resources_slots_and_missing_slots() {
     );
     assert_mentions(
         &err(&src),
-        &["pass `smooth` (Smooth) has no slot `color` among its reads"],
+        &[
+            "pass `smooth` (Smooth) has no slot `color` among its reads; its reads are: `gbuffer_normal`, `depth_stencil`",
+        ],
+    );
+    // A duplicate resource is reported where it is declared the second time, after
+    // other names (line 24 of the edited file).
+    let src = SSBVB.replace(
+        r#"    "color":            Texture(format: Rgba8UnormSrgb, size: Screen),"#,
+        r#"    "color":            Texture(format: Rgba8UnormSrgb, size: Screen),
+    "ssbvb":            Buffer(layout: VoxelSlot, count: ScreenPixels),"#,
+    );
+    let e = err(&src);
+    assert_mentions(
+        &e,
+        &["test.ron:24:5: resource `ssbvb` is declared more than once"],
     );
 
     let src = SSBVB.replace(r#"writes: ["color"],"#, "");

@@ -248,3 +248,38 @@ fn union_usage(a: ResourceUsage, b: ResourceUsage) -> ResourceUsage {
         (a, _) => a,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use wgpu_types::{BufferUsages as B, TextureUsages as T};
+
+    #[test]
+    fn storage_textures_and_unions_of_aliased_usages() {
+        // No registered kind has a storage-texture slot yet; the usage is still derived.
+        let slot = SlotDesc {
+            name: "s",
+            access: Access::Write,
+            class: SlotClass::StorageTexture(&[]),
+        };
+        assert_eq!(
+            add_usage(ResourceUsage::Texture(T::COPY_SRC), &slot),
+            ResourceUsage::Texture(T::COPY_SRC | T::STORAGE_BINDING)
+        );
+        // Resources sharing memory need every usage of each.
+        assert_eq!(
+            union_usage(
+                ResourceUsage::Texture(T::RENDER_ATTACHMENT | T::COPY_SRC),
+                ResourceUsage::Texture(T::TEXTURE_BINDING | T::COPY_SRC)
+            ),
+            ResourceUsage::Texture(T::RENDER_ATTACHMENT | T::TEXTURE_BINDING | T::COPY_SRC)
+        );
+        assert_eq!(
+            union_usage(
+                ResourceUsage::Buffer(B::STORAGE | B::COPY_DST),
+                ResourceUsage::Buffer(B::INDIRECT | B::COPY_DST)
+            ),
+            ResourceUsage::Buffer(B::STORAGE | B::INDIRECT | B::COPY_DST)
+        );
+    }
+}
