@@ -1,5 +1,7 @@
-//! Project tasks: `cargo xtask validate-shaders [--dir DIR]`, `cargo xtask test [ARGS]`.
+//! Project tasks: `cargo xtask validate-shaders [--dir DIR]`, `cargo xtask test [ARGS]`,
+//! `cargo xtask fuzz [TARGET ...] [--seconds N]`.
 
+mod fuzz;
 mod layout_check;
 mod shaders;
 mod standalone;
@@ -14,13 +16,18 @@ const USAGE: &str = "usage:
   cargo xtask test [CARGO TEST ARGS]         make sure a GPU adapter exists, check formatting, check that
                                              no tracked file refers outside the repository, validate
                                              shaders, run clippy (-D warnings), build the docs (warnings
-                                             denied) and run all workspace tests";
+                                             denied), run all workspace tests and fuzz
+                                             every parser for 20 s
+  cargo xtask fuzz [TARGET ...] [--seconds N] [--runs N] [--artifacts DIR] [--report FILE]
+                                             coverage-guided fuzzing of every parser on stable
+                                             (see `cargo xtask fuzz --help`)";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let result = match args.first().map(String::as_str) {
         Some("validate-shaders") => validate_shaders(&args[1..]),
         Some("test") => test(&args[1..]),
+        Some("fuzz") => fuzz::run(&workspace_root(), &args[1..]),
         Some("-h" | "--help") | None => {
             println!("{USAGE}");
             Ok(true)
@@ -226,6 +233,18 @@ fn test(extra: &[String]) -> Result<bool> {
             cmd.env("XDG_RUNTIME_DIR", &dir);
         }
     }
-    let status = cmd.status().context("running cargo test")?;
-    Ok(status.success())
+    if !cmd.status().context("running cargo test")?.success() {
+        return Ok(false);
+    }
+    // A short fuzz smoke, so a parser regression shows on the next submission (the
+    // campaign's long runs are `cargo xtask fuzz --seconds N`). Skipped when the test
+    // run was narrowed by arguments.
+    if extra.is_empty() {
+        let smoke = [String::from("--seconds"), String::from(FUZZ_SMOKE_SECONDS)];
+        return fuzz::run(&root, &smoke);
+    }
+    Ok(true)
 }
+
+/// Seconds per fuzz target in `cargo xtask test`.
+const FUZZ_SMOKE_SECONDS: &str = "20";

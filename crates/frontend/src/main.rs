@@ -8,6 +8,7 @@ mod pipeline_cmd;
 mod progress;
 mod render_cmd;
 mod scene_file;
+mod soak;
 mod view;
 mod voxelize_cmd;
 

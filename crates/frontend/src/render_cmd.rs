@@ -68,6 +68,14 @@ pub struct RenderArgs {
     /// Most frames rendered to converge under a GPU budget.
     #[arg(long, default_value_t = 64)]
     pub max_frames: usize,
+    /// A soak: render this many frames with the camera moving along `--camera-path`,
+    /// sampling process RSS and device memory, before the written frame (`soak` in
+    /// `--json`). 1: just the frame.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+    pub frames: u64,
+    /// The camera's path during `--frames`.
+    #[arg(long, value_enum, default_value = "orbit")]
+    pub camera_path: crate::soak::CameraPath,
 }
 
 /// Parses `x,y,z`.
@@ -117,6 +125,8 @@ struct Report {
     warnings: Vec<String>,
     /// Under a GPU budget: how streaming converged and what is resident (`null` without).
     streaming: Option<crate::budget::StreamingReport>,
+    /// With `--frames N > 1`: memory at the start and end of the soak (`null` without).
+    soak: Option<crate::soak::SoakReport>,
     gpu_memory_bytes: Vec<ObjectReport>,
     asset_notes: Vec<String>,
 }
@@ -250,6 +260,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let mut warnings = clipping_warnings(&scene, &camera);
     let (w, h) = args.size;
     let start = Instant::now();
+    if args.reference && args.frames > 1 {
+        bail!("--frames (a soak of the GPU renderer) does not apply to --reference");
+    }
     let report = if args.reference {
         let mut instances = Vec::new();
         let mut lod_histogram = std::collections::BTreeMap::new();
@@ -292,6 +305,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             lod_histogram,
             warnings,
             streaming: None,
+            soak: None,
             gpu_memory_bytes: Vec::new(),
             asset_notes: notes,
         }
@@ -356,6 +370,19 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 ));
             }
         }
+        let soak = if args.frames > 1 {
+            let r = crate::soak::run(
+                &ctx,
+                &mut renderer,
+                &mut gpu_scene,
+                &camera,
+                args.camera_path,
+                args.frames as usize,
+            )?;
+            Some(r)
+        } else {
+            None
+        };
         let stats = renderer.render(&ctx, &mut gpu_scene, &camera, profiling)?;
         let out = ctx.read_texture(
             &renderer.output().texture,
@@ -384,6 +411,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             lod_histogram: gpu_scene.lod_histogram(),
             warnings,
             streaming,
+            soak,
             gpu_memory_bytes: gpu_scene
                 .memory
                 .iter()
@@ -549,6 +577,28 @@ fn print_report(r: &Report) {
     }
     for w in &r.warnings {
         println!("warning: {w}");
+    }
+    if let Some(s) = &r.soak {
+        let mib = |b: u64| b as f64 / (1 << 20) as f64;
+        let rss = |x: Option<u64>| x.map_or("?".to_string(), |b| format!("{:.1} MiB", mib(b)));
+        println!(
+            "soak: {} frames ({:?}), RSS {} -> {} ({:+.2} %), GPU {:.1} -> {:.1} MiB ({:+.2} %), \
+             buffers {} -> {}, bind groups {} -> {}, frame median {:.1} ms, worst {:.1} ms",
+            s.frames,
+            s.camera_path,
+            rss(s.start.rss_bytes),
+            rss(s.end.rss_bytes),
+            s.rss_growth_percent.unwrap_or(0.0),
+            mib(s.start.gpu_bytes),
+            mib(s.end.gpu_bytes),
+            s.gpu_growth_percent,
+            s.start.buffers,
+            s.end.buffers,
+            s.start.bind_groups,
+            s.end.bind_groups,
+            s.frame_ms_median,
+            s.frame_ms_max
+        );
     }
     for o in &r.gpu_memory_bytes {
         println!(

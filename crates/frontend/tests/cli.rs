@@ -676,3 +676,67 @@ fn render_under_a_gpu_budget_converges_to_the_unbudgeted_image() {
         "{err}"
     );
 }
+
+/// `render --frames N`: a soak along an orbit reports memory after the warm-up and at the
+/// end; a frame that leaked a buffer would show in the counts.
+#[test]
+fn render_frames_soaks_and_reports_memory() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("soak.png");
+    let out = ssbvb()
+        .args([
+            "render", "--size", "64x48", "--frames", "60", "--json", "-o",
+        ])
+        .arg(&png)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let s = &r["soak"];
+    assert_eq!(s["frames"], 60, "{s}");
+    assert_eq!(s["camera_path"], "orbit");
+    assert_eq!(
+        (s["start"]["frame"].as_u64(), s["end"]["frame"].as_u64()),
+        (Some(10), Some(60))
+    );
+    assert!(
+        s["start"]["buffers"].as_u64().unwrap() > 0,
+        "the device counts nothing: {s}"
+    );
+    for key in ["gpu_bytes", "buffers", "bind_groups"] {
+        assert_eq!(s["start"][key], s["end"][key], "{key}: {s}");
+    }
+    assert_eq!(s["samples"].as_array().unwrap().len(), 10, "{s}");
+    let rss = s["rss_growth_percent"].as_f64().unwrap();
+    assert!(rss.abs() < 10.0, "{s}");
+    assert!(png.exists());
+    // Without --frames there is no soak; --frames 0 and a soak of the reference are refused.
+    let out = ssbvb()
+        .args(["render", "--size", "32x24", "--json", "-o"])
+        .arg(&png)
+        .output()
+        .unwrap();
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(r["soak"].is_null());
+    for (args, want) in [
+        (&["--frames", "0"][..], "--frames"),
+        (
+            &["--frames", "5", "--reference"][..],
+            "does not apply to --reference",
+        ),
+    ] {
+        let out = ssbvb()
+            .arg("render")
+            .args(args)
+            .arg("-o")
+            .arg(&png)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(want),
+            "{args:?}: {err}"
+        );
+    }
+}

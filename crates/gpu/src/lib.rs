@@ -181,6 +181,21 @@ impl AdapterChoice {
     }
 }
 
+/// Device memory and object counts ([`GpuContext::memory_counters`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct MemoryCounters {
+    /// Bytes of device memory allocated for buffers.
+    pub buffer_bytes: u64,
+    /// Bytes of device memory allocated for textures.
+    pub texture_bytes: u64,
+    /// Live buffers.
+    pub buffers: u64,
+    /// Live textures.
+    pub textures: u64,
+    /// Live bind groups.
+    pub bind_groups: u64,
+}
+
 /// A device with its queue and what it can do.
 pub struct GpuContext {
     /// The wgpu instance (kept for surfaces).
@@ -481,6 +496,20 @@ impl GpuContext {
             }
         }
         Ok(out)
+    }
+
+    /// What the device holds now, from wgpu's internal counters (the `counters` feature;
+    /// backends that do not count report zeros): the soak's leak check.
+    pub fn memory_counters(&self) -> MemoryCounters {
+        let hal = self.device.get_internal_counters().hal;
+        let n = |v: isize| v.max(0) as u64;
+        MemoryCounters {
+            buffer_bytes: n(hal.buffer_memory.read()),
+            texture_bytes: n(hal.texture_memory.read()),
+            buffers: n(hal.buffers.read()),
+            textures: n(hal.textures.read()),
+            bind_groups: n(hal.bind_groups.read()),
+        }
     }
 
     /// Errors wgpu reported outside any error scope since the last call (empty is good).

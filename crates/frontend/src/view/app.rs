@@ -41,6 +41,8 @@ pub struct Options {
     pub screenshot: Option<PathBuf>,
     /// Pipeline files for the technique switch.
     pub techniques: Vec<PathBuf>,
+    /// With --frames: write process and device memory at the start and end here.
+    pub memory_report: Option<PathBuf>,
 }
 
 /// What is loaded before the window exists.
@@ -171,6 +173,10 @@ struct Viewer {
     needs_rebuild: bool,
     screenshot_next: Option<PathBuf>,
     screenshot_written: bool,
+    /// Pipeline reloads that succeeded and that failed (the last good one kept).
+    reloads: (u64, u64),
+    /// Memory after the warm-up, for `--memory-report`.
+    memory_start: Option<crate::soak::Sample>,
 }
 
 impl Viewer {
@@ -239,6 +245,8 @@ impl Viewer {
             needs_rebuild: false,
             screenshot_next: None,
             screenshot_written: false,
+            reloads: (0, 0),
+            memory_start: None,
             gpu,
         })
     }
@@ -377,10 +385,12 @@ impl Viewer {
                 self.knob_edits.clear();
                 self.overlay.reset();
                 if self.rebuild() {
+                    self.reloads.0 += 1;
                     self.status = Some(format!("reloaded {}", self.watcher.path().display()));
                 }
             }
             ReloadOutcome::Failed(errors) => {
+                self.reloads.1 += 1;
                 self.error = Some(errors.to_string().trim_end().to_string());
             }
         }
@@ -671,6 +681,24 @@ impl Viewer {
         self.stats.presented(Instant::now());
         self.frame += 1;
 
+        if let (Some(limit), Some(path)) = (options.frames, &options.memory_report) {
+            if self.frame == crate::soak::warmup_frames(limit as usize) as u64 {
+                self.memory_start = Some(crate::soak::Sample::take(
+                    &self.gpu.ctx,
+                    self.frame as usize,
+                ));
+            }
+            if self.frame >= limit {
+                let end = crate::soak::Sample::take(&self.gpu.ctx, self.frame as usize);
+                let report = crate::soak::ViewMemoryReport::new(
+                    self.frame,
+                    self.reloads,
+                    self.memory_start.unwrap_or(end),
+                    end,
+                );
+                crate::soak::write_json(path, &report)?;
+            }
+        }
         // Automation: exit after the last frame (its screenshot was taken above).
         if options.frames.is_some_and(|limit| self.frame >= limit) {
             return Ok(Flow::Exit);

@@ -67,6 +67,10 @@ pub struct ViewArgs {
     /// residency and changes the budget live.
     #[arg(long, value_name = "MIB")]
     pub gpu_budget: Option<u64>,
+    /// With --frames: write process RSS and device memory after the warm-up and at the
+    /// end, and the pipeline reloads seen, as JSON (a soak of the viewer and hot reload).
+    #[arg(long, value_name = "FILE", requires = "frames")]
+    pub memory_report: Option<PathBuf>,
 }
 
 /// Pages the viewer streams in before one frame at most.
@@ -125,6 +129,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         frames: args.frames,
         screenshot: args.screenshot.clone(),
         techniques: techniques::list(&assets_dir().join("pipelines")),
+        memory_report: args.memory_report.clone(),
     };
     let mut app = app::App::new(
         options,

@@ -55,3 +55,27 @@ proptest! {
         }
     }
 }
+
+/// The seeds of `cargo xtask fuzz` (`crates/voxel/fuzz/seeds`) are valid inputs: a seed
+/// that no longer parses would start the fuzzer from nothing.
+#[test]
+fn fuzz_seeds_parse() {
+    let seeds = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/seeds");
+    let mut checked = 0;
+    for (dir, format) in [
+        ("obj", Format::Obj),
+        ("ply", Format::Ply),
+        ("gltf", Format::Gltf),
+        ("raw", Format::Raw),
+    ] {
+        for entry in std::fs::read_dir(seeds.join(dir)).expect("seed folder") {
+            let path = entry.unwrap().path();
+            let bytes = std::fs::read(&path).unwrap();
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            let m = parse(&bytes, format, &name).unwrap_or_else(|e| panic!("{e}"));
+            crate::assert_usable(&m, &name, "fuzz seed");
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 6, "seed files");
+}

@@ -1,0 +1,233 @@
+//! `ssbvb render --frames N`: a soak. Renders N frames with the camera moving along a path
+//! and samples process RSS and the device's memory and object counts (wgpu's internal
+//! counters) during the run, so a leak per frame (a buffer, a bind group, a staging copy)
+//! shows as growth between the start and the end. Every frame runs with validation; any
+//! wgpu error fails the soak.
+//!
+//! The start sample is taken after a warm-up (1 % of the frames, at least 10): the first
+//! frames fill allocator caches and pipeline caches that are not leaks.
+
+use std::time::Instant;
+
+use anyhow::{Result, bail};
+use glam::{DQuat, DVec3};
+use serde::Serialize;
+use ssbvb_gpu::GpuContext;
+use ssbvb_passes::{GpuScene, Profiling, Renderer};
+use ssbvb_voxel::camera::Camera;
+
+/// How the camera moves during a soak.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CameraPath {
+    /// One turn around the look-at point, about the up axis, at the camera's distance.
+    Orbit,
+    /// The camera stays where it is.
+    Still,
+}
+
+/// The camera of frame `i` of `n` on `path`, starting at `base`.
+pub fn camera_at(base: &Camera, path: CameraPath, i: usize, n: usize) -> Camera {
+    match path {
+        CameraPath::Still => *base,
+        CameraPath::Orbit => {
+            let angle = std::f64::consts::TAU * i as f64 / n.max(1) as f64;
+            let up = base.up.normalize_or(DVec3::Y);
+            let offset = DQuat::from_axis_angle(up, angle) * (base.position - base.look_at);
+            Camera {
+                position: base.look_at + offset,
+                ..*base
+            }
+        }
+    }
+}
+
+/// What the process and the device hold at one frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Sample {
+    /// Frames rendered before the sample.
+    pub frame: usize,
+    /// Process resident memory (`None` where the platform does not say).
+    pub rss_bytes: Option<u64>,
+    /// Device memory of buffers and textures (0 on backends without counters).
+    pub gpu_bytes: u64,
+    /// Live buffers.
+    pub buffers: u64,
+    /// Live textures.
+    pub textures: u64,
+    /// Live bind groups.
+    pub bind_groups: u64,
+}
+
+impl Sample {
+    /// Samples now; `frame` frames were rendered before.
+    pub fn take(ctx: &GpuContext, frame: usize) -> Self {
+        let c = ctx.memory_counters();
+        Self {
+            frame,
+            rss_bytes: memory_stats::memory_stats().map(|m| m.physical_mem as u64),
+            gpu_bytes: c.buffer_bytes + c.texture_bytes,
+            buffers: c.buffers,
+            textures: c.textures,
+            bind_groups: c.bind_groups,
+        }
+    }
+}
+
+/// `render --json`'s `soak`.
+#[derive(Debug, Clone, Serialize)]
+pub struct SoakReport {
+    /// Frames rendered.
+    pub frames: usize,
+    /// The camera's path.
+    pub camera_path: CameraPath,
+    /// The sample after the warm-up, the one growth is measured from.
+    pub start: Sample,
+    /// The sample after the last frame.
+    pub end: Sample,
+    /// Ten samples spread over the run (start and end included).
+    pub samples: Vec<Sample>,
+    /// `end / start − 1` of the RSS, in percent.
+    pub rss_growth_percent: Option<f64>,
+    /// `end / start − 1` of the device bytes, in percent (0 when nothing is counted).
+    pub gpu_growth_percent: f64,
+    /// Median and worst frame wall time (submission to completion), milliseconds.
+    pub frame_ms_median: f64,
+    /// Worst frame.
+    pub frame_ms_max: f64,
+}
+
+/// The viewer's `--memory-report`: memory after the warm-up and at the end of a
+/// `--frames` run, with the pipeline reloads seen (the soak of hot reload).
+#[derive(Debug, Clone, Serialize)]
+pub struct ViewMemoryReport {
+    /// Frames presented.
+    pub frames: u64,
+    /// Pipeline reloads that succeeded.
+    pub reloads_ok: u64,
+    /// Reloads of a file with errors (the last good pipeline kept rendering).
+    pub reloads_failed: u64,
+    /// After the warm-up.
+    pub start: Sample,
+    /// After the last frame.
+    pub end: Sample,
+    /// `end / start − 1` of the RSS, in percent.
+    pub rss_growth_percent: Option<f64>,
+    /// `end / start − 1` of the device bytes, in percent.
+    pub gpu_growth_percent: f64,
+}
+
+impl ViewMemoryReport {
+    /// The report of a run.
+    pub fn new(frames: u64, reloads: (u64, u64), start: Sample, end: Sample) -> Self {
+        Self {
+            frames,
+            reloads_ok: reloads.0,
+            reloads_failed: reloads.1,
+            start,
+            end,
+            rss_growth_percent: start
+                .rss_bytes
+                .zip(end.rss_bytes)
+                .map(|(a, b)| growth(a, b)),
+            gpu_growth_percent: growth(start.gpu_bytes, end.gpu_bytes),
+        }
+    }
+}
+
+/// Writes `value` as JSON to `path` (a temporary file, then a rename).
+pub fn write_json(path: &std::path::Path, value: &impl Serialize) -> Result<()> {
+    use anyhow::Context;
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, serde_json::to_string_pretty(value)?)
+        .with_context(|| format!("writing {}", tmp.display()))?;
+    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
+}
+
+/// Frames before the start sample of a run of `n`: 1 %, at least 10 (fewer for a short run).
+pub fn warmup_frames(n: usize) -> usize {
+    (n / 100).max(10).min(n.saturating_sub(1))
+}
+
+fn growth(start: u64, end: u64) -> f64 {
+    if start == 0 {
+        0.0
+    } else {
+        (end as f64 / start as f64 - 1.0) * 100.0
+    }
+}
+
+/// Renders `n` frames along `path` from `base`, streaming pages between frames under a
+/// budget; fails on the first wgpu error.
+pub fn run(
+    ctx: &GpuContext,
+    renderer: &mut Renderer,
+    scene: &mut GpuScene,
+    base: &Camera,
+    path: CameraPath,
+    n: usize,
+) -> Result<SoakReport> {
+    let warmup = warmup_frames(n);
+    let every = (n / 9).max(1);
+    let mut samples = Vec::new();
+    let mut start = None;
+    let mut times = Vec::with_capacity(n);
+    for i in 0..n {
+        if i == warmup {
+            let s = Sample::take(ctx, i);
+            start = Some(s);
+            samples.push(s);
+        } else if i > warmup && (i - warmup).is_multiple_of(every) {
+            samples.push(Sample::take(ctx, i));
+        }
+        let cam = camera_at(base, path, i, n);
+        let t = Instant::now();
+        renderer.render(ctx, scene, &cam, Profiling::Off)?;
+        ctx.wait_idle()?;
+        times.push(t.elapsed().as_secs_f64() * 1e3);
+        let errors = ctx.take_uncaptured_errors();
+        if let Some(e) = errors.first() {
+            bail!("wgpu error at soak frame {i}: {e}");
+        }
+    }
+    let end = Sample::take(ctx, n);
+    samples.push(end);
+    let start = start.unwrap_or(end);
+    times.sort_by(f64::total_cmp);
+    Ok(SoakReport {
+        frames: n,
+        camera_path: path,
+        start,
+        end,
+        samples,
+        rss_growth_percent: start
+            .rss_bytes
+            .zip(end.rss_bytes)
+            .map(|(a, b)| growth(a, b)),
+        gpu_growth_percent: growth(start.gpu_bytes, end.gpu_bytes),
+        frame_ms_median: times.get(times.len() / 2).copied().unwrap_or(0.0),
+        frame_ms_max: times.last().copied().unwrap_or(0.0),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_orbit_turns_once_around_the_look_at_point() {
+        let base = Camera::new(DVec3::new(1.0, 2.0, 3.0), DVec3::new(1.0, 0.0, 0.0));
+        let d = |c: &Camera| (c.position - c.look_at).length();
+        for i in 0..8 {
+            let c = camera_at(&base, CameraPath::Orbit, i, 8);
+            assert!((d(&c) - d(&base)).abs() < 1e-12, "distance kept");
+            assert!((c.position.y - 2.0).abs() < 1e-12, "about the up axis");
+            assert_eq!(c.look_at, base.look_at);
+        }
+        let half = camera_at(&base, CameraPath::Orbit, 4, 8);
+        assert!((half.position - DVec3::new(1.0, 2.0, -3.0)).length() < 1e-9);
+        assert_eq!(camera_at(&base, CameraPath::Still, 5, 8), base);
+        assert!((growth(100, 102) - 2.0).abs() < 1e-9);
+        assert_eq!(growth(0, 5), 0.0);
+    }
+}
