@@ -17,3 +17,4 @@ mod smooth_composite;
 mod splat;
 mod streaming;
 mod triangles;
+mod webgpu_limits;
