@@ -24,7 +24,7 @@ struct Target {
 }
 
 /// Every target. The longest inputs are per format: mesh formats need room for a header and
-/// some elements; pipelines are short text; the voxelizer gets a few hundred triangles.
+/// some elements; pipelines and scenes are short text; the voxelizer gets a few hundred triangles.
 const TARGETS: &[Target] = &[
     Target {
         name: "obj",
@@ -55,13 +55,17 @@ const TARGETS: &[Target] = &[
         max_len: 8 << 10,
     },
     Target {
+        name: "scene",
+        max_len: 8 << 10,
+    },
+    Target {
         name: "voxelize",
         max_len: 4 << 10,
     },
 ];
 
 const USAGE: &str = "usage: cargo xtask fuzz [TARGET ...] [--seconds N] [--runs N] [--artifacts DIR] [--report FILE]
-  targets: obj ply gltf vox raw cache pipeline voxelize (default: all)
+  targets: obj ply gltf vox raw cache pipeline scene voxelize (default: all)
   --seconds N      time per target (default 60)
   --runs N         stop a target after N executions (default: no limit)
   --artifacts DIR  where crashing inputs go (default target/fuzz/artifacts)
@@ -210,6 +214,7 @@ fn seed(root: &Path, t: &Target, corpus: &Path) -> Result<()> {
                 .filter(|p| p.extension().is_some_and(|e| e == t.name)),
         ),
         "pipeline" => sources.extend(files_in(&root.join("assets/pipelines"))),
+        "scene" => sources.extend(files_in(&root.join("assets/scenes"))),
         "cache" => {
             let path = corpus.join("seed-knight-level-3.bin");
             if !path.exists() {

@@ -12,8 +12,8 @@ use ssbvb_passes::{GpuScene, Profiling, Renderer, StreamingOptions, StreamingSta
 use ssbvb_voxel::cache::{PageFile, PrepareOutcome};
 use ssbvb_voxel::camera::Camera;
 
-/// Largest budget accepted (MiB): 1 TiB.
-pub const MAX_BUDGET_MIB: u64 = 1 << 20;
+/// Largest budget accepted (MiB): 1 TiB, as in scene files.
+pub const MAX_BUDGET_MIB: u64 = ssbvb_scene::MAX_GPU_BUDGET_MIB;
 
 /// Where one object's pages can be read: its asset's cache file.
 #[derive(Debug, Clone)]
