@@ -57,13 +57,20 @@ pub struct Sample {
     pub textures: u64,
     /// Live bind groups.
     pub bind_groups: u64,
+    /// Under a GPU budget: pages streamed in and evicted so far (`None` without a budget).
+    pub pages_streamed: Option<u64>,
+    /// Pages evicted so far.
+    pub pages_evicted: Option<u64>,
 }
 
 impl Sample {
     /// Samples now; `frame` frames were rendered before.
-    pub fn take(ctx: &GpuContext, frame: usize) -> Self {
+    pub fn take(ctx: &GpuContext, scene: &GpuScene, frame: usize) -> Self {
         let c = ctx.memory_counters();
+        let st = scene.streaming_stats();
         Self {
+            pages_streamed: st.map(|s| s.pages_streamed),
+            pages_evicted: st.map(|s| s.pages_evicted),
             frame,
             rss_bytes: memory_stats::memory_stats().map(|m| m.physical_mem as u64),
             gpu_bytes: c.buffer_bytes + c.texture_bytes,
@@ -174,11 +181,11 @@ pub fn run(
     let mut times = Vec::with_capacity(n);
     for i in 0..n {
         if i == warmup {
-            let s = Sample::take(ctx, i);
+            let s = Sample::take(ctx, scene, i);
             start = Some(s);
             samples.push(s);
         } else if i > warmup && (i - warmup).is_multiple_of(every) {
-            samples.push(Sample::take(ctx, i));
+            samples.push(Sample::take(ctx, scene, i));
         }
         let cam = camera_at(base, path, i, n);
         let t = Instant::now();
@@ -190,7 +197,7 @@ pub fn run(
             bail!("wgpu error at soak frame {i}: {e}");
         }
     }
-    let end = Sample::take(ctx, n);
+    let end = Sample::take(ctx, scene, n);
     samples.push(end);
     let start = start.unwrap_or(end);
     times.sort_by(f64::total_cmp);

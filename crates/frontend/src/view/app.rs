@@ -685,11 +685,13 @@ impl Viewer {
             if self.frame == crate::soak::warmup_frames(limit as usize) as u64 {
                 self.memory_start = Some(crate::soak::Sample::take(
                     &self.gpu.ctx,
+                    &self.scene,
                     self.frame as usize,
                 ));
             }
             if self.frame >= limit {
-                let end = crate::soak::Sample::take(&self.gpu.ctx, self.frame as usize);
+                let end =
+                    crate::soak::Sample::take(&self.gpu.ctx, &self.scene, self.frame as usize);
                 let report = crate::soak::ViewMemoryReport::new(
                     self.frame,
                     self.reloads,
