@@ -118,6 +118,8 @@ pub struct ViewMemoryReport {
     pub start: Sample,
     /// After the last frame.
     pub end: Sample,
+    /// About ten samples over the run, the first after the warm-up, the last at the end.
+    pub samples: Vec<Sample>,
     /// `end / start − 1` of the RSS, in percent.
     pub rss_growth_percent: Option<f64>,
     /// `end / start − 1` of the device bytes, in percent.
@@ -125,14 +127,17 @@ pub struct ViewMemoryReport {
 }
 
 impl ViewMemoryReport {
-    /// The report of a run.
-    pub fn new(frames: u64, reloads: (u64, u64), start: Sample, end: Sample) -> Self {
+    /// The report of a run from its samples (at least one: the end).
+    pub fn new(frames: u64, reloads: (u64, u64), samples: Vec<Sample>) -> Self {
+        let end = samples.last().copied().expect("the end sample");
+        let start = samples.first().copied().unwrap_or(end);
         Self {
             frames,
             reloads_ok: reloads.0,
             reloads_failed: reloads.1,
             start,
             end,
+            samples,
             rss_growth_percent: start
                 .rss_bytes
                 .zip(end.rss_bytes)

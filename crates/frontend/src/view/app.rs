@@ -176,7 +176,7 @@ struct Viewer {
     /// Pipeline reloads that succeeded and that failed (the last good one kept).
     reloads: (u64, u64),
     /// Memory after the warm-up, for `--memory-report`.
-    memory_start: Option<crate::soak::Sample>,
+    memory_samples: Vec<crate::soak::Sample>,
 }
 
 impl Viewer {
@@ -246,7 +246,7 @@ impl Viewer {
             screenshot_next: None,
             screenshot_written: false,
             reloads: (0, 0),
-            memory_start: None,
+            memory_samples: Vec::new(),
             gpu,
         })
     }
@@ -682,21 +682,20 @@ impl Viewer {
         self.frame += 1;
 
         if let (Some(limit), Some(path)) = (options.frames, &options.memory_report) {
-            if self.frame == crate::soak::warmup_frames(limit as usize) as u64 {
-                self.memory_start = Some(crate::soak::Sample::take(
-                    &self.gpu.ctx,
-                    &self.scene,
-                    self.frame as usize,
-                ));
+            let warmup = crate::soak::warmup_frames(limit as usize) as u64;
+            let every = (limit / 9).max(1);
+            if self.frame >= warmup && (self.frame - warmup).is_multiple_of(every) {
+                let s = crate::soak::Sample::take(&self.gpu.ctx, &self.scene, self.frame as usize);
+                self.memory_samples.push(s);
             }
             if self.frame >= limit {
                 let end =
                     crate::soak::Sample::take(&self.gpu.ctx, &self.scene, self.frame as usize);
+                self.memory_samples.push(end);
                 let report = crate::soak::ViewMemoryReport::new(
                     self.frame,
                     self.reloads,
-                    self.memory_start.unwrap_or(end),
-                    end,
+                    std::mem::take(&mut self.memory_samples),
                 );
                 crate::soak::write_json(path, &report)?;
             }
