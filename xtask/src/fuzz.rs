@@ -185,7 +185,10 @@ fn build(root: &Path, targets: &[&Target]) -> Result<PathBuf> {
         targets.len()
     );
     if !cmd.status().context("running cargo build")?.success() {
-        bail!("building the fuzz targets failed");
+        bail!(
+            "building the fuzz targets failed (libFuzzer needs a C++ compiler: on Debian/Ubuntu \
+             `apt-get install -y g++`)"
+        );
     }
     Ok(target_dir.join(host).join("release"))
 }

@@ -124,6 +124,8 @@ const APT_PACKAGES: &[&str] = &[
     "libxcursor1",
     "libxi6",
     "libxrandr2",
+    // libFuzzer (C++) for the fuzz smoke.
+    "g++",
 ];
 
 /// Makes sure a Vulkan adapter can exist: on Linux without a Vulkan driver (or without
