@@ -112,3 +112,21 @@ fn each_pipeline_fits_webgpu_default_limits_or_is_refused_up_front() {
         assert!(n.bind_groups <= u64::from(wgpu::Limits::default().max_bind_groups));
     }
 }
+
+/// Every registered pass kind's WGSL compiles into a shader module on the WebGPU-defaults
+/// device: what the limits refuse is the binding layout, not the shader code.
+#[test]
+fn every_pass_kind_shader_compiles_under_webgpu_default_limits() {
+    let (ctx, errors) = minimal_device();
+    let kinds = ssbvb_passes::registered_kinds();
+    assert!(kinds.len() >= 10, "{} registered kinds", kinds.len());
+    for kind in kinds {
+        let file = ssbvb_passes::registry::registration(&kind).unwrap().shader;
+        let src = ssbvb_passes::shaders::source(file).unwrap_or_else(|e| panic!("{e}"));
+        ctx.shader(file, &src)
+            .unwrap_or_else(|e| panic!("{} ({file}) under WebGPU defaults: {e}", kind.name()));
+    }
+    ctx.wait_idle().unwrap();
+    let errs = std::mem::take(&mut *errors.lock().unwrap());
+    assert!(errs.is_empty(), "{errs:#?}");
+}
