@@ -335,6 +335,15 @@ mod tests {
         assert_eq!(angle_deg([f32::NAN, 0.0, 0.0], [0.0, 0.0, 1.0]), 180.0);
         assert!((angle_deg([0.0, 0.0, 2.0], [0.0, 0.0, -1.0]) - 180.0).abs() < 1e-9);
         assert!((angle_deg([1.0, 1.0, 0.0], [1.0, 0.0, 0.0]) - 45.0).abs() < 1e-9);
+        // Every component of both vectors counts (the length of each, not only the dot).
+        let diagonal = (1.0f64 / 3.0f64.sqrt()).acos().to_degrees();
+        for (a, b) in [
+            ([1.0, 0.0, 0.0], [1.0, 1.0, 1.0]),
+            ([1.0, 1.0, 1.0], [0.0, 1.0, 0.0]),
+            ([0.0, 0.0, 3.0], [2.0, 2.0, 2.0]),
+        ] {
+            assert!((angle_deg(a, b) - diagonal).abs() < 1e-9, "{a:?} {b:?}");
+        }
     }
 
     #[test]
