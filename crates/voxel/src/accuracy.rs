@@ -332,6 +332,8 @@ mod tests {
     #[test]
     fn degenerate_normals_count_as_opposite() {
         assert_eq!(angle_deg([0.0; 3], [0.0, 0.0, 1.0]), 180.0);
+        assert_eq!(angle_deg([0.0, 0.0, 1.0], [0.0; 3]), 180.0);
+        assert_eq!(angle_deg([0.0, 1.0, 0.0], [f32::INFINITY, 0.0, 0.0]), 180.0);
         assert_eq!(angle_deg([f32::NAN, 0.0, 0.0], [0.0, 0.0, 1.0]), 180.0);
         assert!((angle_deg([0.0, 0.0, 2.0], [0.0, 0.0, -1.0]) - 180.0).abs() < 1e-9);
         assert!((angle_deg([1.0, 1.0, 0.0], [1.0, 0.0, 0.0]) - 45.0).abs() < 1e-9);
