@@ -210,7 +210,7 @@ fn view_keeps_rendering_and_holds_memory_while_its_pipeline_is_rewritten() {
     let mut child = c
         .args(["-a", "-s", "-screen 0 1280x800x24"])
         .arg(env!("CARGO_BIN_EXE_ssbvb"))
-        .args(["view", "--size", "160x120", "--frames", "150", "--pipeline"])
+        .args(["view", "--size", "160x120", "--frames", "300", "--pipeline"])
         .arg(&pipeline)
         .arg("--memory-report")
         .arg(&report)
@@ -218,8 +218,17 @@ fn view_keeps_rendering_and_holds_memory_while_its_pipeline_is_rewritten() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    // Rewrite every 0.4 s (the viewer polls every 0.3 s) until the viewer exits; a write
-    // is a temporary file and a rename, as editors save.
+    // Once the viewer is up (its report appears after the warm-up), rewrite every 0.4 s
+    // (it polls every 0.3 s) until it exits; a write is a temporary file and a rename, as
+    // editors save.
+    let up = std::time::Instant::now();
+    while !report.exists() && child.try_wait().unwrap().is_none() {
+        assert!(
+            up.elapsed().as_secs() < 300,
+            "the viewer never reached its warm-up"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
     let mut writes = 0;
     while child.try_wait().unwrap().is_none() && writes < 200 {
         std::thread::sleep(std::time::Duration::from_millis(400));
@@ -236,12 +245,22 @@ fn view_keeps_rendering_and_holds_memory_while_its_pipeline_is_rewritten() {
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
     eprintln!("{writes} rewrites: {r:#}");
-    assert_eq!(r["frames"], 150);
+    assert_eq!(r["frames"], 300);
     assert!(r["reloads_failed"].as_u64().unwrap() >= 1, "{r}");
     assert!(r["reloads_ok"].as_u64().unwrap() >= 1, "{r}");
     for key in ["gpu_bytes", "buffers"] {
         assert_eq!(r["start"][key], r["end"][key], "{key}: {r}");
     }
-    let rss = r["rss_growth_percent"].as_f64().unwrap();
-    assert!(rss < 10.0, "RSS grew {rss} % over the run: {r}");
+    // The first reloads raise RSS once (measured on lavapipe: +16 % over the first 30
+    // frames: the driver's code for the new pipelines, the overlay's error window); a leak
+    // per reload would keep it rising. From a third of the run to the end: measured +0.5 %.
+    let samples = r["samples"].as_array().unwrap();
+    let rss = |s: &serde_json::Value| s["rss_bytes"].as_f64().unwrap();
+    let (mid, end) = (&samples[samples.len() / 3], samples.last().unwrap());
+    let growth = (rss(end) / rss(mid) - 1.0) * 100.0;
+    assert!(
+        growth < 5.0,
+        "RSS grew {growth:.2} % from frame {} to the end: {r}",
+        mid["frame"]
+    );
 }

@@ -684,18 +684,16 @@ impl Viewer {
         if let (Some(limit), Some(path)) = (options.frames, &options.memory_report) {
             let warmup = crate::soak::warmup_frames(limit as usize) as u64;
             let every = (limit / 9).max(1);
-            if self.frame >= warmup && (self.frame - warmup).is_multiple_of(every) {
+            // Written at every sample (the report so far), so a run that dies leaves its
+            // last state, and a watcher knows the viewer is up.
+            let sample = self.frame >= warmup && (self.frame - warmup).is_multiple_of(every);
+            if sample || self.frame >= limit {
                 let s = crate::soak::Sample::take(&self.gpu.ctx, &self.scene, self.frame as usize);
                 self.memory_samples.push(s);
-            }
-            if self.frame >= limit {
-                let end =
-                    crate::soak::Sample::take(&self.gpu.ctx, &self.scene, self.frame as usize);
-                self.memory_samples.push(end);
                 let report = crate::soak::ViewMemoryReport::new(
                     self.frame,
                     self.reloads,
-                    std::mem::take(&mut self.memory_samples),
+                    self.memory_samples.clone(),
                 );
                 crate::soak::write_json(path, &report)?;
             }
