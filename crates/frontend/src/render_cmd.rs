@@ -578,14 +578,15 @@ fn print_report(r: &Report) {
     for w in &r.warnings {
         println!("warning: {w}");
     }
-    if let Some(s) = &r.soak {
+    if let Some(soak) = &r.soak {
+        let s = &soak.memory;
         let mib = |b: u64| b as f64 / (1 << 20) as f64;
         let rss = |x: Option<u64>| x.map_or("?".to_string(), |b| format!("{:.1} MiB", mib(b)));
         println!(
             "soak: {} frames ({:?}), RSS {} -> {} ({:+.2} %), GPU {:.1} -> {:.1} MiB ({:+.2} %), \
              buffers {} -> {}, bind groups {} -> {}, frame median {:.1} ms, worst {:.1} ms",
-            s.frames,
-            s.camera_path,
+            soak.frames,
+            soak.camera_path,
             rss(s.start.rss_bytes),
             rss(s.end.rss_bytes),
             s.rss_growth_percent.unwrap_or(0.0),
@@ -596,8 +597,8 @@ fn print_report(r: &Report) {
             s.end.buffers,
             s.start.bind_groups,
             s.end.bind_groups,
-            s.frame_ms_median,
-            s.frame_ms_max
+            soak.frame_ms_median,
+            soak.frame_ms_max
         );
     }
     for o in &r.gpu_memory_bytes {

@@ -81,6 +81,39 @@ impl Sample {
     }
 }
 
+/// Memory over a run: the samples and the growth from the first to the last.
+#[derive(Debug, Clone, Serialize)]
+pub struct MemoryTrend {
+    /// The sample after the warm-up, the one growth is measured from.
+    pub start: Sample,
+    /// The sample after the last frame.
+    pub end: Sample,
+    /// About ten samples spread over the run (start and end included).
+    pub samples: Vec<Sample>,
+    /// `end / start − 1` of the RSS, in percent.
+    pub rss_growth_percent: Option<f64>,
+    /// `end / start − 1` of the device bytes, in percent (0 when nothing is counted).
+    pub gpu_growth_percent: f64,
+}
+
+impl MemoryTrend {
+    /// The trend of `samples` followed by `last`, the end sample.
+    pub fn of(mut samples: Vec<Sample>, last: Sample) -> Self {
+        samples.push(last);
+        let start = samples[0];
+        Self {
+            start,
+            end: last,
+            rss_growth_percent: start
+                .rss_bytes
+                .zip(last.rss_bytes)
+                .map(|(a, b)| growth(a, b)),
+            gpu_growth_percent: growth(start.gpu_bytes, last.gpu_bytes),
+            samples,
+        }
+    }
+}
+
 /// `render --json`'s `soak`.
 #[derive(Debug, Clone, Serialize)]
 pub struct SoakReport {
@@ -88,16 +121,9 @@ pub struct SoakReport {
     pub frames: usize,
     /// The camera's path.
     pub camera_path: CameraPath,
-    /// The sample after the warm-up, the one growth is measured from.
-    pub start: Sample,
-    /// The sample after the last frame.
-    pub end: Sample,
-    /// Ten samples spread over the run (start and end included).
-    pub samples: Vec<Sample>,
-    /// `end / start − 1` of the RSS, in percent.
-    pub rss_growth_percent: Option<f64>,
-    /// `end / start − 1` of the device bytes, in percent (0 when nothing is counted).
-    pub gpu_growth_percent: f64,
+    /// Memory after the warm-up, over the run and at the end.
+    #[serde(flatten)]
+    pub memory: MemoryTrend,
     /// Median and worst frame wall time (submission to completion), milliseconds.
     pub frame_ms_median: f64,
     /// Worst frame.
@@ -114,37 +140,9 @@ pub struct ViewMemoryReport {
     pub reloads_ok: u64,
     /// Reloads of a file with errors (the last good pipeline kept rendering).
     pub reloads_failed: u64,
-    /// After the warm-up.
-    pub start: Sample,
-    /// After the last frame.
-    pub end: Sample,
-    /// About ten samples over the run, the first after the warm-up, the last at the end.
-    pub samples: Vec<Sample>,
-    /// `end / start − 1` of the RSS, in percent.
-    pub rss_growth_percent: Option<f64>,
-    /// `end / start − 1` of the device bytes, in percent.
-    pub gpu_growth_percent: f64,
-}
-
-impl ViewMemoryReport {
-    /// The report of a run from its samples (at least one: the end).
-    pub fn new(frames: u64, reloads: (u64, u64), samples: Vec<Sample>) -> Self {
-        let end = samples.last().copied().expect("the end sample");
-        let start = samples.first().copied().unwrap_or(end);
-        Self {
-            frames,
-            reloads_ok: reloads.0,
-            reloads_failed: reloads.1,
-            start,
-            end,
-            samples,
-            rss_growth_percent: start
-                .rss_bytes
-                .zip(end.rss_bytes)
-                .map(|(a, b)| growth(a, b)),
-            gpu_growth_percent: growth(start.gpu_bytes, end.gpu_bytes),
-        }
-    }
+    /// Memory after the warm-up, over the run and now.
+    #[serde(flatten)]
+    pub memory: MemoryTrend,
 }
 
 /// Writes `value` as JSON to `path` (a temporary file, then a rename).
@@ -182,14 +180,9 @@ pub fn run(
     let warmup = warmup_frames(n);
     let every = (n / 9).max(1);
     let mut samples = Vec::new();
-    let mut start = None;
     let mut times = Vec::with_capacity(n);
     for i in 0..n {
-        if i == warmup {
-            let s = Sample::take(ctx, scene, i);
-            start = Some(s);
-            samples.push(s);
-        } else if i > warmup && (i - warmup).is_multiple_of(every) {
+        if i >= warmup && (i - warmup).is_multiple_of(every) {
             samples.push(Sample::take(ctx, scene, i));
         }
         let cam = camera_at(base, path, i, n);
@@ -203,20 +196,11 @@ pub fn run(
         }
     }
     let end = Sample::take(ctx, scene, n);
-    samples.push(end);
-    let start = start.unwrap_or(end);
     times.sort_by(f64::total_cmp);
     Ok(SoakReport {
         frames: n,
         camera_path: path,
-        start,
-        end,
-        samples,
-        rss_growth_percent: start
-            .rss_bytes
-            .zip(end.rss_bytes)
-            .map(|(a, b)| growth(a, b)),
-        gpu_growth_percent: growth(start.gpu_bytes, end.gpu_bytes),
+        memory: MemoryTrend::of(samples, end),
         frame_ms_median: times.get(times.len() / 2).copied().unwrap_or(0.0),
         frame_ms_max: times.last().copied().unwrap_or(0.0),
     })

@@ -689,12 +689,13 @@ impl Viewer {
             let sample = self.frame >= warmup && (self.frame - warmup).is_multiple_of(every);
             if sample || self.frame >= limit {
                 let s = crate::soak::Sample::take(&self.gpu.ctx, &self.scene, self.frame as usize);
+                let report = crate::soak::ViewMemoryReport {
+                    frames: self.frame,
+                    reloads_ok: self.reloads.0,
+                    reloads_failed: self.reloads.1,
+                    memory: crate::soak::MemoryTrend::of(self.memory_samples.clone(), s),
+                };
                 self.memory_samples.push(s);
-                let report = crate::soak::ViewMemoryReport::new(
-                    self.frame,
-                    self.reloads,
-                    self.memory_samples.clone(),
-                );
                 crate::soak::write_json(path, &report)?;
             }
         }
