@@ -207,3 +207,21 @@ pub fn gbuffer_hits(frame: &Frame, what: &str) -> Vec<Option<ssbvb_voxel::accura
         })
         .collect()
 }
+
+/// A camera whose rays run almost in the plane of the top faces of the lowest voxel layer
+/// of `asset` at `level` (grazing rays: the hardest ties for every traversal).
+pub fn grazing_camera(asset: &VoxelAsset, level: u32) -> Camera {
+    let cell = 2.0 / (1u64 << level) as f64;
+    let min_y = asset.lods[level as usize]
+        .point_cloud
+        .voxels
+        .iter()
+        .map(|v| v.cell()[1])
+        .min()
+        .expect("a non-empty level");
+    let y = -1.0 + (min_y as f64 + 1.01) * cell;
+    Camera::new(
+        glam::DVec3::new(3.0, y, 0.7),
+        glam::DVec3::new(0.0, y + 0.002, 0.0),
+    )
+}

@@ -230,17 +230,8 @@ fn ray_casters_and_cubes_draw_several_objects() {
 fn grazing_enclosed_and_extreme_planes_match_the_reference() {
     let asset = ssbvb_tests::model_asset("bunny.obj", LEVEL);
     let cell = 2.0 / (1u64 << LEVEL) as f64;
-    let min_y = asset.lods[LEVEL as usize]
-        .point_cloud
-        .voxels
-        .iter()
-        .map(|v| v.cell()[1])
-        .min()
-        .unwrap();
+    let grazing = ssbvb_tests::grazing_camera(&asset, LEVEL);
     let scene = ssbvb_tests::single_object_scene(asset, LEVEL);
-    // Rays almost in the plane of the lowest layer's top faces.
-    let y = -1.0 + (min_y as f64 + 1.01) * cell;
-    let grazing = Camera::new(DVec3::new(3.0, y, 0.7), DVec3::new(0.0, y + 0.002, 0.0));
     check("grazing", &scene, &grazing, 100);
     let planes = Camera {
         near: 1e-4,
