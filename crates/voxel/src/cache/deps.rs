@@ -162,5 +162,34 @@ mod tests {
         assert!(read_list(&p).is_none());
         std::fs::write(&p, "missing\n").unwrap();
         assert!(read_list(&p).is_none());
+        // A hash must have its 32 digits (a short one would parse as a number).
+        std::fs::write(&p, "abc /x.mtl\n").unwrap();
+        assert!(read_list(&p).is_none());
+        // Either line break makes a path unlistable.
+        for bad in ["/a\nb.mtl", "/a\rb.mtl"] {
+            let d = [Dependency {
+                path: PathBuf::from(bad),
+                hash: None,
+            }];
+            assert!(write_list(&p, &d).is_err(), "{bad:?}");
+        }
+    }
+
+    /// Found by cargo-mutants: dependencies that do not exist are keyed by an absolute path
+    /// (their canonical folder and name), so the key does not depend on the working folder.
+    #[test]
+    fn missing_files_are_named_by_their_canonical_folder() {
+        let dir = tempfile::tempdir().unwrap();
+        let canonical = std::fs::canonicalize(dir.path()).unwrap();
+        let missing = dir.path().join("sub/../nothing.mtl");
+        std::fs::create_dir(dir.path().join("sub")).unwrap();
+        assert_eq!(absolute(&missing), canonical.join("nothing.mtl"));
+        let here = std::fs::canonicalize(".").unwrap();
+        assert_eq!(
+            absolute(Path::new("no-such-file.mtl")),
+            here.join("no-such-file.mtl")
+        );
+        let existing = dir.path().join("sub");
+        assert_eq!(absolute(&existing), canonical.join("sub"));
     }
 }
