@@ -11,7 +11,7 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use glam::{DAffine3, DVec3};
 use serde::Serialize;
 use ssbvb_gpu::GpuContext;
@@ -23,7 +23,6 @@ use ssbvb_voxel::camera::Camera;
 
 use super::BenchArgs;
 use super::sweep::{bundled_pipeline, reference_at};
-use crate::render_cmd::assets_dir;
 
 const DEFAULT_LEVELS: [u32; 7] = [7, 8, 9, 10, 11, 12, 13];
 const DEFAULT_BUDGETS: [u64; 3] = [32, 128, 512];
@@ -190,19 +189,11 @@ pub(super) fn run(args: &BenchArgs) -> Result<()> {
     let pipeline = bundled_pipeline("ssbvb.ron")?;
     let ctx = crate::adapter_cmd::headless_context(&[&pipeline])?;
     let log = !args.json;
-    let model = assets_dir().join("models/bunny.obj");
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
     let mut fly = None;
     for &level in &levels {
-        let (asset, outcome) = ssbvb_voxel::cache::load_or_prepare(
-            &model,
-            level,
-            None,
-            &ssbvb_voxel::progress::NoProgress,
-        )
-        .with_context(|| format!("preparing {} at level {level}", model.display()))?;
-        let asset = Arc::new(asset);
+        let (asset, outcome) = super::bundled_bunny(level)?;
         let source = [crate::budget::PageSourceRef::of(&outcome, level)];
         let reference = reference_at(&asset, level, &camera, size);
         let mut base_ms = None;

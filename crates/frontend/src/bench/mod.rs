@@ -163,13 +163,25 @@ fn sweeps(args: &BenchArgs, ctx: &ssbvb_gpu::GpuContext, camera: &Camera) -> Res
         return Ok(Vec::new());
     }
     let cfg = matrix::sweep_config(args.preset);
+    let (asset, _) = bundled_bunny(cfg.level)?;
+    sweep::run_sweeps(ctx, &asset, camera, &cfg, !args.json)
+}
+
+/// The bundled bunny at `level`, from the asset cache (prepared on a miss), and how the
+/// cache answered.
+fn bundled_bunny(
+    level: u32,
+) -> Result<(
+    Arc<ssbvb_voxel::asset::VoxelAsset>,
+    ssbvb_voxel::cache::PrepareOutcome,
+)> {
     let model = assets_dir().join("models/bunny.obj");
-    let (asset, _) = ssbvb_voxel::cache::load_or_prepare(
+    let (asset, outcome) = ssbvb_voxel::cache::load_or_prepare(
         &model,
-        cfg.level,
+        level,
         None,
         &ssbvb_voxel::progress::NoProgress,
     )
-    .with_context(|| format!("preparing {}", model.display()))?;
-    sweep::run_sweeps(ctx, &Arc::new(asset), camera, &cfg, !args.json)
+    .with_context(|| format!("preparing {} at level {level}", model.display()))?;
+    Ok((Arc::new(asset), outcome))
 }

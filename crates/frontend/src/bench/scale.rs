@@ -9,7 +9,6 @@
 
 use std::collections::BTreeMap;
 use std::path::Path;
-use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
@@ -24,7 +23,6 @@ use super::BenchArgs;
 use super::plot::{PlotInfo, Series, plot};
 use super::sweep::{bundled_pipeline, with_kind_edit};
 use super::techniques::{TECHNIQUES, Technique};
-use crate::render_cmd::assets_dir;
 
 /// The finest level of the bunny asset (the table: level 8).
 const LEVEL: u32 = 8;
@@ -153,15 +151,7 @@ pub(super) fn run(args: &BenchArgs) -> Result<()> {
         })
         .collect::<Result<Vec<_>>>()?;
     let ctx = crate::adapter_cmd::headless_context(&pipelines.iter().collect::<Vec<_>>())?;
-    let model = assets_dir().join("models/bunny.obj");
-    let (asset, _) = ssbvb_voxel::cache::load_or_prepare(
-        &model,
-        LEVEL,
-        None,
-        &ssbvb_voxel::progress::NoProgress,
-    )
-    .with_context(|| format!("preparing {}", model.display()))?;
-    let asset = Arc::new(asset);
+    let (asset, _) = super::bundled_bunny(LEVEL)?;
     let mut views: Vec<(&'static str, usize, Camera)> = counts
         .iter()
         .map(|&n| ("grid", n, grid_camera(n)))
