@@ -160,6 +160,7 @@ pub fn reference_of(scene: &Scene, camera: &Camera, size: (u32, u32)) -> Referen
             instances.push(reference::Instance {
                 lod: &o.asset.lods[level as usize],
                 object_to_world: *xf,
+                faces: None,
             });
         }
     }

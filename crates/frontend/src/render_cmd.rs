@@ -275,6 +275,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 instances.push(ssbvb_voxel::reference::Instance {
                     lod: &o.asset.lods[level as usize],
                     object_to_world: *xf,
+                    faces: None,
                 });
             }
         }

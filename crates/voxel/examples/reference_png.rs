@@ -129,12 +129,14 @@ fn main() -> std::io::Result<()> {
         Instance {
             lod: &ball,
             object_to_world: DAffine3::from_translation(DVec3::new(0.0, 0.9, 0.0)),
+            faces: None,
         },
         // The floor: 6 × 6 world units, its top face at y = 0.
         Instance {
             lod: &floor,
             object_to_world: DAffine3::from_scale(DVec3::splat(3.0))
                 * DAffine3::from_translation(DVec3::new(0.0, 1.0 - cell_size(6), 0.0)),
+            faces: None,
         },
     ];
     let camera = Camera {
@@ -162,6 +164,7 @@ fn main() -> std::io::Result<()> {
     let solo = [Instance {
         lod: &ball,
         object_to_world: DAffine3::IDENTITY,
+        faces: None,
     }];
     let cam = Camera {
         fov_y_deg: 40.0,
@@ -192,6 +195,7 @@ fn main() -> std::io::Result<()> {
         let inst = [Instance {
             lod: finest,
             object_to_world: DAffine3::IDENTITY,
+            faces: None,
         }];
         let cam = Camera {
             fov_y_deg: 40.0,

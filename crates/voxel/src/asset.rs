@@ -127,7 +127,7 @@ impl PackedVoxel {
 }
 
 /// Octahedral encoding of a direction into two 8-bit unorms (Cigolle et al. 2014).
-fn encode_octahedral(n: [f32; 3]) -> [u32; 2] {
+pub(crate) fn encode_octahedral(n: [f32; 3]) -> [u32; 2] {
     let l1 = n[0].abs() + n[1].abs() + n[2].abs();
     let (mut x, mut y, z) = if l1 > 0.0 && l1.is_finite() {
         (n[0] / l1, n[1] / l1, n[2] / l1)
@@ -144,7 +144,7 @@ fn encode_octahedral(n: [f32; 3]) -> [u32; 2] {
 }
 
 /// Inverse of [`encode_octahedral`]; always returns a unit vector.
-fn decode_octahedral(u: u32, v: u32) -> [f32; 3] {
+pub(crate) fn decode_octahedral(u: u32, v: u32) -> [f32; 3] {
     let mut x = u as f32 / 255.0 * 2.0 - 1.0;
     let mut y = v as f32 / 255.0 * 2.0 - 1.0;
     let z = 1.0 - x.abs() - y.abs();

@@ -24,5 +24,6 @@ pub mod progress;
 pub mod proxy;
 pub mod reference;
 pub mod shading;
+pub mod surface;
 pub mod svo;
 pub mod voxelize;

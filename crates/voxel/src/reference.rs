@@ -26,7 +26,7 @@ use glam::{DAffine3, DMat3, DVec3};
 use image::ImageEncoder;
 use rayon::prelude::*;
 
-pub use self::dda::{ObjectHit, Traversal, trace_object_ray};
+pub use self::dda::{ObjectHit, Traversal, trace_object_ray, trace_object_ray_faces};
 use crate::asset::LodLevel;
 use crate::camera::{Camera, normalize_or};
 use crate::instance_bvh::{Aabb, InstanceBvh};
@@ -42,6 +42,9 @@ pub struct Instance<'a> {
     /// (normals use the inverse transpose). A singular or non-finite transform hides the
     /// instance.
     pub object_to_world: DAffine3,
+    /// Face masks per voxel id of `lod` (a RastaVox level, [`crate::surface::FaceLod`]):
+    /// voxels are then hit only through their masked faces ([`trace_object_ray_faces`]).
+    pub faces: Option<&'a [u8]>,
 }
 
 /// The first voxel a pixel's ray hits.
@@ -86,6 +89,7 @@ pub struct ReferenceImage {
 /// An instance prepared for tracing: the inverse transform, computed once.
 struct Prepared<'a> {
     lod: &'a LodLevel,
+    faces: Option<&'a [u8]>,
     /// World → object linear part.
     to_object: DMat3,
     /// Object → world translation (subtracted before `to_object` so that large world
@@ -110,6 +114,7 @@ fn prepare<'a>(instances: &[Instance<'a>]) -> Vec<Option<Prepared<'a>>> {
             }
             Some(Prepared {
                 lod: inst.lod,
+                faces: inst.faces,
                 to_object,
                 translation: m.translation,
                 normal_to_world: to_object.transpose(),
@@ -156,12 +161,13 @@ impl<'a> PreparedScene<'a> {
                 let o = p.to_object * (origin - p.translation);
                 let d = p.to_object * dir;
                 let hit =
-                    trace_object_ray(&p.lod.lookup, o, d, Traversal::Hierarchical).filter(|h| {
-                        h.t.is_finite()
-                            && best
-                                .as_ref()
-                                .is_none_or(|(bi, b)| h.t < b.t || (h.t == b.t && i < *bi))
-                    });
+                    trace_object_ray_faces(&p.lod.lookup, p.faces, o, d, Traversal::Hierarchical)
+                        .filter(|h| {
+                            h.t.is_finite()
+                                && best
+                                    .as_ref()
+                                    .is_none_or(|(bi, b)| h.t < b.t || (h.t == b.t && i < *bi))
+                        });
                 if let Some(h) = hit {
                     best = Some((i, h));
                 }

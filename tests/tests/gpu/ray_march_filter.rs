@@ -128,6 +128,7 @@ fn grazes(scene: &Scene, camera: &Camera, size: (u32, u32), x: u32, y: u32, eps:
         .map(|(xf, l, oi)| reference::Instance {
             lod: &scene.objects[*oi].asset.lods[*l as usize],
             object_to_world: *xf,
+            faces: None,
         })
         .collect();
     let rays = camera.pixel_rays(size.0, size.1);

@@ -311,6 +311,7 @@ fn reference_for(
         instances.push(reference::Instance {
             lod: &asset.lods[level as usize],
             object_to_world: *xf,
+            faces: None,
         });
         cells.push(2.0 * xf.matrix3.determinant().abs().cbrt() / (1u64 << level) as f64);
     }

@@ -254,6 +254,7 @@ pub(crate) fn reference_at(
     let inst = [ssbvb_voxel::reference::Instance {
         lod: &asset.lods[level as usize],
         object_to_world: DAffine3::IDENTITY,
+        faces: None,
     }];
     ssbvb_voxel::reference::render(&inst, camera, size.0, size.1, &Default::default())
 }

@@ -151,6 +151,21 @@ pub fn trace_object_ray(
     dir: DVec3,
     traversal: Traversal,
 ) -> Option<ObjectHit> {
+    trace_object_ray_faces(lookup, None, origin, dir, traversal)
+}
+
+/// [`trace_object_ray`] through face-masked voxels (a RastaVox level,
+/// [`crate::surface::FaceLod`]): with `faces`, voxel `id` is hit only where the ray enters
+/// it through a face whose bit is set in `faces[id]` (bit `f` = face `f`, −X/−Y/−Z/+X/+Y/+Z),
+/// as rasterizing its masked camera-facing faces draws it; a camera inside a voxel sees
+/// none of its faces. The reported face is such a face (the fastest axis among them).
+pub fn trace_object_ray_faces(
+    lookup: &SparseLookup,
+    faces: Option<&[u8]>,
+    origin: DVec3,
+    dir: DVec3,
+    traversal: Traversal,
+) -> Option<ObjectHit> {
     if !origin.is_finite() || !dir.is_finite() || dir == DVec3::ZERO {
         return None;
     }
@@ -214,7 +229,7 @@ pub fn trace_object_ray(
         st.next[a] = k2;
         st.t_next[a] = if k2 <= n { f.t(a, k2) } else { f64::INFINITY };
     }
-    if let Some(hit) = best_touched(&f, &st, lookup, t0, [false; 3]) {
+    if let Some(hit) = best_touched(&f, &st, lookup, faces, t0, [false; 3]) {
         return Some(hit);
     }
     let mut skip = SkipCache::default();
@@ -253,7 +268,7 @@ pub fn trace_object_ray(
                 st.hi[a] = k1 - 1;
             }
         }
-        if let Some(hit) = best_touched(&f, &st, lookup, t, crossing) {
+        if let Some(hit) = best_touched(&f, &st, lookup, faces, t, crossing) {
             return Some(hit);
         }
     }
@@ -267,6 +282,7 @@ fn best_touched(
     f: &Frame,
     st: &State,
     lookup: &SparseLookup,
+    faces: Option<&[u8]>,
     t: f64,
     crossing: [bool; 3],
 ) -> Option<ObjectHit> {
@@ -283,6 +299,9 @@ fn best_touched(
                 let Some(voxel) = lookup.get(cell) else {
                     continue;
                 };
+                if faces.is_some_and(|m| entered_faces(f, c, t, m[voxel as usize]) == 0) {
+                    continue;
+                }
                 let rank = |a: usize| {
                     (if f.moving[a] {
                         st.hi[a] - c[a]
@@ -303,7 +322,8 @@ fn best_touched(
     let (_, voxel, c) = best?;
     // Entered face: an axis whose near plane of this cell is crossed exactly at `t`.
     let mut face: Option<usize> = None;
-    for a in (0..3).filter(|&a| f.moving[a]) {
+    let allowed = faces.map_or(0b111, |m| entered_faces(f, c, t, m[voxel as usize]));
+    for a in (0..3).filter(|&a| f.moving[a] && allowed & (1 << a) != 0) {
         if f.t(a, c[a]) == t && face.is_none_or(|b| f.d[a] > f.d[b]) {
             face = Some(a);
         }
@@ -329,6 +349,20 @@ fn best_touched(
         face_normal,
         inside,
     })
+}
+
+/// The axes (bit `a`) through whose near face, set in `mask`, the ray enters cell `c`
+/// (mirrored frame) at time `t`.
+fn entered_faces(f: &Frame, c: [i64; 3], t: f64, mask: u8) -> u32 {
+    let mut axes = 0;
+    for a in (0..3).filter(|&a| f.moving[a]) {
+        // Moving toward +a the ray enters through the −a face (bit a), else the +a face.
+        let bit = if f.mirrored[a] { a + 3 } else { a };
+        if f.t(a, c[a]) == t && mask & (1 << bit) != 0 {
+            axes |= 1 << a;
+        }
+    }
+    axes
 }
 
 /// Remembers, per node size of the lookup's tree, the last region found occupied, so the

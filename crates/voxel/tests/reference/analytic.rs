@@ -203,6 +203,7 @@ fn plane_of_voxels_head_on_and_at_grazing_angles() {
         &[Instance {
             lod: &l,
             object_to_world: DAffine3::IDENTITY,
+            faces: None,
         }],
         &cam,
         0,

@@ -14,15 +14,18 @@ fn nearest_instance_wins() {
         Instance {
             lod: &l,
             object_to_world: DAffine3::from_translation(DVec3::new(0.8, 0.0, -1.0)),
+            faces: None,
         },
         Instance {
             lod: &l,
             object_to_world: DAffine3::from_translation(DVec3::new(-0.8, 0.2, 0.5)),
+            faces: None,
         },
         // A singular transform hides its instance instead of producing NaN.
         Instance {
             lod: &l,
             object_to_world: DAffine3::from_scale(DVec3::ZERO),
+            faces: None,
         },
     ];
     let cam = Camera::new(DVec3::new(0.0, 0.5, 6.0), DVec3::ZERO);
@@ -83,6 +86,7 @@ fn many_overlapping_instances_equal_the_minimum_over_single_renders() {
         .map(|&object_to_world| Instance {
             lod: &l,
             object_to_world,
+            faces: None,
         })
         .collect();
     let cam = Camera::new(DVec3::new(1.0, 3.0, 7.0), DVec3::ZERO);

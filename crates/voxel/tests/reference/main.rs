@@ -10,6 +10,7 @@ mod extremes;
 mod instances;
 mod oracle;
 mod rules;
+mod surface;
 
 use glam::{DAffine3, DVec2, DVec3};
 use ssbvb_voxel::asset::{LodLevel, PackedVoxel, PointCloud, ProxyMesh, SparseLookup};
@@ -252,6 +253,7 @@ fn render_one(l: &LodLevel, xf: DAffine3, cam: &Camera, w: u32, h: u32) -> Refer
         &[Instance {
             lod: l,
             object_to_world: xf,
+            faces: None,
         }],
         cam,
         w,
