@@ -10,10 +10,13 @@
 
 pub mod adapter_needs;
 pub mod bindings;
+pub mod compute_kernels;
 pub mod counters;
 pub mod embed;
 pub mod frame;
 pub mod gbuffer;
+pub mod gpu_radix_sort;
+pub mod gpu_scan;
 pub mod gpu_scene;
 pub mod measure;
 pub mod page_cache;

@@ -8,6 +8,7 @@ mod cube_raster;
 mod dense_dda;
 mod embed;
 mod empty_space;
+mod gpu_sort;
 mod octree_ray_cast;
 mod pipeline;
 mod ray_casters;
