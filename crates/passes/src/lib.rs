@@ -26,6 +26,7 @@ pub mod registry;
 pub mod scene;
 pub mod shaders;
 pub mod streaming;
+pub mod surface_build;
 pub mod visibility;
 pub mod wgsl_layout;
 

@@ -11,6 +11,7 @@ mod empty_space;
 mod gpu_sort;
 mod octree_ray_cast;
 mod pipeline;
+mod rastavox;
 mod ray_casters;
 mod ray_march_filter;
 mod scale;
