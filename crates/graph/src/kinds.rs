@@ -43,6 +43,10 @@ pass_kinds! {
     /// nearest depth by atomic max, then the lowest entry at that depth, and a fullscreen
     /// resolve writes the same G-buffer as `Billboards` (stencil = voxel).
     SplatBillboards(SplatBillboardsParams);
+    /// RastaVox (seed 001): per visible chunk of each instance, the surface voxels of the
+    /// coarsest OR-merged LOD within `pixel_error` pixels, at most three masked faces each by
+    /// vertex pulling, writing the same G-buffer as the billboards (stencil = voxel).
+    RastaVox(RastaVoxParams);
 }
 
 const DEPTH_STENCIL: &[Format] = &[Format::Depth32FloatStencil8, Format::Depth24PlusStencil8];
@@ -387,6 +391,41 @@ impl KindSpec for CubeRasterParams {
     const SLOTS: &'static [SlotDesc] = GBUFFER_WRITES;
 }
 
+/// Parameters of `RastaVox`.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RastaVoxParams {
+    /// The largest projected voxel, in pixels, a chunk's LOD may have (0 = always the
+    /// finest; the paper's 1 "with no visible difference").
+    #[serde(default = "one")]
+    pub pixel_error: f32,
+}
+
+/// The largest accepted `pixel_error`: beyond it every chunk is one voxel anyway.
+pub const MAX_PIXEL_ERROR: f32 = 4096.0;
+
+impl Default for RastaVoxParams {
+    fn default() -> Self {
+        Self { pixel_error: 1.0 }
+    }
+}
+
+impl KindSpec for RastaVoxParams {
+    const NAME: &'static str = "RastaVox";
+    const STAGE: PassStage = PassStage::Render;
+    const SLOTS: &'static [SlotDesc] = GBUFFER_WRITES;
+    fn problems(&self) -> Vec<String> {
+        if (0.0..=MAX_PIXEL_ERROR).contains(&self.pixel_error) {
+            Vec::new()
+        } else {
+            vec![format!(
+                "pixel_error must be a number from 0 to {MAX_PIXEL_ERROR}, got {}",
+                self.pixel_error
+            )]
+        }
+    }
+}
+
 /// Parameters of `SplatBillboards` (the same as `Billboards`).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -456,6 +495,7 @@ mod tests {
             OctreeRayCastParams::NAME,
             CubeRasterParams::NAME,
             SplatBillboardsParams::NAME,
+            RastaVoxParams::NAME,
         ];
         assert_eq!(spec_names, KIND_NAMES);
     }

@@ -540,7 +540,29 @@ fn bad_parameters_name_pass_kind_rule_and_line() {
     const DENSE: &str = include_str!("../../../assets/pipelines/dense_dda.ron");
     const OCTREE: &str = include_str!("../../../assets/pipelines/octree_ray_cast.ron");
     const SPLAT: &str = include_str!("../../../assets/pipelines/ssbvb_splat.ron");
-    let cases: [(&str, &str, &str, &str, &str); 9] = [
+    const RASTAVOX: &str = include_str!("../../../assets/pipelines/rastavox.ron");
+    let cases: [(&str, &str, &str, &str, &str); 12] = [
+        (
+            RASTAVOX,
+            "RastaVox(pixel_error: 1.0)",
+            "RastaVox(pixel_error: -1.0)",
+            "RastaVox",
+            "pixel_error must be a number from 0 to 4096, got -1",
+        ),
+        (
+            RASTAVOX,
+            "RastaVox(pixel_error: 1.0)",
+            "RastaVox(pixel_error: NaN)",
+            "RastaVox",
+            "pixel_error must be a number from 0 to 4096, got NaN",
+        ),
+        (
+            RASTAVOX,
+            "RastaVox(pixel_error: 1.0)",
+            "RastaVox(pixel_error: 5000.0)",
+            "RastaVox",
+            "pixel_error must be a number from 0 to 4096, got 5000",
+        ),
         (
             SSBVB,
             "RayMarchFilter(max_steps: 1024, unique_voxels: true)",

@@ -42,6 +42,7 @@ registry::pass_modules! {
     octree_ray_cast::OctreeRayCast,
     cube_raster::CubeRaster,
     splat_billboards::SplatBillboards,
+    rastavox::RastaVox,
 }
 
 pub use adapter_needs::pipeline_requirements;

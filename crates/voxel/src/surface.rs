@@ -29,10 +29,14 @@
 //! bit; normals within one octahedral step) and what tests and memory reports use.
 
 use bytemuck::{Pod, Zeroable};
+use glam::{DAffine3, DVec3, DVec4};
 
-use crate::asset::encode_octahedral;
-use crate::asset::{LodLevel, MAX_LEVEL, PackedVoxel, PointCloud, decode_octahedral};
+use crate::asset::{
+    LodLevel, MAX_LEVEL, PackedVoxel, PointCloud, decode_octahedral, encode_octahedral,
+};
+use crate::camera::Camera;
 use crate::lookup::SparseLookup;
+use crate::model::cell_size;
 use crate::svo::morton_encode;
 
 /// Bytes of one [`SurfaceVoxel`].
@@ -404,6 +408,78 @@ pub fn pixel_error_lod(
         k += 1;
     }
     k
+}
+
+/// One chunk to draw and the LOD it is drawn at.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ChunkDraw {
+    /// Chunk index ([`SurfaceModel::chunks`] order).
+    pub chunk: usize,
+    /// LOD (0 = finest).
+    pub k: usize,
+}
+
+/// The chunks of one placed surface model that a camera sees, each with its pixel-error
+/// LOD (§4): chunks whose world box lies wholly outside one side plane of the view, or
+/// wholly behind the eye, are culled; the LOD is [`pixel_error_lod`] at the chunk box's
+/// nearest view depth with the largest world size a cell takes under `object_to_world`.
+/// Chunk boxes are the tight `bounds` in finest cells of a `2^level` grid in [-1, 1]³.
+pub fn select_chunks(
+    level: u32,
+    chunk_log2: u32,
+    bounds: &[[[u32; 3]; 2]],
+    object_to_world: &DAffine3,
+    camera: &Camera,
+    screen: (u32, u32),
+    pixel_error: f32,
+) -> Vec<ChunkDraw> {
+    let (w, h) = (screen.0.max(1) as f64, screen.1.max(1) as f64);
+    let view_proj = camera.view_projection(w / h);
+    let forward = camera.pixel_rays(1, 1).forward();
+    let focal_px = 0.5 * h / (camera.fov_y_deg.to_radians() * 0.5).tan();
+    let m = object_to_world.matrix3;
+    let scale = m
+        .x_axis
+        .length()
+        .max(m.y_axis.length())
+        .max(m.z_axis.length());
+    let cell_world = scale * cell_size(level);
+    let s = cell_size(level);
+    let mut out = Vec::new();
+    for (chunk, b) in bounds.iter().enumerate() {
+        let mut clip = [DVec4::ZERO; 8];
+        let mut depth = f64::INFINITY;
+        for (i, c) in clip.iter_mut().enumerate() {
+            let corner = DVec3::new(
+                -1.0 + b[i & 1][0] as f64 * s,
+                -1.0 + b[(i >> 1) & 1][1] as f64 * s,
+                -1.0 + b[(i >> 2) & 1][2] as f64 * s,
+            );
+            let world = object_to_world.transform_point3(corner);
+            depth = depth.min((world - camera.position).dot(forward));
+            *c = view_proj * world.extend(1.0);
+        }
+        let outside = |f: &dyn Fn(&DVec4) -> bool| clip.iter().all(f);
+        if outside(&|c| c.w <= 0.0)
+            || outside(&|c| c.x > c.w)
+            || outside(&|c| c.x < -c.w)
+            || outside(&|c| c.y > c.w)
+            || outside(&|c| c.y < -c.w)
+        {
+            continue;
+        }
+        // The nearest corner's depth bounds the box's from below only for boxes ahead of
+        // the eye; a box around the eye's plane gets depth ≤ 0 and the finest LOD.
+        let k = pixel_error_lod(
+            cell_world,
+            depth,
+            focal_px,
+            f64::from(pixel_error),
+            chunk_log2 as usize,
+        );
+        out.push(ChunkDraw { chunk, k });
+    }
+    out
 }
 
 #[cfg(test)]

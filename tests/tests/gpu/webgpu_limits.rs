@@ -12,7 +12,7 @@ use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_passes::{GpuScene, Profiling, Renderer};
 use ssbvb_voxel::camera::Camera;
 
-const PIPELINES: [&str; 7] = [
+const PIPELINES: [&str; 8] = [
     "ssbvb",
     "ssbvb_flat",
     "ssbvb_splat",
@@ -20,6 +20,7 @@ const PIPELINES: [&str; 7] = [
     "dense_dda",
     "octree_ray_cast",
     "cube_raster",
+    "rastavox",
 ];
 
 /// A device on the shared adapter with WebGPU's default limits and no optional feature, and
