@@ -36,6 +36,44 @@ pub struct GpuHit {
     pub normal: [f32; 3],
 }
 
+/// Fills in the voxel of each hit of a face rasterizer (the cube rasterizer, RastaVox),
+/// whose G-buffer holds no voxel id: the cell half a cell behind the hit point
+/// (`eye + t · dir` along the pixel's ray of `camera` at `size`) against the shown normal,
+/// in the first of `placed` (object → world, lookup) whose level holds a voxel there. The
+/// instance is the index in `placed`; hits no placed level explains keep theirs.
+pub fn recover_face_voxels(
+    hits: &mut [Option<GpuHit>],
+    camera: &crate::camera::Camera,
+    size: (u32, u32),
+    placed: &[(glam::DAffine3, &crate::lookup::SparseLookup)],
+) {
+    let rays = camera.pixel_rays(size.0, size.1);
+    let inverse: Vec<glam::DAffine3> = placed.iter().map(|(xf, _)| xf.inverse()).collect();
+    for (i, hit) in hits.iter_mut().enumerate() {
+        let Some(hit) = hit else { continue };
+        let (x, y) = ((i % size.0 as usize) as u32, (i / size.0 as usize) as u32);
+        let (o, d) = rays.ray(x, y);
+        let world = o + d * hit.t;
+        let n = glam::DVec3::from(hit.normal.map(f64::from));
+        for (pi, ((xf, lookup), inv)) in placed.iter().zip(&inverse).enumerate() {
+            let level = lookup.level;
+            let s = crate::model::cell_size(level);
+            // Normals go world → object with the transpose of the linear part.
+            let n_obj = xf.matrix3.transpose().mul_vec3(n).normalize_or_zero();
+            let q = (inv.transform_point3(world) - n_obj * (0.5 * s) + 1.0) / s;
+            if q.min_element() < 0.0 || q.max_element() >= (1u64 << level) as f64 {
+                continue;
+            }
+            let cell = [q.x as u32, q.y as u32, q.z as u32];
+            if lookup.get(cell).is_some() {
+                hit.instance = pi as u32;
+                hit.cell = cell;
+                break;
+            }
+        }
+    }
+}
+
 /// Median, 95th percentile and maximum of a set of errors (all 0 when it is empty).
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
 pub struct ErrorStats {

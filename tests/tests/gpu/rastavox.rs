@@ -5,7 +5,7 @@
 use glam::{DAffine3, DVec3};
 use ssbvb_passes::surface_build::SurfaceBuilder;
 use ssbvb_passes::{LodPolicy, Scene};
-use ssbvb_voxel::accuracy::{self, AccuracyReport, GpuHit};
+use ssbvb_voxel::accuracy::{self, AccuracyReport};
 use ssbvb_voxel::asset::{LodLevel, PackedVoxel, PointCloud, SparseLookup};
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::reference::{Instance, render};
@@ -191,40 +191,6 @@ fn drawn(scene: &Scene, cam: &Camera, pixel_error: f32) -> Drawn {
     Drawn { placed, per_lod }
 }
 
-/// The G-buffer as hits, the voxel recovered half a cell behind the written position along
-/// the written normal in the drawn level holding a voxel there.
-fn hits(f: &ssbvb_tests::Frame, d: &Drawn, cam: &Camera, what: &str) -> Vec<Option<GpuHit>> {
-    let pos = f.read_f32("gbuffer_position");
-    ssbvb_tests::gbuffer_hits(f, what)
-        .into_iter()
-        .enumerate()
-        .map(|(i, h)| {
-            h.map(|mut hit| {
-                let p = &pos[i * 4..i * 4 + 3];
-                let world = cam.position + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
-                let n = DVec3::from(hit.normal.map(f64::from));
-                for (ii, (xf, face)) in d.placed.iter().enumerate() {
-                    let level = face.lod.level;
-                    let s = 2.0 / (1u64 << level) as f64;
-                    let p_obj = xf.inverse().transform_point3(world);
-                    let n_obj = xf.matrix3.transpose().mul_vec3(n).normalize_or_zero();
-                    let q = (p_obj - n_obj * (0.5 * s) + 1.0) / s;
-                    if q.min_element() < 0.0 || q.max_element() >= (1u64 << level) as f64 {
-                        continue;
-                    }
-                    let cell = [q.x as u32, q.y as u32, q.z as u32];
-                    if face.lod.lookup.get(cell).is_some() {
-                        hit.instance = ii as u32;
-                        hit.cell = cell;
-                        break;
-                    }
-                }
-                hit
-            })
-        })
-        .collect()
-}
-
 /// Renders `scene` with RastaVox at `pixel_error` and compares it with the reference of
 /// the same drawn model (the OR-merged LODs, hit through their masked faces) and, for the
 /// cost of the pixel error, with the finest level (`reference_of`).
@@ -246,7 +212,13 @@ fn compare(
         .collect();
     let reference = render(&instances, cam, SIZE.0, SIZE.1, &scene.light);
     let f = ssbvb_tests::render(&pipeline(pixel_error), scene.clone(), cam, SIZE);
-    let gpu = hits(&f, &d, cam, what);
+    let mut gpu = ssbvb_tests::gbuffer_hits(&f, what);
+    let placed: Vec<_> = d
+        .placed
+        .iter()
+        .map(|(xf, face)| (*xf, &face.lod.lookup))
+        .collect();
+    accuracy::recover_face_voxels(&mut gpu, cam, SIZE, &placed);
     let cells: Vec<f64> = d
         .placed
         .iter()
