@@ -55,6 +55,10 @@ const FILES: &[(&str, &[u8])] = &[
         include_bytes!("../../../assets/pipelines/cube_raster.ron"),
     ),
     (
+        "pipelines/rastavox.ron",
+        include_bytes!("../../../assets/pipelines/rastavox.ron"),
+    ),
+    (
         "models/bunny.obj",
         include_bytes!("../../../assets/models/bunny.obj"),
     ),

@@ -160,6 +160,29 @@ pub struct ObjectMemory {
 }
 
 impl ObjectMemory {
+    /// What one LOD level takes on the GPU (an object holds every level of its asset).
+    pub fn of_lod(lod: &ssbvb_voxel::asset::LodLevel) -> Self {
+        let n = lod.point_cloud.voxels.len() as u64;
+        Self {
+            voxels: n,
+            point_cloud_bytes: n * GPU_VOXEL_BYTES,
+            color_bytes: n * GPU_COLOR_BYTES,
+            normal_bytes: n * GPU_NORMAL_BYTES,
+            lookup_bytes: lod.lookup.bytes() as u64,
+            proxy_bytes: (lod.proxy.positions.len() * 16 + lod.proxy.triangles.len() * 12) as u64,
+        }
+    }
+
+    /// Adds `other` field by field.
+    pub fn add(&mut self, other: &Self) {
+        self.voxels += other.voxels;
+        self.point_cloud_bytes += other.point_cloud_bytes;
+        self.color_bytes += other.color_bytes;
+        self.normal_bytes += other.normal_bytes;
+        self.lookup_bytes += other.lookup_bytes;
+        self.proxy_bytes += other.proxy_bytes;
+    }
+
     /// Sum.
     pub fn total(&self) -> u64 {
         self.point_cloud_bytes + self.lookup_bytes + self.proxy_bytes
@@ -579,15 +602,9 @@ impl GpuScene {
                 }
                 checked_u32(nodes.len(), "lookup size")?;
                 lods.push(info);
-                let n = lod.point_cloud.voxels.len() as u64;
-                mem.voxels += n;
-                mem.color_bytes += n * GPU_COLOR_BYTES;
-                mem.normal_bytes += n * GPU_NORMAL_BYTES;
-                mem.point_cloud_bytes += n * GPU_VOXEL_BYTES;
-                mem.lookup_bytes += l.bytes() as u64;
-                let proxy =
-                    (lod.proxy.positions.len() * 16 + lod.proxy.triangles.len() * 12) as u64;
-                mem.proxy_bytes += proxy;
+                let lod_memory = ObjectMemory::of_lod(lod);
+                mem.add(&lod_memory);
+                let proxy = lod_memory.proxy_bytes;
                 if let Some(o) = streaming.filter(|o| lod.level > o.proxy_level) {
                     // Borrowed: see `StreamingOptions::proxy_level`.
                     let borrowed = ranges[o.proxy_level as usize];

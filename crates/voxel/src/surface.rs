@@ -385,10 +385,11 @@ fn merge(prev: &SurfaceLevel) -> SurfaceLevel {
 }
 
 /// LOD by pixel error (§4, after Dick et al. 2009): the coarsest LOD `k ≤ max_k` whose
-/// voxel, `cell_world · 2^k` world units across (its diagonal, √3 times the edge, is the
-/// worst case on screen), projects to at most `pixel_error` pixels at `distance` from the
-/// eye, with `focal_px` pixels per unit of `size / distance`. Pixel error 0, a zero or
-/// non-finite distance pick the finest (0).
+/// voxel, `cell_world · 2^k` world units across, has a worst-case projected area of at most
+/// `pixel_error²` pixels at `distance` from the eye (`focal_px` pixels per unit of
+/// `size / distance`). A cube's largest silhouette, seen along its diagonal, is a hexagon of
+/// area √3 · edge², so the test is `3^¼ · edge · focal_px / distance ≤ pixel_error`. Pixel
+/// error 0, a zero or non-finite distance pick the finest (0).
 pub fn pixel_error_lod(
     cell_world: f64,
     distance: f64,
@@ -401,7 +402,8 @@ pub fn pixel_error_lod(
     }
     let mut k = 0;
     while k < max_k {
-        let projected = 3f64.sqrt() * cell_world * (1u64 << (k + 1)) as f64 * focal_px / distance;
+        let projected =
+            3f64.powf(0.25) * cell_world * (1u64 << (k + 1)) as f64 * focal_px / distance;
         if projected > pixel_error {
             break;
         }

@@ -301,8 +301,8 @@ fn rastavox_at_pixel_error_zero_matches_the_finest_reference() {
 fn rastavox_pixel_error_picks_coarser_lods_and_matches_their_reference() {
     let asset = ssbvb_tests::model_asset("bunny.obj", 7);
     let scene = ssbvb_tests::single_object_scene(asset, 7);
-    // A level-7 voxel's worst-case extent (√3 × edge) projects to about 0.5 px here
-    // (160 × 120, 45°), so pixel errors 2, 4 and 8 allow LODs 1, 2 and 3.
+    // A level-7 voxel's worst-case extent (3^¼ × edge) projects to about 0.4 px here
+    // (160 × 120, 45°), so pixel errors 2, 4 and 8 allow LODs 2, 3 and 4.
     let cam = Camera::new(DVec3::new(4.5, 2.5, 6.5), DVec3::ZERO);
     let (mut last_coarsest, mut last_iou) = (0, 1.0);
     for pe in [2.0, 4.0, 8.0] {

@@ -6,11 +6,13 @@
 //! This file holds the command line and [`run()`], the order of the steps; the steps live
 //! in their own files: `techniques` (what is compared), `matrix` (what each preset
 //! covers), `run` (measuring the cells), `sweep` (the knob sweeps), `plot` (PNG plots),
-//! `report` (JSON, CSV, Markdown) and `scale` (`--preset scale`, its own table).
+//! `report` (JSON, CSV, Markdown), `scale` (`--preset scale`, its own table), `memory`
+//! (`--preset memory`) and `rastavox` (`--preset rastavox`).
 
 mod matrix;
 mod memory;
 mod plot;
+mod rastavox;
 mod report;
 mod run;
 mod scale;
@@ -49,6 +51,12 @@ pub enum Preset {
     /// fly-through that measures streaming stalls; writes memory.csv, memory.json and
     /// memory.md.
     Memory,
+    /// RastaVox (seed 001): surface-model memory of the bunny and the knight at each level
+    /// (`--levels`, default 5-9) beside the SSBVB asset, the GPU build time, and a
+    /// pixel-error sweep (0, 1, 2, 4) on the bunny at the finest of those levels (and on
+    /// `--instances N` bunnies) against the drawn model and the finest level; writes
+    /// rastavox.csv, rastavox.json and rastavox.md.
+    Rastavox,
 }
 
 /// Arguments of `ssbvb bench`.
@@ -93,7 +101,7 @@ pub struct BenchArgs {
 
 /// Runs `ssbvb bench`.
 pub fn run(args: &BenchArgs) -> Result<()> {
-    if matches!(args.preset, Preset::Scale) {
+    if matches!(args.preset, Preset::Scale | Preset::Rastavox) {
         if let Some(n) = args
             .instances
             .iter()
@@ -101,6 +109,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             .find(|&&n| n == 0 || n > 1 << 16)
         {
             anyhow::bail!("--instances: {n} is not a count from 1 to 65536");
+        }
+        if matches!(args.preset, Preset::Rastavox) {
+            return rastavox::run(args);
         }
         return scale::run(args);
     }

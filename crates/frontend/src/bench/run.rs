@@ -227,6 +227,19 @@ fn run_one(ctx: &ssbvb_gpu::GpuContext, t: &Technique, c: &Cell) -> Result<Row> 
         }
         None => 0,
     };
+    // RastaVox's surface model (all its LODs) likewise.
+    let surface_bytes = if pipeline
+        .passes
+        .iter()
+        .any(|p| matches!(p.kind, PassKind::RastaVox(_)))
+    {
+        ssbvb_voxel::surface::SurfaceModel::extract(&c.asset.lods[c.level as usize])
+            .map_err(|e| anyhow::anyhow!("{e}"))?
+            .bytes()
+            .total()
+    } else {
+        0
+    };
     let m = measure(&setup, pipeline, true)?;
     let (fill, acc, mut times) = (m.fill, m.acc, m.times);
     let (min, max) = times
@@ -246,7 +259,7 @@ fn run_one(ctx: &ssbvb_gpu::GpuContext, t: &Technique, c: &Cell) -> Result<Row> 
         fill_count: fill,
         covered_pixels: acc.covered_reference,
         voxels: c.voxels,
-        gpu_memory_bytes: m.gpu_memory + cube_bytes,
+        gpu_memory_bytes: m.gpu_memory + cube_bytes + surface_bytes,
         coverage_iou: acc.coverage_iou,
         // Voxel ids per pixel come from the slot each pixel's ray filled: not available
         // with unique_voxels (one slot per voxel, not per pixel).

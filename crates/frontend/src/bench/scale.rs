@@ -68,7 +68,7 @@ pub(super) fn grid(n: usize) -> Vec<DAffine3> {
 }
 
 /// Over the grid from one corner, as `bunnies_4096.ron` looks at its 64 × 64 bunnies.
-fn grid_camera(n: usize) -> Camera {
+pub(super) fn grid_camera(n: usize) -> Camera {
     let side = (n as f64).sqrt().ceil().max(1.0);
     let h = (side - 1.0) / 2.0 * 2.2;
     Camera {

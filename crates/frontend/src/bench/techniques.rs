@@ -85,6 +85,20 @@ pub(super) const TECHNIQUES: &[Technique] = &[
         }),
         max_level: 16,
     },
+    // RastaVox at pixel error 0 (every chunk at its finest level: comparable with the
+    // exact techniques); `--preset rastavox` sweeps the pixel error.
+    Technique {
+        name: "rastavox",
+        pipeline: "rastavox.ron",
+        edit: Some(|k| match k {
+            PassKind::RastaVox(r) => {
+                r.pixel_error = 0.0;
+                true
+            }
+            _ => false,
+        }),
+        max_level: 16,
+    },
 ];
 
 /// Technique names, for `--techniques`.

@@ -306,8 +306,8 @@ fn empty_and_interior_only_models_have_no_chunks() {
 
 #[test]
 fn pixel_error_picks_the_coarsest_lod_within_the_error() {
-    // A cell of 0.01 at distance 10 with 500 px per unit: √3·0.01·2^k·50 px.
-    let px = |k: u32| 3f64.sqrt() * 0.01 * f64::from(1u32 << k) * 500.0 / 10.0;
+    // A cell of 0.01 at distance 10 with 500 px per unit: 3^¼·0.01·2^k·50 px.
+    let px = |k: u32| 3f64.powf(0.25) * 0.01 * f64::from(1u32 << k) * 500.0 / 10.0;
     assert!(px(0) < 1.0 && px(1) > 1.0 && px(1) < 2.0 && px(2) > 2.0);
     assert_eq!(pixel_error_lod(0.01, 10.0, 500.0, 0.0, 8), 0);
     assert_eq!(pixel_error_lod(0.01, 10.0, 500.0, 1.0, 8), 0);
