@@ -9,6 +9,7 @@ mod analytic;
 mod extremes;
 mod instances;
 mod oracle;
+mod outputs;
 mod rules;
 mod surface;
 
