@@ -355,3 +355,24 @@ fn rastavox_draws_many_transformed_instances() {
         assert_accurate(&r, &what);
     }
 }
+
+#[test]
+fn rastavox_is_exact_with_the_camera_close_to_the_surface() {
+    // Inside the bunny's chunk box, a few voxels off its back: the nearest chunk depth is
+    // ≤ 0, so every pixel error keeps the finest LOD there, and faces cut by the near
+    // plane must not leave holes the reference does not have.
+    let asset = ssbvb_tests::model_asset("bunny.obj", 7);
+    let scene = ssbvb_tests::single_object_scene(asset, 7);
+    let cam = Camera::new(DVec3::new(0.15, 0.35, 0.75), DVec3::new(0.0, 0.1, 0.0));
+    for pe in [0.0, 4.0] {
+        let what = format!("bunny level 7 near, pixel error {pe}");
+        let (r, _, d) = compare(&scene, &cam, pe, &what);
+        assert_eq!(d.per_lod[0], 1, "{what}: {:?}", d.per_lod);
+        assert!(
+            r.covered_reference > 8000,
+            "{what}: {} px",
+            r.covered_reference
+        );
+        assert_accurate(&r, &what);
+    }
+}

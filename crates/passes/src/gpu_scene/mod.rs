@@ -2,227 +2,26 @@
 //! triangle meshes, and the per-frame constants and visible instances (group 0 of every
 //! pass; WGSL declarations in `shaders/common.inc.wgsl`).
 
-use bytemuck::{Pod, Zeroable};
 use glam::{DAffine3, DMat4, DVec3};
 use ssbvb_gpu::wgpu::util::DeviceExt;
 use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_voxel::asset::{GPU_COLOR_BYTES, GPU_NORMAL_BYTES, GPU_VOXEL_BYTES};
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::lookup::NODE_WORDS;
 
 use crate::PassError;
 use crate::scene::Scene;
 use crate::streaming::{
-    BLOCK_BYTES, MAX_PAGE_BYTES, PINNED_LEVEL, PagedLayoutBuilder, RUN_BYTES, SLOT_BYTES,
-    StreamBuffers, Streaming, StreamingOptions, StreamingStats,
+    PINNED_LEVEL, PagedLayoutBuilder, StreamBuffers, Streaming, StreamingOptions, StreamingStats,
 };
 pub use crate::visibility::choose_level;
+
+mod layout;
+mod pools;
+
 use crate::visibility::{frame_uniform, instance_bvh, mat, visible_instances};
-
-/// Mirror of WGSL `Frame`.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable)]
-pub struct FrameUniform {
-    /// Camera-relative world → clip.
-    pub view_proj: [[f32; 4]; 4],
-    /// Clip → camera-relative world.
-    pub inv_view_proj: [[f32; 4]; 4],
-    /// Camera-relative world → view.
-    pub view: [[f32; 4]; 4],
-    /// View → clip (reversed Z). Positions far from the camera go object → view (per
-    /// instance, composed in f64) → clip, never through large camera-relative world
-    /// coordinates whose f32 rounding exceeds a pixel.
-    pub proj: [[f32; 4]; 4],
-    /// Right axis scaled by the half-width of the view at distance 1.
-    pub cam_right: [f32; 4],
-    /// Up axis scaled by the half-height of the view at distance 1.
-    pub cam_up: [f32; 4],
-    /// Forward axis.
-    pub cam_forward: [f32; 4],
-    /// width, height, 1/width, 1/height.
-    pub screen: [f32; 4],
-    /// Towards the light (xyz), ambient (w).
-    pub light_dir: [f32; 4],
-    /// Light colour (rgb), specular (w).
-    pub light_color: [f32; 4],
-    /// shininess, near, far (0 = infinite), visible instance count.
-    pub misc: [f32; 4],
-}
-
-/// Mirror of WGSL `Instance` (224 bytes).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable)]
-pub struct InstanceUniform {
-    /// Object → camera-relative world.
-    pub object_to_world: [[f32; 4]; 4],
-    /// Object → view, composed in f64 (its translation is the instance's view-space
-    /// origin: lateral offsets stay small and exact however far the instance is).
-    pub object_to_view: [[f32; 4]; 4],
-    /// Camera-relative world → object.
-    pub world_to_object: [[f32; 4]; 4],
-    /// Camera in object space (xyz), world size of a cell (w).
-    pub camera_object: [f32; 4],
-    /// Index into the LOD table.
-    pub lod: u32,
-    /// Grid level of that LOD.
-    pub level: u32,
-    /// Bit 0: camera inside the proxy.
-    pub flags: u32,
-    /// Index of the instance in the whole scene.
-    pub scene_index: u32,
-}
-
-/// Mirror of WGSL `BvhNode` (32 bytes): one node of the hierarchy over the visible
-/// instances' camera-relative world boxes (`ssbvb_voxel::instance_bvh`, rebuilt per frame).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
-pub struct GpuBvhNode {
-    /// Box minimum (rounded down to f32).
-    pub lo: [f32; 3],
-    /// Left child, or `LEAF | visible instance index`.
-    pub left: u32,
-    /// Box maximum (rounded up to f32).
-    pub hi: [f32; 3],
-    /// Right child (0 for a leaf).
-    pub right: u32,
-}
-
-/// `LodInfo::page_base` of a LOD resident whole (WGSL `NO_PAGES`).
-pub const NO_PAGES: u32 = u32::MAX;
-
-/// Mirror of WGSL `LodInfo` (36 bytes).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq, Eq)]
-pub struct LodInfo {
-    /// Grid level.
-    pub level: u32,
-    /// Depth of the lookup tree ([`ssbvb_voxel::lookup::tree_depth`]).
-    pub depth: u32,
-    /// First voxel in the attribute buffers.
-    pub voxel_offset: u32,
-    /// The LOD's root node in the lookup-node buffer.
-    pub node_offset: u32,
-    /// The scene object this LOD belongs to (which octree the octree baseline reads).
-    pub object: u32,
-    /// log2 of the words per binding of the colour and normal streams.
-    pub chunk_bits: u32,
-    /// log2 of the nodes per binding of the lookup-node stream.
-    pub node_chunk_bits: u32,
-    /// Under a budget: the global id of the LOD's first page, or `NO_PAGES` (`u32::MAX`)
-    /// when the LOD is resident whole.
-    pub page_base: u32,
-    /// Under a budget: the LOD's first page node, relative to its root.
-    pub first_page_node: u32,
-}
-
-/// Where a proxy mesh lives in the shared proxy buffers.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ProxyRange {
-    /// First index.
-    pub first_index: u32,
-    /// Index count.
-    pub index_count: u32,
-    /// Added to every index.
-    pub base_vertex: i32,
-}
-
-/// One instance that survived culling this frame.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct VisibleInstance {
-    /// Index in the scene's flattened instance list.
-    pub scene_index: u32,
-    /// Which object it belongs to.
-    pub object: usize,
-    /// Chosen level.
-    pub level: u32,
-    /// Its proxy in the proxy buffers.
-    pub proxy: ProxyRange,
-    /// The camera is inside its proxy (the prepass draws back faces).
-    pub camera_inside: bool,
-}
-
-/// GPU bytes of one object's asset (all LODs), for reports.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
-pub struct ObjectMemory {
-    /// Voxels of all levels.
-    pub voxels: u64,
-    /// Voxel attributes: colour plus normal ([`GPU_VOXEL_BYTES`] per voxel; the cell is
-    /// implied by the lookup).
-    pub point_cloud_bytes: u64,
-    /// Of `point_cloud_bytes`: the colours.
-    pub color_bytes: u64,
-    /// Of `point_cloud_bytes`: the normals.
-    pub normal_bytes: u64,
-    /// Lookup trees (12-byte nodes).
-    pub lookup_bytes: u64,
-    /// Proxy meshes.
-    pub proxy_bytes: u64,
-}
-
-impl ObjectMemory {
-    /// What one LOD level takes on the GPU (an object holds every level of its asset).
-    pub fn of_lod(lod: &ssbvb_voxel::asset::LodLevel) -> Self {
-        let n = lod.point_cloud.voxels.len() as u64;
-        Self {
-            voxels: n,
-            point_cloud_bytes: n * GPU_VOXEL_BYTES,
-            color_bytes: n * GPU_COLOR_BYTES,
-            normal_bytes: n * GPU_NORMAL_BYTES,
-            lookup_bytes: lod.lookup.bytes() as u64,
-            proxy_bytes: (lod.proxy.positions.len() * 16 + lod.proxy.triangles.len() * 12) as u64,
-        }
-    }
-
-    /// Adds `other` field by field.
-    pub fn add(&mut self, other: &Self) {
-        self.voxels += other.voxels;
-        self.point_cloud_bytes += other.point_cloud_bytes;
-        self.color_bytes += other.color_bytes;
-        self.normal_bytes += other.normal_bytes;
-        self.lookup_bytes += other.lookup_bytes;
-        self.proxy_bytes += other.proxy_bytes;
-    }
-
-    /// Sum.
-    pub fn total(&self) -> u64 {
-        self.point_cloud_bytes + self.lookup_bytes + self.proxy_bytes
-    }
-
-    /// Lookup plus attributes per voxel (0 without voxels).
-    pub fn bytes_per_voxel(&self) -> f64 {
-        if self.voxels == 0 {
-            0.0
-        } else {
-            (self.point_cloud_bytes + self.lookup_bytes) as f64 / self.voxels as f64
-        }
-    }
-}
-
-/// A triangle object on the GPU.
-pub struct GpuTriangleMesh {
-    /// Interleaved position (xyz) + normal (xyz) f32 vertices.
-    pub vertices: wgpu::Buffer,
-    /// u32 indices.
-    pub indices: wgpu::Buffer,
-    /// Index count.
-    pub index_count: u32,
-    /// Per-mesh uniform (model matrix camera-relative, normal matrix, colour), 160 bytes.
-    pub uniform: wgpu::Buffer,
-}
-
-/// Mirror of WGSL `Mesh` in triangles.wgsl.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable)]
-pub struct MeshUniform {
-    /// Model → camera-relative world.
-    pub model: [[f32; 4]; 4],
-    /// Inverse transpose of the model's linear part (as a 4×4).
-    pub normal_matrix: [[f32; 4]; 4],
-    /// Linear RGBA albedo.
-    pub color: [f32; 4],
-    /// Padding to 16-byte multiple of a dynamic offset friendly size.
-    pub pad: [f32; 4],
-}
+pub use layout::*;
+pub use pools::{COLOR_CHUNKS, NODE_CHUNKS, NORMAL_CHUNKS, SCENE_STORAGE_BUFFERS, StreamChunks};
+use pools::{chunked, plan_pools};
 
 /// The scene on the GPU.
 pub struct GpuScene {
@@ -278,7 +77,11 @@ pub struct GpuScene {
     pub screen: (u32, u32),
 }
 
-fn storage(ctx: &GpuContext, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer, PassError> {
+pub(super) fn storage(
+    ctx: &GpuContext,
+    label: &str,
+    bytes: &[u8],
+) -> Result<wgpu::Buffer, PassError> {
     // One binding each: refuse clearly what the device cannot bind (lavapipe binds at most
     // 128 MiB, so e.g. the bunny's page pool at level 10 does not fit there).
     let max = ctx.device.limits().max_storage_buffer_binding_size;
@@ -305,80 +108,6 @@ fn storage(ctx: &GpuContext, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer, 
         }))
 }
 
-/// Storage bindings of group 0: instances, LODs, the chunked streams, the hierarchy.
-pub const SCENE_STORAGE_BUFFERS: usize = 4 + COLOR_CHUNKS + NORMAL_CHUNKS + NODE_CHUNKS;
-
-/// How the scene's streams are split over bindings (`LodInfo.chunk_bits` in
-/// `common.inc.wgsl`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct StreamChunks {
-    /// log2 of the words per binding of the colour and normal streams.
-    pub word_bits: u32,
-    /// log2 of the nodes per binding of the lookup-node stream.
-    pub node_bits: u32,
-    /// log2 of the nodes per binding of the octree baseline's 8-byte nodes.
-    pub octree_bits: u32,
-}
-
-impl StreamChunks {
-    /// The largest power-of-two chunks a device binding at most `max_binding` bytes holds
-    /// (at least 2^4 words or nodes, at most 2^30 words and 2^28 nodes).
-    pub fn for_device(max_binding: u64) -> Self {
-        let bits = |unit: u64, max: u32| (max_binding / unit).max(16).ilog2().min(max);
-        Self {
-            word_bits: bits(4, 30),
-            node_bits: bits(4 * NODE_WORDS as u64, 28),
-            octree_bits: bits(8, 28),
-        }
-    }
-}
-
-impl Default for StreamChunks {
-    /// 2^25 words (128 MiB, the smallest storage binding size a device may have), 2^23
-    /// lookup nodes (96 MiB) and 2^24 octree nodes (128 MiB).
-    fn default() -> Self {
-        Self {
-            word_bits: 25,
-            node_bits: 23,
-            octree_bits: 24,
-        }
-    }
-}
-/// Bindings of the colour stream (with 128 MiB bindings: up to 2^27 voxels over all LODs
-/// of the scene).
-pub const COLOR_CHUNKS: usize = 4;
-/// Bindings of the normal stream (with 128 MiB bindings: 2^26 words, 2^27 voxels).
-pub const NORMAL_CHUNKS: usize = 2;
-/// Bindings of the lookup-node stream (with 128 MiB bindings: 2^24 nodes).
-pub const NODE_CHUNKS: usize = 2;
-
-/// A stream split over `chunks` bindings of at most `chunk_bytes` each (unused ones get a
-/// 16-byte buffer); an error when it needs more.
-fn chunked(
-    ctx: &GpuContext,
-    label: &str,
-    bytes: &[u8],
-    chunk_bytes: usize,
-    chunks: usize,
-) -> Result<Vec<wgpu::Buffer>, PassError> {
-    let needed = bytes.len().div_ceil(chunk_bytes);
-    if needed > chunks {
-        return Err(PassError::TooLarge(format!(
-            "the scene's {label} take {} bytes; the renderer binds at most {chunks} × {} \
-             bytes of them: use a coarser level or fewer objects",
-            bytes.len(),
-            chunk_bytes
-        )));
-    }
-    (0..chunks)
-        .map(|i| {
-            let part = bytes.get(i * chunk_bytes..).unwrap_or(&[]);
-            let part = &part[..part.len().min(chunk_bytes)];
-            storage(ctx, &format!("{label} {i}"), part)
-        })
-        .collect()
-}
-
 /// The object-space box of a level's voxels (their cells' union), `None` when it has none.
 fn voxel_bounds(lod: &ssbvb_voxel::asset::LodLevel) -> Option<(DVec3, DVec3)> {
     let mut lo = [u32::MAX; 3];
@@ -398,67 +127,7 @@ fn voxel_bounds(lod: &ssbvb_voxel::asset::LodLevel) -> Option<(DVec3, DVec3)> {
     Some((corner(lo), corner(hi.map(|v| v + 1))))
 }
 
-/// The pools of a streamed scene.
-struct Pools {
-    node_pool_start: u32,
-    voxel_pool_start: u32,
-    slots: u32,
-    blocks: u32,
-    fixed_bytes: u64,
-}
-
-/// Sizes the page pools for a budget and appends them to the streams: the fixed part
-/// (`nodes`, the pinned levels' voxels, `other_bytes`) first, the rest split between node
-/// slots and voxel blocks in the proportion the paged levels' pages need on average.
-fn plan_pools(
-    budget: u64,
-    paged: &PagedLayoutBuilder,
-    nodes: &mut Vec<u32>,
-    colors: &mut Vec<u32>,
-    normals: &mut Vec<u16>,
-    other_bytes: u64,
-) -> Result<Pools, PassError> {
-    let slot_words = crate::page_cache::SLOT_NODES as usize * NODE_WORDS;
-    nodes.resize(nodes.len().next_multiple_of(slot_words), 0);
-    let block = crate::page_cache::BLOCK_VOXELS as usize;
-    colors.resize(colors.len().next_multiple_of(block), 0);
-    normals.resize(colors.len(), 0);
-    let fixed_bytes = nodes.len() as u64 * 4 + colors.len() as u64 * GPU_VOXEL_BYTES + other_bytes;
-    let pages = paged.pages() as u64;
-    let need = fixed_bytes + if pages > 0 { MAX_PAGE_BYTES } else { 0 };
-    if budget < need {
-        return Err(PassError::BudgetTooSmall {
-            budget,
-            minimum: need,
-        });
-    }
-    let pool = budget - fixed_bytes;
-    // Split the pool in the proportion all pages need (node runs against voxel blocks):
-    // a view's pages need about the same.
-    let (runs, blocks) = paged.need();
-    let node_bytes = runs as f64 * RUN_BYTES as f64;
-    let total = node_bytes + blocks as f64 * BLOCK_BYTES as f64;
-    let node_share = if total > 0.0 { node_bytes / total } else { 0.5 };
-    let slots =
-        ((pool as f64 * node_share / SLOT_BYTES as f64).ceil() as u64).clamp(1, pages.max(1));
-    let blocks = ((pool.saturating_sub(slots * SLOT_BYTES)) / BLOCK_BYTES).clamp(64, blocks + 64);
-    let node_pool_start = checked_u32(nodes.len() / NODE_WORDS, "lookup nodes")?;
-    let voxel_pool_start = checked_u32(colors.len(), "voxel count")?;
-    nodes.resize(nodes.len() + slots as usize * slot_words, 0);
-    colors.resize(colors.len() + blocks as usize * block, 0);
-    normals.resize(colors.len(), 0);
-    checked_u32(nodes.len() / NODE_WORDS, "lookup nodes")?;
-    checked_u32(colors.len(), "voxel count")?;
-    Ok(Pools {
-        node_pool_start,
-        voxel_pool_start,
-        slots: slots as u32,
-        blocks: blocks as u32,
-        fixed_bytes,
-    })
-}
-
-fn checked_u32(v: usize, what: &str) -> Result<u32, PassError> {
+pub(super) fn checked_u32(v: usize, what: &str) -> Result<u32, PassError> {
     u32::try_from(v).map_err(|_| {
         PassError::TooLarge(format!("{what}: {v} does not fit the GPU's 32-bit indices"))
     })
