@@ -1,4 +1,5 @@
 //#include "common.inc.wgsl"
+//#include "face_raster.inc.wgsl"
 // Instanced cube rasterization (baseline; seed 002, §3.3.1): one instanced draw per
 // visible instance draws its LOD level's cubes (`cubes`, group 1: one per voxel, or one
 // per completely full octree node when merged; ssbvb_voxel::cube_list). No vertex buffer:
@@ -14,17 +15,11 @@
 // which the rasterizer drops. Only front faces shade, and coplanar opposite faces of
 // adjacent cubes never fight.
 //
-// Fragment: the pixel's ray (the same `pixel_ray` and object-space ray as the ray casters,
-// so depth and cell agree with the CPU reference up to f32 rounding) meets the face's
-// plane at t; the voxel shown is the cell just inside that plane (half a voxel inward
-// along the normal) at the hit's other two coordinates, clamped to the cube — for a
-// merged cube this is the actual surface voxel, since every cell of a full node is a
-// voxel. Its colour comes from the LOD's sparse lookup and point cloud (group 0).
-//
-// Outputs (as octree_ray_cast.wgsl): location 0 albedo (voxel colour, alpha 1), 1 the
-// face's world-space unit normal (w = 1), 2 camera-relative world position (xyz) and
-// linear view depth (w); depth is the rasterized face depth (no frag_depth, so early
-// depth testing stays on); stencil = STENCIL_VOXEL (set by the pass).
+// Fragment (face_raster.inc.wgsl): the exact ray–plane hit; the voxel shown is the cell
+// just inside that plane (half a voxel inward along the normal) at the hit's other two
+// coordinates, clamped to the cube — for a merged cube this is the actual surface voxel,
+// since every cell of a full node is a voxel. Its colour comes from the LOD's sparse lookup
+// and point cloud (group 0). Stencil = STENCIL_VOXEL (set by the pass).
 
 // One cube (ssbvb_voxel::cube_list::Cube, 8 bytes): minimum cell x | y << 16, and
 // z | log2(edge in cells) << 16.
@@ -34,12 +29,6 @@ struct Cube {
 }
 
 @group(1) @binding(0) var<storage, read> cubes: array<Cube>;
-
-struct GBuffer {
-    @location(0) albedo: vec4<f32>,
-    @location(1) normal: vec4<f32>,
-    @location(2) position: vec4<f32>,
-}
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -55,12 +44,6 @@ fn cube_min(c: Cube) -> vec3<u32> {
 fn cube_log2_size(c: Cube) -> u32 {
     return (c.z_size >> 16u) & 0x1fu;
 }
-
-// Corners (u, v) of the face quad's two triangles.
-const QUAD = array<vec2<u32>, 6>(
-    vec2(0u, 0u), vec2(1u, 0u), vec2(1u, 1u),
-    vec2(0u, 0u), vec2(1u, 1u), vec2(0u, 1u),
-);
 
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ci: u32) -> VertexOut {
@@ -104,35 +87,23 @@ fn fs_main(in: VertexOut) -> GBuffer {
     let a = in.face % 3u;
     let side = in.face >= 3u;
     let s = cell_size(inst.level);
-    let dir = pixel_ray(in.clip.xy);
-    let o = (inst.world_to_object * vec4(0.0, 0.0, 0.0, 1.0)).xyz;
-    let d = (inst.world_to_object * vec4(dir, 0.0)).xyz;
     let lo = cube_min(c);
     let plane_cell = lo[a] + select(0u, size, side);
-    // t is the world distance along the normalized pixel ray (d is not renormalized).
-    let t = (f32(plane_cell) * s - 1.0 - o[a]) / d[a];
-    if !(t > 0.0 && t < 1e30) {
-        // Edge-on face (d[a] = 0) or a face behind the eye: nothing to show.
+    let h = face_hit(inst, a, f32(plane_cell) * s - 1.0, in.clip.xy);
+    if !face_hit_valid(h) {
         discard;
     }
-    let p_obj = o + t * d;
     // The cell just inside the plane on axis a; the hit's own cell on the other axes,
     // clamped to the cube (the hit may land a rounding error outside the face's edge).
     let hi = vec3<i32>(lo + vec3(size - 1u));
-    var cell_i = clamp(vec3<i32>(floor((p_obj + 1.0) / s)), vec3<i32>(lo), hi);
+    var cell_i = clamp(vec3<i32>(floor((h.p_obj + 1.0) / s)), vec3<i32>(lo), hi);
     cell_i[a] = i32(plane_cell) - select(0, 1, side);
-    let cell = vec3<u32>(cell_i);
-    let id = lookup_cell(lod, cell);
+    let id = lookup_cell(lod, vec3<u32>(cell_i));
     if id == 0u {
         // Cannot happen when the cube list and the lookup come from the same LOD (every
         // cell of a cube is a voxel). Discarding rather than inventing a colour keeps such
         // a mismatch visible as missing coverage in the accuracy tests.
         discard;
     }
-    let p = dir * t;
-    var out: GBuffer;
-    out.albedo = vec4(lod_voxel_color(lod, id - 1u).rgb, 1.0);
-    out.normal = vec4(face_normal_world(inst, in.face), 1.0);
-    out.position = vec4(p, dot(p, frame.cam_forward.xyz));
-    return out;
+    return face_gbuffer(inst, in.face, h, lod_voxel_color(lod, id - 1u).rgb);
 }

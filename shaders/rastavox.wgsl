@@ -1,4 +1,5 @@
 //#include "common.inc.wgsl"
+//#include "face_raster.inc.wgsl"
 // RastaVox (seed 001): surface voxels rasterized as their masked camera-facing faces
 // (rastavox.rs picks, per visible chunk of each instance, the pixel-error LOD and issues
 // one instanced draw of that chunk's voxels). No vertex buffer and no geometry shader:
@@ -8,7 +9,7 @@
 // the voxel's mask (the paper's back-face culling on the face mask); otherwise its two
 // triangles collapse to a point.
 //
-// The fragment stage is the cube rasterizer's (cube_raster.wgsl): the exact ray–plane
+// The fragment stage is the face rasterizers' (face_raster.inc.wgsl): the exact ray–plane
 // hit, the face's world normal, the voxel's own colour from the attribute buffer.
 
 // One draw: visible instance, grid level of the LOD, chunk origin in that level's cells.
@@ -26,23 +27,12 @@ struct Draw {
 // Per voxel: linear RGBA8 colour, octahedral normal.
 @group(1) @binding(2) var<storage, read> attrs: array<u32>;
 
-struct GBuffer {
-    @location(0) albedo: vec4<f32>,
-    @location(1) normal: vec4<f32>,
-    @location(2) position: vec4<f32>,
-}
-
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) @interpolate(flat) voxel: u32,
     @location(1) @interpolate(flat) face: u32,
     @location(2) @interpolate(flat) draw: u32,
 }
-
-const QUAD = array<vec2<u32>, 6>(
-    vec2(0u, 0u), vec2(1u, 0u), vec2(1u, 1u),
-    vec2(0u, 0u), vec2(1u, 1u), vec2(0u, 1u),
-);
 
 fn surface_voxel_cell(dr: Draw, v: u32) -> vec3<u32> {
     return dr.origin.xyz + vec3(v & 0xffu, (v >> 8u) & 0xffu, (v >> 16u) & 0xffu);
@@ -85,22 +75,11 @@ fn fs_main(in: VertexOut) -> GBuffer {
     let dr = draws[in.draw];
     let inst = instances[dr.visible];
     let a = in.face % 3u;
-    let side = in.face >= 3u;
-    let s = cell_size(dr.level);
-    let dir = pixel_ray(in.clip.xy);
-    let o = (inst.world_to_object * vec4(0.0, 0.0, 0.0, 1.0)).xyz;
-    let d = (inst.world_to_object * vec4(dir, 0.0)).xyz;
     let cell = surface_voxel_cell(dr, surface[in.voxel]);
-    let plane = cell[a] + select(0u, 1u, side);
-    // t is the world distance along the normalized pixel ray (d is not renormalized).
-    let t = (f32(plane) * s - 1.0 - o[a]) / d[a];
-    if !(t > 0.0 && t < 1e30) {
+    let plane = cell[a] + select(0u, 1u, in.face >= 3u);
+    let h = face_hit(inst, a, f32(plane) * cell_size(dr.level) - 1.0, in.clip.xy);
+    if !face_hit_valid(h) {
         discard;
     }
-    let p = dir * t;
-    var out: GBuffer;
-    out.albedo = vec4(unpack4x8unorm(attrs[2u * in.voxel]).rgb, 1.0);
-    out.normal = vec4(face_normal_world(inst, in.face), 1.0);
-    out.position = vec4(p, dot(p, frame.cam_forward.xyz));
-    return out;
+    return face_gbuffer(inst, in.face, h, unpack4x8unorm(attrs[2u * in.voxel]).rgb);
 }

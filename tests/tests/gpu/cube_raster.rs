@@ -2,7 +2,7 @@
 //! the CPU reference. Rasterizing the cubes' front faces covers the pixels whose centre
 //! ray hits a voxel (up to the rasterizer's sub-pixel snapping at cube edges), and the
 //! fragment's ray–face intersection gives the reference's depth, so coverage IoU must be
-//! ≥ 0.995, the same-voxel rate ≥ 0.99 and the depth error tiny (see [`assert_accurate`]):
+//! ≥ 0.995, the same-voxel rate ≥ 0.99 and the depth error tiny (see `ssbvb_tests::assert_face_raster_accurate`):
 //! on the bunny at several LODs, on every test model, with two objects at different
 //! levels (one rotated and scaled), and far from the world origin. Merged and unmerged
 //! cube lists must give the same G-buffer, and merged lists must cover every model's
@@ -124,30 +124,6 @@ fn compare(scene: &Scene, cam: &Camera, pipeline: &str, what: &str) -> AccuracyR
     r
 }
 
-/// Tolerances, measured on lavapipe (bunny LOD 5–7 and every test model, three cameras
-/// each, the two-object scene and the far-away bunny), then given a margin:
-/// - coverage IoU, measured ≥ 0.9986 → 0.995, and same-voxel rate, measured ≥ 0.9963 →
-///   0.99: the rasterizer snaps vertices to its sub-pixel grid (8 bits on lavapipe), so a
-///   pixel centre within ~1/512 px of a projected cube edge may land on the other side of
-///   it than the exact f64 ray (more often in the axis-aligned view, whose pixel rays run
-///   along grid planes);
-/// - depth error median, measured ≤ 6.9e-6 voxels → 1e-4, and p95, ≤ 2.4e-5 → 1e-3: the
-///   same ray–plane intersection as the reference, in f32;
-/// - normal error median and p95, measured 0.00° → 0.1° and 1°: exact face normals in f16.
-fn assert_accurate(r: &AccuracyReport, what: &str) {
-    assert!(
-        r.covered_reference > 200,
-        "{what}: only {} px",
-        r.covered_reference
-    );
-    assert!(r.coverage_iou >= 0.995, "{what}: {r:?}");
-    assert!(r.same_voxel_rate >= 0.99, "{what}: {r:?}");
-    assert!(r.depth_error_voxels.median <= 1e-4, "{what}: {r:?}");
-    assert!(r.depth_error_voxels.p95 <= 1e-3, "{what}: {r:?}");
-    assert!(r.normal_error_deg.median <= 0.1, "{what}: {r:?}");
-    assert!(r.normal_error_deg.p95 <= 1.0, "{what}: {r:?}");
-}
-
 #[test]
 fn cube_raster_matches_the_reference_on_the_bunny_at_several_lods() {
     let asset = ssbvb_tests::model_asset("bunny.obj", 7);
@@ -156,7 +132,7 @@ fn cube_raster_matches_the_reference_on_the_bunny_at_several_lods() {
             let scene = ssbvb_tests::single_object_scene(asset.clone(), level);
             let what = format!("bunny LOD {level} camera {ci}");
             let r = compare(&scene, cam, CUBES, &what);
-            assert_accurate(&r, &what);
+            ssbvb_tests::assert_face_raster_accurate(&r, &what);
         }
     }
 }
@@ -198,7 +174,7 @@ fn cube_raster_draws_two_objects_at_different_levels() {
     };
     let cam = Camera::new(DVec3::new(0.4, 1.2, 4.5), DVec3::new(0.0, 0.0, -0.5));
     let r = compare(&scene, &cam, CUBES, "bunny L6 + 3 knights L4");
-    assert_accurate(&r, "two objects");
+    ssbvb_tests::assert_face_raster_accurate(&r, "two objects");
     // Every instance shows up.
     let f = ssbvb_tests::render(CUBES, scene.clone(), &cam, SIZE);
     let gpu = hits(&f, &scene, &cam, "two objects");
@@ -327,7 +303,7 @@ fn cube_raster_matches_the_reference_on_every_shared_model() {
             let scene = ssbvb_tests::single_object_scene(asset.clone(), level);
             let what = format!("{file} L{level} camera {ci}");
             let r = compare(&scene, cam, CUBES, &what);
-            assert_accurate(&r, &what);
+            ssbvb_tests::assert_face_raster_accurate(&r, &what);
         }
     }
 }
@@ -347,5 +323,5 @@ fn cube_raster_is_accurate_far_from_the_world_origin() {
     };
     let cam = Camera::new(at + DVec3::new(1.8, 1.1, 2.4), at);
     let r = compare(&scene, &cam, CUBES, "bunny L6 at 1e7");
-    assert_accurate(&r, "bunny L6 at 1e7");
+    ssbvb_tests::assert_face_raster_accurate(&r, "bunny L6 at 1e7");
 }

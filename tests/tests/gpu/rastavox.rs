@@ -255,24 +255,6 @@ fn compare(
     (r, vs_finest, d)
 }
 
-/// Tolerances: those of the cube rasterizer (`cube_raster.rs`: the same faces, the same
-/// fragment stage, the same sub-pixel snapping at voxel edges). Measured on lavapipe here
-/// (bunny levels 5 and 7 from three cameras, pixel errors 0–8, 13 transformed bunnies):
-/// IoU ≥ 0.9993, same voxel ≥ 0.9954, depth median ≤ 1.7e-5 and p95 ≤ 6.2e-5 voxels.
-fn assert_accurate(r: &AccuracyReport, what: &str) {
-    assert!(
-        r.covered_reference > 200,
-        "{what}: only {} px",
-        r.covered_reference
-    );
-    assert!(r.coverage_iou >= 0.995, "{what}: {r:?}");
-    assert!(r.same_voxel_rate >= 0.99, "{what}: {r:?}");
-    assert!(r.depth_error_voxels.median <= 1e-4, "{what}: {r:?}");
-    assert!(r.depth_error_voxels.p95 <= 1e-3, "{what}: {r:?}");
-    assert!(r.normal_error_deg.median <= 0.1, "{what}: {r:?}");
-    assert!(r.normal_error_deg.p95 <= 1.0, "{what}: {r:?}");
-}
-
 fn cameras() -> Vec<Camera> {
     vec![
         Camera::new(DVec3::new(1.8, 1.1, 2.4), DVec3::ZERO),
@@ -290,7 +272,7 @@ fn rastavox_at_pixel_error_zero_matches_the_finest_reference() {
             let what = format!("bunny level {level} camera {ci}");
             let (r, vs_finest, d) = compare(&scene, cam, 0.0, &what);
             assert_eq!(d.per_lod[0], d.placed.len(), "{what}: every chunk at LOD 0");
-            assert_accurate(&r, &what);
+            ssbvb_tests::assert_face_raster_accurate(&r, &what);
             // At LOD 0 the drawn model shows what the solid voxels show.
             assert!(vs_finest.coverage_iou >= 0.995, "{what}: {vs_finest:?}");
         }
@@ -311,7 +293,7 @@ fn rastavox_pixel_error_picks_coarser_lods_and_matches_their_reference() {
         let coarsest = d.per_lod.iter().rposition(|&n| n > 0).unwrap();
         assert!(coarsest > last_coarsest, "{what}: {:?}", d.per_lod);
         last_coarsest = coarsest;
-        assert_accurate(&r, &what);
+        ssbvb_tests::assert_face_raster_accurate(&r, &what);
         // OR-merged LODs grow rather than lose (§3.2): every pixel of the finest image
         // stays covered (up to edge snapping) while the silhouette widens with the error.
         let kept = vs_finest.covered_both as f64 / vs_finest.covered_reference as f64;
@@ -352,7 +334,7 @@ fn rastavox_draws_many_transformed_instances() {
         let what = format!("13 bunnies, pixel error {pe}");
         let (r, _, d) = compare(&scene, &cam, pe, &what);
         assert!(d.placed.len() >= 13, "{what}");
-        assert_accurate(&r, &what);
+        ssbvb_tests::assert_face_raster_accurate(&r, &what);
     }
 }
 
@@ -373,6 +355,6 @@ fn rastavox_is_exact_with_the_camera_close_to_the_surface() {
             "{what}: {} px",
             r.covered_reference
         );
-        assert_accurate(&r, &what);
+        ssbvb_tests::assert_face_raster_accurate(&r, &what);
     }
 }
