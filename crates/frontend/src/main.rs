@@ -11,6 +11,7 @@ mod scene_file;
 mod soak;
 mod view;
 mod voxelize_cmd;
+mod voxelize_gpu;
 
 use std::process::ExitCode;
 

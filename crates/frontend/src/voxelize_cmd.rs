@@ -37,39 +37,54 @@ pub struct VoxelizeArgs {
     /// Neither read nor write the asset cache; always prepare from the model.
     #[arg(long)]
     pub no_cache: bool,
+    /// Voxelize a mesh on the GPU (the seed's conservative rasterization along each
+    /// triangle's dominant axis) and report how its voxels differ from the exact CPU
+    /// voxelization per level (`differs_from_cpu`); never uses the cache.
+    #[arg(long)]
+    pub gpu: bool,
 }
 
 /// What the JSON output holds (and the table shows).
 #[derive(Serialize)]
-struct Report {
-    model: PathBuf,
-    level: u32,
+pub(crate) struct Report {
+    pub(crate) model: PathBuf,
+    pub(crate) level: u32,
     /// "hit", "rebuilt" or "disabled".
-    cache: CacheReport,
+    pub(crate) cache: CacheReport,
     /// Where `-o` wrote the asset.
-    output: Option<PathBuf>,
-    object_space_center: [f64; 3],
-    object_space_scale: f64,
+    pub(crate) output: Option<PathBuf>,
+    pub(crate) object_space_center: [f64; 3],
+    pub(crate) object_space_scale: f64,
     /// Stage times when the asset was prepared (absent on a cache hit).
-    stages: Option<StageTimes>,
+    pub(crate) stages: Option<StageTimes>,
     /// Voxelizer report when the asset was prepared.
-    voxelize: Option<VoxelizeReport>,
+    pub(crate) voxelize: Option<VoxelizeReport>,
     /// Seconds for the whole command (load or prepare, and writing `-o`).
-    total_s: f64,
-    levels: Vec<LevelStats>,
+    pub(crate) total_s: f64,
+    pub(crate) levels: Vec<LevelStats>,
+    /// With `--gpu`: per level, the GPU's voxels against the exact CPU voxelization's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) differs_from_cpu: Option<Vec<crate::voxelize_gpu::LevelDiff>>,
+    /// With `--gpu`: the adapter, the GPU's counts and times against the CPU's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) gpu: Option<crate::voxelize_gpu::GpuReport>,
 }
 
 #[derive(Serialize)]
-struct CacheReport {
-    status: &'static str,
-    reason: Option<String>,
-    path: Option<PathBuf>,
-    write_error: Option<String>,
+pub(crate) struct CacheReport {
+    pub(crate) status: &'static str,
+    pub(crate) reason: Option<String>,
+    pub(crate) path: Option<PathBuf>,
+    pub(crate) write_error: Option<String>,
 }
 
 /// Runs `ssbvb voxelize`.
 pub fn run(args: &VoxelizeArgs) -> anyhow::Result<()> {
     let start = Instant::now();
+    if args.gpu {
+        let report = crate::voxelize_gpu::run(args)?;
+        return print_report(&report, args.json);
+    }
     let progress = BarProgress::new(!args.json && std::io::stderr().is_terminal());
 
     let (asset, cache, stats, streamed) = if args.no_cache {
@@ -133,14 +148,20 @@ pub fn run(args: &VoxelizeArgs) -> anyhow::Result<()> {
         voxelize: stats.map(|s| s.voxelize),
         total_s: start.elapsed().as_secs_f64(),
         levels,
+        differs_from_cpu: None,
+        gpu: None,
     };
     if let Some(e) = &report.cache.write_error {
         eprintln!("warning: the asset cache could not be written: {e}");
     }
-    if args.json {
-        println!("{}", serde_json::to_string(&report)?);
+    print_report(&report, args.json)
+}
+
+fn print_report(report: &Report, json: bool) -> anyhow::Result<()> {
+    if json {
+        println!("{}", serde_json::to_string(report)?);
     } else {
-        print!("{}", table(&report));
+        print!("{}", table(report));
     }
     Ok(())
 }
@@ -189,6 +210,20 @@ fn table(r: &Report) -> String {
         );
     }
     let _ = writeln!(s, "total   {:.3}s", r.total_s);
+    if let Some(g) = &r.gpu {
+        let _ = writeln!(
+            s,
+            "gpu     {}: {:.3}s against {:.3}s on the CPU ({} fragments, {} raster pass(es))",
+            g.adapter, g.gpu_seconds, g.cpu_seconds, g.stats.fragments, g.stats.raster_passes
+        );
+    }
+    for d in r.differs_from_cpu.iter().flatten() {
+        let _ = writeln!(
+            s,
+            "level {:>2}: GPU {} voxels, CPU {}: {} extra, {} missing",
+            d.level, d.gpu_voxels, d.cpu_voxels, d.extra, d.missing
+        );
+    }
     let _ = writeln!(s);
     let _ = writeln!(
         s,

@@ -18,6 +18,7 @@ pub mod gbuffer;
 pub mod gpu_radix_sort;
 pub mod gpu_scan;
 pub mod gpu_scene;
+pub mod gpu_voxelize;
 pub mod measure;
 pub mod page_cache;
 pub mod pipelines;

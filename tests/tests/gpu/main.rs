@@ -9,6 +9,7 @@ mod dense_dda;
 mod embed;
 mod empty_space;
 mod gpu_sort;
+mod gpu_voxelize;
 mod octree_ray_cast;
 mod pipeline;
 mod rastavox;

@@ -2,6 +2,7 @@
 //! RastaVox's commands are in `rastavox.rs`.
 
 mod rastavox;
+mod voxelize_gpu;
 
 use std::path::Path;
 use std::process::Command;

@@ -1,0 +1,76 @@
+//! `ssbvb voxelize MODEL --level N --gpu --json`: the CPU path's keys plus
+//! `differs_from_cpu` and `gpu`.
+
+use std::path::Path;
+
+use super::ssbvb;
+
+#[test]
+fn voxelize_gpu_reports_the_cpu_keys_and_the_difference() {
+    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/models");
+    let dir = tempfile::tempdir().unwrap();
+    let out = ssbvb()
+        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+        .arg("voxelize")
+        .arg(models.join("bunny.obj"))
+        .args(["--level", "6", "--json"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let cpu: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let asset = dir.path().join("bunny_gpu.ssbvb");
+    let out = ssbvb()
+        .arg("voxelize")
+        .arg(models.join("bunny.obj"))
+        .args(["--level", "6", "--gpu", "--json", "-o"])
+        .arg(&asset)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let gpu: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for key in cpu.as_object().unwrap().keys() {
+        assert!(gpu.get(key).is_some(), "--gpu lacks `{key}`: {gpu}");
+    }
+    assert_eq!(gpu["cache"]["status"], "disabled");
+    assert!(asset.is_file(), "-o wrote the asset");
+    let diff = gpu["differs_from_cpu"].as_array().unwrap();
+    assert_eq!(diff.len(), 7, "levels 6 down to 0: {diff:?}");
+    let finest = &diff[0];
+    assert_eq!(finest["level"], 6);
+    let cpu_voxels = finest["cpu_voxels"].as_u64().unwrap();
+    // The CPU path's own count at level 6.
+    assert_eq!(cpu["levels"][6]["voxels"].as_u64().unwrap(), cpu_voxels);
+    assert_eq!(gpu["levels"][6]["voxels"], finest["gpu_voxels"]);
+    // Measured: 68 extra, 0 missing of 14 027.
+    assert!(
+        finest["missing"].as_u64().unwrap() * 1000 <= cpu_voxels,
+        "{finest}"
+    );
+    assert!(
+        finest["extra"].as_u64().unwrap() * 10 <= cpu_voxels,
+        "{finest}"
+    );
+    assert!(gpu["gpu"]["fragments"].as_u64().unwrap() >= cpu_voxels);
+    assert!(gpu["gpu"]["cpu_seconds"].as_f64().unwrap() > 0.0);
+    // A voxel model is refused with the reason.
+    let out = ssbvb()
+        .arg("voxelize")
+        .arg(models.join("chr_knight.vox"))
+        .args(["--level", "5", "--gpu"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("chr_knight.vox") && err.contains("--gpu voxelizes meshes"),
+        "{err}"
+    );
+}

@@ -1,0 +1,431 @@
+//! GPU voxelization of meshes the seed's way (seed 003: Crassin & Green's conservative
+//! voxelization by rasterization; `shaders/gpu_voxelize.wgsl`): every triangle is drawn
+//! along the dominant axis of its normal into a 2^L × 2^L viewport, enlarged so that every
+//! cell column its projection touches gets a fragment, and each fragment appends the cells
+//! of its column that the triangle's plane crosses inside the pixel to a voxel fragment list
+//! (atomic slots). The list is then sorted by Morton key ([`GpuRadixSort`]) and each run of
+//! equal keys becomes one voxel, its colour and normal the mean of its fragments
+//! (`shaders/voxel_fragments.wgsl`). The result is a [`VoxelSet`] like the CPU voxelizer's,
+//! so the same preparation (LOD chain, lookups, proxies) follows.
+//!
+//! The CPU voxelizer is exact (a triangle–box overlap test in f64); this path is the
+//! seed's approximation, and its difference is measured, not assumed (`ssbvb voxelize
+//! --gpu` reports `differs_from_cpu`): the plane across a whole pixel square adds cells
+//! next to silhouettes and sharp corners (extra voxels), and the rasterizer's tie rules on
+//! pixel edges a triangle only touches can drop a cell the closed-box test keeps (missing).
+//! Degenerate (zero-area) triangles rasterize nothing. Colours are material × vertex colour
+//! at the pixel centre; textures are not sampled yet.
+//!
+//! A fragment list that overflows its buffer is rebuilt larger (the count is exact), and
+//! one beyond the device's storage-binding limit is refused with the size it needs, never
+//! truncated.
+
+use std::time::Instant;
+
+use glam::DVec3;
+use ssbvb_gpu::wgpu::util::DeviceExt;
+use ssbvb_gpu::{GpuContext, wgpu};
+use ssbvb_voxel::model::Mesh;
+use ssbvb_voxel::svo::LevelVoxels;
+use ssbvb_voxel::voxelize::{VoxelSet, VoxelizeError, VoxelizeReport, mesh_object_space};
+
+use crate::compute_kernels::{Bind, Kernels, WORKGROUP, read_words, storage, uniform};
+use crate::gpu_radix_sort::{GpuRadixSort, SortBuffers};
+use crate::gpu_scan::GpuScan;
+use crate::{PassError, shaders};
+
+/// Bytes of one voxel fragment (key, colour, normal).
+const FRAGMENT_BYTES: u64 = 16;
+/// The first fragment list holds this many fragments per triangle (at least a million).
+const FRAGMENTS_PER_TRIANGLE: u64 = 8;
+
+/// What the GPU voxelization did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct GpuVoxelizeStats {
+    /// Triangles drawn.
+    pub triangles_drawn: u64,
+    /// Fragments in the voxel fragment list.
+    pub fragments: u64,
+    /// Raster passes (more than one when the first fragment list overflowed).
+    pub raster_passes: u32,
+    /// Raster and fragment-count readback (host wall clock, seconds).
+    pub raster_seconds: f64,
+    /// Sort, merge and readback of the voxels (seconds).
+    pub merge_seconds: f64,
+}
+
+/// The compiled voxelizer.
+pub struct GpuVoxelizer {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    merge: Kernels,
+    sort: GpuRadixSort,
+}
+
+fn layout_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
+    let writes = matches!(ty, wgpu::BufferBindingType::Storage { read_only: false });
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        // Written only by the fragment stage (vertex-stage writes are not portable).
+        visibility: if writes {
+            wgpu::ShaderStages::FRAGMENT
+        } else {
+            wgpu::ShaderStages::VERTEX_FRAGMENT
+        },
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+impl GpuVoxelizer {
+    /// Compiles the raster pipeline and the merge kernels.
+    pub fn new(ctx: &GpuContext) -> Result<Self, PassError> {
+        let file = "gpu_voxelize.wgsl";
+        let module = ctx.shader(file, &shaders::source(file)?)?;
+        let (pipeline, layout) = ctx.validated(file, |d| {
+            let read = wgpu::BufferBindingType::Storage { read_only: true };
+            let write = wgpu::BufferBindingType::Storage { read_only: false };
+            let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(file),
+                entries: &[
+                    layout_entry(0, wgpu::BufferBindingType::Uniform),
+                    layout_entry(1, read),
+                    layout_entry(2, read),
+                    layout_entry(3, write),
+                    layout_entry(4, write),
+                ],
+            });
+            let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(file),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            });
+            let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(file),
+                layout: Some(&pl),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: None,
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: wgpu::TextureFormat::R8Unorm,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::empty(),
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+            (pipeline, layout)
+        })?;
+        use Bind::*;
+        Ok(Self {
+            pipeline,
+            layout,
+            merge: Kernels::new(
+                ctx,
+                "voxel_fragments.wgsl",
+                &[
+                    Uniform, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
+                    ReadWrite, ReadWrite, ReadWrite,
+                ],
+                &["fragment_keys", "run_flags", "run_starts", "merge"],
+            )?,
+            sort: GpuRadixSort::new(ctx)?,
+        })
+    }
+
+    /// Voxelizes `mesh` at `level` on the GPU.
+    pub fn voxelize(
+        &self,
+        ctx: &GpuContext,
+        mesh: &Mesh,
+        level: u32,
+    ) -> Result<(VoxelSet, GpuVoxelizeStats), PassError> {
+        self.voxelize_with_capacity(ctx, mesh, level, None)
+    }
+
+    /// [`GpuVoxelizer::voxelize`] with the first fragment list sized for `capacity`
+    /// fragments (default: 8 per triangle, at least a million); a list that overflows is
+    /// rebuilt with the exact count.
+    pub fn voxelize_with_capacity(
+        &self,
+        ctx: &GpuContext,
+        mesh: &Mesh,
+        level: u32,
+        capacity: Option<u64>,
+    ) -> Result<(VoxelSet, GpuVoxelizeStats), PassError> {
+        let max_dim = ctx.device.limits().max_texture_dimension_2d;
+        if level > 16 || (1u64 << level) > u64::from(max_dim) {
+            return Err(PassError::TooLarge(format!(
+                "GPU voxelization: level {level} needs a {0}×{0} viewport, above the device's \
+                 {max_dim}",
+                1u64 << level.min(40)
+            )));
+        }
+        let object_space = mesh_object_space(mesh).ok_or_else(|| {
+            PassError::BadScene(
+                VoxelizeError::Empty("no triangle with finite vertices".into()).to_string(),
+            )
+        })?;
+        let (corners, colors, report) = triangle_corners(mesh, &object_space, level);
+        let triangles = (corners.len() / 12) as u32;
+        let mut stats = GpuVoxelizeStats {
+            triangles_drawn: u64::from(triangles),
+            ..Default::default()
+        };
+        let t0 = Instant::now();
+        let limit = ctx.device.limits().max_storage_buffer_binding_size;
+        let mut capacity = capacity
+            .unwrap_or((u64::from(triangles) * FRAGMENTS_PER_TRIANGLE).max(1 << 20))
+            .max(1);
+        let (fragments, count) = loop {
+            capacity = capacity.min(limit / FRAGMENT_BYTES);
+            let fragments = storage(&ctx.device, "voxel fragments", capacity * 4);
+            let count = self.raster(
+                ctx, &corners, &colors, triangles, level, &fragments, capacity,
+            )?;
+            stats.raster_passes += 1;
+            if count <= capacity {
+                break (fragments, count);
+            }
+            if count > limit / FRAGMENT_BYTES {
+                return Err(PassError::TooLarge(format!(
+                    "GPU voxelization: level {level} makes {count} voxel fragments ({} MiB), \
+                     above the device's storage binding limit of {} MiB",
+                    (count * FRAGMENT_BYTES) >> 20,
+                    limit >> 20
+                )));
+            }
+            capacity = count;
+        };
+        stats.fragments = count;
+        stats.raster_seconds = t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        let voxels = self.merge(ctx, &fragments, count as u32, level)?;
+        stats.merge_seconds = t1.elapsed().as_secs_f64();
+        Ok((
+            VoxelSet {
+                object_space,
+                voxels,
+                report,
+            },
+            stats,
+        ))
+    }
+
+    /// Rasterizes every triangle into `fragments`; returns the fragments made (more than
+    /// `capacity` when it overflowed: those beyond were not written).
+    #[allow(clippy::too_many_arguments)]
+    fn raster(
+        &self,
+        ctx: &GpuContext,
+        corners: &[f32],
+        colors: &[f32],
+        triangles: u32,
+        level: u32,
+        fragments: &wgpu::Buffer,
+        capacity: u64,
+    ) -> Result<u64, PassError> {
+        let d = &ctx.device;
+        let n = 1u32 << level;
+        let init = |label: &str, data: &[f32]| {
+            let one = [0f32; 4];
+            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytemuck::cast_slice(if data.is_empty() { &one } else { data }),
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        };
+        let counter = storage(d, "voxel fragment counter", 1);
+        let params = uniform(d, "voxelize", &[triangles, level, capacity as u32, 0]);
+        let (corner_buf, color_buf) = (init("corners", corners), init("corner colours", colors));
+        ctx.validated("GPU voxelization raster", |d| {
+            let target = d.create_texture(&wgpu::TextureDescriptor {
+                label: Some("voxelization viewport"),
+                size: wgpu::Extent3d {
+                    width: n,
+                    height: n,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::R8Unorm,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+                view_formats: &[],
+            });
+            let view = target.create_view(&Default::default());
+            let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("voxelize"),
+                layout: &self.layout,
+                entries: &[&params, &corner_buf, &color_buf, fragments, &counter]
+                    .iter()
+                    .enumerate()
+                    .map(|(i, b)| wgpu::BindGroupEntry {
+                        binding: i as u32,
+                        resource: b.as_entire_binding(),
+                    })
+                    .collect::<Vec<_>>(),
+            });
+            let mut enc = d.create_command_encoder(&Default::default());
+            {
+                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("voxelize"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Discard,
+                        },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, &bg, &[]);
+                pass.draw(0..3 * triangles, 0..1);
+            }
+            ctx.queue.submit([enc.finish()]);
+        })?;
+        Ok(u64::from(read_words(ctx, &counter, 0, 1)?[0]))
+    }
+
+    /// Sorts the `n` fragments by key and merges each run into a voxel.
+    fn merge(
+        &self,
+        ctx: &GpuContext,
+        fragments: &wgpu::Buffer,
+        n: u32,
+        level: u32,
+    ) -> Result<LevelVoxels, PassError> {
+        let d = &ctx.device;
+        let mut voxels = LevelVoxels {
+            level,
+            ..Default::default()
+        };
+        if n == 0 {
+            return Ok(voxels);
+        }
+        let groups = n.div_ceil(WORKGROUP);
+        let mut a = SortBuffers::new(d, "fragment keys", u64::from(n));
+        let mut b = SortBuffers::new(d, "fragment keys", u64::from(n));
+        let flags = storage(d, "fragment runs", u64::from(n));
+        let starts = storage(d, "run starts", u64::from(n));
+        let dummy = storage(d, "unused", 4);
+        let params = uniform(d, "merge", &[n, 0]);
+        let bind = |keys: &SortBuffers, params: &wgpu::Buffer, outs: [&wgpu::Buffer; 3]| {
+            self.merge.bind_group(
+                d,
+                &[
+                    params, fragments, &keys.lo, &keys.hi, &keys.val, &flags, &starts, outs[0],
+                    outs[1], outs[2],
+                ],
+            )
+        };
+        let mut enc = d.create_command_encoder(&Default::default());
+        let bg = bind(&a, &params, [&dummy, &dummy, &dummy]);
+        self.merge.dispatch(&mut enc, "fragment_keys", &bg, groups);
+        if self.sort.record(d, &mut enc, &a, &b, n, 3 * level) {
+            std::mem::swap(&mut a, &mut b);
+        }
+        let bg = bind(&a, &params, [&dummy, &dummy, &dummy]);
+        self.merge.dispatch(&mut enc, "run_flags", &bg, groups);
+        let sums = self.sort.scan().record(d, &mut enc, &flags, n);
+        self.merge.dispatch(&mut enc, "run_starts", &bg, groups);
+        ctx.queue.submit([enc.finish()]);
+        let runs = read_words(ctx, &sums, GpuScan::total_index(n), 1)?[0];
+        let keys = storage(d, "voxel keys", 2 * u64::from(runs));
+        let colors = storage(d, "voxel colours", u64::from(runs));
+        let normals = storage(d, "voxel normals", 4 * u64::from(runs));
+        let params = uniform(d, "merge", &[n, runs]);
+        let mut enc = d.create_command_encoder(&Default::default());
+        let bg = bind(&a, &params, [&keys, &colors, &normals]);
+        self.merge
+            .dispatch(&mut enc, "merge", &bg, runs.div_ceil(WORKGROUP));
+        ctx.queue.submit([enc.finish()]);
+        let runs = u64::from(runs);
+        let key_words = read_words(ctx, &keys, 0, 2 * runs)?;
+        let color_words = read_words(ctx, &colors, 0, runs)?;
+        let normal_words = read_words(ctx, &normals, 0, 4 * runs)?;
+        voxels.codes = key_words
+            .chunks(2)
+            .map(|k| u64::from(k[0]) | u64::from(k[1]) << 32)
+            .collect();
+        voxels.colors = color_words
+            .iter()
+            .map(|&c| std::array::from_fn(|i| ((c >> (8 * i)) & 0xff) as f32 / 255.0))
+            .collect();
+        voxels.normals = normal_words
+            .chunks(4)
+            .map(|n| [0, 1, 2].map(|i| f32::from_bits(n[i])))
+            .collect();
+        voxels.uvs = vec![[0.0; 2]; voxels.codes.len()];
+        Ok(voxels)
+    }
+}
+
+/// Per drawable triangle its corners in grid units (x, y, z, 1) and corner colours
+/// (material base colour × vertex colour), and the report of what was skipped, counted as
+/// the CPU voxelizer counts it.
+fn triangle_corners(
+    mesh: &Mesh,
+    space: &ssbvb_voxel::model::ObjectSpace,
+    level: u32,
+) -> (Vec<f32>, Vec<f32>, VoxelizeReport) {
+    let half = (1u64 << level) as f64 * 0.5;
+    let mut report = VoxelizeReport {
+        triangles: mesh.triangles.len() as u64,
+        ..Default::default()
+    };
+    let (mut corners, mut colors) = (Vec::new(), Vec::new());
+    for (ti, t) in mesh.triangles.iter().enumerate() {
+        let Some(p) = t
+            .iter()
+            .map(|&i| mesh.positions.get(i as usize))
+            .collect::<Option<Vec<_>>>()
+        else {
+            report.skipped_bad_index += 1;
+            continue;
+        };
+        if p.iter().any(|p| !p.is_finite()) {
+            report.skipped_non_finite += 1;
+            continue;
+        }
+        let g: Vec<DVec3> = p
+            .iter()
+            .map(|p| (space.to_object(p.as_dvec3()) + 1.0) * half)
+            .collect();
+        if (g[1] - g[0]).cross(g[2] - g[0]) == DVec3::ZERO {
+            report.degenerate += 1;
+        }
+        let material = mesh
+            .triangle_materials
+            .get(ti)
+            .and_then(|&m| mesh.materials.get(m as usize))
+            .map_or([1.0; 4], |m| m.base_color);
+        for (k, gk) in g.iter().enumerate() {
+            corners.extend([gk.x as f32, gk.y as f32, gk.z as f32, 1.0]);
+            let vc = mesh.colors.get(t[k] as usize).copied().unwrap_or([1.0; 4]);
+            colors.extend((0..4).map(|c| material[c] * vc[c]));
+        }
+    }
+    (corners, colors, report)
+}

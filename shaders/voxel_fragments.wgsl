@@ -1,0 +1,118 @@
+// The voxel fragment list of gpu_voxelize.wgsl turned into voxels (gpu_voxelize.rs): the
+// keys are copied out and radix-sorted (gpu_radix_sort.wgsl) with the fragment index as
+// payload, runs of equal keys are found by a scan (gpu_scan.wgsl), and one thread per run
+// averages its fragments' colours and normals into one voxel.
+
+struct MergeParams {
+    // Fragments.
+    n: u32,
+    // Runs (voxels), for `merge`.
+    runs: u32,
+}
+
+struct Fragment {
+    key_lo: u32,
+    key_hi: u32,
+    color: u32,
+    normal: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: MergeParams;
+@group(0) @binding(1) var<storage, read> fragments: array<Fragment>;
+@group(0) @binding(2) var<storage, read_write> key_lo: array<u32>;
+@group(0) @binding(3) var<storage, read_write> key_hi: array<u32>;
+@group(0) @binding(4) var<storage, read_write> val: array<u32>;
+@group(0) @binding(5) var<storage, read_write> flags: array<u32>;
+@group(0) @binding(6) var<storage, read_write> starts: array<u32>;
+// Per voxel: Morton key (lo, hi), linear RGBA8 colour, unit normal.
+@group(0) @binding(7) var<storage, read_write> out_keys: array<vec2<u32>>;
+@group(0) @binding(8) var<storage, read_write> out_colors: array<u32>;
+@group(0) @binding(9) var<storage, read_write> out_normals: array<vec4<f32>>;
+
+fn thread_id(li: u32, wg: vec3<u32>, nwg: vec3<u32>) -> u32 {
+    return (wg.x + wg.y * nwg.x) * 256u + li;
+}
+
+@compute @workgroup_size(256)
+fn fragment_keys(
+    @builtin(local_invocation_index) li: u32,
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let i = thread_id(li, wg, nwg);
+    if i < params.n {
+        key_lo[i] = fragments[i].key_lo;
+        key_hi[i] = fragments[i].key_hi;
+        val[i] = i;
+    }
+}
+
+fn starts_run(i: u32) -> bool {
+    return i == 0u || key_lo[i] != key_lo[i - 1u] || key_hi[i] != key_hi[i - 1u];
+}
+
+@compute @workgroup_size(256)
+fn run_flags(
+    @builtin(local_invocation_index) li: u32,
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let i = thread_id(li, wg, nwg);
+    if i < params.n {
+        flags[i] = select(0u, 1u, starts_run(i));
+    }
+}
+
+@compute @workgroup_size(256)
+fn run_starts(
+    @builtin(local_invocation_index) li: u32,
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let i = thread_id(li, wg, nwg);
+    if i < params.n && starts_run(i) {
+        starts[flags[i]] = i;
+    }
+}
+
+fn decode_octahedral(code: u32) -> vec3<f32> {
+    let u = f32(code & 0xffu) / 255.0 * 2.0 - 1.0;
+    let v = f32((code >> 8u) & 0xffu) / 255.0 * 2.0 - 1.0;
+    var n = vec3(u, v, 1.0 - abs(u) - abs(v));
+    if n.z < 0.0 {
+        n = vec3(
+            (1.0 - abs(v)) * select(1.0, -1.0, u < 0.0),
+            (1.0 - abs(u)) * select(1.0, -1.0, v < 0.0),
+            n.z,
+        );
+    }
+    return normalize(n);
+}
+
+@compute @workgroup_size(256)
+fn merge(
+    @builtin(local_invocation_index) li: u32,
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let r = thread_id(li, wg, nwg);
+    if r >= params.runs {
+        return;
+    }
+    let start = starts[r];
+    var end = params.n;
+    if r + 1u < params.runs {
+        end = starts[r + 1u];
+    }
+    var color = vec4(0.0);
+    var normal = vec3(0.0);
+    for (var j = start; j < end; j++) {
+        let f = fragments[val[j]];
+        color += unpack4x8unorm(f.color);
+        normal += decode_octahedral(f.normal);
+    }
+    out_keys[r] = vec2(key_lo[start], key_hi[start]);
+    out_colors[r] = pack4x8unorm(color / f32(end - start));
+    let len = length(normal);
+    out_normals[r] = vec4(select(vec3(0.0, 0.0, 1.0), normal / len, len > 0.0), 0.0);
+}
