@@ -15,6 +15,7 @@ pub mod counters;
 pub mod embed;
 pub mod frame;
 pub mod gbuffer;
+pub mod gpu_lod_build;
 pub mod gpu_radix_sort;
 pub mod gpu_scan;
 pub mod gpu_scene;

@@ -109,3 +109,44 @@ fn an_overflowing_fragment_list_is_rebuilt_not_truncated() {
     assert_eq!(s2.fragments, s1.fragments);
     assert_eq!(small.voxels.codes, full.voxels.codes);
 }
+
+/// The LOD chain, point clouds and lookups built on the GPU from the GPU voxelizer's output
+/// against the CPU preparation of the same voxel set.
+#[test]
+fn gpu_lod_build_equals_the_cpu_preparation() {
+    use ssbvb_passes::gpu_lod_build::GpuLodBuilder;
+    let ctx = ssbvb_tests::ctx();
+    let vox = GpuVoxelizer::new(ctx).unwrap();
+    let builder = GpuLodBuilder::new(ctx).unwrap();
+    for (file, level) in [("bunny.obj", 7), ("teapot.obj", 6)] {
+        let (set, _) = vox.voxelize(ctx, &mesh(file), level).unwrap();
+        let levels = builder.build(ctx, &set.voxels).unwrap();
+        assert!(ctx.take_uncaptured_errors().is_empty());
+        let (asset, _) = ssbvb_voxel::prepare::prepare_voxel_set(set, &NoProgress);
+        assert_eq!(levels.len(), asset.lods.len(), "{file}");
+        for (gpu, lod) in levels.iter().zip(&asset.lods) {
+            let what = format!("{file} level {}", lod.level);
+            let (codes, packed, lookup) = gpu.read_back(ctx).unwrap();
+            let cpu_codes: Vec<u64> = lod
+                .point_cloud
+                .voxels
+                .iter()
+                .map(|v| ssbvb_voxel::svo::morton_encode(v.cell()))
+                .collect();
+            assert_eq!(codes, cpu_codes, "{what}: codes");
+            assert_eq!(lookup, lod.lookup, "{what}: lookup");
+            // Colours to one 8-bit step, normals to one octahedral step (f32 against f64
+            // sums).
+            let mut far = 0;
+            for (i, v) in lod.point_cloud.voxels.iter().enumerate() {
+                let (c, n) = (packed[2 * i], packed[2 * i + 1]);
+                let step = |a: u32, b: u32, s: u32| ((a >> s) & 0xff).abs_diff((b >> s) & 0xff);
+                let color_off = (0..4).any(|k| step(c, v.color, 8 * k) > 1);
+                let cpu_n = v.z_normal >> 16;
+                let normal_off = step(n, cpu_n, 0) > 1 || step(n, cpu_n, 8) > 1;
+                far += usize::from(color_off || normal_off);
+            }
+            assert_eq!(far, 0, "{what}: {far} voxels off by more than a step");
+        }
+    }
+}

@@ -1,0 +1,195 @@
+// The renderer's structures of a voxel set built on the GPU (seed 003's level-by-level
+// octree build; gpu_lod_build.rs drives it): the LOD chain (runs of siblings, `code >> 3`,
+// averaged bottom-up) and each level's sparse lookup (ssbvb_voxel::lookup: a 64-ary tree
+// built from the leaves up, one node per run of `key >> 6`). Runs are found as everywhere
+// here: a flag where the shifted key changes, a scan (gpu_scan.wgsl), the starts scattered.
+// Keys are Morton codes (lo, hi words).
+
+struct LodParams {
+    // Input entries.
+    n: u32,
+    // Key bits dropped to find runs (3: siblings, 6: lookup children).
+    shift: u32,
+    // Runs.
+    runs: u32,
+    // `add_base`: what is added to the inner nodes' bases.
+    offset: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: LodParams;
+@group(0) @binding(1) var<storage, read_write> key_lo: array<u32>;
+@group(0) @binding(2) var<storage, read_write> key_hi: array<u32>;
+@group(0) @binding(3) var<storage, read_write> flags: array<u32>;
+@group(0) @binding(4) var<storage, read_write> starts: array<u32>;
+@group(0) @binding(5) var<storage, read_write> out_lo: array<u32>;
+@group(0) @binding(6) var<storage, read_write> out_hi: array<u32>;
+// Lookup nodes, 3 words each: mask low, mask high, base.
+@group(0) @binding(7) var<storage, read_write> nodes: array<u32>;
+@group(0) @binding(8) var<storage, read_write> colors_in: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read_write> normals_in: array<vec4<f32>>;
+@group(0) @binding(10) var<storage, read_write> colors_out: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read_write> normals_out: array<vec4<f32>>;
+// Point cloud words per voxel: RGBA8 colour, 16-bit octahedral normal.
+@group(0) @binding(12) var<storage, read_write> packed: array<u32>;
+
+fn thread_id(li: u32, wg: vec3<u32>, nwg: vec3<u32>) -> u32 {
+    return (wg.x + wg.y * nwg.x) * 256u + li;
+}
+
+fn key_shifted(i: u32, s: u32) -> vec2<u32> {
+    let lo = key_lo[i];
+    let hi = key_hi[i];
+    if s == 0u {
+        return vec2(lo, hi);
+    }
+    if s >= 32u {
+        return vec2(hi >> (s - 32u), 0u);
+    }
+    return vec2((lo >> s) | (hi << (32u - s)), hi >> s);
+}
+
+fn starts_run(i: u32) -> bool {
+    return i == 0u || any(key_shifted(i, params.shift) != key_shifted(i - 1u, params.shift));
+}
+
+@compute @workgroup_size(256)
+fn run_flags(
+    @builtin(local_invocation_index) li: u32,
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let i = thread_id(li, wg, nwg);
+    if i < params.n {
+        flags[i] = select(0u, 1u, starts_run(i));
+    }
+}
+
+@compute @workgroup_size(256)
+fn run_starts(
+    @builtin(local_invocation_index) li: u32,
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let i = thread_id(li, wg, nwg);
+    if i < params.n && starts_run(i) {
+        starts[flags[i]] = i;
+    }
+}
+
+fn run_end(r: u32) -> u32 {
+    if r + 1u < params.runs {
+        return starts[r + 1u];
+    }
+    return params.n;
+}
+
+// One lookup node per run of `key >> 6`: the children's bits OR-ed, the first child's
+// index as base (add_base later adds the next depth's start for inner nodes).
+@compute @workgroup_size(256)
+fn lookup_group(
+    @builtin(local_invocation_index) li: u32,
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let r = thread_id(li, wg, nwg);
+    if r >= params.runs {
+        return;
+    }
+    let start = starts[r];
+    var mask = vec2(0u);
+    for (var j = start; j < run_end(r); j++) {
+        let bit = key_lo[j] & 63u;
+        mask[bit / 32u] |= 1u << (bit % 32u);
+    }
+    let parent = key_shifted(start, 6u);
+    out_lo[r] = parent.x;
+    out_hi[r] = parent.y;
+    nodes[3u * r] = mask.x;
+    nodes[3u * r + 1u] = mask.y;
+    nodes[3u * r + 2u] = start;
+}
+
+@compute @workgroup_size(256)
+fn add_base(
+    @builtin(local_invocation_index) li: u32,
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let i = thread_id(li, wg, nwg);
+    if i < params.n && (nodes[3u * i] | nodes[3u * i + 1u]) != 0u {
+        nodes[3u * i + 2u] += params.offset;
+    }
+}
+
+// One parent voxel per run of siblings (`code >> 3`), as svo::LevelVoxels::coarsen: mean
+// colour; normalized mean normal, where it cancels the direction away from the children's
+// centroid in the parent, then the first child's normal.
+@compute @workgroup_size(256)
+fn coarsen(
+    @builtin(local_invocation_index) li: u32,
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let r = thread_id(li, wg, nwg);
+    if r >= params.runs {
+        return;
+    }
+    let start = starts[r];
+    let end = run_end(r);
+    var color = vec4(0.0);
+    var normal = vec3(0.0);
+    var offset = vec3(0.0);
+    for (var j = start; j < end; j++) {
+        color += colors_in[j];
+        normal += normals_in[j].xyz;
+        let c = key_lo[j] & 7u;
+        offset += select(vec3(-0.5), vec3(0.5), ((vec3(c) >> vec3(0u, 1u, 2u)) & vec3(1u)) == vec3(1u));
+    }
+    let parent = key_shifted(start, 3u);
+    out_lo[r] = parent.x;
+    out_hi[r] = parent.y;
+    colors_out[r] = color / f32(end - start);
+    var n = normal;
+    if !(length(n) > 1e-12) {
+        n = -offset;
+        if !(length(n) > 1e-12) {
+            n = normals_in[start].xyz;
+        }
+    }
+    let len = length(n);
+    normals_out[r] = vec4(select(vec3(0.0, 0.0, 1.0), n / len, len > 1e-12), 0.0);
+}
+
+fn encode_octahedral(n: vec3<f32>) -> u32 {
+    let l1 = abs(n.x) + abs(n.y) + abs(n.z);
+    var p = vec3(0.0, 0.0, 1.0);
+    if l1 > 0.0 {
+        p = n / l1;
+    }
+    var x = p.x;
+    var y = p.y;
+    if p.z < 0.0 {
+        x = (1.0 - abs(p.y)) * select(1.0, -1.0, p.x < 0.0);
+        y = (1.0 - abs(p.x)) * select(1.0, -1.0, p.y < 0.0);
+    }
+    // floor(v + 0.5): Rust's round on these non-negative values.
+    let qx = u32(floor((clamp(x, -1.0, 1.0) * 0.5 + 0.5) * 255.0 + 0.5));
+    let qy = u32(floor((clamp(y, -1.0, 1.0) * 0.5 + 0.5) * 255.0 + 0.5));
+    return qx | (qy << 8u);
+}
+
+// The point cloud's words (ssbvb_voxel::asset::PackedVoxel's colour and normal).
+@compute @workgroup_size(256)
+fn pack_points(
+    @builtin(local_invocation_index) li: u32,
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let i = thread_id(li, wg, nwg);
+    if i >= params.n {
+        return;
+    }
+    let c = vec4<u32>(clamp(colors_in[i], vec4(0.0), vec4(1.0)) * 255.0 + 0.5);
+    packed[2u * i] = c.x | (c.y << 8u) | (c.z << 16u) | (c.w << 24u);
+    packed[2u * i + 1u] = encode_octahedral(normals_in[i].xyz);
+}
