@@ -42,6 +42,20 @@ pub struct VoxelizeArgs {
     /// voxelization per level (`differs_from_cpu`); never uses the cache.
     #[arg(long)]
     pub gpu: bool,
+    /// With `--gpu`: `exact` (the CPU's triangle–box test in f64, its very voxel set; the
+    /// default where the adapter has f64 shaders) or `raster` (the seed's conservative
+    /// rasterization, a near superset).
+    #[arg(long, value_enum, requires = "gpu")]
+    pub gpu_method: Option<GpuMethodArg>,
+}
+
+/// `--gpu-method`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum GpuMethodArg {
+    /// The CPU's test in f64 per cell (needs f64 shaders).
+    Exact,
+    /// The seed's conservative rasterization.
+    Raster,
 }
 
 /// What the JSON output holds (and the table shows).
@@ -213,8 +227,13 @@ fn table(r: &Report) -> String {
     if let Some(g) = &r.gpu {
         let _ = writeln!(
             s,
-            "gpu     {}: {:.3}s against {:.3}s on the CPU ({} fragments, {} raster pass(es))",
-            g.adapter, g.gpu_seconds, g.cpu_seconds, g.stats.fragments, g.stats.raster_passes
+            "gpu     {} ({:?}): {:.3}s against {:.3}s on the CPU ({} fragments, {} pass(es))",
+            g.adapter,
+            g.method,
+            g.gpu_seconds,
+            g.cpu_seconds,
+            g.stats.fragments,
+            g.stats.raster_passes
         );
     }
     for d in r.differs_from_cpu.iter().flatten() {

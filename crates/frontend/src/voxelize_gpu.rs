@@ -1,5 +1,6 @@
-//! `ssbvb voxelize MODEL --level N --gpu`: the mesh voxelized on the GPU
-//! ([`GpuVoxelizer`], the seed's conservative rasterization), the rest of the preparation
+//! `ssbvb voxelize MODEL --level N --gpu [--gpu-method exact|raster]`: the mesh voxelized
+//! on the GPU ([`GpuVoxelizer`]: by default the exact f64 test where the adapter has f64
+//! shaders, else the seed's conservative rasterization), the rest of the preparation
 //! as usual, and the same report as the CPU path plus `differs_from_cpu` (per level, the
 //! GPU's voxels against the exact CPU voxelization's, both carried down the LOD chain by
 //! OR-ing children) and `gpu` (adapter, fragments, raster passes, time against the CPU's).
@@ -8,7 +9,7 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use serde::Serialize;
-use ssbvb_passes::gpu_voxelize::{GpuVoxelizeStats, GpuVoxelizer};
+use ssbvb_passes::gpu_voxelize::{GpuVoxelizeMethod, GpuVoxelizeStats, GpuVoxelizer};
 use ssbvb_voxel::cache::{hash_source, write_cache};
 use ssbvb_voxel::load::load_model;
 use ssbvb_voxel::model::Model;
@@ -16,7 +17,7 @@ use ssbvb_voxel::prepare::prepare_voxel_set;
 use ssbvb_voxel::progress::NoProgress;
 use ssbvb_voxel::voxelize::voxelize_mesh;
 
-use crate::voxelize_cmd::{CacheReport, Report, VoxelizeArgs};
+use crate::voxelize_cmd::{CacheReport, GpuMethodArg, Report, VoxelizeArgs};
 
 /// One level of `differs_from_cpu`.
 #[derive(Debug, Clone, Serialize)]
@@ -35,6 +36,8 @@ pub(crate) struct LevelDiff {
 pub(crate) struct GpuReport {
     pub(crate) adapter: String,
     pub(crate) adapter_is_software: bool,
+    /// `Exact` or `Raster`.
+    pub(crate) method: GpuVoxelizeMethod,
     #[serde(flatten)]
     pub(crate) stats: GpuVoxelizeStats,
     /// GPU voxelization, host wall clock (raster, sort, merge, readback).
@@ -88,9 +91,15 @@ pub(crate) fn run(args: &VoxelizeArgs) -> anyhow::Result<Report> {
     };
     let ctx = crate::adapter_cmd::headless_context(&[])?;
     let voxelizer = GpuVoxelizer::new(&ctx)?;
+    let method = match args.gpu_method {
+        Some(GpuMethodArg::Exact) => GpuVoxelizeMethod::Exact,
+        Some(GpuMethodArg::Raster) => GpuVoxelizeMethod::Raster,
+        None if voxelizer.has_exact() => GpuVoxelizeMethod::Exact,
+        None => GpuVoxelizeMethod::Raster,
+    };
     let t0 = Instant::now();
     let (set, stats) = voxelizer
-        .voxelize(&ctx, &mesh, args.level)
+        .voxelize_by(&ctx, &mesh, args.level, None, method)
         .with_context(|| format!("{}: GPU voxelization failed", args.model.display()))?;
     let gpu_seconds = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
@@ -124,6 +133,7 @@ pub(crate) fn run(args: &VoxelizeArgs) -> anyhow::Result<Report> {
         gpu: Some(GpuReport {
             adapter: ctx.report().to_string(),
             adapter_is_software: ctx.report().is_software,
+            method,
             stats,
             gpu_seconds,
             cpu_seconds,

@@ -372,7 +372,9 @@ impl GpuContext {
             | wgpu::Features::INDIRECT_FIRST_INSTANCE
             | wgpu::Features::FLOAT32_FILTERABLE
             // Counters (fragments shaded per pass) where the adapter has them.
-            | wgpu::Features::PIPELINE_STATISTICS_QUERY;
+            | wgpu::Features::PIPELINE_STATISTICS_QUERY
+            // The exact GPU voxelization (f64 separating-axis test) where present.
+            | wgpu::Features::SHADER_F64;
         let features = adapter.features() & wanted;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("ssbvb"),

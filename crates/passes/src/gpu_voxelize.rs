@@ -8,13 +8,17 @@
 //! (`shaders/voxel_fragments.wgsl`). The result is a [`VoxelSet`] like the CPU voxelizer's,
 //! so the same preparation (LOD chain, lookups, proxies) follows.
 //!
-//! The CPU voxelizer is exact (a triangle–box overlap test in f64); this path is the
+//! The CPU voxelizer is exact (a triangle–box overlap test in f64). The raster path is the
 //! seed's approximation, and its difference is measured, not assumed (`ssbvb voxelize
 //! --gpu` reports `differs_from_cpu`): the plane across a whole pixel square adds cells
 //! next to silhouettes and sharp corners (extra voxels), and the rasterizer's tie rules on
 //! pixel edges a triangle only touches can drop a cell the closed-box test keeps (missing).
-//! Degenerate (zero-area) triangles rasterize nothing. Colours are material × vertex colour
-//! at the pixel centre; textures are not sampled yet.
+//! Degenerate (zero-area) triangles rasterize nothing. [`GpuVoxelizeMethod::Exact`]
+//! (`shaders/gpu_voxelize_exact.wgsl`, on adapters with f64 shaders) runs the CPU's test
+//! itself on the cells near each triangle's plane, one thread per cell column, and gives
+//! the CPU's voxel set exactly (tested on every shared mesh up to level 10); it is the
+//! default of `voxelize --gpu` where available. Colours are material × vertex colour at the
+//! column centre in both; textures are not sampled yet.
 //!
 //! A fragment list that overflows its buffer is rebuilt larger (the count is exact), and
 //! one beyond the device's storage-binding limit is refused with the size it needs, never
@@ -54,10 +58,22 @@ pub struct GpuVoxelizeStats {
     pub merge_seconds: f64,
 }
 
+/// Which GPU voxelization to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum GpuVoxelizeMethod {
+    /// The seed's conservative rasterization (a near superset of the exact voxels).
+    Raster,
+    /// The CPU's separating-axis test on every cell of each triangle's bounds, in f64
+    /// (`gpu_voxelize_exact.wgsl`; needs `SHADER_F64`): the CPU's voxel set.
+    Exact,
+}
+
 /// The compiled voxelizer.
 pub struct GpuVoxelizer {
     pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
+    /// The exact path, on devices with f64 shaders.
+    exact: Option<Kernels>,
     merge: Kernels,
     sort: GpuRadixSort,
 }
@@ -132,9 +148,20 @@ impl GpuVoxelizer {
             (pipeline, layout)
         })?;
         use Bind::*;
+        let exact = if ctx.has(wgpu::Features::SHADER_F64) {
+            Some(Kernels::new(
+                ctx,
+                "gpu_voxelize_exact.wgsl",
+                &[Uniform, Read, Read, ReadWrite, ReadWrite, ReadWrite],
+                &["count_columns", "exact_columns"],
+            )?)
+        } else {
+            None
+        };
         Ok(Self {
             pipeline,
             layout,
+            exact,
             merge: Kernels::new(
                 ctx,
                 "voxel_fragments.wgsl",
@@ -168,6 +195,31 @@ impl GpuVoxelizer {
         level: u32,
         capacity: Option<u64>,
     ) -> Result<(VoxelSet, GpuVoxelizeStats), PassError> {
+        self.voxelize_by(ctx, mesh, level, capacity, GpuVoxelizeMethod::Raster)
+    }
+
+    /// Whether this device runs [`GpuVoxelizeMethod::Exact`].
+    pub fn has_exact(&self) -> bool {
+        self.exact.is_some()
+    }
+
+    /// Voxelizes `mesh` at `level` with `method` (an error names the missing feature when
+    /// the device cannot run it).
+    pub fn voxelize_by(
+        &self,
+        ctx: &GpuContext,
+        mesh: &Mesh,
+        level: u32,
+        capacity: Option<u64>,
+        method: GpuVoxelizeMethod,
+    ) -> Result<(VoxelSet, GpuVoxelizeStats), PassError> {
+        if method == GpuVoxelizeMethod::Exact && self.exact.is_none() {
+            return Err(PassError::BadScene(
+                "the exact GPU voxelization needs f64 shaders (wgpu feature SHADER_F64), \
+                 which this adapter lacks"
+                    .into(),
+            ));
+        }
         let max_dim = ctx.device.limits().max_texture_dimension_2d;
         if level > 16 || (1u64 << level) > u64::from(max_dim) {
             return Err(PassError::TooLarge(format!(
@@ -181,7 +233,7 @@ impl GpuVoxelizer {
                 VoxelizeError::Empty("no triangle with finite vertices".into()).to_string(),
             )
         })?;
-        let (corners, colors, report) = triangle_corners(mesh, &object_space, level);
+        let (corners, colors, grid, report) = triangle_corners(mesh, &object_space, level);
         let triangles = (corners.len() / 12) as u32;
         let mut stats = GpuVoxelizeStats {
             triangles_drawn: u64::from(triangles),
@@ -195,9 +247,14 @@ impl GpuVoxelizer {
         let (fragments, count) = loop {
             capacity = capacity.min(limit / FRAGMENT_BYTES);
             let fragments = storage(&ctx.device, "voxel fragments", capacity * 4);
-            let count = self.raster(
-                ctx, &corners, &colors, triangles, level, &fragments, capacity,
-            )?;
+            let count = match method {
+                GpuVoxelizeMethod::Raster => self.raster(
+                    ctx, &corners, &colors, triangles, level, &fragments, capacity,
+                )?,
+                GpuVoxelizeMethod::Exact => {
+                    self.exact(ctx, &grid, &colors, triangles, level, &fragments, capacity)?
+                }
+            };
             stats.raster_passes += 1;
             if count <= capacity {
                 break (fragments, count);
@@ -308,6 +365,65 @@ impl GpuVoxelizer {
         Ok(u64::from(read_words(ctx, &counter, 0, 1)?[0]))
     }
 
+    /// Runs the exact test over every triangle's cells into `fragments`; returns the
+    /// fragments made (as [`GpuVoxelizer::raster`]).
+    #[allow(clippy::too_many_arguments)]
+    fn exact(
+        &self,
+        ctx: &GpuContext,
+        grid: &[f64],
+        colors: &[f32],
+        triangles: u32,
+        level: u32,
+        fragments: &wgpu::Buffer,
+        capacity: u64,
+    ) -> Result<u64, PassError> {
+        let kernels = self.exact.as_ref().expect("checked by the caller");
+        let d = &ctx.device;
+        let init = |label: &str, bytes: &[u8]| {
+            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: if bytes.is_empty() { &[0; 16] } else { bytes },
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        };
+        let counter = storage(d, "voxel fragment counter", 1);
+        let offsets = storage(d, "column offsets", u64::from(triangles));
+        let verts = init("grid corners", bytemuck::cast_slice(grid));
+        let cols = init("corner colours", bytemuck::cast_slice(colors));
+        let bind = |params: &wgpu::Buffer| {
+            kernels.bind_group(d, &[params, &verts, &cols, fragments, &counter, &offsets])
+        };
+        // Columns per triangle, their offsets, then one thread per column.
+        let params = uniform(d, "exact voxelize", &[triangles, level, capacity as u32, 0]);
+        let mut enc = d.create_command_encoder(&Default::default());
+        kernels.dispatch(
+            &mut enc,
+            "count_columns",
+            &bind(&params),
+            triangles.div_ceil(WORKGROUP),
+        );
+        let sums = self.sort.scan().record(d, &mut enc, &offsets, triangles);
+        ctx.queue.submit([enc.finish()]);
+        let columns = read_words(ctx, &sums, GpuScan::total_index(triangles), 1)?[0];
+        let params = uniform(
+            d,
+            "exact voxelize",
+            &[triangles, level, capacity as u32, columns],
+        );
+        ctx.validated("exact GPU voxelization", |_| {
+            let mut enc = d.create_command_encoder(&Default::default());
+            kernels.dispatch(
+                &mut enc,
+                "exact_columns",
+                &bind(&params),
+                columns.div_ceil(WORKGROUP),
+            );
+            ctx.queue.submit([enc.finish()]);
+        })?;
+        Ok(u64::from(read_words(ctx, &counter, 0, 1)?[0]))
+    }
+
     /// Sorts the `n` fragments by key and merges each run into a voxel.
     fn merge(
         &self,
@@ -382,20 +498,21 @@ impl GpuVoxelizer {
     }
 }
 
-/// Per drawable triangle its corners in grid units (x, y, z, 1) and corner colours
-/// (material base colour × vertex colour), and the report of what was skipped, counted as
-/// the CPU voxelizer counts it.
+/// Per drawable triangle its corners in grid units as f32 (x, y, z, 1) for the raster path
+/// and as f64 (x, y, z) for the exact path, exactly as the CPU voxelizer maps them; its
+/// corner colours (material base colour × vertex colour); and the report of what was
+/// skipped, counted as the CPU voxelizer counts it.
 fn triangle_corners(
     mesh: &Mesh,
     space: &ssbvb_voxel::model::ObjectSpace,
     level: u32,
-) -> (Vec<f32>, Vec<f32>, VoxelizeReport) {
+) -> (Vec<f32>, Vec<f32>, Vec<f64>, VoxelizeReport) {
     let half = (1u64 << level) as f64 * 0.5;
     let mut report = VoxelizeReport {
         triangles: mesh.triangles.len() as u64,
         ..Default::default()
     };
-    let (mut corners, mut colors) = (Vec::new(), Vec::new());
+    let (mut corners, mut colors, mut grid) = (Vec::new(), Vec::new(), Vec::new());
     for (ti, t) in mesh.triangles.iter().enumerate() {
         let Some(p) = t
             .iter()
@@ -423,9 +540,10 @@ fn triangle_corners(
             .map_or([1.0; 4], |m| m.base_color);
         for (k, gk) in g.iter().enumerate() {
             corners.extend([gk.x as f32, gk.y as f32, gk.z as f32, 1.0]);
+            grid.extend([gk.x, gk.y, gk.z]);
             let vc = mesh.colors.get(t[k] as usize).copied().unwrap_or([1.0; 4]);
             colors.extend((0..4).map(|c| material[c] * vc[c]));
         }
     }
-    (corners, colors, report)
+    (corners, colors, grid, report)
 }
