@@ -29,8 +29,10 @@ struct LodParams {
 @group(0) @binding(9) var<storage, read_write> normals_in: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read_write> colors_out: array<vec4<f32>>;
 @group(0) @binding(11) var<storage, read_write> normals_out: array<vec4<f32>>;
-// Point cloud words per voxel: RGBA8 colour, 16-bit octahedral normal.
+// The point cloud as the scene's streams hold it: one RGBA8 colour word per voxel (here),
+// and 16-bit octahedral normals two per word (`packed_normals`).
 @group(0) @binding(12) var<storage, read_write> packed: array<u32>;
+@group(0) @binding(13) var<storage, read_write> packed_normals: array<u32>;
 
 fn thread_id(li: u32, wg: vec3<u32>, nwg: vec3<u32>) -> u32 {
     return (wg.x + wg.y * nwg.x) * 256u + li;
@@ -178,7 +180,8 @@ fn encode_octahedral(n: vec3<f32>) -> u32 {
     return qx | (qy << 8u);
 }
 
-// The point cloud's words (ssbvb_voxel::asset::PackedVoxel's colour and normal).
+// The point cloud's words (ssbvb_voxel::asset::PackedVoxel's colour and normal): thread i
+// packs voxel i's colour and, for even i, the normal word of voxels i and i + 1.
 @compute @workgroup_size(256)
 fn pack_points(
     @builtin(local_invocation_index) li: u32,
@@ -190,6 +193,12 @@ fn pack_points(
         return;
     }
     let c = vec4<u32>(clamp(colors_in[i], vec4(0.0), vec4(1.0)) * 255.0 + 0.5);
-    packed[2u * i] = c.x | (c.y << 8u) | (c.z << 16u) | (c.w << 24u);
-    packed[2u * i + 1u] = encode_octahedral(normals_in[i].xyz);
+    packed[i] = c.x | (c.y << 8u) | (c.z << 16u) | (c.w << 24u);
+    if i % 2u == 0u {
+        var word = encode_octahedral(normals_in[i].xyz);
+        if i + 1u < params.n {
+            word |= encode_octahedral(normals_in[i + 1u].xyz) << 16u;
+        }
+        packed_normals[i / 2u] = word;
+    }
 }

@@ -36,8 +36,10 @@ pub struct GpuLevel {
     pub colors: wgpu::Buffer,
     /// Unit normal (f32 × 4) per voxel.
     pub normals: wgpu::Buffer,
-    /// Two words per voxel: RGBA8 colour, octahedral normal (the point cloud's).
+    /// RGBA8 colour per voxel (the scene's colour stream).
     pub packed: wgpu::Buffer,
+    /// 16-bit octahedral normals, two per word (the scene's normal stream).
+    pub packed_normals: wgpu::Buffer,
     /// The lookup's nodes, root first ([`NODE_WORDS`] words each).
     pub nodes: wgpu::Buffer,
     /// Nodes in `nodes`.
@@ -60,14 +62,14 @@ struct Binds<'a> {
     nodes: Option<&'a wgpu::Buffer>,
     attrs_in: Option<(&'a wgpu::Buffer, &'a wgpu::Buffer)>,
     attrs_out: Option<(&'a wgpu::Buffer, &'a wgpu::Buffer)>,
-    packed: Option<&'a wgpu::Buffer>,
+    packed: Option<(&'a wgpu::Buffer, &'a wgpu::Buffer)>,
 }
 
 impl GpuLodBuilder {
     /// Compiles the kernels.
     pub fn new(ctx: &GpuContext) -> Result<Self, PassError> {
         let mut binds = vec![Bind::Uniform];
-        binds.extend([Bind::ReadWrite; 12]);
+        binds.extend([Bind::ReadWrite; 13]);
         Ok(Self {
             kernels: Kernels::new(
                 ctx,
@@ -88,8 +90,8 @@ impl GpuLodBuilder {
 
     fn bind(&self, d: &wgpu::Device, b: &Binds, params: &wgpu::Buffer) -> wgpu::BindGroup {
         // Distinct placeholders: a buffer may not be bound twice with writes.
-        let ph: Vec<wgpu::Buffer> = (0..12).map(|_| storage(d, "unused", 4)).collect();
-        let list: [&wgpu::Buffer; 13] = [
+        let ph: Vec<wgpu::Buffer> = (0..13).map(|_| storage(d, "unused", 4)).collect();
+        let list: [&wgpu::Buffer; 14] = [
             params,
             b.keys.map_or(&ph[0], |k| k.0),
             b.keys.map_or(&ph[1], |k| k.1),
@@ -102,7 +104,8 @@ impl GpuLodBuilder {
             b.attrs_in.map_or(&ph[8], |a| a.1),
             b.attrs_out.map_or(&ph[9], |a| a.0),
             b.attrs_out.map_or(&ph[10], |a| a.1),
-            b.packed.unwrap_or(&ph[11]),
+            b.packed.map_or(&ph[11], |p| p.0),
+            b.packed.map_or(&ph[12], |p| p.1),
         ];
         self.kernels.bind_group(d, &list)
     }
@@ -238,11 +241,12 @@ impl GpuLodBuilder {
         starts: &wgpu::Buffer,
     ) -> Result<GpuLevel, PassError> {
         let d = &ctx.device;
-        let packed = storage(d, "point cloud", 2 * u64::from(n));
+        let packed = storage(d, "point cloud colours", u64::from(n));
+        let packed_normals = storage(d, "point cloud normals", u64::from(n.div_ceil(2)));
         let params = uniform(d, "pack", &[n, 0, 0, 0]);
         let b = Binds {
             attrs_in: Some((&colors, &normals)),
-            packed: Some(&packed),
+            packed: Some((&packed, &packed_normals)),
             ..Default::default()
         };
         let mut enc = d.create_command_encoder(&Default::default());
@@ -330,6 +334,7 @@ impl GpuLodBuilder {
             colors,
             normals,
             packed,
+            packed_normals,
             nodes,
             node_count: total,
         })
@@ -337,8 +342,8 @@ impl GpuLodBuilder {
 }
 
 impl GpuLevel {
-    /// Reads the level back: its codes, point-cloud words (colour, normal per voxel) and
-    /// lookup (tests; the cross-check against the CPU preparation).
+    /// Reads the level back: its codes, point-cloud words (colour and 16-bit normal per
+    /// voxel, interleaved) and lookup (tests; the cross-check against the CPU preparation).
     pub fn read_back(
         &self,
         ctx: &GpuContext,
@@ -351,7 +356,11 @@ impl GpuLevel {
             .zip(&hi)
             .map(|(&l, &h)| u64::from(l) | u64::from(h) << 32)
             .collect();
-        let packed = read_words(ctx, &self.packed, 0, 2 * n)?;
+        let colors = read_words(ctx, &self.packed, 0, n)?;
+        let normals = read_words(ctx, &self.packed_normals, 0, n.div_ceil(2))?;
+        let packed = (0..n as usize)
+            .flat_map(|i| [colors[i], (normals[i / 2] >> (16 * (i % 2))) & 0xffff])
+            .collect();
         let nodes = read_words(
             ctx,
             &self.nodes,
