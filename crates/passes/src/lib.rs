@@ -50,7 +50,7 @@ registry::pass_modules! {
 pub use adapter_needs::pipeline_requirements;
 pub use counters::FrameCounters;
 pub use frame::{FrameStats, PassTiming, Profiling, Recorder, Renderer};
-pub use gpu_scene::{GpuScene, ObjectMemory, StreamChunks};
+pub use gpu_scene::{DynamicRoom, GpuScene, ObjectMemory, StreamChunks};
 pub use registry::{PassImpl, PassInit, Registration};
 pub use scene::{LodPolicy, Scene, TriangleObject, VoxelObject};
 pub use streaming::{StreamingOptions, StreamingStats};

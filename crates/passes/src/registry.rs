@@ -105,6 +105,14 @@ fn create<P: PassImpl>(init: &PassInit<'_>) -> Result<Box<dyn PassNode>, PassErr
         pass: init.pass.name.clone(),
         kind: init.pass.kind.name(),
     })?;
+    if P::WHOLE_LEVELS && !init.scene.dynamic.is_empty() {
+        return Err(PassError::BadScene(format!(
+            "pass `{}` (kind {}) builds its structures from the objects' CPU assets and cannot \
+             draw objects whose voxels change on the GPU; only the SSBVB pipelines can",
+            init.pass.name,
+            init.pass.kind.name()
+        )));
+    }
     if P::WHOLE_LEVELS && init.scene.streaming.is_some() {
         return Err(PassError::NeedsWholeLevels {
             pass: init.pass.name.clone(),

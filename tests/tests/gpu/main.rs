@@ -6,6 +6,7 @@ mod billboards;
 mod chunks;
 mod cube_raster;
 mod dense_dda;
+mod dynamic;
 mod embed;
 mod empty_space;
 mod gpu_sort;

@@ -15,8 +15,11 @@ use crate::streaming::{
 };
 pub use crate::visibility::choose_level;
 
+mod dynamic;
 mod layout;
 mod pools;
+
+pub use dynamic::{DynamicLevel, DynamicObject, DynamicRoom};
 
 use crate::visibility::{frame_uniform, instance_bvh, mat, visible_instances};
 pub use layout::*;
@@ -67,6 +70,8 @@ pub struct GpuScene {
     pub memory: Vec<ObjectMemory>,
     /// The page cache under a budget (`None`: every level resident).
     pub streaming: Option<crate::streaming::Streaming>,
+    /// Objects whose voxels change on the GPU, with their room in the streams.
+    pub dynamic: Vec<DynamicObject>,
     /// Page feedback binding (a small unused buffer without a budget).
     _feedback_dummy: Option<wgpu::Buffer>,
     /// Voxel indices of the colour stream (for unique-voxel keys under a budget).
@@ -148,7 +153,18 @@ impl GpuScene {
         scene: Scene,
         chunks: StreamChunks,
     ) -> Result<Self, PassError> {
-        Self::build(ctx, scene, chunks, None)
+        Self::build(ctx, scene, chunks, None, &[])
+    }
+
+    /// [`Self::new`] with room for the voxels of the objects in `rooms` to change on the GPU
+    /// ([`GpuScene::set_object_levels`]).
+    pub fn with_dynamic(
+        ctx: &GpuContext,
+        scene: Scene,
+        rooms: &[DynamicRoom],
+    ) -> Result<Self, PassError> {
+        let limit = ctx.device.limits().max_storage_buffer_binding_size;
+        Self::build(ctx, scene, StreamChunks::for_device(limit), None, rooms)
     }
 
     /// Uploads the scene under a GPU memory budget: levels up to
@@ -161,7 +177,13 @@ impl GpuScene {
         options: &StreamingOptions,
     ) -> Result<Self, PassError> {
         let limit = ctx.device.limits().max_storage_buffer_binding_size;
-        Self::build(ctx, scene, StreamChunks::for_device(limit), Some(options))
+        Self::build(
+            ctx,
+            scene,
+            StreamChunks::for_device(limit),
+            Some(options),
+            &[],
+        )
     }
 
     /// [`Self::streamed`] with the given stream chunks.
@@ -171,7 +193,7 @@ impl GpuScene {
         chunks: StreamChunks,
         options: &StreamingOptions,
     ) -> Result<Self, PassError> {
-        Self::build(ctx, scene, chunks, Some(options))
+        Self::build(ctx, scene, chunks, Some(options), &[])
     }
 
     fn build(
@@ -179,7 +201,21 @@ impl GpuScene {
         scene: Scene,
         chunks: StreamChunks,
         streaming: Option<&StreamingOptions>,
+        rooms: &[DynamicRoom],
     ) -> Result<Self, PassError> {
+        if let Some(r) = rooms.iter().find(|r| r.object >= scene.objects.len()) {
+            return Err(PassError::BadScene(format!(
+                "dynamic room for object {}, the scene has {}",
+                r.object,
+                scene.objects.len()
+            )));
+        }
+        if streaming.is_some() && !rooms.is_empty() {
+            return Err(PassError::BadScene(
+                "dynamic objects cannot be paged under a GPU budget".into(),
+            ));
+        }
+        let mut dynamic: Vec<DynamicObject> = Vec::new();
         if !(4..=30).contains(&chunks.word_bits)
             || !(4..=28).contains(&chunks.node_bits)
             || !(4..=28).contains(&chunks.octree_bits)
@@ -207,6 +243,13 @@ impl GpuScene {
                 ));
             }
             lod_base.push(checked_u32(lods.len(), "LOD count")?);
+            let room = rooms.iter().find(|r| r.object == oi);
+            if room.is_some() {
+                dynamic.push(DynamicObject {
+                    object: oi,
+                    levels: Vec::new(),
+                });
+            }
             let mut ranges = Vec::new();
             let mut mem = ObjectMemory::default();
             for lod in &obj.asset.lods {
@@ -221,6 +264,11 @@ impl GpuScene {
                         lod.point_cloud.voxels.len()
                     )));
                 }
+                if room.is_some() && colors.len() % 2 == 1 {
+                    // Normals go two per word: a dynamic level starts on a word.
+                    colors.push(0);
+                    normals.push(0);
+                }
                 let mut info = LodInfo {
                     level: lod.level,
                     depth: l.depth,
@@ -232,7 +280,11 @@ impl GpuScene {
                     page_base: NO_PAGES,
                     first_page_node: 0,
                 };
-                lod_bounds.push(voxel_bounds(lod));
+                lod_bounds.push(match room {
+                    // Whatever a dynamic level's voxels become, they stay in the object box.
+                    Some(_) => Some((DVec3::splat(-1.0), DVec3::ONE)),
+                    None => voxel_bounds(lod),
+                });
                 if streaming.is_some() && lod.level > PINNED_LEVEL {
                     // Paged: the tree down to the page nodes; leaves and voxels by demand.
                     let file = streaming.and_then(|o| o.page_files.get(oi).cloned().flatten());
@@ -268,6 +320,21 @@ impl GpuScene {
                             .map(|v| (v.z_normal >> 16) as u16),
                     );
                     nodes.extend_from_slice(&l.nodes);
+                    if let (Some(r), Some(d)) = (room, dynamic.last_mut()) {
+                        let n = lod.point_cloud.voxels.len();
+                        let node_count = l.nodes.len() / NODE_WORDS;
+                        let (vcap, ncap) = (r.capacity(n), r.capacity(node_count));
+                        colors.resize(info.voxel_offset as usize + vcap, 0);
+                        normals.resize(colors.len(), 0);
+                        nodes.resize((info.node_offset as usize + ncap) * NODE_WORDS, 0);
+                        d.levels.push(DynamicLevel {
+                            voxel_offset: info.voxel_offset,
+                            voxel_capacity: checked_u32(vcap, "voxel count")?,
+                            node_offset: info.node_offset,
+                            node_capacity: checked_u32(ncap, "lookup nodes")?,
+                            voxels: checked_u32(n, "voxel count")?,
+                        });
+                    }
                 }
                 checked_u32(nodes.len(), "lookup size")?;
                 lods.push(info);
@@ -281,13 +348,15 @@ impl GpuScene {
                     continue;
                 }
                 proxy_bytes += proxy;
+                let boxed = room.map(|_| dynamic::object_box());
+                let proxy_mesh = boxed.as_ref().unwrap_or(&lod.proxy);
                 ranges.push(ProxyRange {
                     first_index: checked_u32(proxy_i.len(), "proxy indices")?,
-                    index_count: checked_u32(lod.proxy.triangles.len() * 3, "proxy indices")?,
+                    index_count: checked_u32(proxy_mesh.triangles.len() * 3, "proxy indices")?,
                     base_vertex: checked_u32(proxy_v.len(), "proxy vertices")? as i32,
                 });
-                proxy_v.extend(lod.proxy.positions.iter().map(|p| [p[0], p[1], p[2], 1.0]));
-                proxy_i.extend(lod.proxy.triangles.iter().flatten());
+                proxy_v.extend(proxy_mesh.positions.iter().map(|p| [p[0], p[1], p[2], 1.0]));
+                proxy_i.extend(proxy_mesh.triangles.iter().flatten());
             }
             proxies.push(ranges);
             memory.push(mem);
@@ -501,6 +570,7 @@ impl GpuScene {
             visible: Vec::new(),
             memory,
             streaming,
+            dynamic,
             _feedback_dummy: feedback_dummy,
             voxel_slots,
             camera: Camera::default(),

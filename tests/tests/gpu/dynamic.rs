@@ -1,0 +1,142 @@
+//! Objects whose voxels change on the GPU: a mesh voxelized on the GPU (exact path), its
+//! LOD chain and lookups built on the GPU, copied into a dynamic object's room and drawn by
+//! the SSBVB frame with no CPU preparation, against the reference of the CPU-prepared asset
+//! of the same mesh.
+
+use glam::DVec3;
+use ssbvb_passes::gpu_lod_build::GpuLodBuilder;
+use ssbvb_passes::gpu_voxelize::{GpuVoxelizeMethod, GpuVoxelizer};
+use ssbvb_passes::{DynamicRoom, GpuScene, PassError, Profiling, Renderer, Scene};
+use ssbvb_voxel::accuracy;
+use ssbvb_voxel::camera::Camera;
+use ssbvb_voxel::load::load_model;
+use ssbvb_voxel::model::{Mesh, Model};
+
+const FLAT: &str = include_str!("../../../assets/pipelines/ssbvb_flat.ron");
+const SIZE: (u32, u32) = (160, 120);
+
+fn mesh(file: &str) -> Mesh {
+    match load_model(&ssbvb_tests::models_dir().join(file)).unwrap() {
+        Model::Mesh(m) => m,
+        _ => panic!("{file} is not a mesh"),
+    }
+}
+
+/// Coverage IoU and same-voxel rate of the frame against the reference of `scene`.
+fn accuracy_of(
+    renderer: &Renderer,
+    scene: &Scene,
+    cam: &Camera,
+    level: u32,
+) -> accuracy::AccuracyReport {
+    let ctx = ssbvb_tests::ctx();
+    let reference = ssbvb_tests::reference_of(scene, cam, SIZE);
+    let hits = ssbvb_passes::measure::gbuffer_hits(ctx, renderer).unwrap();
+    accuracy::compare(&reference, &hits, &[2.0 / f64::from(1u32 << level)]).unwrap()
+}
+
+#[test]
+fn a_gpu_built_object_draws_like_its_cpu_prepared_asset() {
+    let ctx = ssbvb_tests::ctx();
+    let level = 6;
+    let bunny = ssbvb_tests::model_asset("bunny.obj", level);
+    let teapot = ssbvb_tests::model_asset("teapot.obj", level);
+    let scene = ssbvb_tests::single_object_scene(bunny.clone(), level);
+    let mut gpu_scene = GpuScene::with_dynamic(
+        ctx,
+        scene.clone(),
+        &[DynamicRoom {
+            object: 0,
+            growth: 1.5,
+        }],
+    )
+    .unwrap();
+    let pipeline = ssbvb_graph::resolve_str(FLAT, "flat").unwrap();
+    let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, SIZE).unwrap();
+    let cam = Camera::new(DVec3::new(1.6, 1.0, 2.3), DVec3::ZERO);
+    let render = |r: &mut Renderer, s: &mut GpuScene| {
+        r.render(ctx, s, &cam, Profiling::Off).unwrap();
+        ctx.wait_idle().unwrap();
+        assert!(ctx.take_uncaptured_errors().is_empty());
+    };
+    // As uploaded: the bunny, drawn through the room's box proxy.
+    render(&mut renderer, &mut gpu_scene);
+    let a = accuracy_of(&renderer, &scene, &cam, level);
+    // Then the teapot, voxelized and prepared on the GPU, replaces it.
+    let vox = GpuVoxelizer::new(ctx).unwrap();
+    let lods = GpuLodBuilder::new(ctx).unwrap();
+    let (set, _) = vox
+        .voxelize_by(
+            ctx,
+            &mesh("teapot.obj"),
+            level,
+            None,
+            GpuVoxelizeMethod::Exact,
+        )
+        .unwrap();
+    let levels = lods.build(ctx, &set.voxels).unwrap();
+    gpu_scene.set_object_levels(ctx, 0, &levels).unwrap();
+    render(&mut renderer, &mut gpu_scene);
+    let teapot_scene = ssbvb_tests::single_object_scene(teapot.clone(), level);
+    let b = accuracy_of(&renderer, &teapot_scene, &cam, level);
+    // And it no longer shows the bunny.
+    let c = accuracy_of(&renderer, &scene, &cam, level);
+    eprintln!(
+        "uploaded bunny: IoU {:.4} same voxel {:.4}; GPU-built teapot: IoU {:.4} same voxel {:.4} ({} px); against the bunny IoU {:.4}",
+        a.coverage_iou,
+        a.same_voxel_rate,
+        b.coverage_iou,
+        b.same_voxel_rate,
+        b.covered_reference,
+        c.coverage_iou
+    );
+    for (r, what) in [(&a, "bunny"), (&b, "teapot")] {
+        assert!(r.covered_reference > 2000, "{what}: {r:?}");
+        assert!(
+            r.coverage_iou >= 0.99 && r.same_voxel_rate >= 0.99,
+            "{what}: {r:?}"
+        );
+    }
+    assert!(c.coverage_iou < 0.8, "{c:?}");
+    let room = gpu_scene.dynamic_object(0).unwrap();
+    assert_eq!(
+        room.levels[level as usize].voxels,
+        teapot.lods[level as usize].point_cloud.voxels.len() as u32
+    );
+}
+
+#[test]
+fn a_level_that_outgrows_its_room_is_refused_with_the_room_needed() {
+    let ctx = ssbvb_tests::ctx();
+    let small = ssbvb_tests::model_asset("cow.obj", 5);
+    let scene = ssbvb_tests::single_object_scene(small, 5);
+    let mut gpu_scene = GpuScene::with_dynamic(
+        ctx,
+        scene,
+        &[DynamicRoom {
+            object: 0,
+            growth: 1.0,
+        }],
+    )
+    .unwrap();
+    // The igea at level 5 (3 568 voxels) outgrows the cow's room (1 362 + 1 024).
+    let vox = GpuVoxelizer::new(ctx).unwrap();
+    let (set, _) = vox.voxelize(ctx, &mesh("igea.ply"), 5).unwrap();
+    let levels = GpuLodBuilder::new(ctx)
+        .unwrap()
+        .build(ctx, &set.voxels)
+        .unwrap();
+    let room = gpu_scene.dynamic_object(0).unwrap().levels[5];
+    if levels[5].count <= room.voxel_capacity {
+        panic!(
+            "the test needs a set larger than the room: {} ≤ {}",
+            levels[5].count, room.voxel_capacity
+        );
+    }
+    let e = gpu_scene.set_object_levels(ctx, 0, &levels).unwrap_err();
+    assert!(matches!(e, PassError::TooLarge(_)), "{e}");
+    assert!(e.to_string().contains("its room holds"), "{e}");
+    // Not dynamic, wrong level count: refused too.
+    assert!(gpu_scene.set_object_levels(ctx, 1, &levels).is_err());
+    assert!(gpu_scene.set_object_levels(ctx, 0, &levels[..3]).is_err());
+}
