@@ -29,9 +29,9 @@ use std::time::Instant;
 use glam::DVec3;
 use ssbvb_gpu::wgpu::util::DeviceExt;
 use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_voxel::model::Mesh;
+use ssbvb_voxel::model::{Mesh, ObjectSpace};
 use ssbvb_voxel::svo::LevelVoxels;
-use ssbvb_voxel::voxelize::{VoxelSet, VoxelizeError, VoxelizeReport, mesh_object_space};
+use ssbvb_voxel::voxelize::{VoxelSet, VoxelizeError, VoxelizeReport, mesh_bounds};
 
 use crate::compute_kernels::{Bind, Kernels, WORKGROUP, read_words, storage, uniform};
 use crate::gpu_radix_sort::{GpuRadixSort, SortBuffers};
@@ -213,6 +213,21 @@ impl GpuVoxelizer {
         capacity: Option<u64>,
         method: GpuVoxelizeMethod,
     ) -> Result<(VoxelSet, GpuVoxelizeStats), PassError> {
+        self.voxelize_in(ctx, mesh, level, None, capacity, method)
+    }
+
+    /// [`GpuVoxelizer::voxelize_by`] in a given object space (as
+    /// [`ssbvb_voxel::voxelize::voxelize_mesh_in`]: an animated mesh keeps the space of its
+    /// whole motion; a vertex outside it is an error).
+    pub fn voxelize_in(
+        &self,
+        ctx: &GpuContext,
+        mesh: &Mesh,
+        level: u32,
+        space: Option<ObjectSpace>,
+        capacity: Option<u64>,
+        method: GpuVoxelizeMethod,
+    ) -> Result<(VoxelSet, GpuVoxelizeStats), PassError> {
         if method == GpuVoxelizeMethod::Exact && self.exact.is_none() {
             return Err(PassError::BadScene(
                 "the exact GPU voxelization needs f64 shaders (wgpu feature SHADER_F64), \
@@ -228,11 +243,23 @@ impl GpuVoxelizer {
                 1u64 << level.min(40)
             )));
         }
-        let object_space = mesh_object_space(mesh).ok_or_else(|| {
+        let (lo, hi) = mesh_bounds(mesh).ok_or_else(|| {
             PassError::BadScene(
                 VoxelizeError::Empty("no triangle with finite vertices".into()).to_string(),
             )
         })?;
+        let object_space = match space {
+            Some(s) => {
+                let inside = |p: DVec3| s.to_object(p).abs().max_element() <= 1.0;
+                if !(inside(lo) && inside(hi)) {
+                    return Err(PassError::BadScene(
+                        VoxelizeError::OutsideObjectSpace.to_string(),
+                    ));
+                }
+                s
+            }
+            None => ObjectSpace::from_bounds(lo, hi),
+        };
         let (corners, colors, grid, report) = triangle_corners(mesh, &object_space, level);
         let triangles = (corners.len() / 12) as u32;
         let mut stats = GpuVoxelizeStats {

@@ -9,6 +9,7 @@
 //! declaration ([`bindings`]).
 
 pub mod adapter_needs;
+pub mod animated;
 pub mod bindings;
 pub mod compute_kernels;
 pub mod counters;

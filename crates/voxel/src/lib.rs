@@ -10,6 +10,7 @@
 //! instance data of the cube rasterization baseline.
 
 pub mod accuracy;
+pub mod animate;
 pub mod asset;
 pub mod cache;
 pub mod camera;

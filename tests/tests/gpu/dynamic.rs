@@ -3,6 +3,8 @@
 //! the SSBVB frame with no CPU preparation, against the reference of the CPU-prepared asset
 //! of the same mesh.
 
+use std::sync::Arc;
+
 use glam::DVec3;
 use ssbvb_passes::gpu_lod_build::GpuLodBuilder;
 use ssbvb_passes::gpu_voxelize::{GpuVoxelizeMethod, GpuVoxelizer};
@@ -139,4 +141,72 @@ fn a_level_that_outgrows_its_room_is_refused_with_the_room_needed() {
     // Not dynamic, wrong level count: refused too.
     assert!(gpu_scene.set_object_levels(ctx, 1, &levels).is_err());
     assert!(gpu_scene.set_object_levels(ctx, 0, &levels[..3]).is_err());
+}
+
+/// An animated (twisting) bunny re-voxelized on the GPU at time t matches the reference of
+/// its CPU voxelization at t, and differs from its rest pose.
+#[test]
+fn an_animated_mesh_drawn_at_time_t_matches_its_reference_at_t() {
+    use ssbvb_passes::animated::{AnimatedMesh, Animator};
+    use ssbvb_voxel::animate::MeshAnimation;
+    let ctx = ssbvb_tests::ctx();
+    let level = 6;
+    let anim = AnimatedMesh::new(
+        0,
+        mesh("bunny.obj"),
+        MeshAnimation::Twist {
+            degrees_per_second: 90.0,
+        },
+        level,
+    )
+    .unwrap();
+    let rest = Arc::new(anim.cpu_asset(0.0).unwrap());
+    let scene = ssbvb_tests::single_object_scene(rest.clone(), level);
+    let mut gpu_scene = GpuScene::with_dynamic(
+        ctx,
+        scene.clone(),
+        &[DynamicRoom {
+            object: 0,
+            growth: 1.5,
+        }],
+    )
+    .unwrap();
+    let pipeline = ssbvb_graph::resolve_str(FLAT, "flat").unwrap();
+    let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, SIZE).unwrap();
+    let animator = Animator::new(ctx).unwrap();
+    let cam = Camera::new(DVec3::new(0.4, 1.2, 2.8), DVec3::ZERO);
+    let t = 0.8;
+    let times = animator.update(ctx, &mut gpu_scene, &anim, t).unwrap();
+    renderer
+        .render(ctx, &mut gpu_scene, &cam, Profiling::Off)
+        .unwrap();
+    ctx.wait_idle().unwrap();
+    assert!(ctx.take_uncaptured_errors().is_empty());
+    let at_t = Arc::new(anim.cpu_asset(t).unwrap());
+    let r = accuracy_of(
+        &renderer,
+        &ssbvb_tests::single_object_scene(at_t.clone(), level),
+        &cam,
+        level,
+    );
+    let vs_rest = accuracy_of(&renderer, &scene, &cam, level);
+    eprintln!(
+        "twist at t = {t}: {:?} ({:.1} ms); IoU {:.4} same voxel {:.4} ({} px); against the rest pose IoU {:.4}",
+        animator.method(),
+        times.total_ms(),
+        r.coverage_iou,
+        r.same_voxel_rate,
+        r.covered_reference,
+        vs_rest.coverage_iou
+    );
+    assert_eq!(
+        times.voxels,
+        at_t.lods[level as usize].point_cloud.voxels.len() as u64
+    );
+    assert!(r.covered_reference > 2000, "{r:?}");
+    assert!(r.coverage_iou >= 0.99 && r.same_voxel_rate >= 0.99, "{r:?}");
+    assert!(
+        vs_rest.coverage_iou < 0.95,
+        "the twist must show: {vs_rest:?}"
+    );
 }

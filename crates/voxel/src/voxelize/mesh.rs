@@ -24,6 +24,11 @@ const TOUCH_WEIGHT: f64 = 1e-9;
 /// Object space of a mesh: the bounding box of the finite vertices referenced by its
 /// triangles (indices in range). `None` when there is no such vertex.
 pub fn mesh_object_space(mesh: &Mesh) -> Option<ObjectSpace> {
+    mesh_bounds(mesh).map(|(min, max)| ObjectSpace::from_bounds(min, max))
+}
+
+/// The bounding box (model units) of the finite vertices the mesh's triangles reference.
+pub fn mesh_bounds(mesh: &Mesh) -> Option<(DVec3, DVec3)> {
     let mut min = DVec3::splat(f64::INFINITY);
     let mut max = DVec3::splat(f64::NEG_INFINITY);
     for t in &mesh.triangles {
@@ -38,7 +43,7 @@ pub fn mesh_object_space(mesh: &Mesh) -> Option<ObjectSpace> {
             }
         }
     }
-    (min.x <= max.x).then(|| ObjectSpace::from_bounds(min, max))
+    (min.x <= max.x).then_some((min, max))
 }
 
 /// Running sums of one cell in a brick.
@@ -101,7 +106,20 @@ pub fn voxelize_mesh(
     level: u32,
     progress: &dyn Progress,
 ) -> Result<VoxelSet, VoxelizeError> {
-    let bricks = MeshBricks::new(mesh, level, MAX_VOXELS, progress)?;
+    voxelize_mesh_in(mesh, level, None, progress)
+}
+
+/// [`voxelize_mesh`] in a given object space (an animated mesh keeps the space of its
+/// whole motion, so its voxels do not rescale from frame to frame); every vertex must map
+/// into [-1, 1]³ there, else [`VoxelizeError::OutsideObjectSpace`]. `None`: the mesh's own
+/// bounds ([`mesh_object_space`]).
+pub fn voxelize_mesh_in(
+    mesh: &Mesh,
+    level: u32,
+    space: Option<ObjectSpace>,
+    progress: &dyn Progress,
+) -> Result<VoxelSet, VoxelizeError> {
+    let bricks = MeshBricks::new(mesh, level, MAX_VOXELS, space, progress)?;
     // Bricks go in batches so that only one batch of per-chunk output exists next to the
     // result, which is reserved from the estimate (untouched capacity costs no memory).
     let capacity = (bricks.estimate as usize).min(1 << 26);
@@ -186,6 +204,7 @@ impl<'a> MeshBricks<'a> {
         mesh: &'a Mesh,
         level: u32,
         max_voxels: u64,
+        space: Option<ObjectSpace>,
         progress: &dyn Progress,
     ) -> Result<Self, VoxelizeError> {
         check_level(level)?;
@@ -193,8 +212,19 @@ impl<'a> MeshBricks<'a> {
             triangles: mesh.triangles.len() as u64,
             ..Default::default()
         };
-        let object_space = mesh_object_space(mesh)
+        let (lo, hi) = mesh_bounds(mesh)
             .ok_or_else(|| VoxelizeError::Empty("no triangle references a finite vertex".into()))?;
+        let object_space = match space {
+            Some(s) => {
+                // Every referenced finite vertex inside [-1, 1]³ of the given space.
+                let inside = |p: DVec3| s.to_object(p).abs().max_element() <= 1.0;
+                if !(inside(lo) && inside(hi)) {
+                    return Err(VoxelizeError::OutsideObjectSpace);
+                }
+                s
+            }
+            None => ObjectSpace::from_bounds(lo, hi),
+        };
 
         // Vertices in grid units (f64): cell i covers [i, i+1].
         let hc = half_cells(level);

@@ -66,7 +66,7 @@ use crate::svo::LevelVoxels;
 
 pub(crate) use attributes::gradient_26;
 pub use geometry::triangle_box_overlap;
-pub use mesh::{mesh_object_space, voxelize_mesh};
+pub use mesh::{mesh_bounds, mesh_object_space, voxelize_mesh, voxelize_mesh_in};
 pub use regions::voxelize_mesh_regions;
 pub use resample::{voxel_model_object_space, voxelize_voxels, voxelize_voxels_with};
 
@@ -138,6 +138,9 @@ pub enum VoxelizeError {
     /// Nothing to voxelize.
     #[error("the model has nothing to voxelize: {0}")]
     Empty(String),
+    /// A vertex lies outside the object space the mesh was asked to be voxelized in.
+    #[error("the mesh leaves the object space it was given (a vertex maps outside [-1, 1]³)")]
+    OutsideObjectSpace,
     /// The result would exceed [`MAX_VOXELS`] (or [`MAX_REGION_VOXELS`]).
     #[error(
         "level {level} would produce about {estimate} voxels, more than the limit of {limit}; choose a lower level"

@@ -31,7 +31,7 @@ pub fn voxelize_mesh_regions(
     progress: &dyn Progress,
     mut sink: impl FnMut(LevelVoxels),
 ) -> Result<(ObjectSpace, VoxelizeReport), VoxelizeError> {
-    let bricks = MeshBricks::new(mesh, level, MAX_REGION_VOXELS, progress)?;
+    let bricks = MeshBricks::new(mesh, level, MAX_REGION_VOXELS, None, progress)?;
     let brick_log = bricks.brick_log();
     let region_log = region_log.clamp(brick_log, level);
     // A brick's region: its code without the brick digits below the region.

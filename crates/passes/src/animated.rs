@@ -1,0 +1,159 @@
+//! Animated meshes re-voxelized on the GPU every frame (the seed's dynamic objects): the
+//! mesh is deformed at time `t` ([`MeshAnimation`], on the CPU: only vertex positions),
+//! voxelized on the GPU in the object space of its whole motion ([`GpuVoxelizer`]), its LOD
+//! chain and lookups built on the GPU ([`GpuLodBuilder`]) and copied into its object's
+//! room in the scene ([`GpuScene::set_object_levels`]). Each stage is timed, for the cost
+//! table beside the static frame.
+
+use std::time::Instant;
+
+use ssbvb_gpu::GpuContext;
+use ssbvb_voxel::animate::MeshAnimation;
+use ssbvb_voxel::asset::VoxelAsset;
+use ssbvb_voxel::model::{Mesh, ObjectSpace};
+use ssbvb_voxel::prepare::prepare_voxel_set;
+use ssbvb_voxel::progress::NoProgress;
+use ssbvb_voxel::voxelize::voxelize_mesh_in;
+
+use crate::PassError;
+use crate::gpu_lod_build::GpuLodBuilder;
+use crate::gpu_scene::GpuScene;
+use crate::gpu_voxelize::{GpuVoxelizeMethod, GpuVoxelizer};
+
+/// One animated object of a scene.
+#[derive(Debug, Clone)]
+pub struct AnimatedMesh {
+    /// The scene object it drives (uploaded with a [`crate::DynamicRoom`]).
+    pub object: usize,
+    /// The mesh at rest.
+    pub mesh: Mesh,
+    /// How it moves.
+    pub animation: MeshAnimation,
+    /// The object space of the whole motion.
+    pub space: ObjectSpace,
+    /// Voxelization level.
+    pub level: u32,
+}
+
+impl AnimatedMesh {
+    /// An animated mesh, its object space from the motion; an error when the mesh has no
+    /// usable vertex.
+    pub fn new(
+        object: usize,
+        mesh: Mesh,
+        animation: MeshAnimation,
+        level: u32,
+    ) -> Result<Self, PassError> {
+        let space = animation
+            .object_space(&mesh)
+            .ok_or_else(|| PassError::BadScene("the animated mesh has no usable vertex".into()))?;
+        Ok(Self {
+            object,
+            mesh,
+            animation,
+            space,
+            level,
+        })
+    }
+
+    /// The mesh at time `t`.
+    pub fn at(&self, t: f64) -> Result<Mesh, PassError> {
+        self.animation
+            .deform(&self.mesh, t)
+            .ok_or_else(|| PassError::BadScene("the animated mesh has no usable vertex".into()))
+    }
+
+    /// The asset at time `t` prepared on the CPU (the first upload, and the reference).
+    pub fn cpu_asset(&self, t: f64) -> Result<VoxelAsset, PassError> {
+        let set = voxelize_mesh_in(&self.at(t)?, self.level, Some(self.space), &NoProgress)
+            .map_err(|e| PassError::BadScene(e.to_string()))?;
+        Ok(prepare_voxel_set(set, &NoProgress).0)
+    }
+}
+
+/// What one update cost, per stage (host wall clock, each stage waited for; ms).
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct UpdateTimes {
+    /// Deforming the mesh (CPU).
+    pub deform_ms: f64,
+    /// GPU voxelization (with its readback of counts).
+    pub voxelize_ms: f64,
+    /// LOD chain, point clouds and lookups on the GPU.
+    pub lod_ms: f64,
+    /// Copying the levels into the scene's streams.
+    pub copy_ms: f64,
+    /// Voxels of the finest level.
+    pub voxels: u64,
+}
+
+impl UpdateTimes {
+    /// Every stage.
+    pub fn total_ms(&self) -> f64 {
+        self.deform_ms + self.voxelize_ms + self.lod_ms + self.copy_ms
+    }
+}
+
+/// Runs the per-frame update of animated meshes.
+pub struct Animator {
+    voxelizer: GpuVoxelizer,
+    lods: GpuLodBuilder,
+    method: GpuVoxelizeMethod,
+}
+
+impl Animator {
+    /// Compiles the GPU stages; voxelizes exactly where the adapter has f64 shaders, else
+    /// with the seed's raster path.
+    pub fn new(ctx: &GpuContext) -> Result<Self, PassError> {
+        let voxelizer = GpuVoxelizer::new(ctx)?;
+        let method = if voxelizer.has_exact() {
+            GpuVoxelizeMethod::Exact
+        } else {
+            GpuVoxelizeMethod::Raster
+        };
+        Ok(Self {
+            voxelizer,
+            lods: GpuLodBuilder::new(ctx)?,
+            method,
+        })
+    }
+
+    /// The voxelization it runs.
+    pub fn method(&self) -> GpuVoxelizeMethod {
+        self.method
+    }
+
+    /// Brings `mesh`'s object in `scene` to time `t`.
+    pub fn update(
+        &self,
+        ctx: &GpuContext,
+        scene: &mut GpuScene,
+        mesh: &AnimatedMesh,
+        t: f64,
+    ) -> Result<UpdateTimes, PassError> {
+        let mut times = UpdateTimes::default();
+        let ms = |t0: Instant| t0.elapsed().as_secs_f64() * 1e3;
+        let t0 = Instant::now();
+        let deformed = mesh.at(t)?;
+        times.deform_ms = ms(t0);
+        let t0 = Instant::now();
+        let (set, _) = self.voxelizer.voxelize_in(
+            ctx,
+            &deformed,
+            mesh.level,
+            Some(mesh.space),
+            None,
+            self.method,
+        )?;
+        times.voxelize_ms = ms(t0);
+        times.voxels = set.voxels.len() as u64;
+        let t0 = Instant::now();
+        let levels = self.lods.build(ctx, &set.voxels)?;
+        ctx.wait_idle()?;
+        times.lod_ms = ms(t0);
+        let t0 = Instant::now();
+        scene.set_object_levels(ctx, mesh.object, &levels)?;
+        ctx.wait_idle()?;
+        times.copy_ms = ms(t0);
+        Ok(times)
+    }
+}
