@@ -59,6 +59,10 @@ const FILES: &[(&str, &[u8])] = &[
         include_bytes!("../../../assets/pipelines/rastavox.ron"),
     ),
     (
+        "scenes/twisting_bunny.ron",
+        include_bytes!("../../../assets/scenes/twisting_bunny.ron"),
+    ),
+    (
         "models/bunny.obj",
         include_bytes!("../../../assets/models/bunny.obj"),
     ),

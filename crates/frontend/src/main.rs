@@ -1,6 +1,7 @@
 //! The `ssbvb` command-line tool.
 
 mod adapter_cmd;
+mod animation;
 mod bench;
 mod budget;
 mod bundled;

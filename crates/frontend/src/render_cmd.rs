@@ -73,6 +73,11 @@ pub struct RenderArgs {
     /// `--json`). 1: just the frame.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
     pub frames: u64,
+    /// Time in seconds at which the scene's animated objects (`animate:`) are drawn: each is
+    /// deformed, voxelized and prepared on the GPU for that time (`animation` in `--json`
+    /// gives the cost per stage).
+    #[arg(long, default_value_t = 0.0)]
+    pub time: f64,
     /// The camera's path during `--frames`.
     #[arg(long, value_enum, default_value = "orbit")]
     pub camera_path: crate::soak::CameraPath,
@@ -127,6 +132,9 @@ struct Report {
     streaming: Option<crate::budget::StreamingReport>,
     /// With `--frames N > 1`: memory at the start and end of the soak (`null` without).
     soak: Option<crate::soak::SoakReport>,
+    /// With animated objects: the time drawn and each update's cost by stage.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    animation: Option<crate::animation::AnimationReport>,
     gpu_memory_bytes: Vec<ObjectReport>,
     asset_notes: Vec<String>,
 }
@@ -155,6 +163,8 @@ pub struct LoadedInput {
     pub gpu_budget_mib: Option<u64>,
     /// Per object, the cache file its pages stream from under a budget.
     pub page_sources: Vec<Option<crate::budget::PageSourceRef>>,
+    /// The scene's animated objects.
+    pub animated: Vec<ssbvb_passes::animated::AnimatedMesh>,
 }
 
 /// Loads a scene file (`.ron`) or prepares a model file at `level` (default 8), placed at
@@ -179,6 +189,7 @@ pub fn load_input(
             notes: s.notes,
             gpu_budget_mib: s.gpu_budget_mib,
             page_sources: s.page_sources,
+            animated: s.animated,
         });
     }
     let level = level.unwrap_or(8);
@@ -202,6 +213,7 @@ pub fn load_input(
         notes: vec![format!("{}: {outcome}", input.display())],
         gpu_budget_mib: None,
         page_sources: vec![crate::budget::PageSourceRef::of(&outcome, level)],
+        animated: Vec::new(),
     })
 }
 
@@ -217,8 +229,18 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         mut notes,
         gpu_budget_mib,
         page_sources,
+        animated,
     } = load_input(&input, args.level, &progress)?;
     let budget = args.gpu_budget.or(gpu_budget_mib);
+    if !args.time.is_finite() {
+        bail!(
+            "--time must be a finite number of seconds, got {}",
+            args.time
+        );
+    }
+    if !animated.is_empty() && budget.is_some() {
+        bail!("animated objects cannot be paged under a GPU budget; drop --gpu-budget");
+    }
     progress.finish();
     if let Some(p) = args.camera_pos {
         camera.position = p;
@@ -264,6 +286,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         bail!("--frames (a soak of the GPU renderer) does not apply to --reference");
     }
     let report = if args.reference {
+        let scene = crate::animation::posed(&scene, &animated, args.time)?;
         let mut instances = Vec::new();
         let mut lod_histogram = std::collections::BTreeMap::new();
         for o in &scene.objects {
@@ -307,6 +330,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             warnings,
             streaming: None,
             soak: None,
+            animation: (!animated.is_empty()).then(|| crate::animation::AnimationReport {
+                time_s: args.time,
+                method: None,
+                objects: Vec::new(),
+            }),
             gpu_memory_bytes: Vec::new(),
             asset_notes: notes,
         }
@@ -324,7 +352,22 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 let options = crate::budget::options(mib, &page_sources, usize::MAX, &mut notes)?;
                 GpuScene::streamed(&ctx, scene, &options)?
             }
+            None if !animated.is_empty() => {
+                GpuScene::with_dynamic(&ctx, scene, &crate::animation::rooms(&animated))?
+            }
             None => GpuScene::new(&ctx, scene)?,
+        };
+        let animation = if animated.is_empty() {
+            None
+        } else {
+            let animator = ssbvb_passes::animated::Animator::new(&ctx)?;
+            Some(crate::animation::update_all(
+                &ctx,
+                &mut gpu_scene,
+                &animator,
+                &animated,
+                args.time,
+            )?)
         };
         let mut renderer = Renderer::new(&ctx, &gpu_scene, pipeline, args.size)?;
         let profiling = if ctx.report().is_software {
@@ -413,6 +456,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             warnings,
             streaming,
             soak,
+            animation,
             gpu_memory_bytes: gpu_scene
                 .memory
                 .iter()

@@ -16,7 +16,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use glam::DVec3;
 use ssbvb_passes::{LodPolicy, Scene, TriangleObject, VoxelObject};
 use ssbvb_scene::{InstanceDesc, LodDesc, TriangleDesc};
@@ -36,6 +36,8 @@ pub struct LoadedScene {
     pub gpu_budget_mib: Option<u64>,
     /// Per object, the cache file its pages stream from under a budget.
     pub page_sources: Vec<Option<crate::budget::PageSourceRef>>,
+    /// The animated objects (their assets are their rest pose, prepared on the CPU).
+    pub animated: Vec<ssbvb_passes::animated::AnimatedMesh>,
 }
 
 /// Reads a scene file and prepares (or loads from cache) every object's asset.
@@ -59,13 +61,35 @@ fn load_with_cache(
     };
     let mut notes = Vec::new();
     let mut page_sources = Vec::new();
-    for o in &file.objects {
+    let mut animated = Vec::new();
+    for (oi, o) in file.objects.iter().enumerate() {
         let model = dir.join(&o.model);
-        let (asset, outcome) =
-            ssbvb_voxel::cache::load_or_prepare(&model, o.level, cache, progress)
-                .with_context(|| format!("scene {}: object {}", path.display(), o.model))?;
-        notes.push(format!("{}: {outcome}", o.model));
-        page_sources.push(crate::budget::PageSourceRef::of(&outcome, o.level));
+        let what = || format!("scene {}: object {}", path.display(), o.model);
+        let asset = if let Some(animation) = o.animate {
+            // Animated: the mesh itself, voxelized in the space of its whole motion.
+            let ssbvb_voxel::model::Model::Mesh(mesh) =
+                ssbvb_voxel::load::load_model(&model).with_context(what)?
+            else {
+                bail!("{}: animate needs a mesh model (OBJ, PLY, glTF)", what());
+            };
+            let anim = ssbvb_passes::animated::AnimatedMesh::new(oi, mesh, animation, o.level)
+                .with_context(what)?;
+            let rest = anim.cpu_asset(0.0).with_context(what)?;
+            notes.push(format!(
+                "{}: animated, re-voxelized on the GPU each frame",
+                o.model
+            ));
+            page_sources.push(None);
+            animated.push(anim);
+            rest
+        } else {
+            let (asset, outcome) =
+                ssbvb_voxel::cache::load_or_prepare(&model, o.level, cache, progress)
+                    .with_context(what)?;
+            notes.push(format!("{}: {outcome}", o.model));
+            page_sources.push(crate::budget::PageSourceRef::of(&outcome, o.level));
+            asset
+        };
         let lod = match o.lod {
             None => LodPolicy::Fixed(o.level),
             Some(LodDesc::Fixed(l)) => LodPolicy::Fixed(l),
@@ -107,6 +131,7 @@ fn load_with_cache(
         notes,
         gpu_budget_mib: file.gpu_budget_mib,
         page_sources,
+        animated,
     })
 }
 

@@ -29,7 +29,7 @@ use std::time::Instant;
 use glam::DVec3;
 use ssbvb_gpu::wgpu::util::DeviceExt;
 use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_voxel::model::{Mesh, ObjectSpace};
+use ssbvb_voxel::model::{Material, Mesh, ObjectSpace};
 use ssbvb_voxel::svo::LevelVoxels;
 use ssbvb_voxel::voxelize::{VoxelSet, VoxelizeError, VoxelizeReport, mesh_bounds};
 
@@ -564,7 +564,7 @@ fn triangle_corners(
             .triangle_materials
             .get(ti)
             .and_then(|&m| mesh.materials.get(m as usize))
-            .map_or([1.0; 4], |m| m.base_color);
+            .map_or(Material::DEFAULT.base_color, |m| m.base_color);
         for (k, gk) in g.iter().enumerate() {
             corners.extend([gk.x as f32, gk.y as f32, gk.z as f32, 1.0]);
             grid.extend([gk.x, gk.y, gk.z]);

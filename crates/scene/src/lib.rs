@@ -192,6 +192,10 @@ pub struct ObjectDesc {
     /// Placements (default: one at the origin).
     #[serde(default)]
     pub instances: Option<Vec<InstanceDesc>>,
+    /// A mesh animation (`Twist(degrees_per_second: 90)`): the mesh is deformed and
+    /// re-voxelized on the GPU for the time rendered (`ssbvb render --time T`).
+    #[serde(default)]
+    pub animate: Option<ssbvb_voxel::animate::MeshAnimation>,
 }
 
 /// One placement of an object.
@@ -289,6 +293,9 @@ impl SceneFile {
         }
         let mut bad_instances = 0;
         for (i, o) in self.objects.iter().enumerate() {
+            if let Some(p) = o.animate.as_ref().and_then(|a| a.problem()) {
+                out.push(format!("objects[{i}].animate: {p}"));
+            }
             match o.lod {
                 Some(LodDesc::Fixed(l)) if l > o.level => out.push(format!(
                     "objects[{i}].lod: Fixed({l}) is finer than the object's level {}",

@@ -80,6 +80,19 @@ fn gpu_voxelization_covers_the_exact_voxels_with_few_extra() {
                 ssbvb_voxel::accuracy::angle_deg(gpu.voxels.normals[i], cpu.voxels.normals[j])
             })
             .collect();
+        // Colours of the voxels both have: these meshes have one material and no vertex
+        // colours, so every voxel has the material's colour on both paths.
+        let off = codes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, c)| cpu_index.get(c).map(|&j| (i, j)))
+            .filter(|&(i, j)| {
+                (0..4).any(|k| {
+                    (gpu.voxels.colors[i][k] - cpu.voxels.colors[j][k]).abs() > 1.0 / 255.0
+                })
+            })
+            .count();
+        assert_eq!(off, 0, "{file} L{level}: {off} colours differ");
         angles.sort_by(f64::total_cmp);
         let (median, p95) = (angles[angles.len() / 2], angles[angles.len() * 95 / 100]);
         eprintln!("{file} L{level}: normal difference median {median:.2}° p95 {p95:.2}°");

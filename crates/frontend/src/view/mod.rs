@@ -97,7 +97,14 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         mut notes,
         gpu_budget_mib,
         page_sources,
+        animated,
     } = load_input(&input, args.level, &progress)?;
+    if !animated.is_empty() {
+        notes.push(
+            "the viewer draws animated objects in their rest pose (use ssbvb render --time)"
+                .to_string(),
+        );
+    }
     progress.finish();
     // Pages streamed per frame at most: a camera cut fills the view over a few frames
     // rather than stalling one.

@@ -1,6 +1,7 @@
 //! The `ssbvb` binary as users run it: exit codes, the CLI contracts, error messages.
 //! RastaVox's commands are in `rastavox.rs`.
 
+mod animation;
 mod rastavox;
 mod voxelize_gpu;
 
