@@ -78,14 +78,16 @@ pub(super) struct Matrix {
 pub(super) fn matrix(args: &BenchArgs) -> Matrix {
     let bunny = BenchModel::File(assets_dir().join("models/bunny.obj"));
     let mut m = match args.preset {
-        Preset::Quick | Preset::Scale | Preset::Memory | Preset::Rastavox => Matrix {
-            models: vec![bunny],
-            levels: vec![5, 6],
-            sizes: vec![(160, 120)],
-            warmup: 1,
-            frames: 3,
-            camera: Camera::new(DVec3::new(0.0, 0.3, 2.6), DVec3::ZERO),
-        },
+        Preset::Quick | Preset::Scale | Preset::Memory | Preset::Rastavox | Preset::Dynamic => {
+            Matrix {
+                models: vec![bunny],
+                levels: vec![5, 6],
+                sizes: vec![(160, 120)],
+                warmup: 1,
+                frames: 3,
+                camera: Camera::new(DVec3::new(0.0, 0.3, 2.6), DVec3::ZERO),
+            }
+        }
         Preset::Full => Matrix {
             models: vec![bunny],
             levels: vec![7, 8, 9, 10, 11, 12],
@@ -140,20 +142,23 @@ pub(super) fn matrix(args: &BenchArgs) -> Matrix {
 /// Sweep sizes of a preset.
 pub(super) fn sweep_config(preset: Preset) -> SweepConfig {
     match preset {
-        Preset::Quick | Preset::Study | Preset::Scale | Preset::Memory | Preset::Rastavox => {
-            SweepConfig {
-                size: (160, 120),
-                level: 6,
-                warmup: 1,
-                frames: 2,
-                max_steps: &[8, 32, 1024],
-                size_scale: &[0.9, 1.0, 1.3],
-                max_i: &[0.0, 1.0, 3.0],
-                min_dist: &[0.0, 0.5, 2.0],
-                resolution_scale: &[0.5, 1.0],
-                lod_bias: &[-2, -1, 0],
-            }
-        }
+        Preset::Quick
+        | Preset::Study
+        | Preset::Scale
+        | Preset::Memory
+        | Preset::Rastavox
+        | Preset::Dynamic => SweepConfig {
+            size: (160, 120),
+            level: 6,
+            warmup: 1,
+            frames: 2,
+            max_steps: &[8, 32, 1024],
+            size_scale: &[0.9, 1.0, 1.3],
+            max_i: &[0.0, 1.0, 3.0],
+            min_dist: &[0.0, 0.5, 2.0],
+            resolution_scale: &[0.5, 1.0],
+            lod_bias: &[-2, -1, 0],
+        },
         Preset::Full => SweepConfig {
             size: (640, 480),
             level: 9,

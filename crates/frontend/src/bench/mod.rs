@@ -7,8 +7,9 @@
 //! in their own files: `techniques` (what is compared), `matrix` (what each preset
 //! covers), `run` (measuring the cells), `sweep` (the knob sweeps), `plot` (PNG plots),
 //! `report` (JSON, CSV, Markdown), `scale` (`--preset scale`, its own table), `memory`
-//! (`--preset memory`) and `rastavox` (`--preset rastavox`).
+//! (`--preset memory`), `rastavox` (`--preset rastavox`) and `dynamic` (`--preset dynamic`).
 
+mod dynamic;
 mod matrix;
 mod memory;
 mod plot;
@@ -57,6 +58,10 @@ pub enum Preset {
     /// `--instances N` bunnies) against the drawn model and the finest level; writes
     /// rastavox.csv, rastavox.json and rastavox.md.
     Rastavox,
+    /// Dynamic objects: the bunny (`--levels`, default 7-9) static against twisting and
+    /// re-voxelized on the GPU every frame (update stages, the frame after it, and the same
+    /// update on the CPU); writes dynamic.csv, dynamic.json and dynamic.md.
+    Dynamic,
 }
 
 /// Arguments of `ssbvb bench`.
@@ -128,6 +133,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     if matches!(args.preset, Preset::Memory) {
         return memory::run(args);
+    }
+    if matches!(args.preset, Preset::Dynamic) {
+        return dynamic::run(args);
     }
     let m = matrix::matrix(args);
     let techniques = techniques::select(args)?;

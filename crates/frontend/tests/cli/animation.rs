@@ -88,3 +88,40 @@ fn an_animated_scene_renders_at_the_time_asked_and_reports_its_update() {
         "{err}"
     );
 }
+
+#[test]
+fn bench_dynamic_reports_the_update_beside_the_static_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = ssbvb()
+        .args([
+            "bench", "--preset", "dynamic", "--levels", "5", "--sizes", "64x48",
+        ])
+        .args(["--frames", "1", "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("dynamic.json")).unwrap())
+            .unwrap();
+    let row = &json["rows"][0];
+    assert_eq!(row["level"], 5);
+    for key in [
+        "static_frame_ms",
+        "update_ms",
+        "voxelize_ms",
+        "lod_ms",
+        "animated_frame_ms",
+        "cpu_update_ms",
+    ] {
+        assert!(row[key].as_f64().unwrap() > 0.0, "{key}: {row}");
+    }
+    assert!(row["voxels"].as_u64().unwrap() > 1000, "{row}");
+    for f in ["dynamic.csv", "dynamic.md"] {
+        assert!(dir.path().join(f).is_file(), "{f}");
+    }
+}

@@ -1,0 +1,221 @@
+//! `ssbvb bench --preset dynamic`: the cost of a dynamic object beside a static one (the
+//! paper's Table 1 columns "static" and "streamed"). Per bunny level (`--levels`, default
+//! 7-9), at the first `--sizes` (default 1280x720): the static frame (the CPU-prepared asset
+//! uploaded once), then the bunny twisting and re-voxelized every frame: the update's
+//! stages on the GPU (deform, voxelize, LOD chain and lookups, copy into the scene) and the
+//! frame after it; and the CPU path for the same update (voxelize and prepare on the CPU),
+//! to compare the GPU build with. Writes dynamic.csv, dynamic.json and dynamic.md.
+
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{Result, bail};
+use serde::Serialize;
+use ssbvb_passes::animated::{AnimatedMesh, Animator, UpdateTimes};
+use ssbvb_passes::{DynamicRoom, GpuScene, LodPolicy, Profiling, Renderer, Scene, VoxelObject};
+use ssbvb_voxel::animate::MeshAnimation;
+use ssbvb_voxel::model::Model;
+
+use super::BenchArgs;
+use super::sweep::bundled_pipeline;
+
+const DEFAULT_LEVELS: [u32; 3] = [7, 8, 9];
+/// Time step between animated frames (s) and the twist rate (degrees per second).
+const STEP: f64 = 1.0 / 30.0;
+const RATE: f64 = 90.0;
+
+#[derive(Debug, Serialize)]
+struct DynamicRow {
+    level: u32,
+    width: u32,
+    height: u32,
+    voxels: u64,
+    /// The static bunny's frame (median, ms).
+    static_frame_ms: f64,
+    /// Median of each update stage over the animated frames (ms).
+    #[serde(flatten)]
+    update: UpdateTimes,
+    update_ms: f64,
+    /// The frame after an update (median, ms).
+    animated_frame_ms: f64,
+    /// (update + frame) / static frame.
+    ratio_to_static: f64,
+    /// The same update on the CPU: voxelize and prepare (median, ms).
+    cpu_update_ms: f64,
+    /// cpu_update_ms / update_ms.
+    gpu_speedup: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct DynamicReport {
+    adapter: String,
+    adapter_is_software: bool,
+    rows: Vec<DynamicRow>,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    super::run::median(&mut v)
+}
+
+/// Runs `ssbvb bench --preset dynamic`.
+pub(super) fn run(args: &BenchArgs) -> Result<()> {
+    let pipeline = bundled_pipeline("ssbvb.ron")?;
+    let ctx = crate::adapter_cmd::headless_context(&[&pipeline])?;
+    let animator = Animator::new(&ctx)?;
+    let model = crate::render_cmd::assets_dir().join("models/bunny.obj");
+    let Model::Mesh(mesh) = ssbvb_voxel::load::load_model(&model)? else {
+        bail!("{} is not a mesh", model.display());
+    };
+    let size = args
+        .sizes
+        .as_ref()
+        .and_then(|s| s.first().copied())
+        .unwrap_or((1280, 720));
+    let frames = args.frames.unwrap_or(5).max(1);
+    let camera = super::matrix::matrix(args).camera;
+    let mut rows = Vec::new();
+    for &level in args.levels.as_deref().unwrap_or(&DEFAULT_LEVELS) {
+        let anim = AnimatedMesh::new(
+            0,
+            mesh.clone(),
+            MeshAnimation::Twist {
+                degrees_per_second: RATE,
+            },
+            level,
+        )?;
+        let rest = Arc::new(anim.cpu_asset(0.0)?);
+        let scene = Scene {
+            objects: vec![VoxelObject {
+                asset: rest.clone(),
+                instances: vec![glam::DAffine3::IDENTITY],
+                lod: LodPolicy::Fixed(level),
+            }],
+            ..Default::default()
+        };
+        let frame = |gpu_scene: &mut GpuScene, renderer: &mut Renderer| -> Result<f64> {
+            let t0 = Instant::now();
+            renderer.render(&ctx, gpu_scene, &camera, Profiling::Off)?;
+            ctx.wait_idle()?;
+            Ok(t0.elapsed().as_secs_f64() * 1e3)
+        };
+        // Static.
+        let mut gpu_scene = GpuScene::new(&ctx, scene.clone())?;
+        let mut renderer = Renderer::new(&ctx, &gpu_scene, pipeline.clone(), size)?;
+        frame(&mut gpu_scene, &mut renderer)?;
+        let static_ms = median(
+            (0..frames)
+                .map(|_| frame(&mut gpu_scene, &mut renderer))
+                .collect::<Result<_>>()?,
+        );
+        // Dynamic: an update, then the frame, every frame.
+        let room = DynamicRoom {
+            object: 0,
+            growth: 1.5,
+        };
+        let mut gpu_scene = GpuScene::with_dynamic(&ctx, scene, &[room])?;
+        let mut renderer = Renderer::new(&ctx, &gpu_scene, pipeline.clone(), size)?;
+        frame(&mut gpu_scene, &mut renderer)?;
+        let (mut updates, mut animated, mut cpu) = (Vec::new(), Vec::new(), Vec::new());
+        for i in 0..frames {
+            let t = (i + 1) as f64 * STEP;
+            updates.push(animator.update(&ctx, &mut gpu_scene, &anim, t)?);
+            animated.push(frame(&mut gpu_scene, &mut renderer)?);
+            let t0 = Instant::now();
+            anim.cpu_asset(t)?;
+            cpu.push(t0.elapsed().as_secs_f64() * 1e3);
+        }
+        let stage = |f: fn(&UpdateTimes) -> f64| median(updates.iter().map(f).collect());
+        let update = UpdateTimes {
+            deform_ms: stage(|u| u.deform_ms),
+            voxelize_ms: stage(|u| u.voxelize_ms),
+            lod_ms: stage(|u| u.lod_ms),
+            copy_ms: stage(|u| u.copy_ms),
+            voxels: updates.last().map_or(0, |u| u.voxels),
+        };
+        let update_ms = median(updates.iter().map(UpdateTimes::total_ms).collect());
+        let animated_ms = median(animated);
+        let cpu_ms = median(cpu);
+        let row = DynamicRow {
+            level,
+            width: size.0,
+            height: size.1,
+            voxels: update.voxels,
+            static_frame_ms: static_ms,
+            update,
+            update_ms,
+            animated_frame_ms: animated_ms,
+            ratio_to_static: (update_ms + animated_ms) / static_ms,
+            cpu_update_ms: cpu_ms,
+            gpu_speedup: cpu_ms / update_ms,
+        };
+        if !args.json {
+            eprintln!(
+                "dynamic L{level}: static {:.1} ms; update {:.1} ms (voxelize {:.1}, LOD {:.1}, copy {:.2}) + frame {:.1} ms; CPU update {:.1} ms",
+                row.static_frame_ms,
+                row.update_ms,
+                row.update.voxelize_ms,
+                row.update.lod_ms,
+                row.update.copy_ms,
+                row.animated_frame_ms,
+                row.cpu_update_ms
+            );
+        }
+        rows.push(row);
+    }
+    let report = DynamicReport {
+        adapter: ctx.report().to_string(),
+        adapter_is_software: ctx.report().is_software,
+        rows,
+    };
+    write(&args.out, &report)?;
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        println!("wrote {}/dynamic.{{csv,json,md}}", args.out.display());
+    }
+    Ok(())
+}
+
+fn write(dir: &Path, r: &DynamicReport) -> Result<()> {
+    let mut md = format!(
+        "# Dynamic objects\n\nAdapter: {}\n\n| level | size | voxels | static frame ms | update ms | deform | voxelize | LOD | copy | frame after update ms | (update + frame) / static | CPU update ms | CPU / GPU update |\n|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        r.adapter
+    );
+    let mut csv = String::from(
+        "level,width,height,voxels,static_frame_ms,update_ms,deform_ms,voxelize_ms,lod_ms,copy_ms,animated_frame_ms,ratio_to_static,cpu_update_ms,gpu_speedup\n",
+    );
+    for w in &r.rows {
+        md.push_str(&format!(
+            "| {} | {}x{} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {:.1} | {:.2} | {:.1} | {:.2} |\n",
+            w.level, w.width, w.height, w.voxels, w.static_frame_ms, w.update_ms, w.update.deform_ms,
+            w.update.voxelize_ms, w.update.lod_ms, w.update.copy_ms, w.animated_frame_ms,
+            w.ratio_to_static, w.cpu_update_ms, w.gpu_speedup
+        ));
+        csv.push_str(&format!(
+            "{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.4},{:.3},{:.4}\n",
+            w.level,
+            w.width,
+            w.height,
+            w.voxels,
+            w.static_frame_ms,
+            w.update_ms,
+            w.update.deform_ms,
+            w.update.voxelize_ms,
+            w.update.lod_ms,
+            w.update.copy_ms,
+            w.animated_frame_ms,
+            w.ratio_to_static,
+            w.cpu_update_ms,
+            w.gpu_speedup
+        ));
+    }
+    super::report::write_files(
+        dir,
+        vec![
+            ("dynamic.csv", csv),
+            ("dynamic.json", serde_json::to_string_pretty(r)?),
+            ("dynamic.md", md),
+        ],
+    )
+}
