@@ -13,6 +13,7 @@ use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::model::{Mesh, ObjectSpace};
 use ssbvb_voxel::prepare::prepare_voxel_set;
 use ssbvb_voxel::progress::NoProgress;
+use ssbvb_voxel::svo::LevelVoxels;
 use ssbvb_voxel::voxelize::voxelize_mesh_in;
 
 use crate::PassError;
@@ -122,6 +123,34 @@ impl Animator {
         self.method
     }
 
+    /// Replaces the voxels of dynamic object `object` by `voxels` (the finest level, at the
+    /// object's level: Morton-sorted distinct codes with their attributes), supplied by the
+    /// application each frame (the paper's streamed objects): the LOD chain, point clouds
+    /// and lookups are built on the GPU and copied into the object's room. Only `lod_ms`,
+    /// `copy_ms` and `voxels` of the times are set.
+    pub fn stream(
+        &self,
+        ctx: &GpuContext,
+        scene: &mut GpuScene,
+        object: usize,
+        voxels: &LevelVoxels,
+    ) -> Result<UpdateTimes, PassError> {
+        check_voxels(voxels)?;
+        let mut times = UpdateTimes {
+            voxels: voxels.len() as u64,
+            ..Default::default()
+        };
+        let t0 = Instant::now();
+        let levels = self.lods.build(ctx, voxels)?;
+        ctx.wait_idle()?;
+        times.lod_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let t0 = Instant::now();
+        scene.set_object_levels(ctx, object, &levels)?;
+        ctx.wait_idle()?;
+        times.copy_ms = t0.elapsed().as_secs_f64() * 1e3;
+        Ok(times)
+    }
+
     /// Brings `mesh`'s object in `scene` to time `t`.
     pub fn update(
         &self,
@@ -156,4 +185,36 @@ impl Animator {
         times.copy_ms = ms(t0);
         Ok(times)
     }
+}
+
+/// A streamed voxel set must be what the renderer's ids assume: strictly increasing Morton
+/// codes inside the grid, one attribute of each kind per voxel.
+fn check_voxels(v: &LevelVoxels) -> Result<(), PassError> {
+    if v.level > ssbvb_voxel::asset::MAX_LEVEL {
+        return Err(PassError::BadScene(format!(
+            "streamed voxels at level {}, above {}",
+            v.level,
+            ssbvb_voxel::asset::MAX_LEVEL
+        )));
+    }
+    let n = v.codes.len();
+    if v.colors.len() != n || v.normals.len() != n {
+        return Err(PassError::BadScene(format!(
+            "streamed voxels: {n} codes, {} colours, {} normals",
+            v.colors.len(),
+            v.normals.len()
+        )));
+    }
+    if let Some(i) = (1..n).find(|&i| v.codes[i] <= v.codes[i - 1]) {
+        return Err(PassError::BadScene(format!(
+            "streamed voxels: codes not strictly increasing at {i}"
+        )));
+    }
+    if v.codes.last().is_some_and(|&c| c >= 1u64 << (3 * v.level)) {
+        return Err(PassError::BadScene(format!(
+            "streamed voxels: a cell outside the 2^{} grid",
+            v.level
+        )));
+    }
+    Ok(())
 }

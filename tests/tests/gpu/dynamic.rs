@@ -210,3 +210,103 @@ fn an_animated_mesh_drawn_at_time_t_matches_its_reference_at_t() {
         "the twist must show: {vs_rest:?}"
     );
 }
+
+/// A spherical shell of radius `r` (object units) at `level`, as an application streams it.
+fn shell(level: u32, r: f64) -> ssbvb_voxel::svo::LevelVoxels {
+    let n = 1u32 << level;
+    let s = 2.0 / f64::from(n);
+    let mut cells = Vec::new();
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let c = DVec3::new(x as f64, y as f64, z as f64) * s + DVec3::splat(s * 0.5 - 1.0);
+                if (c.length() - r).abs() <= s * 0.87 {
+                    cells.push((ssbvb_voxel::svo::morton_encode([x, y, z]), c));
+                }
+            }
+        }
+    }
+    cells.sort_by_key(|e| e.0);
+    ssbvb_voxel::svo::LevelVoxels {
+        level,
+        codes: cells.iter().map(|e| e.0).collect(),
+        normals: cells
+            .iter()
+            .map(|e| e.1.normalize().as_vec3().to_array())
+            .collect(),
+        colors: cells
+            .iter()
+            .map(|e| [0.3, 0.6 + 0.3 * e.1.y as f32, 0.9, 1.0])
+            .collect(),
+        uvs: vec![[0.0; 2]; cells.len()],
+    }
+}
+
+/// Voxels supplied by the application each frame (the paper's streamed objects) are drawn
+/// as the CPU-prepared asset of the same set; a malformed set is refused.
+#[test]
+fn streamed_voxels_draw_like_their_prepared_asset() {
+    use ssbvb_passes::animated::Animator;
+    let ctx = ssbvb_tests::ctx();
+    let level = 6;
+    let bunny = ssbvb_tests::model_asset("bunny.obj", level);
+    let scene = ssbvb_tests::single_object_scene(bunny, level);
+    let mut gpu_scene = GpuScene::with_dynamic(
+        ctx,
+        scene,
+        &[DynamicRoom {
+            object: 0,
+            growth: 2.0,
+        }],
+    )
+    .unwrap();
+    let pipeline = ssbvb_graph::resolve_str(FLAT, "flat").unwrap();
+    let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, SIZE).unwrap();
+    let animator = Animator::new(ctx).unwrap();
+    let cam = Camera::new(DVec3::new(1.5, 0.8, 2.6), DVec3::ZERO);
+    for r in [0.45, 0.8] {
+        let voxels = shell(level, r);
+        let times = animator.stream(ctx, &mut gpu_scene, 0, &voxels).unwrap();
+        renderer
+            .render(ctx, &mut gpu_scene, &cam, Profiling::Off)
+            .unwrap();
+        ctx.wait_idle().unwrap();
+        assert!(ctx.take_uncaptured_errors().is_empty());
+        let set = ssbvb_voxel::voxelize::VoxelSet {
+            object_space: ssbvb_voxel::model::ObjectSpace::from_bounds(
+                DVec3::splat(-1.0),
+                DVec3::ONE,
+            ),
+            voxels: voxels.clone(),
+            report: Default::default(),
+        };
+        let (asset, _) =
+            ssbvb_voxel::prepare::prepare_voxel_set(set, &ssbvb_voxel::progress::NoProgress);
+        let acc = accuracy_of(
+            &renderer,
+            &ssbvb_tests::single_object_scene(Arc::new(asset), level),
+            &cam,
+            level,
+        );
+        eprintln!(
+            "streamed shell r = {r}: {} voxels, LOD {:.1} ms; IoU {:.4} same voxel {:.4} ({} px)",
+            times.voxels,
+            times.lod_ms,
+            acc.coverage_iou,
+            acc.same_voxel_rate,
+            acc.covered_reference
+        );
+        assert!(acc.covered_reference > 1000, "{acc:?}");
+        assert!(
+            acc.coverage_iou >= 0.99 && acc.same_voxel_rate >= 0.99,
+            "{acc:?}"
+        );
+    }
+    let mut bad = shell(level, 0.5);
+    bad.codes.swap(3, 4);
+    let e = animator.stream(ctx, &mut gpu_scene, 0, &bad).unwrap_err();
+    assert!(e.to_string().contains("not strictly increasing"), "{e}");
+    let mut short = shell(level, 0.5);
+    short.colors.pop();
+    assert!(animator.stream(ctx, &mut gpu_scene, 0, &short).is_err());
+}
