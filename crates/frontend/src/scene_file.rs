@@ -87,8 +87,27 @@ fn load_with_cache(
                 ssbvb_voxel::cache::load_or_prepare(&model, o.level, cache, progress)
                     .with_context(what)?;
             notes.push(format!("{}: {outcome}", o.model));
-            page_sources.push(crate::budget::PageSourceRef::of(&outcome, o.level));
-            asset
+            match o.edits.as_deref() {
+                Some(edits) if !edits.is_empty() => {
+                    let (asset, r) = edited(&asset, o.level, edits).with_context(what)?;
+                    notes.push(format!(
+                        "{}: {} edits: {} voxels added, {} removed, {} brush cells outside \
+                         the grid left out",
+                        o.model,
+                        edits.len(),
+                        r.added,
+                        r.removed,
+                        r.clipped
+                    ));
+                    // Edited voxels are not the cache file's: nothing to page from it.
+                    page_sources.push(None);
+                    asset
+                }
+                _ => {
+                    page_sources.push(crate::budget::PageSourceRef::of(&outcome, o.level));
+                    asset
+                }
+            }
         };
         let lod = match o.lod {
             None => LodPolicy::Fixed(o.level),
@@ -135,6 +154,30 @@ fn load_with_cache(
     })
 }
 
+/// `asset` with `edits` applied to its level `level` and the coarser levels rebuilt.
+fn edited(
+    asset: &ssbvb_voxel::asset::VoxelAsset,
+    level: u32,
+    edits: &[ssbvb_voxel::edit::Edit],
+) -> Result<(
+    ssbvb_voxel::asset::VoxelAsset,
+    ssbvb_voxel::edit::EditReport,
+)> {
+    let finest = ssbvb_voxel::edit::level_voxels(&asset.lods[level as usize]);
+    let (voxels, report) = ssbvb_voxel::edit::apply_edits(&finest, edits)?;
+    if voxels.is_empty() {
+        bail!("the edits remove every voxel");
+    }
+    let set = ssbvb_voxel::voxelize::VoxelSet {
+        object_space: asset.object_space,
+        voxels,
+        report: Default::default(),
+    };
+    let (asset, _) =
+        ssbvb_voxel::prepare::prepare_voxel_set(set, &ssbvb_voxel::progress::NoProgress);
+    Ok((asset, report))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -143,7 +186,7 @@ mod tests {
     use ssbvb_voxel::progress::NoProgress;
 
     /// Writes `text` as a scene beside a tiny OBJ (`tri.obj`) and loads it.
-    fn load_text(text: &str) -> Result<LoadedScene> {
+    pub(super) fn load_text(text: &str) -> Result<LoadedScene> {
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(
             dir.path().join("tri.obj"),
@@ -155,7 +198,7 @@ mod tests {
         load_with_cache(&path, Some(&dir.path().join("cache")), &NoProgress)
     }
 
-    fn err(text: &str) -> String {
+    pub(super) fn err(text: &str) -> String {
         match load_text(text) {
             Ok(_) => panic!("expected an error for {text}"),
             Err(e) => format!("{e:#}"),
@@ -306,5 +349,41 @@ mod tests {
         ))
         .unwrap();
         assert_eq!(s.scene.objects[0].instances.len(), MAX_INSTANCES);
+    }
+}
+
+#[cfg(test)]
+mod edit_tests {
+    use super::LoadedScene;
+    use super::tests::{err, load_text};
+
+    #[test]
+    fn edits_change_the_finest_level_and_are_reported() {
+        let plain = load_text("Scene(objects: [(model: \"tri.obj\", level: 4)])").unwrap();
+        let n = |s: &LoadedScene| s.scene.objects[0].asset.lods[4].point_cloud.voxels.len();
+        // A box of 2 × 2 × 2 cells far from the triangle, one cell of it outside the grid.
+        let s = load_text(
+            "Scene(objects: [(model: \"tri.obj\", level: 4, edits: [\
+             AddBox(min: (0.5, -1.0, -1.0), max: (0.74, -0.76, -0.76), color: (1.0, 0.0, 0.0, 1.0)),\
+             AddSphere(center: (1.0, 1.0, 1.0), radius: 0.12, color: (0.0, 1.0, 0.0, 1.0))])])",
+        )
+        .unwrap();
+        assert_eq!(n(&s), n(&plain) + 8 + 1);
+        assert!(
+            s.notes.iter().any(|l| l
+                .contains("2 edits: 9 voxels added, 0 removed, 7 brush cells outside the grid")),
+            "{:?}",
+            s.notes
+        );
+        assert!(s.page_sources[0].is_none());
+        // Removing everything is an error, a bad edit names its place.
+        let e = err(
+            "Scene(objects: [(model: \"tri.obj\", level: 4, edits: [RemoveBox(min: (-1.0, -1.0, -1.0), max: (1.0, 1.0, 1.0))])])",
+        );
+        assert!(e.contains("the edits remove every voxel"), "{e}");
+        let e = err(
+            "Scene(objects: [(model: \"tri.obj\", level: 4, edits: [RemoveSphere(center: (0.0, 0.0, 0.0), radius: -1.0)])])",
+        );
+        assert!(e.contains("objects[0].edits[0]: a negative radius"), "{e}");
     }
 }

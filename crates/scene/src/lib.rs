@@ -196,6 +196,10 @@ pub struct ObjectDesc {
     /// re-voxelized on the GPU for the time rendered (`ssbvb render --time T`).
     #[serde(default)]
     pub animate: Option<ssbvb_voxel::animate::MeshAnimation>,
+    /// Brush edits applied to the finest level in order (`AddSphere`, `RemoveSphere`,
+    /// `AddBox`, `RemoveBox`, in object space [-1, 1]³); the coarser levels follow.
+    #[serde(default)]
+    pub edits: Option<Vec<ssbvb_voxel::edit::Edit>>,
 }
 
 /// One placement of an object.
@@ -295,6 +299,16 @@ impl SceneFile {
         for (i, o) in self.objects.iter().enumerate() {
             if let Some(p) = o.animate.as_ref().and_then(|a| a.problem()) {
                 out.push(format!("objects[{i}].animate: {p}"));
+            }
+            for (j, e) in o.edits.iter().flatten().enumerate() {
+                if let Some(p) = e.problem() {
+                    out.push(format!("objects[{i}].edits[{j}]: {p}"));
+                }
+            }
+            if o.animate.is_some() && o.edits.as_ref().is_some_and(|e| !e.is_empty()) {
+                out.push(format!(
+                    "objects[{i}]: edits and animate together are not supported yet"
+                ));
             }
             match o.lod {
                 Some(LodDesc::Fixed(l)) if l > o.level => out.push(format!(

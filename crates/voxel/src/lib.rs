@@ -15,6 +15,7 @@ pub mod asset;
 pub mod cache;
 pub mod camera;
 pub mod cube_list;
+pub mod edit;
 pub mod instance_bvh;
 pub mod load;
 pub mod lookup;

@@ -310,3 +310,70 @@ fn streamed_voxels_draw_like_their_prepared_asset() {
     short.colors.pop();
     assert!(animator.stream(ctx, &mut gpu_scene, 0, &short).is_err());
 }
+
+/// A brush edit at run time (applied to the voxel set, its levels rebuilt on the GPU)
+/// draws like the CPU-prepared asset of the edited set.
+#[test]
+fn a_runtime_edit_draws_like_the_edited_asset() {
+    use ssbvb_passes::animated::Animator;
+    use ssbvb_voxel::edit::{Edit, apply_edits, level_voxels};
+    let ctx = ssbvb_tests::ctx();
+    let level = 6;
+    let bunny = ssbvb_tests::model_asset("bunny.obj", level);
+    let scene = ssbvb_tests::single_object_scene(bunny.clone(), level);
+    let mut gpu_scene = GpuScene::with_dynamic(
+        ctx,
+        scene.clone(),
+        &[DynamicRoom {
+            object: 0,
+            growth: 1.5,
+        }],
+    )
+    .unwrap();
+    let pipeline = ssbvb_graph::resolve_str(FLAT, "flat").unwrap();
+    let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, SIZE).unwrap();
+    let animator = Animator::new(ctx).unwrap();
+    let cam = Camera::new(DVec3::new(1.6, 1.0, 2.3), DVec3::ZERO);
+    // Carve 8 voxels deep into the side facing the camera and add a red ball on top.
+    let edits = [
+        Edit::RemoveSphere {
+            center: (0.45, 0.1, 0.5),
+            radius: 8.0 * 2.0 / 64.0,
+        },
+        Edit::AddSphere {
+            center: (-0.2, 0.75, 0.0),
+            radius: 0.15,
+            color: (0.9, 0.1, 0.1, 1.0),
+        },
+    ];
+    let (voxels, report) = apply_edits(&level_voxels(&bunny.lods[level as usize]), &edits).unwrap();
+    assert!(report.removed > 50 && report.added > 50, "{report:?}");
+    animator.stream(ctx, &mut gpu_scene, 0, &voxels).unwrap();
+    renderer
+        .render(ctx, &mut gpu_scene, &cam, Profiling::Off)
+        .unwrap();
+    ctx.wait_idle().unwrap();
+    let set = ssbvb_voxel::voxelize::VoxelSet {
+        object_space: bunny.object_space,
+        voxels,
+        report: Default::default(),
+    };
+    let (edited, _) =
+        ssbvb_voxel::prepare::prepare_voxel_set(set, &ssbvb_voxel::progress::NoProgress);
+    let r = accuracy_of(
+        &renderer,
+        &ssbvb_tests::single_object_scene(Arc::new(edited), level),
+        &cam,
+        level,
+    );
+    let before = accuracy_of(&renderer, &scene, &cam, level);
+    eprintln!(
+        "edit {report:?}: IoU {:.4} same voxel {:.4}; against the unedited bunny IoU {:.4} same voxel {:.4}",
+        r.coverage_iou, r.same_voxel_rate, before.coverage_iou, before.same_voxel_rate
+    );
+    assert!(r.coverage_iou >= 0.99 && r.same_voxel_rate >= 0.99, "{r:?}");
+    assert!(
+        before.same_voxel_rate < 0.97,
+        "the edit must show: {before:?}"
+    );
+}
