@@ -157,6 +157,9 @@ impl Edit {
     }
 }
 
+/// A voxel's normal, colour and texture coordinate.
+type Attrs = ([f32; 3], [f32; 4], [f32; 2]);
+
 /// `voxels` with `edits` applied in order.
 pub fn apply_edits(
     voxels: &LevelVoxels,
@@ -166,7 +169,7 @@ pub fn apply_edits(
     let s = cell_size(voxels.level);
     let mut report = EditReport::default();
     // code → (normal, colour, uv), in Morton order.
-    let mut cells: BTreeMap<u64, ([f32; 3], [f32; 4], [f32; 2])> = voxels
+    let mut cells: BTreeMap<u64, Attrs> = voxels
         .codes
         .iter()
         .enumerate()
