@@ -4,7 +4,9 @@
 //! uploaded once), then the bunny twisting and re-voxelized every frame: the update's
 //! stages on the GPU (deform, voxelize, LOD chain and lookups, copy into the scene) and the
 //! frame after it; and the CPU path for the same update (voxelize and prepare on the CPU),
-//! to compare the GPU build with. Writes dynamic.csv, dynamic.json and dynamic.md.
+//! to compare the GPU build with; and an edit (a sphere of radius 8 voxels carved into the
+//! bunny, its levels rebuilt on the GPU) against the full rebuild. Writes dynamic.csv,
+//! dynamic.json and dynamic.md.
 
 use std::path::Path;
 use std::sync::Arc;
@@ -45,6 +47,13 @@ struct DynamicRow {
     cpu_update_ms: f64,
     /// cpu_update_ms / update_ms.
     gpu_speedup: f64,
+    /// An edit (a sphere of radius 8 voxels around a surface voxel removed): applying it to
+    /// the voxel set (CPU) and rebuilding the object's levels on the GPU (median, ms).
+    edit_ms: f64,
+    /// Voxels the edit removed.
+    edit_removed: u64,
+    /// edit_ms / the full GPU rebuild (update_ms).
+    edit_vs_rebuild: f64,
 }
 
 #[derive(Debug, Serialize)]
@@ -134,6 +143,25 @@ pub(super) fn run(args: &BenchArgs) -> Result<()> {
             voxels: updates.last().map_or(0, |u| u.voxels),
         };
         let update_ms = median(updates.iter().map(UpdateTimes::total_ms).collect());
+        // An edit of radius 8 voxels centred on a surface voxel of the rest pose (the
+        // middle one in Morton order).
+        let finest = ssbvb_voxel::edit::level_voxels(&rest.lods[level as usize]);
+        let s = ssbvb_voxel::model::cell_size(level);
+        let c = ssbvb_voxel::edit::cell_of(finest.codes[finest.codes.len() / 2])
+            .map(|v| (f64::from(v) + 0.5) * s - 1.0);
+        let edit = ssbvb_voxel::edit::Edit::RemoveSphere {
+            center: (c[0], c[1], c[2]),
+            radius: 8.0 * s,
+        };
+        let (mut edits, mut removed) = (Vec::new(), 0);
+        for _ in 0..frames {
+            let t0 = Instant::now();
+            let (voxels, r) = ssbvb_voxel::edit::apply_edits(&finest, &[edit])?;
+            animator.stream(&ctx, &mut gpu_scene, 0, &voxels)?;
+            edits.push(t0.elapsed().as_secs_f64() * 1e3);
+            removed = r.removed;
+        }
+        let edit_ms = median(edits);
         let animated_ms = median(animated);
         let cpu_ms = median(cpu);
         let row = DynamicRow {
@@ -148,17 +176,21 @@ pub(super) fn run(args: &BenchArgs) -> Result<()> {
             ratio_to_static: (update_ms + animated_ms) / static_ms,
             cpu_update_ms: cpu_ms,
             gpu_speedup: cpu_ms / update_ms,
+            edit_ms,
+            edit_removed: removed,
+            edit_vs_rebuild: edit_ms / update_ms,
         };
         if !args.json {
             eprintln!(
-                "dynamic L{level}: static {:.1} ms; update {:.1} ms (voxelize {:.1}, LOD {:.1}, copy {:.2}) + frame {:.1} ms; CPU update {:.1} ms",
+                "dynamic L{level}: static {:.1} ms; update {:.1} ms (voxelize {:.1}, LOD {:.1}, copy {:.2}) + frame {:.1} ms; CPU update {:.1} ms; edit {:.1} ms",
                 row.static_frame_ms,
                 row.update_ms,
                 row.update.voxelize_ms,
                 row.update.lod_ms,
                 row.update.copy_ms,
                 row.animated_frame_ms,
-                row.cpu_update_ms
+                row.cpu_update_ms,
+                row.edit_ms
             );
         }
         rows.push(row);
@@ -179,21 +211,22 @@ pub(super) fn run(args: &BenchArgs) -> Result<()> {
 
 fn write(dir: &Path, r: &DynamicReport) -> Result<()> {
     let mut md = format!(
-        "# Dynamic objects\n\nAdapter: {}\n\n| level | size | voxels | static frame ms | update ms | deform | voxelize | LOD | copy | frame after update ms | (update + frame) / static | CPU update ms | CPU / GPU update |\n|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        "# Dynamic objects\n\nAdapter: {}\n\n| level | size | voxels | static frame ms | update ms | deform | voxelize | LOD | copy | frame after update ms | (update + frame) / static | CPU update ms | CPU / GPU update | edit ms (r = 8 voxels) | voxels removed | edit / rebuild |\n|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         r.adapter
     );
     let mut csv = String::from(
-        "level,width,height,voxels,static_frame_ms,update_ms,deform_ms,voxelize_ms,lod_ms,copy_ms,animated_frame_ms,ratio_to_static,cpu_update_ms,gpu_speedup\n",
+        "level,width,height,voxels,static_frame_ms,update_ms,deform_ms,voxelize_ms,lod_ms,copy_ms,animated_frame_ms,ratio_to_static,cpu_update_ms,gpu_speedup,edit_ms,edit_removed,edit_vs_rebuild\n",
     );
     for w in &r.rows {
         md.push_str(&format!(
-            "| {} | {}x{} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {:.1} | {:.2} | {:.1} | {:.2} |\n",
+            "| {} | {}x{} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {:.1} | {:.2} | {:.1} | {:.2} | {:.1} | {} | {:.3} |\n",
             w.level, w.width, w.height, w.voxels, w.static_frame_ms, w.update_ms, w.update.deform_ms,
             w.update.voxelize_ms, w.update.lod_ms, w.update.copy_ms, w.animated_frame_ms,
-            w.ratio_to_static, w.cpu_update_ms, w.gpu_speedup
+            w.ratio_to_static, w.cpu_update_ms, w.gpu_speedup, w.edit_ms, w.edit_removed,
+            w.edit_vs_rebuild
         ));
         csv.push_str(&format!(
-            "{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.4},{:.3},{:.4}\n",
+            "{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.4},{:.3},{:.4},{:.3},{},{:.4}\n",
             w.level,
             w.width,
             w.height,
@@ -207,7 +240,10 @@ fn write(dir: &Path, r: &DynamicReport) -> Result<()> {
             w.animated_frame_ms,
             w.ratio_to_static,
             w.cpu_update_ms,
-            w.gpu_speedup
+            w.gpu_speedup,
+            w.edit_ms,
+            w.edit_removed,
+            w.edit_vs_rebuild
         ));
     }
     super::report::write_files(

@@ -121,6 +121,8 @@ fn bench_dynamic_reports_the_update_beside_the_static_frame() {
         assert!(row[key].as_f64().unwrap() > 0.0, "{key}: {row}");
     }
     assert!(row["voxels"].as_u64().unwrap() > 1000, "{row}");
+    assert!(row["edit_ms"].as_f64().unwrap() > 0.0, "{row}");
+    assert!(row["edit_removed"].as_u64().unwrap() > 10, "{row}");
     for f in ["dynamic.csv", "dynamic.md"] {
         assert!(dir.path().join(f).is_file(), "{f}");
     }
