@@ -24,10 +24,12 @@ struct Fragment {
 @group(0) @binding(4) var<storage, read_write> val: array<u32>;
 @group(0) @binding(5) var<storage, read_write> flags: array<u32>;
 @group(0) @binding(6) var<storage, read_write> starts: array<u32>;
-// Per voxel: Morton key (lo, hi), linear RGBA8 colour, unit normal.
-@group(0) @binding(7) var<storage, read_write> out_keys: array<vec2<u32>>;
-@group(0) @binding(8) var<storage, read_write> out_colors: array<u32>;
-@group(0) @binding(9) var<storage, read_write> out_normals: array<vec4<f32>>;
+// Per voxel: Morton key (low and high words), mean linear RGBA, unit normal: the layout
+// gpu_lod_build.wgsl reads, so the voxels never leave the GPU on the way to the renderer.
+@group(0) @binding(7) var<storage, read_write> out_lo: array<u32>;
+@group(0) @binding(8) var<storage, read_write> out_hi: array<u32>;
+@group(0) @binding(9) var<storage, read_write> out_colors: array<vec4<f32>>;
+@group(0) @binding(10) var<storage, read_write> out_normals: array<vec4<f32>>;
 
 fn thread_id(li: u32, wg: vec3<u32>, nwg: vec3<u32>) -> u32 {
     return (wg.x + wg.y * nwg.x) * 256u + li;
@@ -111,8 +113,9 @@ fn merge(
         color += unpack4x8unorm(f.color);
         normal += decode_octahedral(f.normal);
     }
-    out_keys[r] = vec2(key_lo[start], key_hi[start]);
-    out_colors[r] = pack4x8unorm(color / f32(end - start));
+    out_lo[r] = key_lo[start];
+    out_hi[r] = key_hi[start];
+    out_colors[r] = color / f32(end - start);
     let len = length(normal);
     out_normals[r] = vec4(select(vec3(0.0, 0.0, 1.0), normal / len, len > 0.0), 0.0);
 }

@@ -2,8 +2,10 @@
 //! mesh is deformed at time `t` ([`MeshAnimation`], on the CPU: only vertex positions),
 //! voxelized on the GPU in the object space of its whole motion ([`GpuVoxelizer`]), its LOD
 //! chain and lookups built on the GPU ([`GpuLodBuilder`]) and copied into its object's
-//! room in the scene ([`GpuScene::set_object_levels`]). Each stage is timed, for the cost
-//! table beside the static frame.
+//! room in the scene ([`GpuScene::set_object_levels`]); the voxels never leave the GPU on
+//! the way (only counts are read back). Each stage is timed, for the cost table beside the
+//! static frame. Voxel sets supplied by the application ([`Animator::stream`]) and brush
+//! edits (`ssbvb_voxel::edit`) take the same way from the LOD build on.
 
 use std::time::Instant;
 
@@ -165,7 +167,8 @@ impl Animator {
         let deformed = mesh.at(t)?;
         times.deform_ms = ms(t0);
         let t0 = Instant::now();
-        let (set, _) = self.voxelizer.voxelize_in(
+        // The voxels stay on the GPU from the voxelizer to the scene's streams.
+        let (_, voxels, _) = self.voxelizer.voxelize_to_gpu(
             ctx,
             &deformed,
             mesh.level,
@@ -173,10 +176,11 @@ impl Animator {
             None,
             self.method,
         )?;
+        ctx.wait_idle()?;
         times.voxelize_ms = ms(t0);
-        times.voxels = set.voxels.len() as u64;
+        times.voxels = u64::from(voxels.count);
         let t0 = Instant::now();
-        let levels = self.lods.build(ctx, &set.voxels)?;
+        let levels = self.lods.build_gpu(ctx, voxels)?;
         ctx.wait_idle()?;
         times.lod_ms = ms(t0);
         let t0 = Instant::now();

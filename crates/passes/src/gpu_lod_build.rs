@@ -17,10 +17,9 @@ use ssbvb_voxel::lookup::{NODE_WORDS, SparseLookup, tree_depth};
 use ssbvb_voxel::svo::LevelVoxels;
 
 use crate::PassError;
-use crate::compute_kernels::{
-    Bind, Kernels, WORKGROUP, read_words, storage, storage_init, uniform,
-};
+use crate::compute_kernels::{Bind, Kernels, WORKGROUP, read_words, storage, uniform};
 use crate::gpu_scan::GpuScan;
+use crate::gpu_voxelize::GpuVoxels;
 
 /// One level on the GPU.
 pub struct GpuLevel {
@@ -147,17 +146,19 @@ impl GpuLodBuilder {
         ctx: &GpuContext,
         finest: &LevelVoxels,
     ) -> Result<Vec<GpuLevel>, PassError> {
-        let d = &ctx.device;
-        let n = u32::try_from(finest.len())
+        u32::try_from(finest.len())
             .map_err(|_| PassError::TooLarge(format!("{} voxels", finest.len())))?;
-        let lo: Vec<u32> = finest.codes.iter().map(|&c| c as u32).collect();
-        let hi: Vec<u32> = finest.codes.iter().map(|&c| (c >> 32) as u32).collect();
-        let colors: Vec<f32> = finest.colors.iter().flatten().copied().collect();
-        let normals: Vec<f32> = finest
-            .normals
-            .iter()
-            .flat_map(|n| [n[0], n[1], n[2], 0.0])
-            .collect();
+        self.build_gpu(ctx, GpuVoxels::upload(&ctx.device, finest))
+    }
+
+    /// [`GpuLodBuilder::build`] from voxels already on the GPU (the voxelizer's output).
+    pub fn build_gpu(
+        &self,
+        ctx: &GpuContext,
+        finest: GpuVoxels,
+    ) -> Result<Vec<GpuLevel>, PassError> {
+        let d = &ctx.device;
+        let n = finest.count;
         let scratch = u64::from(n.max(1));
         let flags = storage(d, "lod flags", scratch);
         let starts = storage(d, "lod starts", scratch);
@@ -165,10 +166,10 @@ impl GpuLodBuilder {
             ctx,
             finest.level,
             n,
-            storage_init(d, "codes", &lo),
-            storage_init(d, "codes", &hi),
-            storage_init(d, "colours", bytemuck::cast_slice(&colors)),
-            storage_init(d, "normals", bytemuck::cast_slice(&normals)),
+            finest.key_lo,
+            finest.key_hi,
+            finest.colors,
+            finest.normals,
             &flags,
             &starts,
         )?;

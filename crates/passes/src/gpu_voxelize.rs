@@ -33,7 +33,9 @@ use ssbvb_voxel::model::{Material, Mesh, ObjectSpace};
 use ssbvb_voxel::svo::LevelVoxels;
 use ssbvb_voxel::voxelize::{VoxelSet, VoxelizeError, VoxelizeReport, mesh_bounds};
 
-use crate::compute_kernels::{Bind, Kernels, WORKGROUP, read_words, storage, uniform};
+use crate::compute_kernels::{
+    Bind, Kernels, WORKGROUP, read_words, storage, storage_init, uniform,
+};
 use crate::gpu_radix_sort::{GpuRadixSort, SortBuffers};
 use crate::gpu_scan::GpuScan;
 use crate::{PassError, shaders};
@@ -167,7 +169,7 @@ impl GpuVoxelizer {
                 "voxel_fragments.wgsl",
                 &[
                     Uniform, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
-                    ReadWrite, ReadWrite, ReadWrite,
+                    ReadWrite, ReadWrite, ReadWrite, ReadWrite,
                 ],
                 &["fragment_keys", "run_flags", "run_starts", "merge"],
             )?,
@@ -228,6 +230,23 @@ impl GpuVoxelizer {
         capacity: Option<u64>,
         method: GpuVoxelizeMethod,
     ) -> Result<(VoxelSet, GpuVoxelizeStats), PassError> {
+        let (mut set, voxels, stats) =
+            self.voxelize_to_gpu(ctx, mesh, level, space, capacity, method)?;
+        set.voxels = voxels.read_back(ctx)?;
+        Ok((set, stats))
+    }
+
+    /// [`GpuVoxelizer::voxelize_in`] leaving the voxels on the GPU ([`GpuVoxels`], for the
+    /// LOD build); the returned set holds the object space and the report, no voxels.
+    pub fn voxelize_to_gpu(
+        &self,
+        ctx: &GpuContext,
+        mesh: &Mesh,
+        level: u32,
+        space: Option<ObjectSpace>,
+        capacity: Option<u64>,
+        method: GpuVoxelizeMethod,
+    ) -> Result<(VoxelSet, GpuVoxels, GpuVoxelizeStats), PassError> {
         if method == GpuVoxelizeMethod::Exact && self.exact.is_none() {
             return Err(PassError::BadScene(
                 "the exact GPU voxelization needs f64 shaders (wgpu feature SHADER_F64), \
@@ -304,9 +323,13 @@ impl GpuVoxelizer {
         Ok((
             VoxelSet {
                 object_space,
-                voxels,
+                voxels: LevelVoxels {
+                    level,
+                    ..Default::default()
+                },
                 report,
             },
+            voxels,
             stats,
         ))
     }
@@ -451,77 +474,141 @@ impl GpuVoxelizer {
         Ok(u64::from(read_words(ctx, &counter, 0, 1)?[0]))
     }
 
-    /// Sorts the `n` fragments by key and merges each run into a voxel.
+    /// Sorts the `n` fragments by key and merges each run into a voxel, on the GPU.
     fn merge(
         &self,
         ctx: &GpuContext,
         fragments: &wgpu::Buffer,
         n: u32,
         level: u32,
-    ) -> Result<LevelVoxels, PassError> {
+    ) -> Result<GpuVoxels, PassError> {
         let d = &ctx.device;
-        let mut voxels = LevelVoxels {
-            level,
-            ..Default::default()
-        };
         if n == 0 {
-            return Ok(voxels);
+            return Ok(GpuVoxels::new(d, level, 0));
         }
         let groups = n.div_ceil(WORKGROUP);
         let mut a = SortBuffers::new(d, "fragment keys", u64::from(n));
         let mut b = SortBuffers::new(d, "fragment keys", u64::from(n));
         let flags = storage(d, "fragment runs", u64::from(n));
         let starts = storage(d, "run starts", u64::from(n));
-        let dummy = storage(d, "unused", 4);
+        let dummy = GpuVoxels::new(d, level, 1);
         let params = uniform(d, "merge", &[n, 0]);
-        let bind = |keys: &SortBuffers, params: &wgpu::Buffer, outs: [&wgpu::Buffer; 3]| {
+        let bind = |keys: &SortBuffers, params: &wgpu::Buffer, out: &GpuVoxels| {
             self.merge.bind_group(
                 d,
                 &[
-                    params, fragments, &keys.lo, &keys.hi, &keys.val, &flags, &starts, outs[0],
-                    outs[1], outs[2],
+                    params,
+                    fragments,
+                    &keys.lo,
+                    &keys.hi,
+                    &keys.val,
+                    &flags,
+                    &starts,
+                    &out.key_lo,
+                    &out.key_hi,
+                    &out.colors,
+                    &out.normals,
                 ],
             )
         };
         let mut enc = d.create_command_encoder(&Default::default());
-        let bg = bind(&a, &params, [&dummy, &dummy, &dummy]);
+        let bg = bind(&a, &params, &dummy);
         self.merge.dispatch(&mut enc, "fragment_keys", &bg, groups);
         if self.sort.record(d, &mut enc, &a, &b, n, 3 * level) {
             std::mem::swap(&mut a, &mut b);
         }
-        let bg = bind(&a, &params, [&dummy, &dummy, &dummy]);
+        let bg = bind(&a, &params, &dummy);
         self.merge.dispatch(&mut enc, "run_flags", &bg, groups);
         let sums = self.sort.scan().record(d, &mut enc, &flags, n);
         self.merge.dispatch(&mut enc, "run_starts", &bg, groups);
         ctx.queue.submit([enc.finish()]);
         let runs = read_words(ctx, &sums, GpuScan::total_index(n), 1)?[0];
-        let keys = storage(d, "voxel keys", 2 * u64::from(runs));
-        let colors = storage(d, "voxel colours", u64::from(runs));
-        let normals = storage(d, "voxel normals", 4 * u64::from(runs));
+        let out = GpuVoxels::new(d, level, u64::from(runs));
         let params = uniform(d, "merge", &[n, runs]);
         let mut enc = d.create_command_encoder(&Default::default());
-        let bg = bind(&a, &params, [&keys, &colors, &normals]);
+        let bg = bind(&a, &params, &out);
         self.merge
             .dispatch(&mut enc, "merge", &bg, runs.div_ceil(WORKGROUP));
         ctx.queue.submit([enc.finish()]);
-        let runs = u64::from(runs);
-        let key_words = read_words(ctx, &keys, 0, 2 * runs)?;
-        let color_words = read_words(ctx, &colors, 0, runs)?;
-        let normal_words = read_words(ctx, &normals, 0, 4 * runs)?;
-        voxels.codes = key_words
-            .chunks(2)
-            .map(|k| u64::from(k[0]) | u64::from(k[1]) << 32)
-            .collect();
-        voxels.colors = color_words
+        Ok(out)
+    }
+}
+
+/// A Morton-sorted voxel set on the GPU, in the layout [`crate::gpu_lod_build`] reads:
+/// what the GPU voxelizer hands to the LOD build without a trip to the host.
+pub struct GpuVoxels {
+    /// Grid level.
+    pub level: u32,
+    /// Voxels.
+    pub count: u32,
+    /// Low words of the Morton codes.
+    pub key_lo: wgpu::Buffer,
+    /// High words of the Morton codes.
+    pub key_hi: wgpu::Buffer,
+    /// Linear RGBA, four f32 per voxel.
+    pub colors: wgpu::Buffer,
+    /// Unit normal, four f32 per voxel (w unused).
+    pub normals: wgpu::Buffer,
+}
+
+impl GpuVoxels {
+    /// Buffers for `count` voxels (at least one word each).
+    pub fn new(d: &wgpu::Device, level: u32, count: u64) -> Self {
+        Self {
+            level,
+            count: count as u32,
+            key_lo: storage(d, "voxel keys", count),
+            key_hi: storage(d, "voxel keys", count),
+            colors: storage(d, "voxel colours", 4 * count),
+            normals: storage(d, "voxel normals", 4 * count),
+        }
+    }
+
+    /// Uploads a voxel set.
+    pub fn upload(d: &wgpu::Device, voxels: &LevelVoxels) -> Self {
+        let lo: Vec<u32> = voxels.codes.iter().map(|&c| c as u32).collect();
+        let hi: Vec<u32> = voxels.codes.iter().map(|&c| (c >> 32) as u32).collect();
+        let colors: Vec<f32> = voxels.colors.iter().flatten().copied().collect();
+        let normals: Vec<f32> = voxels
+            .normals
             .iter()
-            .map(|&c| std::array::from_fn(|i| ((c >> (8 * i)) & 0xff) as f32 / 255.0))
+            .flat_map(|n| [n[0], n[1], n[2], 0.0])
             .collect();
-        voxels.normals = normal_words
-            .chunks(4)
-            .map(|n| [0, 1, 2].map(|i| f32::from_bits(n[i])))
-            .collect();
-        voxels.uvs = vec![[0.0; 2]; voxels.codes.len()];
-        Ok(voxels)
+        Self {
+            level: voxels.level,
+            count: voxels.codes.len() as u32,
+            key_lo: storage_init(d, "voxel keys", &lo),
+            key_hi: storage_init(d, "voxel keys", &hi),
+            colors: storage_init(d, "voxel colours", bytemuck::cast_slice(&colors)),
+            normals: storage_init(d, "voxel normals", bytemuck::cast_slice(&normals)),
+        }
+    }
+
+    /// Reads the set back (the CLI's statistics, tests).
+    pub fn read_back(&self, ctx: &GpuContext) -> Result<LevelVoxels, PassError> {
+        let n = u64::from(self.count);
+        let lo = read_words(ctx, &self.key_lo, 0, n)?;
+        let hi = read_words(ctx, &self.key_hi, 0, n)?;
+        let colors = read_words(ctx, &self.colors, 0, 4 * n)?;
+        let normals = read_words(ctx, &self.normals, 0, 4 * n)?;
+        let f = |w: &[u32]| -> [f32; 4] { std::array::from_fn(|i| f32::from_bits(w[i])) };
+        Ok(LevelVoxels {
+            level: self.level,
+            codes: lo
+                .iter()
+                .zip(&hi)
+                .map(|(&l, &h)| u64::from(l) | u64::from(h) << 32)
+                .collect(),
+            colors: colors.chunks(4).map(f).collect(),
+            normals: normals
+                .chunks(4)
+                .map(|w| {
+                    let v = f(w);
+                    [v[0], v[1], v[2]]
+                })
+                .collect(),
+            uvs: vec![[0.0; 2]; n as usize],
+        })
     }
 }
 
