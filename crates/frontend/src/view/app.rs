@@ -55,6 +55,8 @@ pub struct Loaded {
     pub watcher: PipelineWatcher,
     /// Under a GPU budget: how the scene streams (the budget changes live).
     pub streaming: Option<ssbvb_passes::StreamingOptions>,
+    /// Animated objects, re-voxelized on the GPU every frame at the time since start.
+    pub animated: Vec<ssbvb_passes::animated::AnimatedMesh>,
 }
 
 /// The application: waiting for `resumed`, then running, or failed.
@@ -151,6 +153,11 @@ struct Viewer {
     egui_renderer: egui_wgpu::Renderer,
     scene: GpuScene,
     renderer: Renderer,
+    /// Animated objects and what updates them (none without animated objects).
+    animated: Vec<ssbvb_passes::animated::AnimatedMesh>,
+    animator: Option<ssbvb_passes::animated::Animator>,
+    /// The animation clock's start.
+    started: Instant,
     watcher: PipelineWatcher,
     /// Under a GPU budget: how the scene streams.
     streaming: Option<ssbvb_passes::StreamingOptions>,
@@ -202,9 +209,19 @@ impl Viewer {
         let blit = Blit::new(ctx, gpu.config.format)?;
         let scene = match &loaded.streaming {
             Some(o) => GpuScene::streamed(ctx, loaded.scene, o),
+            None if !loaded.animated.is_empty() => GpuScene::with_dynamic(
+                ctx,
+                loaded.scene,
+                &crate::animation::rooms(&loaded.animated),
+            ),
             None => GpuScene::new(ctx, loaded.scene),
         }
         .context("uploading the scene")?;
+        let animator = if loaded.animated.is_empty() {
+            None
+        } else {
+            Some(ssbvb_passes::animated::Animator::new(ctx)?)
+        };
         let renderer = Renderer::new(ctx, &scene, loaded.watcher.current().clone(), gpu.size())
             .with_context(|| format!("building {}", loaded.watcher.path().display()))?;
         let egui_ctx = egui::Context::default();
@@ -227,6 +244,9 @@ impl Viewer {
             egui_renderer,
             scene,
             renderer,
+            animated: loaded.animated,
+            animator,
+            started: Instant::now(),
             watcher: loaded.watcher,
             streaming: loaded.streaming,
             knob_edits: BTreeMap::new(),
@@ -491,6 +511,24 @@ impl Viewer {
         if let (Some(limit), Some(path)) = (options.frames, &options.screenshot) {
             if self.frame + 1 >= limit && !self.screenshot_written {
                 self.screenshot_next = Some(path.clone());
+            }
+        }
+
+        // Animated objects at the time since start.
+        if let Some(animator) = &self.animator {
+            let t = self.started.elapsed().as_secs_f64();
+            match crate::animation::update_all(
+                &self.gpu.ctx,
+                &mut self.scene,
+                animator,
+                &self.animated,
+                t,
+            ) {
+                Ok(r) => {
+                    let ms: f64 = r.objects.iter().map(|o| o.total_ms).sum();
+                    self.status = Some(format!("animation t = {t:.2} s: update {ms:.1} ms"));
+                }
+                Err(e) => self.error = Some(format!("animation: {e:#}")),
             }
         }
 

@@ -99,11 +99,8 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         page_sources,
         animated,
     } = load_input(&input, args.level, &progress)?;
-    if !animated.is_empty() {
-        notes.push(
-            "the viewer draws animated objects in their rest pose (use ssbvb render --time)"
-                .to_string(),
-        );
+    if !animated.is_empty() && args.gpu_budget.or(gpu_budget_mib).is_some() {
+        anyhow::bail!("animated objects cannot be paged under a GPU budget; drop --gpu-budget");
     }
     progress.finish();
     // Pages streamed per frame at most: a camera cut fills the view over a few frames
@@ -145,6 +142,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
             camera,
             watcher,
             streaming,
+            animated,
         },
     );
     event_loop
