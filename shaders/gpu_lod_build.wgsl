@@ -1,3 +1,4 @@
+//#include "voxel_codes.inc.wgsl"
 // The renderer's structures of a voxel set built on the GPU (seed 003's level-by-level
 // octree build; gpu_lod_build.rs drives it): the LOD chain (runs of siblings, `code >> 3`,
 // averaged bottom-up) and each level's sparse lookup (ssbvb_voxel::lookup: a 64-ary tree
@@ -33,10 +34,6 @@ struct LodParams {
 // and 16-bit octahedral normals two per word (`packed_normals`).
 @group(0) @binding(12) var<storage, read_write> packed: array<u32>;
 @group(0) @binding(13) var<storage, read_write> packed_normals: array<u32>;
-
-fn thread_id(li: u32, wg: vec3<u32>, nwg: vec3<u32>) -> u32 {
-    return (wg.x + wg.y * nwg.x) * 256u + li;
-}
 
 fn key_shifted(i: u32, s: u32) -> vec2<u32> {
     let lo = key_lo[i];
@@ -160,24 +157,6 @@ fn coarsen(
     }
     let len = length(n);
     normals_out[r] = vec4(select(vec3(0.0, 0.0, 1.0), n / len, len > 1e-12), 0.0);
-}
-
-fn encode_octahedral(n: vec3<f32>) -> u32 {
-    let l1 = abs(n.x) + abs(n.y) + abs(n.z);
-    var p = vec3(0.0, 0.0, 1.0);
-    if l1 > 0.0 {
-        p = n / l1;
-    }
-    var x = p.x;
-    var y = p.y;
-    if p.z < 0.0 {
-        x = (1.0 - abs(p.y)) * select(1.0, -1.0, p.x < 0.0);
-        y = (1.0 - abs(p.x)) * select(1.0, -1.0, p.y < 0.0);
-    }
-    // floor(v + 0.5): Rust's round on these non-negative values.
-    let qx = u32(floor((clamp(x, -1.0, 1.0) * 0.5 + 0.5) * 255.0 + 0.5));
-    let qy = u32(floor((clamp(y, -1.0, 1.0) * 0.5 + 0.5) * 255.0 + 0.5));
-    return qx | (qy << 8u);
 }
 
 // The point cloud's words (ssbvb_voxel::asset::PackedVoxel's colour and normal): thread i

@@ -1,3 +1,4 @@
+//#include "voxel_codes.inc.wgsl"
 // GPU voxelization the seed's way (seed 003, after Crassin & Green; gpu_voxelize.rs drives
 // it): each triangle is rasterized along the dominant axis of its normal into a 2^L × 2^L
 // viewport (one pixel per cell column), enlarged so that every pixel whose square it
@@ -97,41 +98,6 @@ fn vs_main(@builtin(vertex_index) vi: u32) -> VertexOut {
 
 fn pack_color(c: vec4<f32>) -> u32 {
     return pack4x8unorm(clamp(c, vec4(0.0), vec4(1.0)));
-}
-
-// Octahedral encoding, 8 bits each (ssbvb_voxel::asset::PackedVoxel's).
-fn encode_octahedral(n: vec3<f32>) -> u32 {
-    let l1 = abs(n.x) + abs(n.y) + abs(n.z);
-    var p = vec3(0.0, 0.0, 1.0);
-    if l1 > 0.0 {
-        p = n / l1;
-    }
-    var x = p.x;
-    var y = p.y;
-    if p.z < 0.0 {
-        x = (1.0 - abs(p.y)) * select(1.0, -1.0, p.x < 0.0);
-        y = (1.0 - abs(p.x)) * select(1.0, -1.0, p.y < 0.0);
-    }
-    let qx = u32(floor((clamp(x, -1.0, 1.0) * 0.5 + 0.5) * 255.0 + 0.5));
-    let qy = u32(floor((clamp(y, -1.0, 1.0) * 0.5 + 0.5) * 255.0 + 0.5));
-    return qx | (qy << 8u);
-}
-
-fn morton(c: vec3<u32>) -> vec2<u32> {
-    var lo = 0u;
-    var hi = 0u;
-    for (var j = 0u; j < 16u; j++) {
-        for (var a = 0u; a < 3u; a++) {
-            let bit = 3u * j + a;
-            let b = (c[a] >> j) & 1u;
-            if bit < 32u {
-                lo |= b << bit;
-            } else {
-                hi |= b << (bit - 32u);
-            }
-        }
-    }
-    return vec2(lo, hi);
 }
 
 // The colour target only gives the rasterizer a viewport; the output is the fragment list.

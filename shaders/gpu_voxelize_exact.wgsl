@@ -1,3 +1,4 @@
+//#include "voxel_codes.inc.wgsl"
 // Exact GPU voxelization (gpu_voxelize.rs, GpuVoxelizeMethod::Exact; needs SHADER_F64): the
 // CPU voxelizer's separating-axis test (ssbvb_voxel::voxelize::triangle_box_overlap: closed
 // cells, 13 axes, in f64 with the same operations in the same order, each product written
@@ -86,40 +87,6 @@ fn overlap(t0: vec3<f64>, t1: vec3<f64>, t2: vec3<f64>, center: vec3<f64>) -> bo
     return abs(d) <= r;
 }
 
-fn morton(c: vec3<u32>) -> vec2<u32> {
-    var lo = 0u;
-    var hi = 0u;
-    for (var j = 0u; j < 16u; j++) {
-        for (var a = 0u; a < 3u; a++) {
-            let bit = 3u * j + a;
-            let b = (c[a] >> j) & 1u;
-            if bit < 32u {
-                lo |= b << bit;
-            } else {
-                hi |= b << (bit - 32u);
-            }
-        }
-    }
-    return vec2(lo, hi);
-}
-
-fn encode_octahedral(n: vec3<f32>) -> u32 {
-    let l1 = abs(n.x) + abs(n.y) + abs(n.z);
-    var p = vec3(0.0, 0.0, 1.0);
-    if l1 > 0.0 {
-        p = n / l1;
-    }
-    var x = p.x;
-    var y = p.y;
-    if p.z < 0.0 {
-        x = (1.0 - abs(p.y)) * select(1.0, -1.0, p.x < 0.0);
-        y = (1.0 - abs(p.x)) * select(1.0, -1.0, p.y < 0.0);
-    }
-    let qx = u32(floor((clamp(x, -1.0, 1.0) * 0.5 + 0.5) * 255.0 + 0.5));
-    let qy = u32(floor((clamp(y, -1.0, 1.0) * 0.5 + 0.5) * 255.0 + 0.5));
-    return qx | (qy << 8u);
-}
-
 // A triangle's dominant axis and its candidate bounds (cells, f32: exact for indices).
 struct TriFrame {
     a: u32,
@@ -144,10 +111,6 @@ fn frame_of(p0: vec3<f64>, p1: vec3<f64>, p2: vec3<f64>) -> TriFrame {
     let lo = vec3<u32>(clamp(floor(bmin) - 1.0, vec3(0.0), vec3(lastf)));
     let hi = vec3<u32>(clamp(floor(bmax) + 1.0, vec3(0.0), vec3(lastf)));
     return TriFrame(a, (a + 1u) % 3u, (a + 2u) % 3u, lo, hi);
-}
-
-fn thread_id(li: u32, wg: vec3<u32>, nwg: vec3<u32>) -> u32 {
-    return (wg.x + wg.y * nwg.x) * 256u + li;
 }
 
 @compute @workgroup_size(256)

@@ -1,3 +1,4 @@
+//#include "voxel_codes.inc.wgsl"
 // The RastaVox build on the GPU (seed 001, §3; surface_build.rs drives it): surface
 // extraction with an atomic output slot, then per LOD the OR-merge of runs of children.
 // The sort between them is gpu_radix_sort.wgsl, the run starts come from gpu_scan.wgsl.
@@ -41,10 +42,6 @@ struct BuildParams {
 @group(0) @binding(11) var<storage, read_write> surface_out: array<u32>;
 @group(0) @binding(12) var<storage, read_write> attrs_out: array<u32>;
 
-fn thread_id(li: u32, wg: vec3<u32>, nwg: vec3<u32>) -> u32 {
-    return (wg.x + wg.y * nwg.x) * 256u + li;
-}
-
 fn point_cell(p: vec4<u32>) -> vec3<u32> {
     return vec3(p.x & 0xffffu, p.x >> 16u, p.y & 0xffffu);
 }
@@ -82,23 +79,6 @@ fn is_voxel(c: vec3<u32>) -> bool {
         }
     }
     return false;
-}
-
-fn morton(c: vec3<u32>) -> vec2<u32> {
-    var lo = 0u;
-    var hi = 0u;
-    for (var j = 0u; j < 16u; j++) {
-        for (var a = 0u; a < 3u; a++) {
-            let bit = 3u * j + a;
-            let b = (c[a] >> j) & 1u;
-            if bit < 32u {
-                lo |= b << bit;
-            } else {
-                hi |= b << (bit - 32u);
-            }
-        }
-    }
-    return vec2(lo, hi);
 }
 
 @compute @workgroup_size(256)
@@ -197,39 +177,8 @@ fn run_starts(
 }
 
 fn octahedral_l1(code: u32) -> vec3<f32> {
-    let u = f32(code & 0xffu) / 255.0 * 2.0 - 1.0;
-    let v = f32((code >> 8u) & 0xffu) / 255.0 * 2.0 - 1.0;
-    var n = vec3(u, v, 1.0 - abs(u) - abs(v));
-    if n.z < 0.0 {
-        n = vec3((1.0 - abs(v)) * sign_nz(u), (1.0 - abs(u)) * sign_nz(v), n.z);
-    }
-    let len = length(n);
-    let unit = n / len;
+    let unit = decode_octahedral(code);
     return unit / (abs(unit.x) + abs(unit.y) + abs(unit.z));
-}
-
-// Rust's f32::signum: +1 for +0.
-fn sign_nz(x: f32) -> f32 {
-    return select(1.0, -1.0, x < 0.0);
-}
-
-fn encode_octahedral(n: vec3<f32>) -> u32 {
-    let l1 = abs(n.x) + abs(n.y) + abs(n.z);
-    var p = vec3(0.0, 0.0, 1.0);
-    if l1 > 0.0 {
-        p = n / l1;
-    }
-    var x = p.x;
-    var y = p.y;
-    if p.z < 0.0 {
-        x = (1.0 - abs(p.y)) * sign_nz(p.x);
-        y = (1.0 - abs(p.x)) * sign_nz(p.y);
-    }
-    // floor(v + 0.5): Rust's round (half away from zero) on these non-negative values;
-    // WGSL's round goes half to even.
-    let qx = u32(floor((clamp(x, -1.0, 1.0) * 0.5 + 0.5) * 255.0 + 0.5));
-    let qy = u32(floor((clamp(y, -1.0, 1.0) * 0.5 + 0.5) * 255.0 + 0.5));
-    return qx | (qy << 8u);
 }
 
 // One thread per run of level k: the parent voxel of level k + 1.

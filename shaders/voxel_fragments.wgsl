@@ -1,3 +1,4 @@
+//#include "voxel_codes.inc.wgsl"
 // The voxel fragment list of gpu_voxelize.wgsl turned into voxels (gpu_voxelize.rs): the
 // keys are copied out and radix-sorted (gpu_radix_sort.wgsl) with the fragment index as
 // payload, runs of equal keys are found by a scan (gpu_scan.wgsl), and one thread per run
@@ -30,10 +31,6 @@ struct Fragment {
 @group(0) @binding(8) var<storage, read_write> out_hi: array<u32>;
 @group(0) @binding(9) var<storage, read_write> out_colors: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read_write> out_normals: array<vec4<f32>>;
-
-fn thread_id(li: u32, wg: vec3<u32>, nwg: vec3<u32>) -> u32 {
-    return (wg.x + wg.y * nwg.x) * 256u + li;
-}
 
 @compute @workgroup_size(256)
 fn fragment_keys(
@@ -75,20 +72,6 @@ fn run_starts(
     if i < params.n && starts_run(i) {
         starts[flags[i]] = i;
     }
-}
-
-fn decode_octahedral(code: u32) -> vec3<f32> {
-    let u = f32(code & 0xffu) / 255.0 * 2.0 - 1.0;
-    let v = f32((code >> 8u) & 0xffu) / 255.0 * 2.0 - 1.0;
-    var n = vec3(u, v, 1.0 - abs(u) - abs(v));
-    if n.z < 0.0 {
-        n = vec3(
-            (1.0 - abs(v)) * select(1.0, -1.0, u < 0.0),
-            (1.0 - abs(u)) * select(1.0, -1.0, v < 0.0),
-            n.z,
-        );
-    }
-    return normalize(n);
 }
 
 @compute @workgroup_size(256)
