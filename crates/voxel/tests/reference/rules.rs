@@ -124,3 +124,76 @@ fn axis_parallel_grazing_edge_and_corner_rays_follow_the_documented_rules() {
     .unwrap();
     assert_eq!((h.cell, h.t, h.face_normal), ([0, 0, 0], 2.0, DVec3::NEG_Y));
 }
+
+/// From an origin inside the grid, the first event is the origin itself: only the cell
+/// holding it is touched, not the next ones (a voxel one or two cells ahead is hit where
+/// the ray reaches it, never at t = 0). Found by mutation testing (`docs/reliability.md`).
+#[test]
+fn an_origin_inside_the_grid_touches_only_its_own_cell_at_first() {
+    let s = cell_size(3);
+    for ahead in [1i64, 2] {
+        let l = lod(3, &[[(3 + ahead) as u32, 4, 4]]);
+        // Centre of cell (3, 4, 4), moving +x.
+        let o = DVec3::new(b(3, 3) + 0.5 * s, b(3, 4) + 0.5 * s, b(3, 4) + 0.5 * s);
+        for traversal in [Traversal::Hierarchical, Traversal::CellByCell] {
+            let h = trace_object_ray(&l.lookup, o, DVec3::X, traversal).expect("a hit ahead");
+            assert_eq!(h.cell, [(3 + ahead) as u32, 4, 4]);
+            let t = b(3, 3 + ahead) - o.x;
+            assert!((h.t - t).abs() < 1e-12 && !h.inside, "ahead {ahead}: {h:?}");
+            // Mirrored: from cell (3 + 2·ahead, 4, 4) moving −x.
+            let o2 = DVec3::new(b(3, 3 + 2 * ahead) + 0.5 * s, o.y, o.z);
+            let h2 = trace_object_ray(&l.lookup, o2, DVec3::NEG_X, traversal).unwrap();
+            assert!((h2.t - (o2.x - b(3, 4 + ahead))).abs() < 1e-12, "{h2:?}");
+        }
+    }
+}
+
+/// Entering a voxel exactly through its edge with equal speeds on the two axes: the face
+/// reported is the lower axis's (the documented tie rule of the face normal).
+#[test]
+fn an_edge_entry_at_equal_speeds_reports_the_lower_axis_face() {
+    let l = lod(3, &[[4, 4, 4]]);
+    let s = cell_size(3);
+    // Through the edge x = b(4), y = b(4) at z inside the cell, from (−,−) at equal speeds.
+    let z = b(3, 4) + 0.5 * s;
+    let o = DVec3::new(b(3, 4) - 0.75 * s, b(3, 4) - 0.75 * s, z);
+    let h = trace_object_ray(
+        &l.lookup,
+        o,
+        DVec3::new(1.0, 1.0, 0.0),
+        Traversal::Hierarchical,
+    )
+    .unwrap();
+    assert_eq!((h.cell, h.face_axis), ([4, 4, 4], 0), "{h:?}");
+    assert_eq!(h.face_normal, DVec3::NEG_X);
+    // Mirrored on both axes: still the x face (+X, against the ray).
+    let o = DVec3::new(b(3, 5) + 0.75 * s, b(3, 5) + 0.75 * s, z);
+    let h = trace_object_ray(
+        &l.lookup,
+        o,
+        DVec3::new(-1.0, -1.0, 0.0),
+        Traversal::CellByCell,
+    )
+    .unwrap();
+    assert_eq!(
+        (h.cell, h.face_axis, h.face_normal),
+        ([4, 4, 4], 0, DVec3::X),
+        "{h:?}"
+    );
+}
+
+/// Several occupied cells touched first at one corner: the one differing from the entered
+/// cell on the fewest axes wins before the z, y, x order (the rank sum comes first).
+#[test]
+fn a_corner_tie_prefers_the_fewest_differing_axes_before_z() {
+    // The ray passes exactly through the grid point (4, 4, 4) along (1, 1, 1); the entered
+    // cell (4, 4, 4) is empty. A = (4, 4, 3) differs on z only (rank sum 1, z rank 1);
+    // B = (3, 3, 4) differs on x and y (rank sum 2, z rank 0).
+    let l = lod(3, &[[4, 4, 3], [3, 3, 4]]);
+    let s = cell_size(3);
+    let o = DVec3::splat(b(3, 4) - 0.375 * s);
+    for traversal in [Traversal::Hierarchical, Traversal::CellByCell] {
+        let h = trace_object_ray(&l.lookup, o, DVec3::ONE, traversal).unwrap();
+        assert_eq!(h.cell, [4, 4, 3], "{h:?}");
+    }
+}
