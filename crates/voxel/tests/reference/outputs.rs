@@ -87,6 +87,38 @@ fn identical_instances_tie_to_the_lowest_index() {
     let img = render(&inst, &Camera::default(), 24, 18, &Light::default());
     assert!(img.coverage() > 50);
     assert!(img.hits.iter().flatten().all(|h| h.instance == 0));
+    // The same voxel in two instances whose boxes differ (so the hierarchy meets them in
+    // either order): where both show it at the same distance, the lower index wins.
+    let small = lod(2, &[[2, 2, 2]]);
+    let big = lod(2, &[[2, 2, 2], [0, 0, 0], [3, 3, 3], [0, 3, 0]]);
+    for (first, second) in [(&small, &big), (&big, &small)] {
+        let inst = [first, second].map(|l| Instance {
+            lod: l,
+            object_to_world: DAffine3::IDENTITY,
+            faces: None,
+        });
+        for eye in [
+            DVec3::new(2.0, 1.5, 3.0),
+            DVec3::new(-3.0, -1.0, -2.0),
+            DVec3::new(0.2, 3.5, 0.1),
+        ] {
+            let img = render(
+                &inst,
+                &Camera::new(eye, DVec3::splat(0.25)),
+                32,
+                24,
+                &Light::default(),
+            );
+            let shared: Vec<_> = img
+                .hits
+                .iter()
+                .flatten()
+                .filter(|h| h.cell == [2, 2, 2])
+                .collect();
+            assert!(!shared.is_empty(), "{eye:?}");
+            assert!(shared.iter().all(|h| h.instance == 0), "{eye:?}");
+        }
+    }
 }
 
 #[test]
