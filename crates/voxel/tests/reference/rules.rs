@@ -197,3 +197,50 @@ fn a_corner_tie_prefers_the_fewest_differing_axes_before_z() {
         assert_eq!(h.cell, [4, 4, 3], "{h:?}");
     }
 }
+
+/// A ray parallel to an axis whose origin lies a rounding step below, on, or above a cell
+/// boundary of that axis touches the right cells: the cell estimate `(o + 1) / s` can round
+/// up across the boundary, and the exact comparisons that follow settle it (found by
+/// mutation testing: with boundaries hit exactly the settling never ran).
+#[test]
+fn a_static_axis_origin_next_to_a_boundary_touches_the_right_cells() {
+    let level = 3;
+    for k in 1..8i64 {
+        // A voxel in the row below the boundary y = b(k), ahead along +x.
+        let l = lod(level, &[[5, (k - 1) as u32, 4]]);
+        let z = b(level, 4) + 0.5 * cell_size(level);
+        let on = b(level, k);
+        let (below, above) = (on.next_down(), on.next_up());
+        assert!(below < on && on < above, "k {k}");
+        for traversal in [Traversal::Hierarchical, Traversal::CellByCell] {
+            let hit =
+                |y: f64| trace_object_ray(&l.lookup, DVec3::new(-1.5, y, z), DVec3::X, traversal);
+            assert_eq!(
+                hit(below).map(|h| h.cell),
+                Some([5, (k - 1) as u32, 4]),
+                "k {k} below"
+            );
+            assert_eq!(
+                hit(on).map(|h| h.cell),
+                Some([5, (k - 1) as u32, 4]),
+                "k {k} on"
+            );
+            assert_eq!(hit(above), None, "k {k} above");
+        }
+        // And the voxel above the boundary: seen from on and above, not from below.
+        let l = lod(level, &[[5, k as u32, 4]]);
+        let hit = |y: f64| {
+            trace_object_ray(
+                &l.lookup,
+                DVec3::new(-1.5, y, z),
+                DVec3::X,
+                Traversal::Hierarchical,
+            )
+        };
+        assert_eq!(hit(below), None, "k {k} below, voxel above");
+        assert!(
+            hit(on).is_some() && hit(above).is_some(),
+            "k {k} voxel above"
+        );
+    }
+}
