@@ -51,7 +51,8 @@ pub struct GpuLodBuilder {
     scan: GpuScan,
 }
 
-/// The buffers one dispatch binds (`None`: a placeholder).
+/// The buffers one dispatch binds (`None`: a binding the kernel does not use, bound to a
+/// small unused buffer because a bind group needs every entry).
 #[derive(Default)]
 struct Binds<'a> {
     keys: Option<(&'a wgpu::Buffer, &'a wgpu::Buffer)>,
@@ -88,7 +89,8 @@ impl GpuLodBuilder {
     }
 
     fn bind(&self, d: &wgpu::Device, b: &Binds, params: &wgpu::Buffer) -> wgpu::BindGroup {
-        // Distinct placeholders: a buffer may not be bound twice with writes.
+        // Unused bindings get distinct small buffers: one buffer may not be bound twice
+        // with writes.
         let ph: Vec<wgpu::Buffer> = (0..13).map(|_| storage(d, "unused", 4)).collect();
         let list: [&wgpu::Buffer; 14] = [
             params,

@@ -99,7 +99,8 @@ impl GpuSurface {
     }
 }
 
-/// The buffers of one kernel dispatch (`None`: a placeholder is bound).
+/// The buffers of one kernel dispatch (`None`: a binding the kernel does not use, bound
+/// to a small unused buffer because a bind group needs every entry).
 #[derive(Default)]
 struct Binds<'a> {
     key: Option<&'a SortBuffers>,

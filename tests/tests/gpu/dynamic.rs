@@ -24,6 +24,17 @@ fn mesh(file: &str) -> Mesh {
     }
 }
 
+/// The scene uploaded with room for object 0 to grow `growth`-fold, and the flat SSBVB
+/// frame (per-pixel voxel ids, so the same-voxel rate is measured).
+fn dynamic_frame(scene: Scene, growth: f64) -> (GpuScene, Renderer) {
+    let ctx = ssbvb_tests::ctx();
+    let room = DynamicRoom { object: 0, growth };
+    let gpu_scene = GpuScene::with_dynamic(ctx, scene, &[room]).unwrap();
+    let pipeline = ssbvb_graph::resolve_str(FLAT, "flat").unwrap();
+    let renderer = Renderer::new(ctx, &gpu_scene, pipeline, SIZE).unwrap();
+    (gpu_scene, renderer)
+}
+
 /// Coverage IoU and same-voxel rate of the frame against the reference of `scene`.
 fn accuracy_of(
     renderer: &Renderer,
@@ -44,17 +55,7 @@ fn a_gpu_built_object_draws_like_its_cpu_prepared_asset() {
     let bunny = ssbvb_tests::model_asset("bunny.obj", level);
     let teapot = ssbvb_tests::model_asset("teapot.obj", level);
     let scene = ssbvb_tests::single_object_scene(bunny.clone(), level);
-    let mut gpu_scene = GpuScene::with_dynamic(
-        ctx,
-        scene.clone(),
-        &[DynamicRoom {
-            object: 0,
-            growth: 1.5,
-        }],
-    )
-    .unwrap();
-    let pipeline = ssbvb_graph::resolve_str(FLAT, "flat").unwrap();
-    let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, SIZE).unwrap();
+    let (mut gpu_scene, mut renderer) = dynamic_frame(scene.clone(), 1.5);
     let cam = Camera::new(DVec3::new(1.6, 1.0, 2.3), DVec3::ZERO);
     let render = |r: &mut Renderer, s: &mut GpuScene| {
         r.render(ctx, s, &cam, Profiling::Off).unwrap();
@@ -162,17 +163,7 @@ fn an_animated_mesh_drawn_at_time_t_matches_its_reference_at_t() {
     .unwrap();
     let rest = Arc::new(anim.cpu_asset(0.0).unwrap());
     let scene = ssbvb_tests::single_object_scene(rest.clone(), level);
-    let mut gpu_scene = GpuScene::with_dynamic(
-        ctx,
-        scene.clone(),
-        &[DynamicRoom {
-            object: 0,
-            growth: 1.5,
-        }],
-    )
-    .unwrap();
-    let pipeline = ssbvb_graph::resolve_str(FLAT, "flat").unwrap();
-    let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, SIZE).unwrap();
+    let (mut gpu_scene, mut renderer) = dynamic_frame(scene.clone(), 1.5);
     let animator = Animator::new(ctx).unwrap();
     let cam = Camera::new(DVec3::new(0.4, 1.2, 2.8), DVec3::ZERO);
     let t = 0.8;
@@ -251,17 +242,7 @@ fn streamed_voxels_draw_like_their_prepared_asset() {
     let level = 6;
     let bunny = ssbvb_tests::model_asset("bunny.obj", level);
     let scene = ssbvb_tests::single_object_scene(bunny, level);
-    let mut gpu_scene = GpuScene::with_dynamic(
-        ctx,
-        scene,
-        &[DynamicRoom {
-            object: 0,
-            growth: 2.0,
-        }],
-    )
-    .unwrap();
-    let pipeline = ssbvb_graph::resolve_str(FLAT, "flat").unwrap();
-    let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, SIZE).unwrap();
+    let (mut gpu_scene, mut renderer) = dynamic_frame(scene, 2.0);
     let animator = Animator::new(ctx).unwrap();
     let cam = Camera::new(DVec3::new(1.5, 0.8, 2.6), DVec3::ZERO);
     for r in [0.45, 0.8] {
@@ -321,17 +302,7 @@ fn a_runtime_edit_draws_like_the_edited_asset() {
     let level = 6;
     let bunny = ssbvb_tests::model_asset("bunny.obj", level);
     let scene = ssbvb_tests::single_object_scene(bunny.clone(), level);
-    let mut gpu_scene = GpuScene::with_dynamic(
-        ctx,
-        scene.clone(),
-        &[DynamicRoom {
-            object: 0,
-            growth: 1.5,
-        }],
-    )
-    .unwrap();
-    let pipeline = ssbvb_graph::resolve_str(FLAT, "flat").unwrap();
-    let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, SIZE).unwrap();
+    let (mut gpu_scene, mut renderer) = dynamic_frame(scene.clone(), 1.5);
     let animator = Animator::new(ctx).unwrap();
     let cam = Camera::new(DVec3::new(1.6, 1.0, 2.3), DVec3::ZERO);
     // Carve 8 voxels deep into the side facing the camera and add a red ball on top.

@@ -24,6 +24,7 @@ pub use dynamic::{DynamicLevel, DynamicObject, DynamicRoom};
 use crate::visibility::{frame_uniform, instance_bvh, mat, visible_instances};
 pub use layout::*;
 pub use pools::{COLOR_CHUNKS, NODE_CHUNKS, NORMAL_CHUNKS, SCENE_STORAGE_BUFFERS, StreamChunks};
+use pools::{checked_u32, storage};
 use pools::{chunked, plan_pools};
 
 /// The scene on the GPU.
@@ -82,37 +83,6 @@ pub struct GpuScene {
     pub screen: (u32, u32),
 }
 
-pub(super) fn storage(
-    ctx: &GpuContext,
-    label: &str,
-    bytes: &[u8],
-) -> Result<wgpu::Buffer, PassError> {
-    // One binding each: refuse clearly what the device cannot bind (lavapipe binds at most
-    // 128 MiB, so e.g. the bunny's page pool at level 10 does not fit there).
-    let max = ctx.device.limits().max_storage_buffer_binding_size;
-    if bytes.len() as u64 > max {
-        return Err(PassError::TooLarge(format!(
-            "the scene's {label} take {} bytes; this device binds at most {max} bytes per \
-             storage buffer: use a coarser level or fewer objects",
-            bytes.len()
-        )));
-    }
-    // Empty bindings are invalid: keep at least 16 bytes.
-    let mut data = bytes.to_vec();
-    if data.len() < 16 {
-        data.resize(16, 0);
-    }
-    Ok(ctx
-        .device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: &data,
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_DST
-                | wgpu::BufferUsages::COPY_SRC,
-        }))
-}
-
 /// The object-space box of a level's voxels (their cells' union), `None` when it has none.
 fn voxel_bounds(lod: &ssbvb_voxel::asset::LodLevel) -> Option<(DVec3, DVec3)> {
     let mut lo = [u32::MAX; 3];
@@ -130,12 +100,6 @@ fn voxel_bounds(lod: &ssbvb_voxel::asset::LodLevel) -> Option<(DVec3, DVec3)> {
     let s = ssbvb_voxel::model::cell_size(lod.level);
     let corner = |c: [u32; 3]| DVec3::from(c.map(|v| v as f64 * s - 1.0));
     Some((corner(lo), corner(hi.map(|v| v + 1))))
-}
-
-pub(super) fn checked_u32(v: usize, what: &str) -> Result<u32, PassError> {
-    u32::try_from(v).map_err(|_| {
-        PassError::TooLarge(format!("{what}: {v} does not fit the GPU's 32-bit indices"))
-    })
 }
 
 impl GpuScene {

@@ -1,12 +1,12 @@
-//! How the scene's streams are split over bindings, and how a GPU budget is split into
-//! the fixed part and the page pools of a streamed scene.
+//! How the scene's streams are split over bindings, how a GPU budget is split into the
+//! fixed part and the page pools of a streamed scene, and the scene's buffer helpers.
 
 use ssbvb_voxel::asset::GPU_VOXEL_BYTES;
 use ssbvb_voxel::lookup::NODE_WORDS;
 
+use ssbvb_gpu::wgpu::util::DeviceExt;
 use ssbvb_gpu::{GpuContext, wgpu};
 
-use super::{checked_u32, storage};
 use crate::PassError;
 use crate::streaming::{BLOCK_BYTES, MAX_PAGE_BYTES, PagedLayoutBuilder, RUN_BYTES, SLOT_BYTES};
 
@@ -141,5 +141,42 @@ pub(super) fn plan_pools(
         slots: slots as u32,
         blocks: blocks as u32,
         fixed_bytes,
+    })
+}
+
+pub(super) fn storage(
+    ctx: &GpuContext,
+    label: &str,
+    bytes: &[u8],
+) -> Result<wgpu::Buffer, PassError> {
+    // One binding each: refuse clearly what the device cannot bind (lavapipe binds at most
+    // 128 MiB, so e.g. the bunny's page pool at level 10 does not fit there).
+    let max = ctx.device.limits().max_storage_buffer_binding_size;
+    if bytes.len() as u64 > max {
+        return Err(PassError::TooLarge(format!(
+            "the scene's {label} take {} bytes; this device binds at most {max} bytes per \
+             storage buffer: use a coarser level or fewer objects",
+            bytes.len()
+        )));
+    }
+    // Empty bindings are invalid: keep at least 16 bytes.
+    let mut data = bytes.to_vec();
+    if data.len() < 16 {
+        data.resize(16, 0);
+    }
+    Ok(ctx
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: &data,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+        }))
+}
+
+pub(super) fn checked_u32(v: usize, what: &str) -> Result<u32, PassError> {
+    u32::try_from(v).map_err(|_| {
+        PassError::TooLarge(format!("{what}: {v} does not fit the GPU's 32-bit indices"))
     })
 }
