@@ -344,6 +344,20 @@ fn voxel_normal_world(inst: Instance, v: PackedVoxel) -> vec3<f32> {
 
 // Blinn-Phong exactly as ssbvb-voxel's shading::shade (linear RGB).
 fn shade(albedo: vec3<f32>, normal: vec3<f32>, view_dir: vec3<f32>) -> vec3<f32> {
+    return shade_lit(albedo, normal, view_dir, 1.0, 1.0, vec3(0.0));
+}
+
+// `shade` with the light from the voxels (ssbvb-voxel shading::shade_lit, same
+// association): ambient times `ao`, the directional terms times `shadow`, plus
+// albedo times the bounce `indirect`.
+fn shade_lit(
+    albedo: vec3<f32>,
+    normal: vec3<f32>,
+    view_dir: vec3<f32>,
+    ao: f32,
+    shadow: f32,
+    indirect: vec3<f32>,
+) -> vec3<f32> {
     let l = safe_normalize(frame.light_dir.xyz, vec3(0.0, 0.0, 1.0));
     let n = safe_normalize(normal, vec3(0.0, 0.0, 1.0));
     let v = safe_normalize(view_dir, n);
@@ -355,7 +369,8 @@ fn shade(albedo: vec3<f32>, normal: vec3<f32>, view_dir: vec3<f32>) -> vec3<f32>
         spec = frame.light_color.w * pow(ndh, max(frame.misc.x, 0.0));
     }
     let c = frame.light_color.rgb;
-    return frame.light_dir.w * albedo + ndl * albedo * c + spec * c;
+    return ao * frame.light_dir.w * albedo + shadow * ndl * albedo * c + shadow * spec * c
+        + albedo * indirect;
 }
 
 fn safe_normalize(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {

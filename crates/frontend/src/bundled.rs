@@ -31,6 +31,10 @@ const FILES: &[(&str, &[u8])] = &[
         include_bytes!("../../../assets/pipelines/ssbvb_flat.ron"),
     ),
     (
+        "pipelines/ssbvb_vct.ron",
+        include_bytes!("../../../assets/pipelines/ssbvb_vct.ron"),
+    ),
+    (
         "scenes/bunnies_64.ron",
         include_bytes!("../../../assets/scenes/bunnies_64.ron"),
     ),

@@ -4,6 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::cone_kinds::{ConeCompositeKind, ConeTraceParams};
 use crate::pass_kind::{Access, KindSpec, OfKind, PassStage, SlotClass, SlotDesc, pass_kinds};
 use crate::schema::{BufferLayout, Format};
 
@@ -47,15 +48,23 @@ pass_kinds! {
     /// coarsest OR-merged LOD within `pixel_error` pixels, at most three masked faces each by
     /// vertex pulling, writing the same G-buffer as the billboards (stencil = voxel).
     RastaVox(RastaVoxParams);
+    /// Voxel cone tracing (seed 003, Crassin et al. 2011), fullscreen: per G-buffer pixel,
+    /// cones through the pre-filtered scene volume give ambient occlusion and a soft shadow
+    /// (`occlusion`) and one diffuse bounce (`indirect`).
+    ConeTrace(ConeTraceParams);
+    /// Deferred lighting like `Composite`, with the cone tracer's occlusion, shadow and
+    /// bounce.
+    ConeComposite = ConeCompositeKind;
 }
 
-const DEPTH_STENCIL: &[Format] = &[Format::Depth32FloatStencil8, Format::Depth24PlusStencil8];
-const DEPTH: &[Format] = &[Format::Depth32Float];
-const ALBEDO: &[Format] = &[Format::Rgba8Unorm];
-const NORMAL: &[Format] = &[Format::Rgba16Float, Format::Rgba32Float];
-const POSITION: &[Format] = &[Format::Rgba32Float];
-const ENTRY: &[Format] = &[Format::Rgba32Float];
-const COLOR_OUT: &[Format] = &[
+pub(crate) const DEPTH_STENCIL: &[Format] =
+    &[Format::Depth32FloatStencil8, Format::Depth24PlusStencil8];
+pub(crate) const DEPTH: &[Format] = &[Format::Depth32Float];
+pub(crate) const ALBEDO: &[Format] = &[Format::Rgba8Unorm];
+pub(crate) const NORMAL: &[Format] = &[Format::Rgba16Float, Format::Rgba32Float];
+pub(crate) const POSITION: &[Format] = &[Format::Rgba32Float];
+pub(crate) const ENTRY: &[Format] = &[Format::Rgba32Float];
+pub(crate) const COLOR_OUT: &[Format] = &[
     Format::Rgba8UnormSrgb,
     Format::Bgra8UnormSrgb,
     Format::Rgba8Unorm,
@@ -496,6 +505,8 @@ mod tests {
             CubeRasterParams::NAME,
             SplatBillboardsParams::NAME,
             RastaVoxParams::NAME,
+            ConeTraceParams::NAME,
+            ConeCompositeKind::NAME,
         ];
         assert_eq!(spec_names, KIND_NAMES);
     }

@@ -13,6 +13,7 @@
 //! The crate needs no GPU (it depends on `wgpu-types` only), so all of this is unit-tested
 //! on any machine. Executing a resolved pipeline is `ssbvb-passes`' job.
 
+pub mod cone_kinds;
 pub mod edit;
 pub mod error;
 pub mod kinds;
@@ -22,6 +23,7 @@ pub mod resolve;
 pub mod schema;
 pub mod watch;
 
+pub use cone_kinds::*;
 pub use error::{GraphError, Loc, PipelineErrors};
 pub use kinds::*;
 pub use locate::Position;

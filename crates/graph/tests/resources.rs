@@ -226,9 +226,10 @@ fn omitted_parameters_take_their_defaults() {
     for k in PassKind::all_defaults() {
         let name = k.name();
         let written = match k {
-            PassKind::EmptySpacePrepass | PassKind::Triangles | PassKind::Composite => {
-                name.to_string()
-            }
+            PassKind::EmptySpacePrepass
+            | PassKind::Triangles
+            | PassKind::Composite
+            | PassKind::ConeComposite => name.to_string(),
             _ => format!("{name}()"),
         };
         assert_eq!(kind(&written), k, "{written}");

@@ -30,6 +30,8 @@ pub enum OwnKind {
     Uniform,
     /// A 3D texture of `u32` texels read with `textureLoad`.
     Texture3dUint,
+    /// A filterable 3D float texture (with mip levels) read with `textureSampleLevel`.
+    Texture3dFloat,
 }
 
 /// One resource a pass owns, by its WGSL global name.
@@ -137,6 +139,14 @@ impl PassBindings {
                 OwnKind::Texture3dUint => (
                     wgpu::BindingType::Texture {
                         sample_type: wgpu::TextureSampleType::Uint,
+                        view_dimension: wgpu::TextureViewDimension::D3,
+                        multisampled: false,
+                    },
+                    false,
+                ),
+                OwnKind::Texture3dFloat => (
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
                         view_dimension: wgpu::TextureViewDimension::D3,
                         multisampled: false,
                     },

@@ -20,14 +20,21 @@ impl PassImpl for Composite {
     type Params = CompositeKind;
     const SHADER: &'static str = "composite.wgsl";
 
-    /// Compiles the pipeline for the output's format (sRGB encoding in the shader for
-    /// 8-bit non-sRGB targets).
     fn new(init: &PassInit<'_>, _params: &CompositeKind) -> Result<Self, PassError> {
+        Self::compile(init, Self::SHADER)
+    }
+}
+
+impl Composite {
+    /// Compiles the fullscreen lighting pipeline of `shader` (this pass's, or
+    /// `ConeComposite`'s, which differs only in what it reads) for the output's format
+    /// (sRGB encoding in the shader for 8-bit non-sRGB targets).
+    pub fn compile(init: &PassInit<'_>, shader: &str) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
         let d = &ctx.device;
-        let module = ctx.shader("composite.wgsl", &shaders::source("composite.wgsl")?)?;
+        let module = ctx.shader(shader, &shaders::source(shader)?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, &[]);
-        let layout = pipeline_layout(d, "composite", scene, Some(&bindings));
+        let layout = pipeline_layout(d, shader, scene, Some(&bindings));
         let out = slot_format(ctx, pipeline, pass, "color");
         let encode = matches!(
             out,
@@ -39,7 +46,7 @@ impl PassImpl for Composite {
             d,
             &RenderSpec {
                 constants: &constants,
-                ..RenderSpec::new("composite", &module, &layout, &targets)
+                ..RenderSpec::new(shader, &module, &layout, &targets)
             },
         );
         Ok(Self { pipeline, bindings })

@@ -22,6 +22,7 @@ pub mod gpu_scan;
 pub mod gpu_scene;
 pub mod gpu_voxelize;
 pub mod measure;
+pub mod measure_lighting;
 pub mod page_cache;
 pub mod pipelines;
 pub mod ray_cast_counters;
@@ -46,6 +47,8 @@ registry::pass_modules! {
     cube_raster::CubeRaster,
     splat_billboards::SplatBillboards,
     rastavox::RastaVox,
+    cone_trace::ConeTrace,
+    cone_composite::ConeComposite,
 }
 
 pub use adapter_needs::pipeline_requirements;

@@ -21,7 +21,7 @@ pub fn f16_to_f32(h: u16) -> f32 {
     }
 }
 
-fn read(
+pub(crate) fn read(
     ctx: &GpuContext,
     r: &Renderer,
     name: &str,

@@ -17,6 +17,7 @@ pub mod camera;
 pub mod cube_list;
 pub mod edit;
 pub mod instance_bvh;
+pub mod lighting;
 pub mod load;
 pub mod lookup;
 pub mod model;

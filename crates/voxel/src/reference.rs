@@ -263,6 +263,50 @@ fn shade_with(
     [clean(rgb[0]), clean(rgb[1]), clean(rgb[2]), 1.0]
 }
 
+/// A scene prepared once for many rays: the lighting reference ([`crate::lighting`])
+/// traces hundreds of rays per pixel through the same instances.
+pub struct Tracer<'a> {
+    scene: PreparedScene<'a>,
+}
+
+impl<'a> Tracer<'a> {
+    /// Prepares `instances` (inverse transforms and the hierarchy over their boxes).
+    pub fn new(instances: &[Instance<'a>]) -> Self {
+        Self {
+            scene: PreparedScene::new(instances),
+        }
+    }
+
+    /// The nearest hit along the world ray from `origin` in direction `dir` (normalized
+    /// here; [`Hit::t`] is a world distance, [`Hit::view_depth`] equals it).
+    pub fn trace(&self, origin: DVec3, dir: DVec3) -> Option<Hit> {
+        let d = normalize_or(dir, DVec3::Z);
+        trace_world(&self.scene, origin, d, d)
+    }
+
+    /// The linear albedo and the world-space unit stored normal of a hit's voxel (the
+    /// inputs of [`shade`]); the face normal and mid-grey for a voxel id outside its point
+    /// cloud.
+    pub fn surface(&self, hit: &Hit) -> ([f32; 3], [f32; 3]) {
+        let placed = self.scene.instances.get(hit.instance as usize);
+        let Some(Some(p)) = placed else {
+            return ([0.5; 3], hit.face_normal);
+        };
+        match p.lod.point_cloud.voxels.get(hit.voxel as usize) {
+            Some(v) => {
+                let c = v.color();
+                let n = DVec3::from(v.normal().map(f64::from));
+                let face = DVec3::from(hit.face_normal.map(f64::from));
+                (
+                    [c[0], c[1], c[2]],
+                    to_f32(normalize_or(p.normal_to_world * n, face)),
+                )
+            }
+            None => ([0.5; 3], hit.face_normal),
+        }
+    }
+}
+
 /// Renders the reference image: one ray per pixel centre, nearest hit over `instances`,
 /// shaded with `light`. Rows are traced in parallel (rayon).
 pub fn render(

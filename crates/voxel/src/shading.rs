@@ -69,6 +69,41 @@ fn normalize_or(v: [f32; 3], fallback: [f32; 3]) -> [f32; 3] {
 /// towards the eye (none need be normalized). Returns linear RGB, never NaN for finite
 /// `albedo` and light parameters.
 pub fn shade(albedo: [f32; 3], normal: [f32; 3], view_dir: [f32; 3], light: &Light) -> [f32; 3] {
+    shade_lit(albedo, normal, view_dir, light, &Lit::NONE)
+}
+
+/// Light from the voxels at a surface point ([`crate::lighting`]): the ambient term is
+/// scaled by `ao`, the directional terms by `shadow`, and `albedo · indirect` is added.
+/// [`Lit::NONE`] gives [`shade`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Lit {
+    /// Ambient occlusion (1 = open).
+    pub ao: f32,
+    /// Visibility of the light (1 = lit).
+    pub shadow: f32,
+    /// One-bounce radiance arriving (before the albedo).
+    pub indirect: [f32; 3],
+}
+
+impl Lit {
+    /// Open, lit, no bounce: plain Blinn-Phong.
+    pub const NONE: Lit = Lit {
+        ao: 1.0,
+        shadow: 1.0,
+        indirect: [0.0; 3],
+    };
+}
+
+/// [`shade`] with the light from the voxels `lit` (the cone composite's formula):
+/// `ao · ambient · albedo + shadow · ndl · albedo · color + shadow · spec · color +
+/// albedo · indirect`.
+pub fn shade_lit(
+    albedo: [f32; 3],
+    normal: [f32; 3],
+    view_dir: [f32; 3],
+    light: &Light,
+    lit: &Lit,
+) -> [f32; 3] {
     let l = normalize_or(light.direction, [0.0, 0.0, 1.0]);
     let n = normalize_or(normal, [0.0, 0.0, 1.0]);
     let v = normalize_or(view_dir, n);
@@ -82,8 +117,12 @@ pub fn shade(albedo: [f32; 3], normal: [f32; 3], view_dir: [f32; 3], light: &Lig
     };
     let mut out = [0.0; 3];
     for c in 0..3 {
-        out[c] =
-            light.ambient * albedo[c] + ndl * albedo[c] * light.color[c] + spec * light.color[c];
+        // Associated as in `shade` before the factors were added (1 · x and x + 0 are
+        // exact, so `Lit::NONE` reproduces it bit for bit).
+        out[c] = lit.ao * light.ambient * albedo[c]
+            + lit.shadow * ndl * albedo[c] * light.color[c]
+            + lit.shadow * spec * light.color[c]
+            + albedo[c] * lit.indirect[c];
     }
     out
 }

@@ -4,6 +4,7 @@
 mod all_models;
 mod billboards;
 mod chunks;
+mod cone_trace;
 mod cube_raster;
 mod dense_dda;
 mod dynamic;

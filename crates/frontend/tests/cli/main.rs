@@ -2,6 +2,7 @@
 //! RastaVox's commands are in `rastavox.rs`.
 
 mod animation;
+mod cone_trace;
 mod rastavox;
 mod voxelize_gpu;
 

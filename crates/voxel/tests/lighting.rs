@@ -1,0 +1,146 @@
+//! The lighting reference ([`ssbvb_voxel::lighting`]) against closed forms, and the scene
+//! volume on a placed cube: which cells are opaque, lit and shadowed.
+
+use glam::{DAffine3, DVec3};
+use ssbvb_voxel::asset::VoxelAsset;
+use ssbvb_voxel::lighting::monte_carlo::monte_carlo;
+use ssbvb_voxel::lighting::volume::{RadianceVolume, VolumeInstance, mip_dims};
+use ssbvb_voxel::lighting::{LightingParams, LightingSample};
+use ssbvb_voxel::prepare::prepare_voxel_set;
+use ssbvb_voxel::procedural::ProceduralModel;
+use ssbvb_voxel::progress::NoProgress;
+use ssbvb_voxel::reference::{Instance, Tracer};
+use ssbvb_voxel::shading::Light;
+
+/// A completely full 4³ grid: placed with a scale, any solid box.
+fn full_cube() -> VoxelAsset {
+    let set = ProceduralModel::Random {
+        fraction: 1.0,
+        seed: 0,
+    }
+    .voxels(2)
+    .unwrap();
+    prepare_voxel_set(set, &NoProgress).0
+}
+
+/// The object-space cube [-1, 1]³ placed as the box `lo..hi`.
+fn boxed(lo: DVec3, hi: DVec3) -> DAffine3 {
+    DAffine3::from_scale_rotation_translation(
+        (hi - lo) * 0.5,
+        glam::DQuat::IDENTITY,
+        (hi + lo) * 0.5,
+    )
+}
+
+fn light_along(d: DVec3) -> Light {
+    Light {
+        direction: [d.x as f32, d.y as f32, d.z as f32],
+        ..Light::default()
+    }
+}
+
+fn lit_at(instances: &[Instance], light: &Light, p: DVec3, n: DVec3, max: f64) -> LightingSample {
+    let params = LightingParams {
+        max_distance: max,
+        shadow_aperture: 10.0,
+        near: 1e-6,
+    };
+    monte_carlo(&Tracer::new(instances), light, &params, p, n, 4096, 7)
+}
+
+#[test]
+fn ao_facing_a_wall_is_the_squared_ratio_of_distance_to_radius() {
+    // A wall filling z < 0 near the axis; the receiver at z = d faces it. A cosine-weighted
+    // direction at angle θ meets it at d / cos θ, within D when cos θ ≥ d / D, which has
+    // probability 1 − (d/D)²: AO = (d/D)².
+    let asset = full_cube();
+    let wall = boxed(DVec3::new(-50.0, -50.0, -1.0), DVec3::new(50.0, 50.0, 0.0));
+    let inst = [Instance {
+        lod: &asset.lods[2],
+        object_to_world: wall,
+        faces: None,
+    }];
+    let light = light_along(DVec3::Z);
+    for (d, max) in [(0.5, 1.0), (0.3, 1.0), (0.8, 1.0), (1.5, 1.0)] {
+        let s = lit_at(&inst, &light, DVec3::new(0.0, 0.0, d), -DVec3::Z, max);
+        let want: f64 = if d >= max { 1.0 } else { (d / max) * (d / max) };
+        assert!(
+            (f64::from(s.ao) - want).abs() < 0.01,
+            "d {d}: {} vs {want}",
+            s.ao
+        );
+        // Facing away: open.
+        let away = lit_at(&inst, &light, DVec3::new(0.0, 0.0, d), DVec3::Z, max);
+        assert_eq!(away.ao, 1.0);
+        assert_eq!((away.shadow, away.indirect), (1.0, [0.0; 3]));
+    }
+}
+
+#[test]
+fn a_half_plane_over_the_receiver_shadows_half_the_light_cone() {
+    // A slab over x < 0 at height 1..2; the light straight above: the cone's directions
+    // with x < 0 meet it.
+    let asset = full_cube();
+    let slab = boxed(DVec3::new(-100.0, -100.0, 1.0), DVec3::new(0.0, 100.0, 2.0));
+    let inst = [Instance {
+        lod: &asset.lods[2],
+        object_to_world: slab,
+        faces: None,
+    }];
+    let light = light_along(DVec3::Z);
+    let s = lit_at(&inst, &light, DVec3::ZERO, DVec3::Z, 0.5);
+    assert!((s.shadow - 0.5).abs() < 0.01, "{}", s.shadow);
+    // Well under the slab: dark; well beside it: lit.
+    assert_eq!(
+        lit_at(&inst, &light, DVec3::new(-1.0, 0.0, 0.0), DVec3::Z, 0.5).shadow,
+        0.0
+    );
+    assert_eq!(
+        lit_at(&inst, &light, DVec3::new(1.0, 0.0, 0.0), DVec3::Z, 0.5).shadow,
+        1.0
+    );
+    // The slab is out of AO reach at 0.5 and within it at 3.
+    let near = lit_at(&inst, &light, DVec3::new(-1.0, 0.0, 0.0), DVec3::Z, 0.5);
+    assert_eq!(near.ao, 1.0);
+    let far = lit_at(&inst, &light, DVec3::new(-1.0, 0.0, 0.0), DVec3::Z, 3.0);
+    assert!(far.ao < 0.5, "{}", far.ao);
+}
+
+#[test]
+fn the_volume_marks_the_cube_opaque_lights_its_top_and_shadows_what_is_below() {
+    let asset = full_cube();
+    // Two cubes, one above the other with a gap; the light straight above.
+    let upper = boxed(DVec3::new(-1.0, 2.0, -1.0), DVec3::new(1.0, 4.0, 1.0));
+    let lower = boxed(DVec3::new(-1.0, -2.0, -1.0), DVec3::new(1.0, 0.0, 1.0));
+    let instances = [upper, lower].map(|m| VolumeInstance {
+        asset: &asset,
+        object_to_world: m,
+    });
+    let light = light_along(DVec3::Y);
+    let v = RadianceVolume::build(&instances, &light, 64);
+    assert_eq!(v.dims[1] % 16, 0);
+    assert!(v.dims.iter().all(|&d| d <= 64));
+    let at = |w: DVec3| {
+        let c = ((w - v.origin) / v.cell).floor();
+        let i =
+            c.x as usize + v.dims[0] as usize * (c.y as usize + v.dims[1] as usize * c.z as usize);
+        v.mips[0][i]
+    };
+    // Inside either cube: opaque; in the gap: empty.
+    assert_eq!(at(DVec3::new(0.0, 3.0, 0.0))[3], 1.0);
+    assert_eq!(at(DVec3::new(0.0, -1.0, 0.0))[3], 1.0);
+    assert_eq!(at(DVec3::new(0.0, 1.0, 0.0)), [0.0; 4]);
+    // The upper cube's top face is lit (its cells' normals point up), the lower cube's is
+    // in the upper one's shadow.
+    let top = at(DVec3::new(0.0, 4.0 - v.cell * 0.5, 0.0));
+    assert!(top[1] > 0.1, "{top:?}");
+    let shaded = at(DVec3::new(0.0, -v.cell * 0.5, 0.0));
+    assert_eq!(shaded[3], 1.0);
+    assert_eq!(&shaded[..3], &[0.0; 3], "{shaded:?}");
+    // The mip chain runs down to one texel and keeps the mean opacity.
+    assert_eq!(mip_dims(v.dims, v.mips.len() as u32 - 1), [1, 1, 1]);
+    let mean =
+        |k: usize| v.mips[k].iter().map(|t| f64::from(t[3])).sum::<f64>() / v.mips[k].len() as f64;
+    assert!((mean(0) - mean(1)).abs() < 1e-4, "{} {}", mean(0), mean(1));
+    assert!(v.occupied > 0 && v.bytes() > 8 * v.mips[0].len() as u64);
+}

@@ -1,0 +1,122 @@
+//! Voxel cone tracing against its Monte Carlo reference: ambient occlusion, soft shadow and
+//! one bounce on the bunny standing on the ground plane (voxel and triangle receivers).
+
+use glam::DVec3;
+use ssbvb_passes::measure_lighting::{LightingReport, lighting_error};
+use ssbvb_passes::{Scene, TriangleObject};
+use ssbvb_tests::{ctx, model_asset, render, single_object_scene};
+use ssbvb_voxel::camera::Camera;
+use ssbvb_voxel::lighting::LightingSample;
+
+const VCT: &str = include_str!("../../../assets/pipelines/ssbvb_vct.ron");
+const LEVEL: u32 = 8;
+const SIZE: (u32, u32) = (160, 120);
+
+/// The default scene: the bunny on the plane, seen from the default camera.
+fn bunny_on_plane() -> (Scene, Camera) {
+    let mut scene = single_object_scene(model_asset("bunny.obj", LEVEL), LEVEL);
+    scene.triangles = vec![TriangleObject::ground_plane(
+        DVec3::new(0.0, -0.95, 0.0),
+        3.0,
+        [0.45, 0.5, 0.45, 1.0],
+    )];
+    let mut camera = Camera::new(DVec3::new(1.9, 0.9, 2.7), DVec3::new(0.0, -0.15, 0.0));
+    camera.near = 0.01;
+    camera.far = 100.0;
+    (scene, camera)
+}
+
+fn dump(report: &LightingReport, name: &str) {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("cone_trace");
+    std::fs::create_dir_all(&dir).unwrap();
+    let (w, h) = SIZE;
+    for (what, pick) in [("ao", 0usize), ("shadow", 1), ("indirect", 2)] {
+        let mut img = vec![0u8; (w * h * 4) as usize * 2];
+        for p in &report.pixels {
+            let (x, y) = (p.index % w as usize, p.index / w as usize);
+            for (side, s) in [(0, &p.gpu), (1, &p.reference)] {
+                let v = match pick {
+                    0 => s.ao,
+                    1 => s.shadow,
+                    _ => s.indirect[0] * 2.0,
+                };
+                let o = ((y * 2 * w as usize) + side * w as usize + x) * 4;
+                let g = (v.clamp(0.0, 1.0) * 255.0) as u8;
+                img[o..o + 4].copy_from_slice(&[g, g, g, 255]);
+            }
+        }
+        let path = dir.join(format!("{name}_{what}.png"));
+        ssbvb_voxel::reference::write_png_atomic(&path, w * 2, h, &img).unwrap();
+    }
+}
+
+/// Mean absolute difference of each compared pixel's `pick` from a constant.
+fn constant_mae(r: &LightingReport, pick: fn(&LightingSample) -> f32, c: f32) -> f32 {
+    r.pixels
+        .iter()
+        .map(|p| (pick(&p.reference) - c).abs())
+        .sum::<f32>()
+        / r.pixels.len() as f32
+}
+
+/// At the default knobs (`ssbvb_vct.ron`), 128 Monte Carlo samples on every other row and
+/// column of a 160×120 frame. Measured (llvmpipe): AO error 0.017 (voxel receivers 0.026,
+/// plane 0.011), shadow 0.007, bounce 0.008, lit PSNR 30.9 dB. Bounds: the issue's 0.05 for
+/// AO, about three times the measurement for the rest, and each at most half the error of
+/// the best constant (a pass writing "open, lit, no bounce" fails).
+#[test]
+fn cone_traced_light_matches_monte_carlo_on_the_bunny_on_its_plane() {
+    let (scene, camera) = bunny_on_plane();
+    let frame = render(VCT, scene.clone(), &camera, SIZE);
+    // The reference's origins sit a voxel diagonal above the receiver (lighting.rs).
+    let near = 3f64.sqrt() * 2.0 / f64::from(1u32 << LEVEL);
+    let r = lighting_error(ctx(), &frame.renderer, &scene, &camera, near, 128, 2).unwrap();
+    dump(&r, "bunny");
+    let stencil = frame.read_stencil("depth_stencil");
+    let voxels = r.pixels.iter().filter(|p| stencil[p.index] == 1).count();
+    eprintln!(
+        "{} pixels ({voxels} voxel): AO error {:.4} (bias {:+.4}), shadow {:.4}, bounce {:.4}, \
+         lit {:.4} / {:.2} dB",
+        r.pixels.len(),
+        r.ao_mae,
+        r.ao_bias,
+        r.shadow_mae,
+        r.indirect_mae,
+        r.lit_mae,
+        r.lit_psnr
+    );
+    // Both kinds of receiver are measured, and the reference has something to match.
+    assert!(voxels > 800 && r.pixels.len() - voxels > 800, "{voxels}");
+    let ao = |s: &LightingSample| s.ao;
+    let shadow = |s: &LightingSample| s.shadow;
+    let bounce = |s: &LightingSample| s.indirect[1];
+    let min_ao = r.pixels.iter().map(|p| p.reference.ao).fold(1.0, f32::min);
+    assert!(
+        min_ao < 0.5,
+        "the reference shows no contact occlusion: {min_ao}"
+    );
+    assert!(r.ao_mae <= 0.05, "AO error {}", r.ao_mae);
+    assert!(r.ao_bias.abs() <= 0.03, "AO bias {}", r.ao_bias);
+    assert!(r.shadow_mae <= 0.025, "shadow error {}", r.shadow_mae);
+    assert!(r.indirect_mae <= 0.025, "bounce error {}", r.indirect_mae);
+    assert!(r.lit_psnr >= 28.0, "lit PSNR {}", r.lit_psnr);
+    for (name, pick, err) in [
+        ("AO", ao as fn(&LightingSample) -> f32, r.ao_mae),
+        ("shadow", shadow, r.shadow_mae),
+    ] {
+        let mean = r.pixels.iter().map(|p| pick(&p.reference)).sum::<f32>() / r.pixels.len() as f32;
+        let best = constant_mae(&r, pick, 1.0).min(constant_mae(&r, pick, mean));
+        assert!(
+            err <= 0.5 * f64::from(best),
+            "{name}: {err} vs a constant's {best}"
+        );
+    }
+    let gpu_bounce = r.pixels.iter().map(|p| bounce(&p.gpu)).fold(0.0, f32::max);
+    assert!(gpu_bounce > 0.05, "no bounce light at all: {gpu_bounce}");
+    let best = constant_mae(&r, bounce, 0.0);
+    assert!(
+        r.indirect_mae <= 0.5 * f64::from(best),
+        "bounce {} vs 0's {best}",
+        r.indirect_mae
+    );
+}
