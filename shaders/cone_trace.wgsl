@@ -13,7 +13,8 @@ struct Cone {
     // max_distance, tan(aperture / 2), step_scale, tan(shadow_aperture / 2).
     knobs: vec4<f32>,
     // x: number of cones; y: origin offset along the normal, z: first sample's distance,
-    // both in cells.
+    // both in cells; w: G-buffer pixels per target texel along each axis (1 at full
+    // resolution, 2 when the targets are half the screen: texel q lights pixel 2q).
     misc: vec4<f32>,
     // Cone axes in the tangent frame (z = normal), cosine-weighted, equal weights.
     dirs: array<vec4<f32>, 64>,
@@ -71,6 +72,7 @@ fn trace_cone(
     max_t: f32,
     height: f32,
     rise: f32,
+    step_scale: f32,
 ) -> vec4<f32> {
     let cell = cone.origin.w;
     var acc = vec4(0.0);
@@ -81,18 +83,19 @@ fn trace_cone(
         let s = volume_at(p + d * t, log2(diameter / cell));
         // A texel's opacity holds over its own width (the diameter); the step is
         // step_scale of it.
-        let a = 1.0 - pow(max(1.0 - s.a, 0.0), cone.knobs.z);
+        let a = 1.0 - pow(max(1.0 - s.a, 0.0), step_scale);
         if s.a > 0.0 {
             acc += (1.0 - acc.a) * vec4(s.rgb * (a / s.a), a);
         }
-        t += diameter * cone.knobs.z;
+        t += diameter * step_scale;
     }
     return acc;
 }
 
 @fragment
 fn fs_main(@builtin(position) pos: vec4<f32>) -> Targets {
-    let px = vec2<i32>(pos.xy);
+    let dims = vec2<i32>(textureDimensions(albedo));
+    let px = min(vec2<i32>(floor(pos.xy) * cone.misc.w), dims - 1);
     if textureLoad(albedo, px, 0).a == 0.0 {
         discard;
     }
@@ -111,12 +114,12 @@ fn fs_main(@builtin(position) pos: vec4<f32>) -> Targets {
     for (var i = 0u; i < count; i++) {
         let c = cone.dirs[i].xyz;
         let d = t * c.x + b * c.y + n * c.z;
-        let r = trace_cone(p, d, cone.knobs.y, cone.knobs.x, offset, c.z);
+        let r = trace_cone(p, d, cone.knobs.y, cone.knobs.x, offset, c.z, cone.knobs.z);
         occluded += r.a;
         bounce += r.rgb;
     }
     let l = safe_normalize(frame.light_dir.xyz, vec3(0.0, 0.0, 1.0));
-    let s = trace_cone(p, l, cone.knobs.w, volume_exit(p, l), offset, max(dot(l, n), 0.0));
+    let s = trace_cone(p, l, cone.knobs.w, volume_exit(p, l), offset, max(dot(l, n), 0.0), cone.knobs.z);
     let w = 1.0 / f32(max(count, 1u));
     var out: Targets;
     out.occlusion = vec4(1.0 - occluded * w, 1.0 - s.a, 0.0, 1.0);

@@ -244,6 +244,11 @@ impl PassNode for ConeTrace {
         // Camera-relative like every GPU position (subtracted in f64).
         let o = self.origin - rec.scene.camera.position;
         self.constants.origin[..3].copy_from_slice(&[o.x as f32, o.y as f32, o.z as f32]);
+        // Targets smaller than the G-buffer (e.g. `ScreenScaled(0.5)`) trace one pixel of
+        // each block.
+        let target = rec.texture("occlusion").texture.width().max(1);
+        let gbuffer = rec.texture("albedo").texture.width();
+        self.constants.misc[3] = (gbuffer as f32 / target as f32).round().max(1.0);
         rec.gpu
             .queue
             .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&self.constants));

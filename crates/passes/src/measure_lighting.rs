@@ -31,9 +31,14 @@ pub struct LitPixel {
     pub reference: LightingSample,
     /// The composite's output (sRGB8) and the reference lit with [`shade_lit`] (sRGB8).
     pub color: ([u8; 3], [u8; 3]),
+    /// The cone pass traced this pixel itself (always at full resolution; one pixel of
+    /// each block at a lower one, the others are upsampled by the composite).
+    pub traced: bool,
 }
 
-/// Errors of the cone tracer against the Monte Carlo reference over the compared pixels.
+/// Errors of the cone tracer against the Monte Carlo reference: AO, shadow and bounce over
+/// the compared pixels the cone pass traced (its estimate), the lit colour over all of
+/// them (what the composite shows, upsampling included).
 #[derive(Debug, Clone)]
 pub struct LightingReport {
     /// The compared pixels.
@@ -77,6 +82,10 @@ pub struct LitFrame {
     normal: Vec<[f32; 4]>,
     occlusion: Vec<[f32; 4]>,
     indirect: Vec<[f32; 4]>,
+    /// Size of the cone pass's targets (less than the G-buffer's when traced at a lower
+    /// resolution).
+    light_width: u32,
+    light_height: u32,
     color: Vec<u8>,
     max_distance: f64,
     shadow_aperture: f64,
@@ -97,18 +106,37 @@ impl LitFrame {
             .map(|i| r.pipeline.resources[i].name.clone())
             .unwrap_or_else(|| "gbuffer_normal".into());
         let albedo = read(ctx, r, "gbuffer_albedo")?;
+        let occlusion = read(ctx, r, "occlusion")?;
         Ok(Self {
+            light_width: occlusion.width,
+            light_height: occlusion.height,
             width: albedo.width,
             height: albedo.height,
             albedo: albedo.bytes,
             position: read(ctx, r, "gbuffer_position")?.as_f32(),
             normal: half4(&read(ctx, r, &normal_resource)?.bytes),
-            occlusion: half4(&read(ctx, r, "occlusion")?.bytes),
+            occlusion: half4(&occlusion.bytes),
             indirect: half4(&read(ctx, r, "indirect")?.bytes),
             color: read(ctx, r, &r.pipeline.resources[r.pipeline.output].name)?.bytes,
             max_distance,
             shadow_aperture,
         })
+    }
+
+    /// The cone targets' texel holding pixel `i` (the pixel itself at full resolution; at
+    /// a lower one, the texel whose traced pixel is at or before it: the traced pixels are
+    /// those at multiples of the ratio, so an even `stride` compares exactly them at half
+    /// resolution).
+    fn light_texel(&self, i: usize) -> (usize, bool) {
+        let (x, y) = (i % self.width as usize, i / self.width as usize);
+        let rx = (self.width / self.light_width.max(1)).max(1) as usize;
+        let ry = (self.height / self.light_height.max(1)).max(1) as usize;
+        let lx = (x / rx).min(self.light_width as usize - 1);
+        let ly = (y / ry).min(self.light_height as usize - 1);
+        (
+            ly * self.light_width as usize + lx,
+            x % rx == 0 && y % ry == 0,
+        )
     }
 
     fn relative_position(&self, i: usize) -> [f32; 3] {
@@ -181,13 +209,14 @@ pub fn compare(
     let pixels: Vec<LitPixel> = reference
         .iter()
         .map(|&(i, reference)| {
+            let (t, traced) = frame.light_texel(i);
             let gpu = LightingSample {
-                ao: frame.occlusion[i][0],
-                shadow: frame.occlusion[i][1],
+                ao: frame.occlusion[t][0],
+                shadow: frame.occlusion[t][1],
                 indirect: [
-                    frame.indirect[i][0],
-                    frame.indirect[i][1],
-                    frame.indirect[i][2],
+                    frame.indirect[t][0],
+                    frame.indirect[t][1],
+                    frame.indirect[t][2],
                 ],
             };
             let a = &frame.albedo[i * 4..i * 4 + 3];
@@ -207,15 +236,20 @@ pub fn compare(
                 gpu,
                 reference,
                 color: ([out[0], out[1], out[2]], c.map(linear_to_srgb8)),
+                traced,
             }
         })
         .collect();
     let n = pixels.len().max(1) as f64;
     let mean = |f: &dyn Fn(&LitPixel) -> f64| pixels.iter().map(f).sum::<f64>() / n;
-    let ao_mae = mean(&|p| f64::from((p.gpu.ao - p.reference.ao).abs()));
-    let ao_bias = mean(&|p| f64::from(p.gpu.ao - p.reference.ao));
-    let shadow_mae = mean(&|p| f64::from((p.gpu.shadow - p.reference.shadow).abs()));
-    let indirect_mae = mean(&|p| {
+    let traced = pixels.iter().filter(|p| p.traced).count().max(1) as f64;
+    let traced_mean = |f: &dyn Fn(&LitPixel) -> f64| {
+        pixels.iter().filter(|p| p.traced).map(f).sum::<f64>() / traced
+    };
+    let ao_mae = traced_mean(&|p| f64::from((p.gpu.ao - p.reference.ao).abs()));
+    let ao_bias = traced_mean(&|p| f64::from(p.gpu.ao - p.reference.ao));
+    let shadow_mae = traced_mean(&|p| f64::from((p.gpu.shadow - p.reference.shadow).abs()));
+    let indirect_mae = traced_mean(&|p| {
         (0..3)
             .map(|k| f64::from((p.gpu.indirect[k] - p.reference.indirect[k]).abs()))
             .sum::<f64>()

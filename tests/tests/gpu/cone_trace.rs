@@ -50,33 +50,37 @@ fn dump(report: &LightingReport, name: &str) {
     }
 }
 
-/// Mean absolute difference of each compared pixel's `pick` from a constant.
+/// Mean absolute difference of `pick` of the traced pixels' reference from a constant.
 fn constant_mae(r: &LightingReport, pick: fn(&LightingSample) -> f32, c: f32) -> f32 {
-    r.pixels
+    let traced: Vec<_> = r.pixels.iter().filter(|p| p.traced).collect();
+    traced
         .iter()
         .map(|p| (pick(&p.reference) - c).abs())
         .sum::<f32>()
-        / r.pixels.len() as f32
+        / traced.len() as f32
 }
 
-/// At the default knobs (`ssbvb_vct.ron`), 128 Monte Carlo samples on every other row and
-/// column of a 160×120 frame. Measured (llvmpipe): AO error 0.017 (voxel receivers 0.026,
-/// plane 0.011), shadow 0.007, bounce 0.008, lit PSNR 30.9 dB. Bounds: the issue's 0.05 for
-/// AO, about three times the measurement for the rest, and each at most half the error of
-/// the best constant (a pass writing "open, lit, no bounce" fails).
+/// At the default knobs (`ssbvb_vct.ron`: half-resolution cones), 128 Monte Carlo samples
+/// at every third row and column of a 160×120 frame (traced and upsampled pixels; the
+/// three terms are compared where traced, the lit colour everywhere). Measured
+/// (llvmpipe): AO error 0.019 (bias −0.007), shadow 0.009, bounce 0.009, lit PSNR 30.4 dB.
+/// Bounds: the issue's 0.05 for AO, about three times the measurement for the rest, and
+/// AO and shadow at most half the error of the best constant (a pass writing "open, lit,
+/// no bounce" fails).
 #[test]
 fn cone_traced_light_matches_monte_carlo_on_the_bunny_on_its_plane() {
     let (scene, camera) = bunny_on_plane();
     let frame = render(VCT, scene.clone(), &camera, SIZE);
     // The reference's origins sit a voxel diagonal above the receiver (lighting.rs).
     let near = 3f64.sqrt() * 2.0 / f64::from(1u32 << LEVEL);
-    let r = lighting_error(ctx(), &frame.renderer, &scene, &camera, near, 128, 2).unwrap();
+    let r = lighting_error(ctx(), &frame.renderer, &scene, &camera, near, 128, 3).unwrap();
     dump(&r, "bunny");
     let stencil = frame.read_stencil("depth_stencil");
     let voxels = r.pixels.iter().filter(|p| stencil[p.index] == 1).count();
+    let traced = r.pixels.iter().filter(|p| p.traced).count();
     eprintln!(
-        "{} pixels ({voxels} voxel): AO error {:.4} (bias {:+.4}), shadow {:.4}, bounce {:.4}, \
-         lit {:.4} / {:.2} dB",
+        "{} pixels ({voxels} voxel, {traced} traced): AO error {:.4} (bias {:+.4}), shadow \
+         {:.4}, bounce {:.4}, lit {:.4} / {:.2} dB",
         r.pixels.len(),
         r.ao_mae,
         r.ao_bias,
@@ -85,8 +89,9 @@ fn cone_traced_light_matches_monte_carlo_on_the_bunny_on_its_plane() {
         r.lit_mae,
         r.lit_psnr
     );
-    // Both kinds of receiver are measured, and the reference has something to match.
-    assert!(voxels > 800 && r.pixels.len() - voxels > 800, "{voxels}");
+    // Both kinds of receiver, traced and upsampled pixels are measured.
+    assert!(voxels > 400 && r.pixels.len() - voxels > 400, "{voxels}");
+    assert!(traced > 200 && r.pixels.len() - traced > 600, "{traced}");
     let ao = |s: &LightingSample| s.ao;
     let shadow = |s: &LightingSample| s.shadow;
     let bounce = |s: &LightingSample| s.indirect[1];
@@ -97,9 +102,12 @@ fn cone_traced_light_matches_monte_carlo_on_the_bunny_on_its_plane() {
     );
     assert!(r.ao_mae <= 0.05, "AO error {}", r.ao_mae);
     assert!(r.ao_bias.abs() <= 0.03, "AO bias {}", r.ao_bias);
-    assert!(r.shadow_mae <= 0.025, "shadow error {}", r.shadow_mae);
+    assert!(r.shadow_mae <= 0.03, "shadow error {}", r.shadow_mae);
     assert!(r.indirect_mae <= 0.025, "bounce error {}", r.indirect_mae);
-    assert!(r.lit_psnr >= 28.0, "lit PSNR {}", r.lit_psnr);
+    // The lit colour: measured 0.0070 linear, 30.4 dB; a composite that drops the AO
+    // measured 0.0102 and 29.7 dB. Bounds: the measurement plus 20 %, and 0.9 dB.
+    assert!(r.lit_mae <= 0.0085, "lit error {}", r.lit_mae);
+    assert!(r.lit_psnr >= 29.5, "lit PSNR {}", r.lit_psnr);
     for (name, pick, err) in [
         ("AO", ao as fn(&LightingSample) -> f32, r.ao_mae),
         ("shadow", shadow, r.shadow_mae),
@@ -113,10 +121,14 @@ fn cone_traced_light_matches_monte_carlo_on_the_bunny_on_its_plane() {
     }
     let gpu_bounce = r.pixels.iter().map(|p| bounce(&p.gpu)).fold(0.0, f32::max);
     assert!(gpu_bounce > 0.05, "no bounce light at all: {gpu_bounce}");
-    let best = constant_mae(&r, bounce, 0.0);
-    assert!(
-        r.indirect_mae <= 0.5 * f64::from(best),
-        "bounce {} vs 0's {best}",
-        r.indirect_mae
-    );
+    // The bounce is faint in this scene (most of it under the bunny): its error, in green,
+    // measured at 0.56 of no bounce at all's; bound 0.75.
+    let traced: Vec<_> = r.pixels.iter().filter(|p| p.traced).collect();
+    let err = traced
+        .iter()
+        .map(|p| (bounce(&p.gpu) - bounce(&p.reference)).abs())
+        .sum::<f32>()
+        / traced.len() as f32;
+    let none = constant_mae(&r, bounce, 0.0);
+    assert!(err <= 0.75 * none, "bounce {err} vs none's {none}");
 }

@@ -78,16 +78,19 @@ pub(super) struct Matrix {
 pub(super) fn matrix(args: &BenchArgs) -> Matrix {
     let bunny = BenchModel::File(assets_dir().join("models/bunny.obj"));
     let mut m = match args.preset {
-        Preset::Quick | Preset::Scale | Preset::Memory | Preset::Rastavox | Preset::Dynamic => {
-            Matrix {
-                models: vec![bunny],
-                levels: vec![5, 6],
-                sizes: vec![(160, 120)],
-                warmup: 1,
-                frames: 3,
-                camera: Camera::new(DVec3::new(0.0, 0.3, 2.6), DVec3::ZERO),
-            }
-        }
+        Preset::Quick
+        | Preset::Scale
+        | Preset::Memory
+        | Preset::Rastavox
+        | Preset::Dynamic
+        | Preset::Vct => Matrix {
+            models: vec![bunny],
+            levels: vec![5, 6],
+            sizes: vec![(160, 120)],
+            warmup: 1,
+            frames: 3,
+            camera: Camera::new(DVec3::new(0.0, 0.3, 2.6), DVec3::ZERO),
+        },
         Preset::Full => Matrix {
             models: vec![bunny],
             levels: vec![7, 8, 9, 10, 11, 12],
@@ -147,7 +150,8 @@ pub(super) fn sweep_config(preset: Preset) -> SweepConfig {
         | Preset::Scale
         | Preset::Memory
         | Preset::Rastavox
-        | Preset::Dynamic => SweepConfig {
+        | Preset::Dynamic
+        | Preset::Vct => SweepConfig {
             size: (160, 120),
             level: 6,
             warmup: 1,

@@ -21,7 +21,7 @@ fn pipeline_check_rejects_each_cone_knob_out_of_range_by_name() {
             "shadow_aperture",
         ),
         ("max_distance: 0.5", "max_distance: -1.0", "max_distance"),
-        ("step_scale: 0.5", "step_scale: 0.0", "step_scale"),
+        ("step_scale: 1.0", "step_scale: 0.0", "step_scale"),
         ("resolution: 128", "resolution: 4", "resolution"),
     ] {
         let src = VCT.replacen(from, to, 1);
