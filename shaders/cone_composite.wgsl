@@ -24,7 +24,8 @@ struct Upsampled {
 // bilinearly and by how well their pixel's depth and normal match this one's, so light
 // does not bleed across silhouettes. A pixel traced itself takes its own texel.
 fn upsample(p: vec2<i32>, x: vec3<f32>, n: vec3<f32>, low: vec2<i32>, full: vec2<i32>) -> Upsampled {
-    let ratio = f32(full.x) / f32(low.x);
+    // Rounded as cone_trace.rs computes it (161 pixels over 81 texels: 2).
+    let ratio = max(round(f32(full.x) / f32(low.x)), 1.0);
     let f = vec2<f32>(p) / ratio;
     let base = vec2<i32>(floor(f));
     let frac = f - vec2<f32>(base);

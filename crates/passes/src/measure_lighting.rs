@@ -129,8 +129,12 @@ impl LitFrame {
     /// resolution).
     fn light_texel(&self, i: usize) -> (usize, bool) {
         let (x, y) = (i % self.width as usize, i / self.width as usize);
-        let rx = (self.width / self.light_width.max(1)).max(1) as usize;
-        let ry = (self.height / self.light_height.max(1)).max(1) as usize;
+        // One ratio for both axes, rounded, as the cone pass computes it (`misc.w`): a
+        // 161-pixel screen has 81 half-resolution texels, ratio 2.
+        let ratio = (f64::from(self.width) / f64::from(self.light_width.max(1)))
+            .round()
+            .max(1.0) as usize;
+        let (rx, ry) = (ratio, ratio);
         let lx = (x / rx).min(self.light_width as usize - 1);
         let ly = (y / ry).min(self.light_height as usize - 1);
         (
