@@ -24,8 +24,10 @@ struct Upsampled {
 // bilinearly and by how well their pixel's depth and normal match this one's, so light
 // does not bleed across silhouettes. A pixel traced itself takes its own texel.
 fn upsample(p: vec2<i32>, x: vec3<f32>, n: vec3<f32>, low: vec2<i32>, full: vec2<i32>) -> Upsampled {
-    // Rounded as cone_trace.rs computes it (161 pixels over 81 texels: 2).
-    let ratio = max(round(f32(full.x) / f32(low.x)), 1.0);
+    // As cone_trace.rs computes it: the targets are a whole fraction of the screen
+    // (checked), so full / low is within a texel of a whole k (161 pixels over 81 texels:
+    // 2).
+    let ratio = max(floor(f32(full.x) / f32(low.x) + 0.5), 1.0);
     let f = vec2<f32>(p) / ratio;
     let base = vec2<i32>(floor(f));
     let frac = f - vec2<f32>(base);
@@ -43,7 +45,7 @@ fn upsample(p: vec2<i32>, x: vec3<f32>, n: vec3<f32>, low: vec2<i32>, full: vec2
         let xs = textureLoad(position, src, 0).xyz;
         let ns = textureLoad(normal, src, 0).xyz;
         let dz = abs(length(xs) - depth) / max(depth, 1e-6);
-        let w = bw * exp(-dz * 100.0) * pow(max(dot(ns, n), 0.0) * 0.5 + 0.5, 8.0) + 1e-6 * bw;
+        let w = bw * exp(-dz * 100.0) * pow(max(dot(ns, n), 0.0), 8.0) + 1e-6 * bw;
         sum_o += w * textureLoad(occlusion, q, 0);
         sum_b += w * textureLoad(indirect, q, 0).rgb;
         sum_w += w;

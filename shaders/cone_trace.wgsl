@@ -8,7 +8,8 @@
 struct Cone {
     // Camera-relative world position of the volume's low corner; w: finest cell edge.
     origin: vec4<f32>,
-    // 1 / the volume's world extent per axis; w: the coarsest mip level.
+    // 1 / the volume's world extent per axis; w: the coarsest mip level sampled (the last
+    // whose texels halve exactly, volume.rs `exact_levels`).
     inv_extent: vec4<f32>,
     // max_distance, tan(aperture / 2), step_scale, tan(shadow_aperture / 2).
     knobs: vec4<f32>,
@@ -103,7 +104,8 @@ fn fs_main(@builtin(position) pos: vec4<f32>) -> Targets {
     let offset = cone.misc.y * cone.origin.w;
     let p = textureLoad(position, px, 0).xyz + n * offset;
     // Tangent frame (Duff et al. 2017; lighting.rs `tangent_frame`).
-    let sgn = select(-1.0, 1.0, n.z >= 0.0);
+    // The sign bit, as Rust's copysign reads it (-0.0 counts as negative).
+    let sgn = select(-1.0, 1.0, (bitcast<u32>(n.z) >> 31u) == 0u);
     let k = -1.0 / (sgn + n.z);
     let m = n.x * n.y * k;
     let t = vec3(1.0 + sgn * n.x * n.x * k, sgn * m, -sgn * n.x);

@@ -99,6 +99,40 @@ pub fn volume_instances(scene: &Scene) -> Vec<VolumeInstance<'_>> {
         .collect()
 }
 
+/// The targets are the screen or a whole fraction of it (`ScreenScaled(1/k)`): texel q
+/// lights pixel q·k, a mapping the composite and the measurement share. Any other size
+/// would leave pixels no texel traces.
+fn check_target_size(
+    pipeline: &ssbvb_graph::ResolvedPipeline,
+    pass: &ssbvb_graph::ScheduledPass,
+) -> Result<(), PassError> {
+    use ssbvb_graph::{ResourceDesc, SizeDesc};
+    for slot in ["occlusion", "indirect"] {
+        let Some(r) = pass.resource_of(slot).map(|i| &pipeline.resources[i]) else {
+            continue;
+        };
+        let ResourceDesc::Texture { size, .. } = r.desc else {
+            continue;
+        };
+        let whole = match size {
+            SizeDesc::Screen => true,
+            SizeDesc::ScreenScaled(f) => {
+                let k = 1.0 / f64::from(f);
+                f > 0.0 && f <= 1.0 && (k - k.round()).abs() < 1e-6
+            }
+            SizeDesc::Fixed(..) => false,
+        };
+        if !whole {
+            return Err(PassError::BadScene(format!(
+                "pass `{}`: its target `{}` is {size:?}; cone tracing needs `Screen` or \
+                 `ScreenScaled(1/k)` for a whole k (0.5, 0.25, ...)",
+                pass.name, r.name
+            )));
+        }
+    }
+    Ok(())
+}
+
 fn upload(ctx: &GpuContext, v: &RadianceVolume) -> Result<wgpu::Texture, PassError> {
     let limit = ctx.device.limits().max_texture_dimension_3d;
     if v.dims.iter().any(|&d| d > limit) {
@@ -167,6 +201,7 @@ impl PassImpl for ConeTrace {
     fn new(init: &PassInit<'_>, params: &ConeTraceParams) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
         let d = &ctx.device;
+        check_target_size(pipeline, pass)?;
         let volume = RadianceVolume::build(
             &volume_instances(&scene.scene),
             &scene.scene.light,
@@ -193,7 +228,7 @@ impl PassImpl for ConeTrace {
                 (1.0 / extent.x) as f32,
                 (1.0 / extent.y) as f32,
                 (1.0 / extent.z) as f32,
-                (volume.mips.len() - 1) as f32,
+                volume.exact_levels().saturating_sub(1) as f32,
             ],
             knobs: [
                 params.max_distance,

@@ -65,6 +65,34 @@ pub fn cone_knobs(r: &Renderer) -> Option<(f64, f64)> {
     })
 }
 
+/// Texels of an Rgba16Float or Rgba32Float texture.
+fn float4(t: &ssbvb_gpu::readback::TextureData) -> Vec<[f32; 4]> {
+    match t.format {
+        ssbvb_gpu::wgpu::TextureFormat::Rgba32Float => t
+            .as_f32()
+            .chunks(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect(),
+        _ => half4(&t.bytes),
+    }
+}
+
+/// The output as RGBA8 (BGRA swapped); other formats are refused.
+fn rgba8(t: ssbvb_gpu::readback::TextureData) -> Result<Vec<u8>, PassError> {
+    use ssbvb_gpu::wgpu::TextureFormat as F;
+    match t.format {
+        F::Rgba8Unorm | F::Rgba8UnormSrgb => Ok(t.bytes),
+        F::Bgra8Unorm | F::Bgra8UnormSrgb => Ok(t
+            .bytes
+            .chunks(4)
+            .flat_map(|p| [p[2], p[1], p[0], p[3]])
+            .collect()),
+        f => Err(PassError::BadScene(format!(
+            "the lighting measurement compares an 8-bit output; this pipeline's is {f:?}"
+        ))),
+    }
+}
+
 fn half4(bytes: &[u8]) -> Vec<[f32; 4]> {
     bytes
         .chunks(8)
@@ -114,10 +142,10 @@ impl LitFrame {
             height: albedo.height,
             albedo: albedo.bytes,
             position: read(ctx, r, "gbuffer_position")?.as_f32(),
-            normal: half4(&read(ctx, r, &normal_resource)?.bytes),
+            normal: float4(&read(ctx, r, &normal_resource)?),
             occlusion: half4(&occlusion.bytes),
             indirect: half4(&read(ctx, r, "indirect")?.bytes),
-            color: read(ctx, r, &r.pipeline.resources[r.pipeline.output].name)?.bytes,
+            color: rgba8(read(ctx, r, &r.pipeline.resources[r.pipeline.output].name)?)?,
             max_distance,
             shadow_aperture,
         })

@@ -52,8 +52,12 @@ pub struct LightingSample {
 /// the hemisphere, each standing for an equal share (a spherical Fibonacci set: point `i`
 /// at radius `√((i + ½)/n)` of the unit disc, turned by the golden angle, lifted onto the
 /// hemisphere). The cone tracer's cone axes: with equal weights their mean estimates a
-/// cosine-weighted integral.
+/// cosine-weighted integral. One cone is the normal itself (the set's single point would
+/// lean 45° to one side).
 pub fn cone_directions(n: u32) -> Vec<[f32; 3]> {
+    if n == 1 {
+        return vec![[0.0, 0.0, 1.0]];
+    }
     let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
     (0..n)
         .map(|i| {

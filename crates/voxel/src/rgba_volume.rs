@@ -35,8 +35,9 @@ pub const EMPTY_BRICK: u32 = u32::MAX;
 /// Why a volume could not be built.
 #[derive(Debug, Error, PartialEq)]
 pub enum RgbaVolumeError {
-    /// An edge of zero or above [`MAX_EDGE`].
-    #[error("a volume of {0:?} texels: each edge must be from 1 to {MAX_EDGE}")]
+    /// An edge that is not a power of two from 1 to [`MAX_EDGE`] (the mip levels of a
+    /// texture halve exactly only then).
+    #[error("a volume of {0:?} texels: each edge must be a power of two from 1 to {MAX_EDGE}")]
     BadSize([u32; 3]),
     /// A density, alpha or colour that is NaN or infinite.
     #[error("a non-finite {what} at texel {texel:?}")]
@@ -173,7 +174,7 @@ impl RgbaVolume {
     /// per texel length. Rejects a bad size and non-finite or out-of-range values, naming
     /// the texel.
     pub fn from_texels(dims: [u32; 3], texels: &[[f32; 4]]) -> Result<Self, RgbaVolumeError> {
-        if dims.iter().any(|&d| d == 0 || d > MAX_EDGE)
+        if dims.iter().any(|&d| !d.is_power_of_two() || d > MAX_EDGE)
             || texels.len() != dims.iter().map(|&d| d as usize).product::<usize>()
         {
             return Err(RgbaVolumeError::BadSize(dims));
@@ -324,26 +325,28 @@ mod tests {
 
     #[test]
     fn bricks_keep_every_texel_and_drop_empty_ones() {
-        // 20³ with one opaque texel in the far corner brick and one in the first.
-        let dims = [20, 20, 20];
-        let mut t = vec![[0f32; 4]; 8000];
+        // 32×32×16 with one opaque texel in the far corner brick and one in the first.
+        let dims = [32, 32, 16];
+        let mut t = vec![[0f32; 4]; 32 * 32 * 16];
         t[index(dims, [1, 2, 3])] = [0.5, 0.25, 0.0, 0.5];
-        t[index(dims, [19, 19, 19])] = [1.0, 1.0, 1.0, 1.0];
+        t[index(dims, [31, 31, 15])] = [1.0, 1.0, 1.0, 1.0];
         let v = RgbaVolume::from_texels(dims, &t).unwrap();
         let l = &v.levels[0];
-        assert_eq!(l.bricks, [3, 3, 3]);
+        assert_eq!(l.bricks, [4, 4, 2]);
         assert_eq!(l.stored_bricks(), 2);
         assert_eq!(l.texel([1, 2, 3]), [128, 64, 0, 128]);
-        assert_eq!(l.texel([19, 19, 19]), [255; 4]);
+        assert_eq!(l.texel([31, 31, 15]), [255; 4]);
         assert_eq!(l.texel([5, 5, 5]), [0; 4]);
         assert_eq!(l.texel([-1, 0, 0]), [0; 4]);
-        // Level 0 keeps 2 of 27 bricks (coarse levels of a small volume are smaller dense
+        // Level 0 keeps 2 of 32 bricks (coarse levels of a small volume are smaller dense
         // than in whole bricks).
         assert_eq!(l.data.len(), 2 * 512);
         assert!(v.bytes() < v.dense_bytes());
-        // 20 → 10 → 5 → 2 → 1.
-        let edges: Vec<u32> = v.levels.iter().map(|l| l.dims[0]).collect();
-        assert_eq!(edges, [20, 10, 5, 2, 1]);
+        // 32 → 16 → 8 → 4 → 2 → 1 (the short axis reaches 1 first).
+        let edges: Vec<[u32; 3]> = v.levels.iter().map(|l| l.dims).collect();
+        assert_eq!(edges[4], [2, 2, 1]);
+        assert_eq!(edges.len(), 6);
+        assert!(RgbaVolume::from_texels([20, 20, 20], &vec![[0.0; 4]; 8000]).is_err());
     }
 
     #[test]

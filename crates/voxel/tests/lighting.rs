@@ -118,7 +118,8 @@ fn the_volume_marks_the_cube_opaque_lights_its_top_and_shadows_what_is_below() {
     });
     let light = light_along(DVec3::Y);
     let v = RadianceVolume::build(&instances, &light, 64);
-    assert_eq!(v.dims[1] % 16, 0);
+    assert_eq!(v.dims.map(|d| d % 64), [0; 3]);
+    assert_eq!(v.exact_levels(), v.mips.len());
     assert!(v.dims.iter().all(|&d| d <= 64));
     let at = |w: DVec3| {
         let c = ((w - v.origin) / v.cell).floor();
@@ -143,4 +144,22 @@ fn the_volume_marks_the_cube_opaque_lights_its_top_and_shadows_what_is_below() {
         |k: usize| v.mips[k].iter().map(|t| f64::from(t[3])).sum::<f64>() / v.mips[k].len() as f64;
     assert!((mean(0) - mean(1)).abs() < 1e-4, "{} {}", mean(0), mean(1));
     assert!(v.occupied > 0 && v.bytes() > 8 * v.mips[0].len() as u64);
+}
+
+#[test]
+fn a_volume_stays_within_its_cell_budget() {
+    // A cubic scene at the largest resolution would be 512³ cells: lowered to fit 2^24.
+    let asset = full_cube();
+    let inst = [VolumeInstance {
+        asset: &asset,
+        object_to_world: DAffine3::IDENTITY,
+    }];
+    let v = RadianceVolume::build(&inst, &Light::default(), 512);
+    let cells: u64 = v.dims.iter().map(|&d| u64::from(d)).product();
+    assert!(
+        cells <= ssbvb_voxel::lighting::volume::MAX_CELLS,
+        "{:?}",
+        v.dims
+    );
+    assert!(v.dims[0] >= 192, "lowered too far: {:?}", v.dims);
 }

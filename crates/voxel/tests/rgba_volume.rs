@@ -92,9 +92,10 @@ fn palette_alpha_carries_into_the_texels_and_no_alpha_is_opaque() {
     let l = &v.levels[0];
     assert_eq!(unquantize(l.texel([1, 0, 1])), unquantize([128, 0, 0, 128]));
     assert_eq!(l.texel([1, 3, 1]), [0, 0, 255, 255]);
-    // Twice as fine: each voxel covers 8 texels wholly; the alphas stay.
+    // Twice as fine: each voxel covers 8 texels of half its edge: alpha 1 - 0.5^½ (75 of
+    // 255), so a ray through a voxel's two texels keeps the voxel's transmittance.
     let fine = from_voxel_model(&m, 8).unwrap();
-    assert_eq!(fine.levels[0].texel([2, 1, 5]), [128, 0, 0, 128]);
+    assert_eq!(fine.levels[0].texel([2, 1, 5]), [75, 0, 0, 75]);
     assert_eq!(fine.levels[0].texel([7, 7, 7]), [0, 0, 255, 255]);
     // Half as fine: a texel averages 8 voxels by coverage: alpha sums to the full texel.
     let coarse = from_voxel_model(&m, 2).unwrap();

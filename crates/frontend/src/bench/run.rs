@@ -59,6 +59,61 @@ impl Row {
     }
 }
 
+/// Frames of one renderer: its median frame time over `frames` timed frames after one
+/// warm-up, then one profiled frame (per-pass wall times on a software adapter, whose
+/// timestamps are unreliable; GPU timestamps elsewhere).
+pub(super) struct TimedFrames {
+    /// Median wall time of the timed frames (ms).
+    pub(super) frame_ms: f64,
+    /// The profiled frame.
+    pub(super) stats: ssbvb_passes::FrameStats,
+    software: bool,
+}
+
+impl TimedFrames {
+    /// Renders and times (see the type).
+    pub(super) fn run(
+        ctx: &ssbvb_gpu::GpuContext,
+        renderer: &mut ssbvb_passes::Renderer,
+        gpu_scene: &mut ssbvb_passes::GpuScene,
+        camera: &ssbvb_voxel::camera::Camera,
+        frames: usize,
+    ) -> anyhow::Result<Self> {
+        use ssbvb_passes::Profiling;
+        renderer.render(ctx, gpu_scene, camera, Profiling::Off)?;
+        ctx.wait_idle()?;
+        let mut times = Vec::new();
+        for _ in 0..frames.max(1) {
+            let t0 = std::time::Instant::now();
+            renderer.render(ctx, gpu_scene, camera, Profiling::Off)?;
+            ctx.wait_idle()?;
+            times.push(t0.elapsed().as_secs_f64() * 1e3);
+        }
+        let software = ctx.report().is_software;
+        let profiling = if software {
+            Profiling::TimestampsAndWall
+        } else {
+            Profiling::Timestamps
+        };
+        let stats = renderer.render(ctx, gpu_scene, camera, profiling)?;
+        Ok(Self {
+            frame_ms: median(&mut times),
+            stats,
+            software,
+        })
+    }
+
+    /// The time of pass `name` in the profiled frame (ms).
+    pub(super) fn pass_ms(&self, name: &str) -> Option<f64> {
+        let p = self.stats.passes.iter().find(|p| p.name == name)?;
+        if self.software {
+            p.wall_ms
+        } else {
+            p.gpu_ms.or(p.wall_ms)
+        }
+    }
+}
+
 /// The median of `v` (sorts it; the upper one of an even count).
 pub(super) fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);

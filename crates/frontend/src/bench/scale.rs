@@ -9,12 +9,11 @@
 
 use std::collections::BTreeMap;
 use std::path::Path;
-use std::time::Instant;
 
 use anyhow::{Context, Result};
 use glam::{DAffine3, DQuat, DVec3};
 use serde::Serialize;
-use ssbvb_passes::{FrameCounters, GpuScene, LodPolicy, Profiling, Renderer, Scene, VoxelObject};
+use ssbvb_passes::{FrameCounters, GpuScene, LodPolicy, Renderer, Scene, VoxelObject};
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::reference;
@@ -333,40 +332,15 @@ fn measure(
 ) -> Result<ScaleRow> {
     let mut gpu_scene = GpuScene::new(ctx, scene.clone())?;
     let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, size)?;
-    renderer.render(ctx, &mut gpu_scene, camera, Profiling::Off)?;
-    ctx.wait_idle()?;
-    let mut times = Vec::new();
-    for _ in 0..frames.max(1) {
-        let t0 = Instant::now();
-        renderer.render(ctx, &mut gpu_scene, camera, Profiling::Off)?;
-        ctx.wait_idle()?;
-        times.push(t0.elapsed().as_secs_f64() * 1e3);
-    }
-    let software = ctx.report().is_software;
-    let profiling = if software {
-        Profiling::TimestampsAndWall
-    } else {
-        Profiling::Timestamps
-    };
-    let stats = renderer.render(ctx, &mut gpu_scene, camera, profiling)?;
+    let timed = super::run::TimedFrames::run(ctx, &mut renderer, &mut gpu_scene, camera, frames)?;
     let counters = renderer.counters(ctx)?;
     let hits = ssbvb_passes::measure::gbuffer_hits(ctx, &renderer)?;
     let acc = ssbvb_voxel::accuracy::compare(reference, &hits, cells)
         .map_err(|e| anyhow::anyhow!("{e}"))?;
-    let filter_ms = stats
-        .passes
-        .iter()
-        .find(|p| p.name == "filter")
-        .and_then(|p| {
-            if software {
-                p.wall_ms
-            } else {
-                p.gpu_ms.or(p.wall_ms)
-            }
-        });
+    let filter_ms = timed.pass_ms("filter");
     let covered = acc.covered_reference;
     let per_px = |ms: f64| (covered > 0).then(|| ms * 1e3 / covered as f64);
-    let frame_ms = super::run::median(&mut times);
+    let frame_ms = timed.frame_ms;
     let histogram: BTreeMap<u32, usize> = gpu_scene.lod_histogram();
     Ok(ScaleRow {
         technique: t.name,

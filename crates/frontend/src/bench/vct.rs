@@ -15,18 +15,19 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use serde::Serialize;
 use ssbvb_passes::measure_lighting::{LitFrame, compare, monte_carlo_reference};
-use ssbvb_passes::{GpuScene, Profiling, Renderer, Scene};
+use ssbvb_passes::{GpuScene, Renderer, Scene};
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::lighting::volume::RadianceVolume;
 use ssbvb_voxel::progress::NoProgress;
 
 use super::BenchArgs;
+use super::run::TimedFrames;
 use crate::render_cmd::assets_dir;
 
 /// Monte Carlo rays per term and receiver.
 const SAMPLES: u32 = 256;
-/// Every `STRIDE`-th row and column is compared: odd, so at half resolution about half
-/// the compared pixels were traced and the rest upsampled.
+/// Every `STRIDE`-th row and column is compared: odd, so at half resolution a quarter of
+/// the compared pixels (even row and column) were traced and the rest upsampled.
 const STRIDE: u32 = 7;
 const DEFAULT_CONES: u32 = 9;
 const DEFAULT_APERTURE: f32 = 60.0;
@@ -115,51 +116,6 @@ fn pipeline_text(base: &str, k: &Knobs) -> String {
         })
         .collect::<Vec<_>>()
         .join("\n")
-}
-
-struct Timed {
-    frame_ms: f64,
-    cone_ms: Option<f64>,
-    filter_ms: Option<f64>,
-}
-
-fn time_frames(
-    ctx: &ssbvb_gpu::GpuContext,
-    renderer: &mut Renderer,
-    gpu_scene: &mut GpuScene,
-    camera: &Camera,
-    frames: usize,
-) -> Result<Timed> {
-    renderer.render(ctx, gpu_scene, camera, Profiling::Off)?;
-    ctx.wait_idle()?;
-    let mut times = Vec::new();
-    for _ in 0..frames {
-        let t0 = Instant::now();
-        renderer.render(ctx, gpu_scene, camera, Profiling::Off)?;
-        ctx.wait_idle()?;
-        times.push(t0.elapsed().as_secs_f64() * 1e3);
-    }
-    let software = ctx.report().is_software;
-    let profiling = if software {
-        Profiling::TimestampsAndWall
-    } else {
-        Profiling::Timestamps
-    };
-    let stats = renderer.render(ctx, gpu_scene, camera, profiling)?;
-    let pass = |name: &str| {
-        stats.passes.iter().find(|p| p.name == name).and_then(|p| {
-            if software {
-                p.wall_ms
-            } else {
-                p.gpu_ms.or(p.wall_ms)
-            }
-        })
-    };
-    Ok(Timed {
-        frame_ms: super::run::median(&mut times),
-        cone_ms: pass("cone_trace"),
-        filter_ms: pass("filter"),
-    })
 }
 
 /// Runs `ssbvb bench --preset vct`.
@@ -266,7 +222,7 @@ pub(super) fn run(args: &BenchArgs) -> Result<()> {
             let build_ms = t0.elapsed().as_secs_f64() * 1e3;
             let mut gpu_scene = GpuScene::new(&ctx, scene.clone())?;
             let mut renderer = Renderer::new(&ctx, &gpu_scene, pipeline, size)?;
-            let timed = time_frames(&ctx, &mut renderer, &mut gpu_scene, &camera, frames)?;
+            let timed = TimedFrames::run(&ctx, &mut renderer, &mut gpu_scene, &camera, frames)?;
             let lit = LitFrame::read(&ctx, &renderer)?;
             // The finest level drawn sets the reference's ray offset: a voxel diagonal.
             let level = gpu_scene.lod_histogram().keys().max().copied().unwrap_or(0);
@@ -295,9 +251,12 @@ pub(super) fn run(args: &BenchArgs) -> Result<()> {
                 volume_mib: volume.bytes() as f64 / (1 << 20) as f64,
                 volume_build_ms: build_ms,
                 frame_ms: timed.frame_ms,
-                cone_ms: timed.cone_ms,
-                filter_ms: timed.filter_ms,
-                cone_vs_filter: timed.cone_ms.zip(timed.filter_ms).map(|(c, f)| c / f),
+                cone_ms: timed.pass_ms("cone_trace"),
+                filter_ms: timed.pass_ms("filter"),
+                cone_vs_filter: timed
+                    .pass_ms("cone_trace")
+                    .zip(timed.pass_ms("filter"))
+                    .map(|(c, f)| c / f),
                 compared_pixels: r.pixels.len(),
                 ao_mae: Some(r.ao_mae),
                 ao_bias: Some(r.ao_bias),
@@ -347,7 +306,7 @@ fn measure_plain(
 ) -> Result<VctRow> {
     let mut gpu_scene = GpuScene::new(ctx, scene.clone())?;
     let mut renderer = Renderer::new(ctx, &gpu_scene, plain.clone(), size)?;
-    let timed = time_frames(ctx, &mut renderer, &mut gpu_scene, camera, frames)?;
+    let timed = TimedFrames::run(ctx, &mut renderer, &mut gpu_scene, camera, frames)?;
     Ok(VctRow {
         scene: file.into(),
         sweep: "baseline",
@@ -363,7 +322,7 @@ fn measure_plain(
         volume_build_ms: 0.0,
         frame_ms: timed.frame_ms,
         cone_ms: None,
-        filter_ms: timed.filter_ms,
+        filter_ms: timed.pass_ms("filter"),
         cone_vs_filter: None,
         compared_pixels: 0,
         ao_mae: None,

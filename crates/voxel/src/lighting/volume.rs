@@ -18,7 +18,9 @@
 //!   against the Monte Carlo reference (docs/benchmarks.md) is what decides whether that is
 //!   worth it, and on the measured scenes it is not the dominant error.
 //! - **Size.** Cells are cubes; the longest axis of the padded scene box gets `resolution`
-//!   cells, the others what their extent needs; each is then rounded up to a multiple of 16. Memory is 8 bytes per cell
+//!   cells, the others what their extent needs; each is then rounded up to a multiple of 64
+//!   (six exact mip levels), and the resolution is lowered until the grid has at most
+//!   [`MAX_CELLS`]. Memory is 8 bytes per cell
 //!   (Rgba16Float) plus 1/7 for the mips; the cost of a build grows with the instances'
 //!   voxels at the chosen LODs, which shrink as the scene (and so a cell) grows.
 
@@ -50,9 +52,17 @@ pub struct RadianceVolume {
     /// `mips[k]`: level `k` (dims `max(1, dims >> k)`), x fastest then y then z; texels are
     /// premultiplied linear radiance and opacity.
     pub mips: Vec<Vec<[f32; 4]>>,
-    /// Opaque cells of the finest level.
+    /// Surface cells of the finest level (cells holding voxels; enclosed cells are opaque
+    /// too but not counted).
     pub occupied: usize,
 }
+
+/// Every axis of the finest level is a multiple of this (six exact mip levels).
+pub const EXACT_MULTIPLE: u32 = 64;
+
+/// The most finest-level cells a volume may have (2^24: about 1 GiB of CPU memory while
+/// building); `build` lowers the resolution to fit.
+pub const MAX_CELLS: u64 = 1 << 24;
 
 /// Dims of mip `k`.
 pub fn mip_dims(dims: [u32; 3], k: u32) -> [u32; 3] {
@@ -72,9 +82,10 @@ struct CellSum {
 }
 
 impl RadianceVolume {
-    /// Builds the volume of `instances` lit by `light`, with `resolution` cells (at least 2)
-    /// along the longest axis of their world boxes padded by one cell on each side. With no
-    /// visible instance the volume is one empty cell at the origin.
+    /// Builds the volume of `instances` lit by `light`, with `resolution` cells (at least 3)
+    /// along the longest axis of their world boxes padded by one cell on each side, fewer
+    /// when the volume would pass [`MAX_CELLS`]. With no visible instance the volume is one
+    /// empty cell at the origin.
     pub fn build(instances: &[VolumeInstance], light: &Light, resolution: u32) -> Self {
         let boxes: Vec<Aabb> = instances
             .iter()
@@ -89,17 +100,26 @@ impl RadianceVolume {
                 occupied: 0,
             };
         };
-        let resolution = resolution.max(3);
         let extent = bounds.hi - bounds.lo;
-        let cell = (extent.max_element() / f64::from(resolution - 2)).max(1e-30);
+        // Multiples of 64 so the first six mip levels halve exactly (a texture's mip of an
+        // odd size drops a cell row and shifts the coarser levels): the default cones reach
+        // level 5 (a diameter of ~36 cells at max_distance).
+        let layout = |resolution: u32| {
+            let cell = (extent.max_element() / f64::from(resolution - 2)).max(1e-30);
+            let dims = [extent.x, extent.y, extent.z].map(|e| {
+                ((e / cell).ceil() as u32 + 2)
+                    .clamp(1, resolution)
+                    .next_multiple_of(EXACT_MULTIPLE)
+            });
+            (cell, dims)
+        };
+        let mut resolution = resolution.max(3);
+        let (mut cell, mut dims) = layout(resolution);
+        while dims.iter().map(|&d| u64::from(d)).product::<u64>() > MAX_CELLS && resolution > 3 {
+            resolution = (resolution * 7 / 8).max(3);
+            (cell, dims) = layout(resolution);
+        }
         let origin = bounds.lo - DVec3::splat(cell);
-        // Multiples of 16 so the first four mip levels halve exactly (a texture's mip of
-        // an odd size drops a cell row and shifts the coarser levels).
-        let dims = [extent.x, extent.y, extent.z].map(|e| {
-            ((e / cell).ceil() as u32 + 2)
-                .clamp(1, resolution)
-                .next_multiple_of(16)
-        });
         let mut sums = vec![CellSum::default(); dims.iter().map(|&d| d as usize).product()];
         for inst in instances {
             splat_instance(inst, origin, cell, dims, &mut sums);
@@ -157,6 +177,16 @@ impl RadianceVolume {
             mips,
             occupied,
         }
+    }
+
+    /// Mip levels whose texels halve the level above exactly on every axis (level 0
+    /// counts; the cone tracer samples no coarser one).
+    pub fn exact_levels(&self) -> usize {
+        let mut n = 1;
+        while n < self.mips.len() && self.dims.iter().all(|&d| d % (1 << n) == 0) {
+            n += 1;
+        }
+        n
     }
 
     /// Bytes of all levels at 8 bytes per texel (Rgba16Float on the GPU).

@@ -144,10 +144,12 @@ impl Cloud {
 
 /// A voxel model (VOX: each voxel's palette colour with its alpha; a palette without alpha
 /// is opaque) fitted into object space like opaque objects (bounding box centred, longest
-/// extent → [-1, 1]) and resampled onto `edge`³ texels by box overlap: a texel's alpha is
-/// the sum over the voxels of voxel alpha × the fraction of the texel the voxel's cube
-/// covers (at most 1), its colour their alpha-weighted mean. At the model's own resolution
-/// texels are its voxels.
+/// extent → [-1, 1]) and resampled onto `edge`³ texels (a power of two) by box overlap: a
+/// voxel's alpha holds over its own edge, so it becomes an extinction; a texel takes the
+/// overlap-weighted mean extinction of the voxels covering it and turns it back into alpha
+/// over its own edge, its colour their extinction-weighted mean. At the model's own
+/// resolution, with a cubic bounding box, texels are its voxels; twice as fine, a
+/// half-transparent voxel becomes texels of alpha 1 − 0.5^½.
 pub fn from_voxel_model(model: &VoxelModel, edge: u32) -> Result<RgbaVolume, RgbaVolumeError> {
     if edge == 0 || edge > super::MAX_EDGE {
         return Err(RgbaVolumeError::BadSize([edge; 3]));
@@ -169,11 +171,14 @@ pub fn from_voxel_model(model: &VoxelModel, edge: u32) -> Result<RgbaVolume, Rgb
         DVec3::from(hi.map(f64::from)),
     );
     let to_texel = |p: DVec3| (space.to_object(p) + DVec3::ONE) * (0.5 * f64::from(edge));
+    // A voxel's edge in texels: its alpha holds over that length.
+    let voxel_len = to_texel(DVec3::ONE).x - to_texel(DVec3::ZERO).x;
     let mut sum = vec![[0f64; 4]; n];
     for (v, c) in model.voxels.iter().zip(&model.colors) {
         let a0 = to_texel(DVec3::from(v.map(f64::from)));
         let a1 = to_texel(DVec3::from(v.map(|x| f64::from(x) + 1.0)));
-        let alpha = f64::from(c[3].clamp(0.0, 1.0));
+        // Extinction per texel length.
+        let sigma = -(1.0 - f64::from(c[3].clamp(0.0, 1.0)).min(1.0 - 1e-6)).ln() / voxel_len;
         let range = |k: usize| {
             let first = (a0[k].floor().max(0.0) as u32).min(edge - 1);
             let last = ((a1[k].ceil() as u32).saturating_sub(1)).clamp(first, edge - 1);
@@ -189,7 +194,7 @@ pub fn from_voxel_model(model: &VoxelModel, edge: u32) -> Result<RgbaVolume, Rgb
                             (a1[k].min(t1) - a0[k].max(t0)).max(0.0)
                         })
                         .product();
-                    let w = alpha * overlap;
+                    let w = sigma * overlap;
                     let i = x as usize + edge as usize * (y as usize + edge as usize * z as usize);
                     for k in 0..3 {
                         sum[i][k] += f64::from(c[k].clamp(0.0, 1.0)) * w;
@@ -202,7 +207,8 @@ pub fn from_voxel_model(model: &VoxelModel, edge: u32) -> Result<RgbaVolume, Rgb
     let texels: Vec<[f32; 4]> = sum
         .iter()
         .map(|s| {
-            let a = s[3].min(1.0);
+            // s[3]: the texel's extinction per texel length.
+            let a = 1.0 - (-s[3]).exp();
             let k = if s[3] > 0.0 { a / s[3] } else { 0.0 };
             [
                 (s[0] * k) as f32,
