@@ -163,3 +163,41 @@ fn a_volume_stays_within_its_cell_budget() {
     );
     assert!(v.dims[0] >= 192, "lowered too far: {:?}", v.dims);
 }
+
+#[test]
+fn the_bounce_from_a_lit_wall_is_its_radiance_times_the_blocked_fraction() {
+    // The wall of the AO test with the light straight at its face (+Z): its face voxels'
+    // stored normals point along +Z (the 4³ grid is symmetric about them), so each ray
+    // that meets it within D brings albedo · light back: bounce = albedo · (1 - (d/D)²).
+    // Lit from behind, the face sends nothing.
+    let asset = full_cube();
+    let wall = boxed(DVec3::new(-50.0, -50.0, -1.0), DVec3::new(50.0, 50.0, 0.0));
+    let inst = [Instance {
+        lod: &asset.lods[2],
+        object_to_world: wall,
+        faces: None,
+    }];
+    let (d, max) = (0.5, 1.0);
+    // Over the middle of one face voxel (each is 25 units wide; voxels differ in colour):
+    // every ray within reach meets that voxel.
+    let p = DVec3::new(12.5, 12.5, d);
+    let front = lit_at(&inst, &light_along(DVec3::Z), p, -DVec3::Z, max);
+    let tracer = Tracer::new(&inst);
+    let hit = tracer.trace(p, -DVec3::Z).unwrap();
+    let (albedo, normal) = tracer.surface(&hit);
+    assert!((normal[2] - 1.0).abs() < 1e-3, "{normal:?}");
+    let blocked = 1.0 - (d / max) * (d / max);
+    for k in 0..3 {
+        let want = f64::from(albedo[k]) * blocked;
+        assert!(
+            (f64::from(front.indirect[k]) - want).abs() < 0.01,
+            "{:?} vs {want}",
+            front.indirect
+        );
+    }
+    assert!(front.indirect[0] > 0.1);
+    let behind = lit_at(&inst, &light_along(-DVec3::Z), p, -DVec3::Z, max);
+    assert_eq!(behind.indirect, [0.0; 3]);
+    // Lit, but the light's cone is blocked by the wall for this receiver: no direct light.
+    assert_eq!(behind.shadow, 0.0);
+}
