@@ -187,10 +187,10 @@ fn the_bounce_from_a_lit_wall_is_its_radiance_times_the_blocked_fraction() {
     let (albedo, normal) = tracer.surface(&hit);
     assert!((normal[2] - 1.0).abs() < 1e-3, "{normal:?}");
     let blocked = 1.0 - (d / max) * (d / max);
-    for k in 0..3 {
-        let want = f64::from(albedo[k]) * blocked;
+    for (got, a) in front.indirect.iter().zip(albedo) {
+        let want = f64::from(a) * blocked;
         assert!(
-            (f64::from(front.indirect[k]) - want).abs() < 0.01,
+            (f64::from(*got) - want).abs() < 0.01,
             "{:?} vs {want}",
             front.indirect
         );
