@@ -363,3 +363,57 @@ fn a_coloured_oblique_light_and_a_shadowed_source_scale_the_bounce() {
     assert_eq!(s.indirect, [0.0; 3]);
     assert!((s.ao - 0.25).abs() < 0.01, "{}", s.ao);
 }
+
+#[test]
+fn a_soft_shadow_partly_covered_matches_quadrature_over_the_light_cone() {
+    // A slab over x < 0 at height 1..2 and a receiver 0.05 to its lit side: the light's
+    // 20° cone (straight up) is partly covered. The reference's uniform cone sampling
+    // against a quadrature of the same cone with an analytic slab hit.
+    let asset = full_cube();
+    let slab = boxed(DVec3::new(-100.0, -100.0, 1.0), DVec3::new(0.0, 100.0, 2.0));
+    let inst = [Instance {
+        lod: &asset.lods[2],
+        object_to_world: slab,
+        faces: None,
+    }];
+    let params = LightingParams {
+        max_distance: 0.5,
+        shadow_aperture: 20.0,
+        near: 1e-6,
+    };
+    let p = DVec3::new(0.05, 0.0, 0.0);
+    let s = monte_carlo(
+        &Tracer::new(&inst),
+        &light_along(DVec3::Z),
+        &params,
+        p,
+        DVec3::Z,
+        4096,
+        5,
+    );
+    // Uniform in solid angle: cos θ uniform in [cos 10°, 1]; the ray meets the slab's
+    // bottom (z = 1) at x = p.x + tan θ cos φ, or its side (x = 0) below z = 2.
+    let cos_max = 10f64.to_radians().cos();
+    let n = 400;
+    let mut lit = 0.0;
+    for i in 0..n {
+        for j in 0..n {
+            let c = 1.0 - (f64::from(i) + 0.5) / f64::from(n) * (1.0 - cos_max);
+            let phi = std::f64::consts::TAU * (f64::from(j) + 0.5) / f64::from(n);
+            let sin = (1.0 - c * c).sqrt();
+            let d = DVec3::new(sin * phi.cos(), sin * phi.sin(), c);
+            let bottom = p.x + d.x / d.z < 0.0;
+            let side = d.x < 0.0 && p.z + d.z * (-p.x / d.x) <= 2.0;
+            if !(bottom || side) {
+                lit += 1.0;
+            }
+        }
+    }
+    let want = lit / f64::from(n * n);
+    assert!(want > 0.5 && want < 0.8, "{want}");
+    assert!(
+        (f64::from(s.shadow) - want).abs() < 0.01,
+        "{} vs {want}",
+        s.shadow
+    );
+}
