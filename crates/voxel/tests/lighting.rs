@@ -335,7 +335,7 @@ fn a_coloured_oblique_light_and_a_shadowed_source_scale_the_bounce() {
     }];
     let light = Light {
         direction: [0.0, 0.6, 0.8],
-        color: [0.5, 1.0, 2.0],
+        color: [0.5, 0.8, 2.0],
         ..Light::default()
     };
     let p = DVec3::new(12.5, 12.5, 0.5);
