@@ -32,6 +32,15 @@ fn boxed(lo: DVec3, hi: DVec3) -> DAffine3 {
     )
 }
 
+/// The full cube's finest level placed by `m`, traced without face masks.
+fn placed(asset: &VoxelAsset, m: DAffine3) -> Instance<'_> {
+    Instance {
+        lod: &asset.lods[2],
+        object_to_world: m,
+        faces: None,
+    }
+}
+
 fn light_along(d: DVec3) -> Light {
     Light {
         direction: [d.x as f32, d.y as f32, d.z as f32],
@@ -55,11 +64,7 @@ fn ao_facing_a_wall_is_the_squared_ratio_of_distance_to_radius() {
     // probability 1 − (d/D)²: AO = (d/D)².
     let asset = full_cube();
     let wall = boxed(DVec3::new(-50.0, -50.0, -1.0), DVec3::new(50.0, 50.0, 0.0));
-    let inst = [Instance {
-        lod: &asset.lods[2],
-        object_to_world: wall,
-        faces: None,
-    }];
+    let inst = [placed(&asset, wall)];
     let light = light_along(DVec3::Z);
     for (d, max) in [(0.5, 1.0), (0.3, 1.0), (0.8, 1.0), (1.5, 1.0)] {
         let s = lit_at(&inst, &light, DVec3::new(0.0, 0.0, d), -DVec3::Z, max);
@@ -82,11 +87,7 @@ fn a_half_plane_over_the_receiver_shadows_half_the_light_cone() {
     // with x < 0 meet it.
     let asset = full_cube();
     let slab = boxed(DVec3::new(-100.0, -100.0, 1.0), DVec3::new(0.0, 100.0, 2.0));
-    let inst = [Instance {
-        lod: &asset.lods[2],
-        object_to_world: slab,
-        faces: None,
-    }];
+    let inst = [placed(&asset, slab)];
     let light = light_along(DVec3::Z);
     let s = lit_at(&inst, &light, DVec3::ZERO, DVec3::Z, 0.5);
     assert!((s.shadow - 0.5).abs() < 0.01, "{}", s.shadow);
@@ -172,11 +173,7 @@ fn the_bounce_from_a_lit_wall_is_its_radiance_times_the_blocked_fraction() {
     // Lit from behind, the face sends nothing.
     let asset = full_cube();
     let wall = boxed(DVec3::new(-50.0, -50.0, -1.0), DVec3::new(50.0, 50.0, 0.0));
-    let inst = [Instance {
-        lod: &asset.lods[2],
-        object_to_world: wall,
-        faces: None,
-    }];
+    let inst = [placed(&asset, wall)];
     let (d, max) = (0.5, 1.0);
     // Over the middle of one face voxel (each is 25 units wide; voxels differ in colour):
     // every ray within reach meets that voxel.
@@ -210,11 +207,7 @@ fn each_receiver_gets_its_own_rotation_of_the_sample_set() {
     // wall the stratified set is exact for every rotation.)
     let asset = full_cube();
     let wall = boxed(DVec3::new(-100.0, -50.0, -1.0), DVec3::new(0.0, 50.0, 0.0));
-    let inst = [Instance {
-        lod: &asset.lods[2],
-        object_to_world: wall,
-        faces: None,
-    }];
+    let inst = [placed(&asset, wall)];
     let tracer = Tracer::new(&inst);
     let params = LightingParams {
         max_distance: 1.0,
@@ -298,11 +291,7 @@ fn the_near_offset_lifts_ray_origins_along_the_normal() {
     // the origins to 0.2 from it: AO = 0.2² (0.4² if they moved the other way).
     let asset = full_cube();
     let wall = boxed(DVec3::new(-50.0, -50.0, -1.0), DVec3::new(50.0, 50.0, 0.0));
-    let inst = [Instance {
-        lod: &asset.lods[2],
-        object_to_world: wall,
-        faces: None,
-    }];
+    let inst = [placed(&asset, wall)];
     let params = LightingParams {
         max_distance: 1.0,
         shadow_aperture: 10.0,
@@ -371,11 +360,7 @@ fn a_soft_shadow_partly_covered_matches_quadrature_over_the_light_cone() {
     // against a quadrature of the same cone with an analytic slab hit.
     let asset = full_cube();
     let slab = boxed(DVec3::new(-100.0, -100.0, 1.0), DVec3::new(0.0, 100.0, 2.0));
-    let inst = [Instance {
-        lod: &asset.lods[2],
-        object_to_world: slab,
-        faces: None,
-    }];
+    let inst = [placed(&asset, slab)];
     let params = LightingParams {
         max_distance: 0.5,
         shadow_aperture: 20.0,
