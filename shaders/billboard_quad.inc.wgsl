@@ -194,7 +194,9 @@ struct BoxHit {
     hit: bool,
     // Ray parameter of the entry point (0 when the origin is inside).
     t: f32,
-    // Entered face (VoxelSlot.face numbering: axis for the low side, 3 + axis for the high).
+    // Entered face (VoxelSlot.face numbering: axis for the low side, 3 + axis for the high);
+    // on a miss, the face the rule below picks all the same (a Flat billboard's pixel
+    // beside its voxel's silhouette still gets a face of that voxel).
     face: u32,
 }
 
@@ -208,16 +210,15 @@ fn ray_box(o: vec3<f32>, d: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) -> BoxHit {
     var axis = 0u;
     var entered = false;
     var inside_axis = 0u;
+    // Parallel to a slab and outside it: never inside the box.
+    var outside = false;
     for (var a = 0u; a < 3u; a++) {
         let da = d[a];
         if abs(da) > abs(d[inside_axis]) {
             inside_axis = a;
         }
         if abs(da) < 1e-30 {
-            // Parallel to the slab: inside it (closed) or never.
-            if o[a] < lo[a] || o[a] > hi[a] {
-                return BoxHit(false, 0.0, 0u);
-            }
+            outside = outside || o[a] < lo[a] || o[a] > hi[a];
             continue;
         }
         let t0 = (lo[a] - o[a]) / da;
@@ -230,14 +231,12 @@ fn ray_box(o: vec3<f32>, d: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) -> BoxHit {
             entered = true;
         }
     }
-    if !(t_near <= t_far) || t_far < 0.0 {
-        return BoxHit(false, 0.0, 0u);
-    }
-    if t_near < 0.0 {
+    if !entered || t_near < 0.0 {
         axis = inside_axis;
     }
     let face = select(axis + 3u, axis, d[axis] > 0.0);
-    return BoxHit(true, max(t_near, 0.0), face);
+    let hit = !outside && t_near <= t_far && t_far >= 0.0;
+    return BoxHit(hit, select(0.0, max(t_near, 0.0), hit), face);
 }
 
 // The pixel's ray (from the eye, camera-relative) against a slot's voxel box.
@@ -256,8 +255,11 @@ fn slot_ray_box(slot: VoxelSlot, px: vec2<f32>) -> BoxHit {
 struct Fragment {
     covered: bool,
     albedo: vec4<f32>,
+    // Shading normal (the voxel's stored one), w = 1.
     normal: vec4<f32>,
     position: vec4<f32>,
+    // Geometric normal (the entered face's), octahedral.
+    geometric: vec2<f32>,
     // Reversed-Z depth.
     depth: f32,
 }
@@ -272,8 +274,8 @@ fn flat_fragment(slot: VoxelSlot, q: Quad, px: vec2<f32>, world_on_quad: vec3<f3
     // The quad's plane: one depth for the whole quad, as the rasterizer interpolates it.
     let clip = frame.proj * vec4(0.0, 0.0, q.cz, 1.0);
     f.depth = clamp(clip.z / clip.w, 0.0, 1.0);
+    let h = slot_ray_box(slot, px);
     if q.near_field {
-        let h = slot_ray_box(slot, px);
         if !h.hit {
             f.covered = false;
             return f;
@@ -285,10 +287,11 @@ fn flat_fragment(slot: VoxelSlot, q: Quad, px: vec2<f32>, world_on_quad: vec3<f3
     f.albedo = vec4(voxel_color(slot.voxel).rgb, 1.0);
     f.normal = vec4(voxel_normal_world(inst, slot.voxel), 1.0);
     f.position = vec4(world, dot(world, frame.cam_forward.xyz));
+    f.geometric = oct_encode(face_normal_world(inst, h.face));
     return f;
 }
 
-// A ray-box billboard's pixel: exact coverage, depth and face normal.
+// A ray-box billboard's pixel: exact coverage, depth and entered face.
 fn ray_box_fragment(slot: VoxelSlot, px: vec2<f32>) -> Fragment {
     var f: Fragment;
     let h = slot_ray_box(slot, px);
@@ -300,8 +303,9 @@ fn ray_box_fragment(slot: VoxelSlot, px: vec2<f32>) -> Fragment {
     let dir = pixel_ray(px);
     let p = dir * h.t;
     f.albedo = vec4(voxel_color(slot.voxel).rgb, 1.0);
-    f.normal = vec4(face_normal_world(inst, h.face), 1.0);
+    f.normal = vec4(voxel_normal_world(inst, slot.voxel), 1.0);
     f.position = vec4(p, h.t * dot(dir, frame.cam_forward.xyz));
+    f.geometric = oct_encode(face_normal_world(inst, h.face));
     f.depth = ndc_depth(p);
     return f;
 }

@@ -32,14 +32,17 @@
 //
 // Two fragment entry points (the pass picks one by `BillboardMode`):
 // - fs_main (Flat, the paper): flat quad at the voxel centre's depth; albedo = voxel colour,
-//   normal = the voxel's stored normal, position = the point on the quad.
+//   shading normal = the voxel's stored normal, position = the point on the quad, geometric
+//   normal = the face the pixel's ray enters (or would enter) the voxel's box through.
 // - fs_ray_box (RayBox, ray-box splatting, Majercik et al. JCGT 2018): the pixel's ray is
 //   intersected with the voxel's box in object space; a miss is discarded, a hit writes its
-//   exact depth (frag_depth), the entered face's normal and the hit position. With one
+//   exact depth (frag_depth), the voxel's stored normal, the entered face's normal and
+//   the hit position. With one
 //   SSBVB slot per covered pixel this reproduces the CPU reference (up to f32).
 //
-// Outputs: location 0 albedo (Rgba8Unorm, alpha 1), 1 world-space unit normal (w = 1),
-// 2 camera-relative world position (xyz) and linear view depth (w); stencil = STENCIL_VOXEL.
+// Outputs: the G-buffer (ssbvb_passes::gbuffer): location 0 albedo (alpha 1), 1 shading
+// normal, 2 camera-relative position and linear depth, 3 geometric normal (octahedral);
+// stencil = STENCIL_VOXEL.
 
 // The SSBVB: compacted hits of the ray-march filter (entries 0..instance_count of the draw).
 @group(1) @binding(0) var<storage, read> ssbvb: array<VoxelSlot>;
@@ -62,12 +65,14 @@ struct GBuffer {
     @location(0) albedo: vec4<f32>,
     @location(1) normal: vec4<f32>,
     @location(2) position: vec4<f32>,
+    @location(3) geometric_normal: vec2<f32>,
 }
 
 struct GBufferDepth {
     @location(0) albedo: vec4<f32>,
     @location(1) normal: vec4<f32>,
     @location(2) position: vec4<f32>,
+    @location(3) geometric_normal: vec2<f32>,
     @builtin(frag_depth) depth: f32,
 }
 
@@ -133,10 +138,11 @@ fn fs_main(in: VsOut) -> GBuffer {
     out.albedo = f.albedo;
     out.normal = f.normal;
     out.position = f.position;
+    out.geometric_normal = f.geometric;
     return out;
 }
 
-// Ray-box splatting: exact coverage, depth and face normal.
+// Ray-box splatting: exact coverage, depth and entered face.
 @fragment
 fn fs_ray_box(in: VsOut) -> GBufferDepth {
     let f = ray_box_fragment(ssbvb[in.slot], in.clip.xy);
@@ -147,6 +153,7 @@ fn fs_ray_box(in: VsOut) -> GBufferDepth {
     out.albedo = f.albedo;
     out.normal = f.normal;
     out.position = f.position;
+    out.geometric_normal = f.geometric;
     out.depth = f.depth;
     return out;
 }

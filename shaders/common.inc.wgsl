@@ -187,10 +187,16 @@ fn voxel_cell(v: PackedVoxel) -> vec3<u32> {
     return vec3(v.xy & 0xffffu, v.xy >> 16u, v.z_normal & 0xffffu);
 }
 
-// Inverse of the octahedral encoding in asset.rs; always a unit vector.
+// A packed voxel's stored normal (object space).
 fn voxel_normal(v: PackedVoxel) -> vec3<f32> {
-    let u = f32((v.z_normal >> 16u) & 0xffu) / 255.0 * 2.0 - 1.0;
-    let w = f32(v.z_normal >> 24u) / 255.0 * 2.0 - 1.0;
+    return oct16_normal(v.z_normal >> 16u);
+}
+
+// Inverse of the 16-bit octahedral encoding in asset.rs (u in the low byte, v in the high
+// one); always a unit vector.
+fn oct16_normal(bits: u32) -> vec3<f32> {
+    let u = f32(bits & 0xffu) / 255.0 * 2.0 - 1.0;
+    let w = f32((bits >> 8u) & 0xffu) / 255.0 * 2.0 - 1.0;
     var n = vec3(u, w, 1.0 - abs(u) - abs(w));
     if n.z < 0.0 {
         let s = select(vec2(-1.0), vec2(1.0), n.xy >= vec2(0.0));
@@ -330,16 +336,45 @@ fn object_ray(inst: Instance, px: vec2<f32>, dir: vec3<f32>) -> ObjectRay {
 fn face_normal_world(inst: Instance, face: u32) -> vec3<f32> {
     var n = vec3(0.0);
     n[face % 3u] = select(-1.0, 1.0, face >= 3u);
-    let m = inst.world_to_object;
-    // Inverse transpose of object_to_world's linear part = transpose of world_to_object's.
-    let nw = transpose(mat3x3(m[0].xyz, m[1].xyz, m[2].xyz)) * n;
-    return normalize(nw);
+    return object_normal_world(inst, n);
 }
 
 // World-space unit normal of a voxel's stored normal.
 fn voxel_normal_world(inst: Instance, v: PackedVoxel) -> vec3<f32> {
+    return object_normal_world(inst, voxel_normal(v));
+}
+
+// World-space unit normal of voxel `id` of a LOD (its stored normal).
+fn lod_voxel_normal_world(inst: Instance, lod: LodInfo, id: u32) -> vec3<f32> {
+    return object_normal_world(inst, oct16_normal(voxel_normal_bits(lod, lod.voxel_offset + id)));
+}
+
+// An object-space normal taken to world space and normalized: the inverse transpose of
+// object_to_world's linear part is the transpose of world_to_object's.
+fn object_normal_world(inst: Instance, n: vec3<f32>) -> vec3<f32> {
     let m = inst.world_to_object;
-    return normalize(transpose(mat3x3(m[0].xyz, m[1].xyz, m[2].xyz)) * voxel_normal(v));
+    return normalize(transpose(mat3x3(m[0].xyz, m[1].xyz, m[2].xyz)) * n);
+}
+
+// The G-buffer's geometric normal: octahedral encoding of a unit vector into [-1, 1]^2
+// (ssbvb_passes::gbuffer::oct_encode is the CPU twin and documents it).
+fn oct_encode(n: vec3<f32>) -> vec2<f32> {
+    let p = n / max(abs(n.x) + abs(n.y) + abs(n.z), 1e-30);
+    if p.z >= 0.0 {
+        return p.xy;
+    }
+    let s = select(vec2(-1.0), vec2(1.0), p.xy >= vec2(0.0));
+    return (1.0 - abs(p.yx)) * s;
+}
+
+// Inverse of oct_encode (a unit vector).
+fn oct_decode(e: vec2<f32>) -> vec3<f32> {
+    var n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    if n.z < 0.0 {
+        let s = select(vec2(-1.0), vec2(1.0), n.xy >= vec2(0.0));
+        n = vec3((1.0 - abs(n.yx)) * s, n.z);
+    }
+    return safe_normalize(n, vec3(0.0, 0.0, 1.0));
 }
 
 // Blinn-Phong exactly as ssbvb-voxel's shading::shade (linear RGB).

@@ -105,5 +105,6 @@ fn fs_main(in: VertexOut) -> GBuffer {
         // a mismatch visible as missing coverage in the accuracy tests.
         discard;
     }
-    return face_gbuffer(inst, in.face, h, lod_voxel_color(lod, id - 1u).rgb);
+    let g = lod.voxel_offset + id - 1u;
+    return face_gbuffer(inst, in.face, h, unpack4x8unorm(voxel_color_word(lod, g)).rgb, voxel_normal_bits(lod, g));
 }

@@ -16,8 +16,8 @@
 // different one of the touched cells than the f64 reference's tie rule.
 //
 // Outputs (as billboards.wgsl's RayBox mode): location 0 albedo (the voxel colour, alpha 1),
-// 1 the entered face's world-space unit normal (w = 1), 2 camera-relative world position
-// (xyz) and linear view depth (w); frag_depth the reversed-Z depth of the hit point;
+// 1 the voxel's stored normal, 2 camera-relative world position (xyz) and linear view
+// depth (w), 3 the entered face's normal (octahedral); frag_depth the reversed-Z depth of the hit point;
 // stencil = STENCIL_VOXEL (set by the pass). No hit: discard.
 //
 // The dense grids of every visible (object, level) pair are stacked along z in one atlas;

@@ -2,13 +2,15 @@
 // the corners of a face quad, and the fragment's exact hit. The pixel's ray (the same
 // `pixel_ray` and object-space ray as the ray casters, so depth and cell agree with the CPU
 // reference up to f32 rounding) meets the face's plane at t; the G-buffer gets the face's
-// world normal, the camera-relative hit and its linear depth. Depth is the rasterized face
+// shading normal (the voxel's stored one), the face's geometric normal, the
+// camera-relative hit and its linear depth. Depth is the rasterized face
 // depth (no frag_depth, so early depth testing stays on).
 
 struct GBuffer {
     @location(0) albedo: vec4<f32>,
     @location(1) normal: vec4<f32>,
     @location(2) position: vec4<f32>,
+    @location(3) geometric_normal: vec2<f32>,
 }
 
 // Corners (u, v) of the face quad's two triangles.
@@ -43,12 +45,14 @@ fn face_hit_valid(h: FaceHit) -> bool {
     return h.t > 0.0 && h.t < 1e30;
 }
 
-// The G-buffer of face `face` (VoxelSlot.face order) hit at `h`, coloured `albedo`.
-fn face_gbuffer(inst: Instance, face: u32, h: FaceHit, albedo: vec3<f32>) -> GBuffer {
+// The G-buffer of face `face` (VoxelSlot.face order) hit at `h`, of a voxel coloured
+// `albedo` whose stored normal is `normal_bits` (16-bit octahedral, object space).
+fn face_gbuffer(inst: Instance, face: u32, h: FaceHit, albedo: vec3<f32>, normal_bits: u32) -> GBuffer {
     let p = h.dir * h.t;
     var out: GBuffer;
     out.albedo = vec4(albedo, 1.0);
-    out.normal = vec4(face_normal_world(inst, face), 1.0);
+    out.normal = vec4(object_normal_world(inst, oct16_normal(normal_bits)), 1.0);
     out.position = vec4(p, dot(p, frame.cam_forward.xyz));
+    out.geometric_normal = oct_encode(face_normal_world(inst, face));
     return out;
 }

@@ -24,9 +24,9 @@
 // floor cell of the origin. The entered face is the axis last stepped on (at the grid
 // entry: the latest slab entry; starting inside: the dominant axis of the direction).
 //
-// Outputs (as dense_dda.wgsl): location 0 albedo (voxel colour, alpha 1), 1 the entered
-// face's world-space unit normal (w = 1), 2 camera-relative world position (xyz) and
-// linear view depth (w); frag_depth the reversed-Z depth; stencil = STENCIL_VOXEL (set by
+// Outputs (as dense_dda.wgsl): location 0 albedo (voxel colour, alpha 1), 1 the voxel's
+// stored normal, 2 camera-relative world position (xyz) and linear view depth (w), 3 the
+// entered face's normal (octahedral); frag_depth the reversed-Z depth; stencil = STENCIL_VOXEL (set by
 // the pass). No hit: discard.
 //
 // Limit: levels up to 16 (the stack depth).

@@ -10,7 +10,7 @@
 // triangles collapse to a point.
 //
 // The fragment stage is the face rasterizers' (face_raster.inc.wgsl): the exact ray–plane
-// hit, the face's world normal, the voxel's own colour from the attribute buffer.
+// hit and the face's normal, the voxel's own colour and normal from the attribute buffer.
 
 // One draw: visible instance, grid level of the LOD, chunk origin in that level's cells.
 struct Draw {
@@ -81,5 +81,6 @@ fn fs_main(in: VertexOut) -> GBuffer {
     if !face_hit_valid(h) {
         discard;
     }
-    return face_gbuffer(inst, in.face, h, unpack4x8unorm(attrs[2u * in.voxel]).rgb);
+    let albedo = unpack4x8unorm(attrs[2u * in.voxel]).rgb;
+    return face_gbuffer(inst, in.face, h, albedo, attrs[2u * in.voxel + 1u]);
 }

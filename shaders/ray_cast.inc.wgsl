@@ -23,6 +23,7 @@ struct GBufferDepth {
     @location(0) albedo: vec4<f32>,
     @location(1) normal: vec4<f32>,
     @location(2) position: vec4<f32>,
+    @location(3) geometric_normal: vec2<f32>,
     @builtin(frag_depth) depth: f32,
 }
 
@@ -96,9 +97,11 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     let inst = instances[best_inst];
     let p = dir * best.t;
     var out: GBufferDepth;
-    out.albedo = vec4(lod_voxel_color(lods[inst.lod], best.id).rgb, 1.0);
-    out.normal = vec4(face_normal_world(inst, best.face), 1.0);
+    let lod = lods[inst.lod];
+    out.albedo = vec4(lod_voxel_color(lod, best.id).rgb, 1.0);
+    out.normal = vec4(lod_voxel_normal_world(inst, lod, best.id), 1.0);
     out.position = vec4(p, dot(p, frame.cam_forward.xyz));
+    out.geometric_normal = oct_encode(face_normal_world(inst, best.face));
     out.depth = ndc_depth(p);
     return out;
 }

@@ -141,6 +141,7 @@ struct GBufferDepth {
     @location(0) albedo: vec4<f32>,
     @location(1) normal: vec4<f32>,
     @location(2) position: vec4<f32>,
+    @location(3) geometric_normal: vec2<f32>,
     @builtin(frag_depth) depth: f32,
 }
 
@@ -168,6 +169,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     out.albedo = f.albedo;
     out.normal = f.normal;
     out.position = f.position;
+    out.geometric_normal = f.geometric;
     out.depth = bitcast<f32>(atomicLoad(&splat_depth_bits[p]));
     return out;
 }

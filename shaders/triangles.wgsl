@@ -4,7 +4,8 @@
 // uniform (group 1) holds its camera-relative model matrix, normal matrix and colour.
 //
 // Outputs: location 0 albedo (Rgba8Unorm: the mesh colour, alpha 1), 1 world-space unit
-// normal (w = 1), 2 camera-relative world position (xyz) and linear view depth (w).
+// shading normal (w = 1), 2 camera-relative world position (xyz) and linear view depth
+// (w), 3 the triangle's plane normal towards the camera (octahedral).
 // Lighting is two-sided: the shading normal is flipped to the side of the surface the camera
 // sees (decided by the geometric normal, so any winding and mirrored transforms work). A
 // zero-length or non-finite interpolated normal falls back to the geometric normal.
@@ -39,6 +40,7 @@ struct GBuffer {
     @location(0) albedo: vec4<f32>,
     @location(1) normal: vec4<f32>,
     @location(2) position: vec4<f32>,
+    @location(3) geometric_normal: vec2<f32>,
 }
 
 @vertex
@@ -67,5 +69,6 @@ fn fs_main(in: VsOut) -> GBuffer {
     out.albedo = vec4(clamp(mesh.color.rgb, vec3(0.0), vec3(1.0)), 1.0);
     out.normal = vec4(n, 1.0);
     out.position = vec4(in.world, dot(in.world, frame.cam_forward.xyz));
+    out.geometric_normal = oct_encode(geo);
     return out;
 }

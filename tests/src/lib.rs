@@ -178,15 +178,28 @@ pub fn read_half4(frame: &Frame, name: &str) -> Vec<[f32; 4]> {
         .collect()
 }
 
+/// The geometric normals of a frame's `gbuffer_geometric_normal` (octahedral `Rg16Float`
+/// codes, decoded by `ssbvb_passes::gbuffer::oct_decode`).
+pub fn read_geometric_normals(frame: &Frame) -> Vec<[f32; 3]> {
+    frame
+        .read("gbuffer_geometric_normal")
+        .chunks_exact(4)
+        .map(|c| {
+            let h = |i: usize| f16_to_f32(u16::from_le_bytes([c[i], c[i + 1]]));
+            ssbvb_passes::gbuffer::oct_decode([h(0), h(2)])
+        })
+        .collect()
+}
+
 /// The G-buffer of a ray-cast or rasterized frame as reference-comparable hits: one per
 /// pixel where something was drawn, with the depth along the pixel's ray and the written
-/// normal (instance and cell unknown: [`u32::MAX`]). Fails the test at a non-finite
+/// geometric normal (instance and cell unknown: [`u32::MAX`]). Fails the test at a non-finite
 /// position or normal, or a drawn pixel whose stencil is not the voxel value (1); `what`
 /// names the render in those messages.
 pub fn gbuffer_hits(frame: &Frame, what: &str) -> Vec<Option<ssbvb_voxel::accuracy::GpuHit>> {
     let albedo = frame.read("gbuffer_albedo");
     let pos = frame.read_f32("gbuffer_position");
-    let normal = read_half4(frame, "gbuffer_normal");
+    let normal = read_geometric_normals(frame);
     let stencil = frame.read_stencil("depth_stencil");
     (0..normal.len())
         .map(|i| {
@@ -202,7 +215,7 @@ pub fn gbuffer_hits(frame: &Frame, what: &str) -> Vec<Option<ssbvb_voxel::accura
                     instance: u32::MAX,
                     cell: [u32::MAX; 3],
                     t: (p[0] as f64).hypot(p[1] as f64).hypot(p[2] as f64),
-                    normal: [n[0], n[1], n[2]],
+                    normal: n,
                 }
             })
         })

@@ -63,6 +63,11 @@ pub(crate) const DEPTH: &[Format] = &[Format::Depth32Float];
 pub(crate) const ALBEDO: &[Format] = &[Format::Rgba8Unorm];
 pub(crate) const NORMAL: &[Format] = &[Format::Rgba16Float, Format::Rgba32Float];
 pub(crate) const POSITION: &[Format] = &[Format::Rgba32Float];
+/// The G-buffer's shading normal: 8 bytes, so that the four colour attachments fit
+/// WebGPU's 32 bytes per sample (4 + 8 + 16 + 4).
+pub(crate) const GBUFFER_NORMAL: &[Format] = &[Format::Rgba16Float];
+/// The G-buffer's geometric normal, octahedral-encoded (see `ssbvb_passes::gbuffer`).
+pub(crate) const GEOMETRIC_NORMAL: &[Format] = &[Format::Rg16Float];
 pub(crate) const ENTRY: &[Format] = &[Format::Rgba32Float];
 pub(crate) const COLOR_OUT: &[Format] = &[
     Format::Rgba8UnormSrgb,
@@ -82,14 +87,23 @@ macro_rules! slot {
     };
 }
 
-/// The G-buffer every geometry pass writes.
+/// The G-buffer every geometry pass writes (`ssbvb_passes::gbuffer` documents each slot).
 const GBUFFER_WRITES: &[SlotDesc] = &[
     slot!("gbuffer_albedo", Write, SlotClass::ColorAttachment(ALBEDO)),
-    slot!("gbuffer_normal", Write, SlotClass::ColorAttachment(NORMAL)),
+    slot!(
+        "gbuffer_normal",
+        Write,
+        SlotClass::ColorAttachment(GBUFFER_NORMAL)
+    ),
     slot!(
         "gbuffer_position",
         Write,
         SlotClass::ColorAttachment(POSITION)
+    ),
+    slot!(
+        "gbuffer_geometric_normal",
+        Write,
+        SlotClass::ColorAttachment(GEOMETRIC_NORMAL)
     ),
     slot!(
         "depth_stencil",
@@ -227,6 +241,7 @@ impl KindSpec for BillboardsParams {
         GBUFFER_WRITES[1],
         GBUFFER_WRITES[2],
         GBUFFER_WRITES[3],
+        GBUFFER_WRITES[4],
     ];
     fn problems(&self) -> Vec<String> {
         if self.size_scale.is_finite() && self.size_scale > 0.0 {
@@ -475,6 +490,7 @@ impl KindSpec for SplatBillboardsParams {
         GBUFFER_WRITES[1],
         GBUFFER_WRITES[2],
         GBUFFER_WRITES[3],
+        GBUFFER_WRITES[4],
     ];
     fn problems(&self) -> Vec<String> {
         BillboardsParams {

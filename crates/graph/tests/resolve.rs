@@ -70,7 +70,8 @@ fn ssbvb_pipeline_resolves_in_the_expected_order() {
         "  entry: texture 640x480 Rgba32Float (4915200 bytes), passes 0..=1, shares memory with gbuffer_position",
         "  prepass_depth: texture 640x480 Depth32Float (1228800 bytes), passes 0..=0",
         "  color: texture 640x480 Rgba8UnormSrgb (1228800 bytes), passes 5..=5, output",
-        "memory: 25804816 bytes in 9 physical resources (30720016 bytes without aliasing, 4915200 saved)",
+        "  gbuffer_geometric_normal: texture 640x480 Rg16Float (1228800 bytes), passes 2..=3",
+        "memory: 27033616 bytes in 10 physical resources (31948816 bytes without aliasing, 4915200 saved)",
     ] {
         assert!(
             text.lines().any(|l| l == line),
@@ -297,7 +298,7 @@ fn unknown_resources_slots_and_missing_slots() {
     let e = err(&src);
     assert_mentions(
         &e,
-        &["test.ron:24:5: resource `ssbvb` is declared more than once"],
+        &["test.ron:26:5: resource `ssbvb` is declared more than once"],
     );
 
     let src = SSBVB.replace(r#"writes: ["color"],"#, "");

@@ -169,7 +169,7 @@ fn sizes_counts_and_bytes_at_a_screen_size() {
     // aliasing (texels x bytes per texel; the SSBVB 32 bytes per pixel; one draw).
     let p = resolve_str(SSBVB, "ssbvb.ron").unwrap();
     let px = 32 * 16;
-    let texel_bytes: u64 = [16, 4, 4, 8, 16, 8, 8, 4].iter().sum();
+    let texel_bytes: u64 = [16, 4, 4, 8, 16, 4, 8, 8, 4].iter().sum();
     let unaliased = px * texel_bytes + px * 32 + 16;
     let m = p.memory((32, 16));
     assert_eq!(m.unaliased, unaliased);

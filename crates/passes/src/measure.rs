@@ -36,7 +36,7 @@ pub(crate) fn read(
 
 /// Per pixel of the last frame (row-major, row 0 at the top): the hit the G-buffer shows
 /// (`gbuffer_albedo` alpha > 0), its distance from the eye (from `gbuffer_position`), its
-/// normal (`gbuffer_normal`, Rgba16Float or Rgba32Float) and, with a filter, the voxel cell
+/// geometric normal (`gbuffer_geometric_normal`, [`geometric_normals`]) and, with a filter, the voxel cell
 /// of the SSBVB slot its pixel's ray filled (else `[u32::MAX; 3]`, which never counts as
 /// the same voxel; meaningful only for a filter at screen resolution without
 /// `unique_voxels`, whose slots are one per covered pixel).
@@ -44,15 +44,7 @@ pub(crate) fn read(
 pub fn gbuffer_hits(ctx: &GpuContext, r: &Renderer) -> Result<Vec<Option<GpuHit>>, PassError> {
     let albedo = read(ctx, r, "gbuffer_albedo")?;
     let pos = read(ctx, r, "gbuffer_position")?.as_f32();
-    let normal_tex = read(ctx, r, "gbuffer_normal")?;
-    let normal: Vec<f32> = match normal_tex.format {
-        wgpu::TextureFormat::Rgba16Float => normal_tex
-            .bytes
-            .chunks(2)
-            .map(|h| f16_to_f32(u16::from_le_bytes([h[0], h[1]])))
-            .collect(),
-        _ => normal_tex.as_f32(),
-    };
+    let normal = geometric_normals(&read(ctx, r, "gbuffer_geometric_normal")?)?;
     let n = (albedo.width * albedo.height) as usize;
     let mut cells = vec![[u32::MAX; 3]; n];
     if r.fill_count(ctx)?.is_some() {
@@ -70,9 +62,27 @@ pub fn gbuffer_hits(ctx: &GpuContext, r: &Renderer) -> Result<Vec<Option<GpuHit>
                     instance: 0,
                     cell: cells[i],
                     t: (p[0] as f64).hypot(p[1] as f64).hypot(p[2] as f64),
-                    normal: [normal[i * 4], normal[i * 4 + 1], normal[i * 4 + 2]],
+                    normal: normal[i],
                 }
             })
+        })
+        .collect())
+}
+
+/// The unit vectors of a read-back geometric-normal target (`Rg16Float` octahedral codes,
+/// see [`crate::gbuffer`]); an error for any other format.
+pub fn geometric_normals(t: &ssbvb_gpu::readback::TextureData) -> Result<Vec<[f32; 3]>, PassError> {
+    if t.format != wgpu::TextureFormat::Rg16Float {
+        return Err(PassError::BadScene(format!(
+            "a geometric normal target must be Rg16Float, not {:?}",
+            t.format
+        )));
+    }
+    Ok(t.bytes
+        .chunks_exact(4)
+        .map(|c| {
+            let h = |i: usize| f16_to_f32(u16::from_le_bytes([c[i], c[i + 1]]));
+            crate::gbuffer::oct_decode([h(0), h(2)])
         })
         .collect())
 }

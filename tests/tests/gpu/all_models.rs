@@ -46,7 +46,7 @@ fn check(mode: &str) {
             let f = ssbvb_tests::render(&src, scene, cam, SIZE);
             let albedo = f.read("gbuffer_albedo");
             let pos = f.read_f32("gbuffer_position");
-            let normal = ssbvb_tests::read_half4(&f, "gbuffer_normal");
+            let normal = ssbvb_tests::read_geometric_normals(&f);
             let slots = read_slots(ssbvb_tests::ctx(), &f.renderer).unwrap();
             let mut slot_cell = vec![None; (SIZE.0 * SIZE.1) as usize];
             for s in &slots {
@@ -64,7 +64,7 @@ fn check(mode: &str) {
                             instance: 0,
                             cell: slot_cell[i].unwrap_or([u32::MAX; 3]),
                             t: (p[0] as f64).hypot(p[1] as f64).hypot(p[2] as f64),
-                            normal: [normal[i][0], normal[i][1], normal[i][2]],
+                            normal: normal[i],
                         }
                     })
                 })

@@ -216,12 +216,16 @@ fn merged_and_unmerged_cubes_give_the_same_gbuffer() {
             ssbvb_tests::read_half4(&a, "gbuffer_normal"),
             ssbvb_tests::read_half4(&b, "gbuffer_normal"),
         );
+        let (g_a, g_b) = (
+            ssbvb_tests::read_geometric_normals(&a),
+            ssbvb_tests::read_geometric_normals(&b),
+        );
         let pixels = (SIZE.0 * SIZE.1) as usize;
         let mut differ = 0;
         let mut max_pos = 0f32;
         for i in 0..pixels {
             let same_albedo = albedo_a[i * 4..i * 4 + 4] == albedo_b[i * 4..i * 4 + 4];
-            if !same_albedo || n_a[i] != n_b[i] {
+            if !same_albedo || n_a[i] != n_b[i] || g_a[i] != g_b[i] {
                 differ += 1;
                 continue;
             }

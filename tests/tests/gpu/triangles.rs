@@ -16,11 +16,13 @@ const TRIANGLES_ONLY: &str = r#"Pipeline(
     "gbuffer_albedo":   Texture(format: Rgba8Unorm, size: Screen),
     "gbuffer_normal":   Texture(format: Rgba16Float, size: Screen),
     "gbuffer_position": Texture(format: Rgba32Float, size: Screen),
+    // Geometric normal (the face or triangle hit), octahedral-encoded.
+    "gbuffer_geometric_normal": Texture(format: Rg16Float, size: Screen),
     "depth_stencil":    Texture(format: Depth32FloatStencil8, size: Screen),
   },
   passes: [
     (name: "triangles", kind: Triangles,
-     writes: ["gbuffer_albedo", "gbuffer_normal", "gbuffer_position", "depth_stencil"]),
+     writes: ["gbuffer_albedo", "gbuffer_normal", "gbuffer_position", "gbuffer_geometric_normal", "depth_stencil"]),
   ],
   output: "gbuffer_albedo",
 )"#;
@@ -94,6 +96,15 @@ fn ground_plane_matches_its_analytic_intersection() {
                     assert!(
                         n[0].abs() < 1e-3 && (n[1] - normal_y).abs() < 1e-3 && n[2].abs() < 1e-3,
                         "{name} pixel {i}: normal {n:?}"
+                    );
+                    // The plane's own normal, towards the camera (derivatives of the
+                    // position: a few f32 ulps off axis; f16 storage).
+                    let geo = g.geometric[i];
+                    assert!(
+                        geo[0].abs() < 2e-3
+                            && (geo[1] - normal_y).abs() < 1e-3
+                            && geo[2].abs() < 2e-3,
+                        "{name} pixel {i}: geometric normal {geo:?}"
                     );
                     let (_, d) = cam.ray(i as u32 % SIZE.0, i as u32 / SIZE.0, SIZE.0, SIZE.1);
                     let view_depth = t * d.dot(forward);
