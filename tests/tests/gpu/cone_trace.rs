@@ -4,7 +4,7 @@
 use glam::DVec3;
 use ssbvb_passes::measure_lighting::{LightingReport, lighting_error};
 use ssbvb_passes::{Scene, TriangleObject};
-use ssbvb_tests::{ctx, model_asset, render, single_object_scene};
+use ssbvb_tests::{ctx, model_asset, read_half4, render, single_object_scene};
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::lighting::LightingSample;
 
@@ -170,4 +170,111 @@ fn cone_targets_must_be_a_whole_fraction_of_the_screen() {
     );
     make("ScreenScaled(0.25)").unwrap();
     assert!(c.take_uncaptured_errors().is_empty());
+}
+
+/// Far from the world origin: the whole scene and the camera moved by 10⁶ units. The volume
+/// is placed in f64 and handed to the shader camera-relative, as the G-buffer positions
+/// are, so the cone targets and the lit frame equal the unmoved scene's (itself checked
+/// against Monte Carlo above) up to f32 rounding. Measured: largest AO or visibility
+/// difference 0.0 over every traced texel, colour identical. In absolute f32 world
+/// coordinates a level-8 cell (0.0078) is an eighth of the spacing of floats at 10⁶.
+#[test]
+fn the_cone_light_is_the_same_a_million_units_from_the_origin() {
+    let (scene, camera) = bunny_on_plane();
+    let shift = DVec3::new(1.0e6, 2.5e5, -1.0e6);
+    let mut moved = scene.clone();
+    for o in &mut moved.objects {
+        for xf in &mut o.instances {
+            xf.translation += shift;
+        }
+    }
+    for t in &mut moved.triangles {
+        t.transform.translation += shift;
+    }
+    let mut moved_camera = camera.clone();
+    moved_camera.position += shift;
+    moved_camera.look_at += shift;
+    let a = render(VCT, scene, &camera, SIZE);
+    let b = render(VCT, moved, &moved_camera, SIZE);
+    let (oa, ob) = (read_half4(&a, "occlusion"), read_half4(&b, "occlusion"));
+    let lit = oa.iter().filter(|t| t[3] > 0.0).count();
+    assert!(lit > 1000, "{lit} traced texels");
+    let worst = oa
+        .iter()
+        .zip(&ob)
+        .map(|(p, q)| (p[0] - q[0]).abs().max((p[1] - q[1]).abs()))
+        .fold(0.0f32, f32::max);
+    let (ca, cb) = (a.read("color"), b.read("color"));
+    let colour = ca
+        .iter()
+        .zip(&cb)
+        .map(|(p, q)| p.abs_diff(*q))
+        .max()
+        .unwrap();
+    eprintln!("moved by 1e6: worst AO/visibility difference {worst}, colour {colour}");
+    assert!(worst <= 0.01, "{worst}");
+    assert!(colour <= 2, "{colour}");
+}
+
+/// A camera a third of a cell from a surface, at the traced sample of the default view
+/// whose Monte Carlo AO is nearest 0.5 (half occluded), the near plane at 10⁻⁴: a handful
+/// of voxels or a patch of plane fill the frame, and the light still matches Monte Carlo
+/// at those samples. (The most occluded sample, AO 0.094 in a contact crevice, reads
+/// 0.001 from the cones in the wide view and the close one alike: cones starting two
+/// cells off the surface over-occlude in gaps narrower than that, whatever the camera.)
+/// Measured: reference AO 0.48 over the close frame, AO error 0.041 (the cones read 0.58
+/// at the chosen sample in the wide view too), shadow 0.016; bounds: the issue's 0.05.
+#[test]
+fn a_camera_touching_the_surface_keeps_the_cone_light_finite_and_close() {
+    let (scene, camera) = bunny_on_plane();
+    let cell = 2.0 / f64::from(1u32 << LEVEL);
+    let near = 3f64.sqrt() * cell;
+    let wide = render(VCT, scene.clone(), &camera, SIZE);
+    let r = lighting_error(ctx(), &wide.renderer, &scene, &camera, near, 32, 4).unwrap();
+    let dark = r
+        .pixels
+        .iter()
+        .filter(|p| p.traced)
+        .min_by(|a, b| {
+            (a.reference.ao - 0.5)
+                .abs()
+                .total_cmp(&(b.reference.ao - 0.5).abs())
+        })
+        .unwrap();
+    let rel = wide.read_f32("gbuffer_position");
+    let p = &rel[dark.index * 4..dark.index * 4 + 3];
+    let rel = DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+    let dir = rel.normalize();
+    let mut close = camera.clone();
+    close.position = camera.position + rel - dir * (cell / 3.0);
+    close.look_at = close.position + dir;
+    close.near = 1e-4;
+    let size = (64, 48);
+    let frame = render(VCT, scene.clone(), &close, size);
+    let occlusion = read_half4(&frame, "occlusion");
+    assert!(
+        occlusion
+            .iter()
+            .flatten()
+            .all(|v| v.is_finite() && (0.0..=1.0).contains(v)),
+        "occlusion out of [0, 1]"
+    );
+    let r = lighting_error(ctx(), &frame.renderer, &scene, &close, near, 64, 2).unwrap();
+    let ref_ao: Vec<f32> = r.pixels.iter().map(|p| p.reference.ao).collect();
+    let mean_ao = ref_ao.iter().sum::<f32>() / ref_ao.len() as f32;
+    eprintln!(
+        "touching (from AO {:.3}, cones {:.3} in the wide view): {} pixels (reference AO mean {mean_ao:.3}), AO error \
+         {:.4} (bias {:+.4}), shadow {:.4}, lit {:.2} dB",
+        dark.reference.ao,
+        dark.gpu.ao,
+        r.pixels.len(),
+        r.ao_mae,
+        r.ao_bias,
+        r.shadow_mae,
+        r.lit_psnr
+    );
+    assert!(r.pixels.len() > 500, "{}", r.pixels.len());
+    assert!(mean_ao < 0.8, "not an occluded spot: {mean_ao}");
+    assert!(r.ao_mae <= 0.05, "AO error {}", r.ao_mae);
+    assert!(r.shadow_mae <= 0.05, "shadow error {}", r.shadow_mae);
 }
