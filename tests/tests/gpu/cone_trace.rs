@@ -191,7 +191,7 @@ fn the_cone_light_is_the_same_a_million_units_from_the_origin() {
     for t in &mut moved.triangles {
         t.transform.translation += shift;
     }
-    let mut moved_camera = camera.clone();
+    let mut moved_camera = camera;
     moved_camera.position += shift;
     moved_camera.look_at += shift;
     let a = render(VCT, scene, &camera, SIZE);
@@ -245,7 +245,7 @@ fn a_camera_touching_the_surface_keeps_the_cone_light_finite_and_close() {
     let p = &rel[dark.index * 4..dark.index * 4 + 3];
     let rel = DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
     let dir = rel.normalize();
-    let mut close = camera.clone();
+    let mut close = camera;
     close.position = camera.position + rel - dir * (cell / 3.0);
     close.look_at = close.position + dir;
     close.near = 1e-4;
