@@ -62,14 +62,16 @@ struct VsOut {
 }
 
 struct GBuffer {
-    @location(0) albedo: vec4<f32>,
+    // Linear RGBA8, packed (pack4x8unorm).
+    @location(0) albedo: u32,
     @location(1) normal: vec4<f32>,
     @location(2) position: vec4<f32>,
     @location(3) geometric_normal: vec2<f32>,
 }
 
 struct GBufferDepth {
-    @location(0) albedo: vec4<f32>,
+    // Linear RGBA8, packed (pack4x8unorm).
+    @location(0) albedo: u32,
     @location(1) normal: vec4<f32>,
     @location(2) position: vec4<f32>,
     @location(3) geometric_normal: vec2<f32>,
@@ -135,7 +137,7 @@ fn fs_main(in: VsOut) -> GBuffer {
         discard;
     }
     var out: GBuffer;
-    out.albedo = f.albedo;
+    out.albedo = pack4x8unorm(f.albedo);
     out.normal = f.normal;
     out.position = f.position;
     out.geometric_normal = f.geometric;
@@ -150,7 +152,7 @@ fn fs_ray_box(in: VsOut) -> GBufferDepth {
         discard;
     }
     var out: GBufferDepth;
-    out.albedo = f.albedo;
+    out.albedo = pack4x8unorm(f.albedo);
     out.normal = f.normal;
     out.position = f.position;
     out.geometric_normal = f.geometric;

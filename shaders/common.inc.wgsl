@@ -367,15 +367,6 @@ fn oct_encode(n: vec3<f32>) -> vec2<f32> {
     return (1.0 - abs(p.yx)) * s;
 }
 
-// Inverse of oct_encode (a unit vector).
-fn oct_decode(e: vec2<f32>) -> vec3<f32> {
-    var n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
-    if n.z < 0.0 {
-        let s = select(vec2(-1.0), vec2(1.0), n.xy >= vec2(0.0));
-        n = vec3((1.0 - abs(n.yx)) * s, n.z);
-    }
-    return safe_normalize(n, vec3(0.0, 0.0, 1.0));
-}
 
 // Blinn-Phong exactly as ssbvb-voxel's shading::shade (linear RGB).
 fn shade(albedo: vec3<f32>, normal: vec3<f32>, view_dir: vec3<f32>) -> vec3<f32> {

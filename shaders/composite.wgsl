@@ -8,7 +8,7 @@
 // hardware).
 override ENCODE_SRGB: bool = false;
 
-@group(1) @binding(0) var albedo: texture_2d<f32>;
+@group(1) @binding(0) var albedo: texture_2d<u32>;
 @group(1) @binding(1) var normal: texture_2d<f32>;
 // Camera-relative world position (xyz) and linear view depth (w).
 @group(1) @binding(2) var position: texture_2d<f32>;
@@ -16,7 +16,7 @@ override ENCODE_SRGB: bool = false;
 @fragment
 fn fs_main(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {
     let p = vec2<i32>(pos.xy);
-    let a = textureLoad(albedo, p, 0);
+    let a = unpack4x8unorm(textureLoad(albedo, p, 0).x);
     // Nothing drawn here: keep what the target holds (cleared to transparent black when
     // this pass is the target's first writer, the caller's image when embedded).
     if a.a == 0.0 {

@@ -6,7 +6,7 @@
 
 override ENCODE_SRGB: bool = false;
 
-@group(1) @binding(0) var albedo: texture_2d<f32>;
+@group(1) @binding(0) var albedo: texture_2d<u32>;
 @group(1) @binding(1) var normal: texture_2d<f32>;
 @group(1) @binding(2) var position: texture_2d<f32>;
 // r: ambient occlusion, g: light visibility.
@@ -39,7 +39,7 @@ fn upsample(p: vec2<i32>, x: vec3<f32>, n: vec3<f32>, low: vec2<i32>, full: vec2
         let q = min(base + vec2(j & 1, j >> 1u), low - 1);
         let bw = select(1.0 - frac.x, frac.x, (j & 1) == 1) * select(1.0 - frac.y, frac.y, (j >> 1u) == 1);
         let src = min(vec2<i32>(vec2<f32>(q) * ratio), full - 1);
-        if bw <= 0.0 || textureLoad(albedo, src, 0).a == 0.0 {
+        if bw <= 0.0 || unpack4x8unorm(textureLoad(albedo, src, 0).x).a == 0.0 {
             continue;
         }
         let xs = textureLoad(position, src, 0).xyz;
@@ -59,7 +59,7 @@ fn upsample(p: vec2<i32>, x: vec3<f32>, n: vec3<f32>, low: vec2<i32>, full: vec2
 @fragment
 fn fs_main(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {
     let p = vec2<i32>(pos.xy);
-    let a = textureLoad(albedo, p, 0);
+    let a = unpack4x8unorm(textureLoad(albedo, p, 0).x);
     if a.a == 0.0 {
         discard;
     }

@@ -21,7 +21,7 @@ struct Cone {
     dirs: array<vec4<f32>, 64>,
 }
 
-@group(1) @binding(0) var albedo: texture_2d<f32>;
+@group(1) @binding(0) var albedo: texture_2d<u32>;
 @group(1) @binding(1) var normal: texture_2d<f32>;
 @group(1) @binding(2) var position: texture_2d<f32>;
 @group(1) @binding(3) var volume: texture_3d<f32>;
@@ -97,7 +97,7 @@ fn trace_cone(
 fn fs_main(@builtin(position) pos: vec4<f32>) -> Targets {
     let dims = vec2<i32>(textureDimensions(albedo));
     let px = min(vec2<i32>(floor(pos.xy) * cone.misc.w), dims - 1);
-    if textureLoad(albedo, px, 0).a == 0.0 {
+    if unpack4x8unorm(textureLoad(albedo, px, 0).x).a == 0.0 {
         discard;
     }
     let n = safe_normalize(textureLoad(normal, px, 0).xyz, vec3(0.0, 0.0, 1.0));

@@ -7,7 +7,8 @@
 // depth (no frag_depth, so early depth testing stays on).
 
 struct GBuffer {
-    @location(0) albedo: vec4<f32>,
+    // Linear RGBA8, packed (pack4x8unorm).
+    @location(0) albedo: u32,
     @location(1) normal: vec4<f32>,
     @location(2) position: vec4<f32>,
     @location(3) geometric_normal: vec2<f32>,
@@ -50,7 +51,7 @@ fn face_hit_valid(h: FaceHit) -> bool {
 fn face_gbuffer(inst: Instance, face: u32, h: FaceHit, albedo: vec3<f32>, normal_bits: u32) -> GBuffer {
     let p = h.dir * h.t;
     var out: GBuffer;
-    out.albedo = vec4(albedo, 1.0);
+    out.albedo = pack4x8unorm(vec4(albedo, 1.0));
     out.normal = vec4(object_normal_world(inst, oct16_normal(normal_bits)), 1.0);
     out.position = vec4(p, dot(p, frame.cam_forward.xyz));
     out.geometric_normal = oct_encode(face_normal_world(inst, face));

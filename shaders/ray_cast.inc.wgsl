@@ -20,7 +20,8 @@ var<private> cast_steps: u32;
 const COUNTER_LANES: u32 = 64u;
 
 struct GBufferDepth {
-    @location(0) albedo: vec4<f32>,
+    // Linear RGBA8, packed (pack4x8unorm).
+    @location(0) albedo: u32,
     @location(1) normal: vec4<f32>,
     @location(2) position: vec4<f32>,
     @location(3) geometric_normal: vec2<f32>,
@@ -98,7 +99,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     let p = dir * best.t;
     var out: GBufferDepth;
     let lod = lods[inst.lod];
-    out.albedo = vec4(lod_voxel_color(lod, best.id).rgb, 1.0);
+    out.albedo = pack4x8unorm(vec4(lod_voxel_color(lod, best.id).rgb, 1.0));
     out.normal = vec4(lod_voxel_normal_world(inst, lod, best.id), 1.0);
     out.position = vec4(p, dot(p, frame.cam_forward.xyz));
     out.geometric_normal = oct_encode(face_normal_world(inst, best.face));

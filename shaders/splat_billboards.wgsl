@@ -138,7 +138,8 @@ fn splat_main(
 }
 
 struct GBufferDepth {
-    @location(0) albedo: vec4<f32>,
+    // Linear RGBA8, packed (pack4x8unorm).
+    @location(0) albedo: u32,
     @location(1) normal: vec4<f32>,
     @location(2) position: vec4<f32>,
     @location(3) geometric_normal: vec2<f32>,
@@ -166,7 +167,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
         f = flat_fragment(slot, flat_q, frag.xy, q.c);
     }
     var out: GBufferDepth;
-    out.albedo = f.albedo;
+    out.albedo = pack4x8unorm(f.albedo);
     out.normal = f.normal;
     out.position = f.position;
     out.geometric_normal = f.geometric;

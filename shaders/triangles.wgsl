@@ -3,7 +3,7 @@
 // stencil = STENCIL_TRIANGLE (so smoothing never touches them). One draw per mesh; the mesh's
 // uniform (group 1) holds its camera-relative model matrix, normal matrix and colour.
 //
-// Outputs: location 0 albedo (Rgba8Unorm: the mesh colour, alpha 1), 1 world-space unit
+// Outputs: location 0 albedo (the mesh colour, alpha 1, packed RGBA8), 1 world-space unit
 // shading normal (w = 1), 2 camera-relative world position (xyz) and linear view depth
 // (w), 3 the triangle's plane normal towards the camera (octahedral).
 // Lighting is two-sided: the shading normal is flipped to the side of the surface the camera
@@ -37,7 +37,8 @@ struct VsOut {
 }
 
 struct GBuffer {
-    @location(0) albedo: vec4<f32>,
+    // Linear RGBA8, packed (pack4x8unorm).
+    @location(0) albedo: u32,
     @location(1) normal: vec4<f32>,
     @location(2) position: vec4<f32>,
     @location(3) geometric_normal: vec2<f32>,
@@ -66,7 +67,7 @@ fn fs_main(in: VsOut) -> GBuffer {
         n = -n;
     }
     var out: GBuffer;
-    out.albedo = vec4(clamp(mesh.color.rgb, vec3(0.0), vec3(1.0)), 1.0);
+    out.albedo = pack4x8unorm(vec4(clamp(mesh.color.rgb, vec3(0.0), vec3(1.0)), 1.0));
     out.normal = vec4(n, 1.0);
     out.position = vec4(in.world, dot(in.world, frame.cam_forward.xyz));
     out.geometric_normal = oct_encode(geo);

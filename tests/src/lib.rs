@@ -179,14 +179,20 @@ pub fn read_half4(frame: &Frame, name: &str) -> Vec<[f32; 4]> {
 }
 
 /// The geometric normals of a frame's `gbuffer_geometric_normal` (octahedral `Rg16Float`
-/// codes, decoded by `ssbvb_passes::gbuffer::oct_decode`).
+/// codes, decoded by `ssbvb_passes::gbuffer::oct_decode`; a non-finite code decodes to
+/// NaN, so checks for finite normals still see it).
 pub fn read_geometric_normals(frame: &Frame) -> Vec<[f32; 3]> {
     frame
         .read("gbuffer_geometric_normal")
         .chunks_exact(4)
         .map(|c| {
             let h = |i: usize| f16_to_f32(u16::from_le_bytes([c[i], c[i + 1]]));
-            ssbvb_passes::gbuffer::oct_decode([h(0), h(2)])
+            let code = [h(0), h(2)];
+            if code.iter().all(|v| v.is_finite()) {
+                ssbvb_passes::gbuffer::oct_decode(code)
+            } else {
+                [f32::NAN; 3]
+            }
         })
         .collect()
 }
@@ -200,6 +206,7 @@ pub fn gbuffer_hits(frame: &Frame, what: &str) -> Vec<Option<ssbvb_voxel::accura
     let albedo = frame.read("gbuffer_albedo");
     let pos = frame.read_f32("gbuffer_position");
     let normal = read_geometric_normals(frame);
+    let shading = read_half4(frame, "gbuffer_normal");
     let stencil = frame.read_stencil("depth_stencil");
     (0..normal.len())
         .map(|i| {
@@ -209,6 +216,13 @@ pub fn gbuffer_hits(frame: &Frame, what: &str) -> Vec<Option<ssbvb_voxel::accura
                 assert!(
                     p.iter().chain(&n).all(|v| v.is_finite()),
                     "{what}: NaN at {i}"
+                );
+                // The shading normal: a unit vector (f16), w = 1.
+                let s = shading[i];
+                let len = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
+                assert!(
+                    (len - 1.0).abs() < 2e-3 && s[3] == 1.0,
+                    "{what}: shading normal {s:?} at {i}"
                 );
                 assert_eq!(stencil[i], 1, "{what}: stencil at {i}");
                 ssbvb_voxel::accuracy::GpuHit {

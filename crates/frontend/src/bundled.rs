@@ -67,6 +67,14 @@ const FILES: &[(&str, &[u8])] = &[
         include_bytes!("../../../assets/scenes/twisting_bunny.ron"),
     ),
     (
+        "pipelines/volumetric.ron",
+        include_bytes!("../../../assets/pipelines/volumetric.ron"),
+    ),
+    (
+        "scenes/volumetric.ron",
+        include_bytes!("../../../assets/scenes/volumetric.ron"),
+    ),
+    (
         "models/bunny.obj",
         include_bytes!("../../../assets/models/bunny.obj"),
     ),

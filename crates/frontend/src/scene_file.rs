@@ -18,8 +18,8 @@ use std::sync::Arc;
 
 use anyhow::{Context, Result, bail};
 use glam::DVec3;
-use ssbvb_passes::{LodPolicy, Scene, TriangleObject, VoxelObject};
-use ssbvb_scene::{InstanceDesc, LodDesc, TriangleDesc};
+use ssbvb_passes::{LodPolicy, Scene, TriangleObject, VolumeObject, VoxelObject};
+use ssbvb_scene::{InstanceDesc, LodDesc, TriangleDesc, VolumeDesc, VolumeSource};
 use ssbvb_voxel::camera::Camera;
 
 /// A scene ready to upload, with its camera and pipeline path.
@@ -126,6 +126,12 @@ fn load_with_cache(
             instances: instances.iter().map(InstanceDesc::transform).collect(),
             lod,
         });
+    }
+    for (i, v) in file.volumes.iter().enumerate() {
+        scene.volumes.push(
+            volume_object(dir, v, i)
+                .with_context(|| format!("scene {}: volumes[{i}]", path.display()))?,
+        );
     }
     for t in &file.triangles {
         match *t {
@@ -386,4 +392,50 @@ mod edit_tests {
         );
         assert!(e.contains("objects[0].edits[0]: a negative radius"), "{e}");
     }
+}
+
+/// Builds volume `i` of a scene in `dir`: a procedural cloud, a mesh voxelized with
+/// fractional coverage, or a VOX model with palette alpha.
+fn volume_object(dir: &Path, v: &VolumeDesc, i: usize) -> Result<VolumeObject> {
+    use ssbvb_voxel::rgba_volume::sources::{Cloud, from_mesh_coverage, from_voxel_model};
+    let (name, volume) = match &v.source {
+        VolumeSource::Cloud {
+            seed,
+            density,
+            colour,
+        } => {
+            let cloud = Cloud {
+                seed: *seed,
+                density: *density,
+                colour: [colour.0, colour.1, colour.2],
+            };
+            (
+                format!("volumes[{i}] (cloud {seed})"),
+                cloud.volume(v.edge)?,
+            )
+        }
+        VolumeSource::Model(file) => {
+            let model_path = dir.join(file);
+            let volume = match ssbvb_voxel::load::load_model(&model_path)? {
+                ssbvb_voxel::model::Model::Mesh(mesh) => {
+                    if v.edge > ssbvb_scene::volumes::MAX_MESH_VOLUME_EDGE {
+                        bail!(
+                            "{}: a mesh volume is at most {} texels per edge, got {}",
+                            model_path.display(),
+                            ssbvb_scene::volumes::MAX_MESH_VOLUME_EDGE,
+                            v.edge
+                        );
+                    }
+                    from_mesh_coverage(&mesh, v.edge.trailing_zeros())?
+                }
+                ssbvb_voxel::model::Model::Voxels(vm) => from_voxel_model(&vm, v.edge)?,
+            };
+            (format!("volumes[{i}] ({file})"), volume)
+        }
+    };
+    Ok(VolumeObject {
+        name,
+        volume: Arc::new(volume),
+        instances: v.placements().iter().map(InstanceDesc::transform).collect(),
+    })
 }

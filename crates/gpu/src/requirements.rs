@@ -273,6 +273,26 @@ pub const fn max_texture_dimension_3d(n: u64) -> LimitNeed {
     }
 }
 
+/// `max_color_attachment_bytes_per_sample` at least `n`.
+pub const fn max_color_attachment_bytes_per_sample(n: u64) -> LimitNeed {
+    LimitNeed {
+        name: "max_color_attachment_bytes_per_sample",
+        at_least: n,
+        get: |l| l.max_color_attachment_bytes_per_sample as u64,
+    }
+}
+
+/// WebGPU's bytes per sample of colour attachments `formats` bound together (in location
+/// order): each format's render-target byte cost, placed at its component alignment.
+pub fn color_attachment_bytes(formats: &[TextureFormat]) -> u64 {
+    let mut total = 0u64;
+    for f in formats {
+        let align = u64::from(f.target_component_alignment().unwrap_or(1));
+        total = total.div_ceil(align) * align + u64::from(f.target_pixel_byte_cost().unwrap_or(0));
+    }
+    total
+}
+
 /// `max_compute_invocations_per_workgroup` at least `n`.
 pub const fn max_compute_invocations_per_workgroup(n: u64) -> LimitNeed {
     LimitNeed {

@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 use crate::cone_kinds::{ConeCompositeKind, ConeTraceParams};
 use crate::pass_kind::{Access, KindSpec, OfKind, PassStage, SlotClass, SlotDesc, pass_kinds};
 use crate::schema::{BufferLayout, Format};
+use crate::volume_kinds::VolumeSlicesParams;
 
 pass_kinds! {
     /// Rasterizes the proxy meshes of visible objects: per pixel the object-space entry
@@ -55,16 +56,23 @@ pass_kinds! {
     /// Deferred lighting like `Composite`, with the cone tracer's occlusion, shadow and
     /// bounce.
     ConeComposite = ConeCompositeKind;
+    /// Volumetric billboards (seed 004): view-aligned slices through every RGBA volume,
+    /// back to front, blended "over" the output colour and depth-tested against the
+    /// opaque depth.
+    VolumeSlices(VolumeSlicesParams);
 }
 
 pub(crate) const DEPTH_STENCIL: &[Format] =
     &[Format::Depth32FloatStencil8, Format::Depth24PlusStencil8];
 pub(crate) const DEPTH: &[Format] = &[Format::Depth32Float];
-pub(crate) const ALBEDO: &[Format] = &[Format::Rgba8Unorm];
+/// Linear RGBA8 albedo packed in a `u32` (`pack4x8unorm`): WebGPU counts an `Rgba8Unorm`
+/// attachment as 8 bytes per sample, an `R32Uint` as 4, and the G-buffer's colour
+/// attachments must fit 32 bytes.
+pub(crate) const ALBEDO: &[Format] = &[Format::R32Uint];
 pub(crate) const NORMAL: &[Format] = &[Format::Rgba16Float, Format::Rgba32Float];
 pub(crate) const POSITION: &[Format] = &[Format::Rgba32Float];
 /// The G-buffer's shading normal: 8 bytes, so that the four colour attachments fit
-/// WebGPU's 32 bytes per sample (4 + 8 + 16 + 4).
+/// WebGPU's 32 bytes per sample (4 + 8 + 16 + 4, albedo packed in a `u32`).
 pub(crate) const GBUFFER_NORMAL: &[Format] = &[Format::Rgba16Float];
 /// The G-buffer's geometric normal, octahedral-encoded (see `ssbvb_passes::gbuffer`).
 pub(crate) const GEOMETRIC_NORMAL: &[Format] = &[Format::Rg16Float];
@@ -523,6 +531,7 @@ mod tests {
             RastaVoxParams::NAME,
             ConeTraceParams::NAME,
             ConeCompositeKind::NAME,
+            VolumeSlicesParams::NAME,
         ];
         assert_eq!(spec_names, KIND_NAMES);
     }

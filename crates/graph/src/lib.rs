@@ -21,6 +21,7 @@ pub mod locate;
 pub mod pass_kind;
 pub mod resolve;
 pub mod schema;
+pub mod volume_kinds;
 pub mod watch;
 
 pub use cone_kinds::*;
@@ -36,4 +37,5 @@ pub use schema::{
     Binding, Bindings, BufferLayout, CountDesc, Format, PassDesc, PipelineDesc, ResourceDesc,
     SizeDesc,
 };
+pub use volume_kinds::*;
 pub use watch::{PipelineWatcher, ReloadOutcome};

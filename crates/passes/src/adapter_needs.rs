@@ -3,10 +3,11 @@
 //! exists).
 
 use ssbvb_gpu::requirements::{
-    Requirements, max_bind_groups, max_storage_buffers_per_shader_stage,
+    Requirements, color_attachment_bytes, max_bind_groups, max_color_attachment_bytes_per_sample,
+    max_storage_buffers_per_shader_stage,
 };
 use ssbvb_gpu::wgpu;
-use ssbvb_graph::{PassStage, ResolvedPipeline, ResourceDesc, ResourceUsage};
+use ssbvb_graph::{Access, PassStage, ResolvedPipeline, ResourceDesc, ResourceUsage, SlotClass};
 
 use crate::registry::registration;
 
@@ -48,6 +49,26 @@ pub fn pipeline_requirements(pipeline: &ResolvedPipeline) -> Requirements {
         req.need_limit(max_bind_groups(n.bind_groups), &who);
         if let Some(l) = n.limit {
             req.need_limit(l, &who);
+        }
+        // The colour attachments a render pass writes together.
+        let formats: Vec<wgpu::TextureFormat> = pass
+            .kind
+            .slots()
+            .iter()
+            .filter(|s| {
+                s.access == Access::Write && matches!(s.class, SlotClass::ColorAttachment(_))
+            })
+            .filter_map(|s| pass.resource_of(s.name))
+            .filter_map(|r| match pipeline.resources[r].desc {
+                ResourceDesc::Texture { format, .. } => Some(format.to_wgpu()),
+                _ => None,
+            })
+            .collect();
+        if !formats.is_empty() {
+            req.need_limit(
+                max_color_attachment_bytes_per_sample(color_attachment_bytes(&formats)),
+                &who,
+            );
         }
     }
     let mut depth_readback = false;
@@ -125,5 +146,45 @@ mod tests {
         // hierarchy, the page feedback) and 5 of the filter.
         assert_eq!(storage.0.at_least, 17, "{storage:?}");
         assert!(storage.1.contains("RayMarchFilter"), "{storage:?}");
+    }
+
+    /// Every bundled pipeline's render passes fit WebGPU's default 32 bytes of colour
+    /// attachments per sample (the G-buffer writers take exactly 32: albedo packed in a
+    /// `u32` 4, shading normal 8, position 16, geometric normal 4), and the need names the
+    /// widest pass. The sum is wgpu's own byte costs: an `Rgba8Unorm` albedo would cost 8
+    /// and make it 36.
+    #[test]
+    fn colour_attachments_fit_webgpu_default_bytes_per_sample() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/pipelines");
+        let mut checked = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            let text = std::fs::read_to_string(&path).unwrap();
+            let p = ssbvb_graph::resolve_str(&text, &path.display().to_string()).unwrap();
+            let req = pipeline_requirements(&p);
+            let (need, who) = req
+                .limits
+                .iter()
+                .find(|(n, _)| n.name == "max_color_attachment_bytes_per_sample")
+                .unwrap();
+            assert!(
+                need.at_least <= 32,
+                "{}: {} bytes ({who})",
+                path.display(),
+                need.at_least
+            );
+            if text.contains("gbuffer_geometric_normal") {
+                assert_eq!(need.at_least, 32, "{}: {who}", path.display());
+            }
+            checked += 1;
+        }
+        assert!(checked >= 10, "{checked}");
+        let rgba8 = [
+            wgpu::TextureFormat::Rgba8Unorm,
+            wgpu::TextureFormat::Rgba16Float,
+            wgpu::TextureFormat::Rgba32Float,
+            wgpu::TextureFormat::Rg16Float,
+        ];
+        assert_eq!(color_attachment_bytes(&rgba8), 36);
     }
 }

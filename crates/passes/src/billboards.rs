@@ -29,8 +29,9 @@
 //!   neighbouring quads overlap, the nearest centre wins, so silhouettes overhang slightly.
 //! - [`BillboardMode::RayBox`] (ray–box splatting, Majercik et al. 2018): every fragment
 //!   intersects its pixel's ray with the voxel's box, discards misses and writes the exact
-//!   hit depth (`frag_depth`), the entered face's normal and the hit position. Coverage,
-//!   depth and normals then equal the CPU reference's up to f32 rounding. Writing
+//!   hit depth (`frag_depth`), the entered face as geometric normal (the stored normal
+//!   shades, as in Flat mode; `crate::gbuffer`) and the hit position. Coverage, depth and
+//!   normals then equal the CPU reference's up to f32 rounding. Writing
 //!   `frag_depth` disables early depth testing; that is the price.
 //!
 //! # Back-face culling

@@ -32,6 +32,8 @@ pub enum OwnKind {
     Texture3dUint,
     /// A filterable 3D float texture (with mip levels) read with `textureSampleLevel`.
     Texture3dFloat,
+    /// A 2D float texture read with `textureLoad`.
+    Texture2dFloat,
 }
 
 /// One resource a pass owns, by its WGSL global name.
@@ -148,6 +150,14 @@ impl PassBindings {
                     wgpu::BindingType::Texture {
                         sample_type: wgpu::TextureSampleType::Float { filterable: true },
                         view_dimension: wgpu::TextureViewDimension::D3,
+                        multisampled: false,
+                    },
+                    false,
+                ),
+                OwnKind::Texture2dFloat => (
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
                         multisampled: false,
                     },
                     false,

@@ -9,8 +9,8 @@
 //! that can face the camera), the cube read from a storage buffer by `instance_index`.
 //! The draw starts at vertex `18 × v`, which tells
 //! the shader the visible instance `v` without any per-draw buffer. The fragment shader
-//! writes the voxel under the pixel (colour from the LOD's sparse lookup), the face
-//! normal, the exact ray–face position and linear depth, so its accuracy compares with
+//! writes the voxel under the pixel (colour and stored normal from the LOD's sparse
+//! lookup), the face as geometric normal, the exact ray–face position and linear depth, so its accuracy compares with
 //! the ray casters'. Many objects and every LOD work; instances of one object at one level
 //! share a cube buffer.
 //!

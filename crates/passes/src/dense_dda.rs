@@ -5,7 +5,8 @@
 //! see [`crate::triangles`]): per pixel the fragment shader casts the pixel's ray through
 //! every visible instance with a plain cell-by-cell Amanatides–Woo DDA over a **dense**
 //! `R32Uint` 3D texture (voxel id + 1, 0 = empty) and writes the nearest hit with its exact
-//! depth (`frag_depth`) and the entered face's normal. The shared smoothing and composite
+//! depth (`frag_depth`), the voxel's stored normal and the entered face's (`crate::gbuffer`).
+//! The shared smoothing and composite
 //! run after it unchanged.
 //!
 //! Every (object, level) pair a visible instance uses has its dense grid in one `R32Uint`

@@ -4,7 +4,7 @@
 //!
 //! | location | slot                       | format        | contents                                               |
 //! |----------|----------------------------|---------------|--------------------------------------------------------|
-//! | 0        | `gbuffer_albedo`           | `Rgba8Unorm`  | linear albedo, alpha 1 where something was drawn       |
+//! | 0        | `gbuffer_albedo`           | `R32Uint`     | linear RGBA8 albedo packed (`pack4x8unorm`), alpha 1 where something was drawn |
 //! | 1        | `gbuffer_normal`           | `Rgba16Float` | shading normal: world-space unit, w = 1                |
 //! | 2        | `gbuffer_position`         | `Rgba32Float` | camera-relative world position, w = linear depth       |
 //! | 3        | `gbuffer_geometric_normal` | `Rg16Float`   | geometric normal, octahedral ([`oct_decode`])          |
@@ -17,8 +17,10 @@
 //! entered face of the voxel's box (the reference's `Hit::face_normal`; for a Flat
 //! billboard the face the pixel's ray enters, or would enter, by the same slab rule) and
 //! a triangle's plane, turned towards the camera; geometric accuracy is measured on it.
-//! The four colour attachments take 4 + 8 + 16 + 4 = 32 bytes per sample, WebGPU's limit,
-//! hence the two-channel encoding (axis-aligned face normals encode exactly).
+//! The four colour attachments take 4 + 8 + 16 + 4 = 32 bytes per sample, WebGPU's default
+//! limit: hence the two-channel encoding (axis-aligned face normals encode exactly) and the
+//! packed albedo (WebGPU counts an `Rgba8Unorm` attachment as 8 bytes). Its bytes read back
+//! as RGBA8 all the same.
 //!
 //! Linear depth is the distance along the camera's forward axis (the reference's
 //! `view_depth`). The first pass of the frame that writes a slot clears it (colours to 0,

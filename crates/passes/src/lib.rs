@@ -49,6 +49,7 @@ registry::pass_modules! {
     rastavox::RastaVox,
     cone_trace::ConeTrace,
     cone_composite::ConeComposite,
+    volume_slices::VolumeSlices,
 }
 
 pub use adapter_needs::pipeline_requirements;
@@ -56,7 +57,7 @@ pub use counters::FrameCounters;
 pub use frame::{FrameStats, PassTiming, Profiling, Recorder, Renderer};
 pub use gpu_scene::{DynamicRoom, GpuScene, ObjectMemory, StreamChunks};
 pub use registry::{PassImpl, PassInit, Registration};
-pub use scene::{LodPolicy, Scene, TriangleObject, VoxelObject};
+pub use scene::{LodPolicy, Scene, TriangleObject, VolumeObject, VoxelObject};
 pub use streaming::{StreamingOptions, StreamingStats};
 
 use ssbvb_gpu::{GpuContext, GpuError, wgpu};

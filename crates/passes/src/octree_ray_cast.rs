@@ -7,7 +7,8 @@
 //! every visible instance with a stack-based, front-to-back descent of the object's
 //! [`Svo`] (the pointer octree of `ssbvb_voxel::svo`, laid out level by level like an ESVO
 //! without contours) down to the instance's LOD level, and writes the nearest hit with its
-//! exact depth (`frag_depth`) and the entered face's normal. The shared smoothing and
+//! exact depth (`frag_depth`), the voxel's stored normal and the entered face's
+//! (`crate::gbuffer`). The shared smoothing and
 //! composite run after it unchanged.
 //!
 //! The octrees of every object of the scene are built with [`Svo::from_asset`] the first

@@ -42,6 +42,18 @@ pub struct VoxelObject {
     pub lod: LodPolicy,
 }
 
+/// A translucent RGBA volume (volumetric billboard) placed one or more times; drawn by
+/// `VolumeSlices` after the opaque frame.
+#[derive(Debug, Clone)]
+pub struct VolumeObject {
+    /// What it is called in errors and reports (its scene entry).
+    pub name: String,
+    /// The mipmapped, bricked volume.
+    pub volume: Arc<ssbvb_voxel::rgba_volume::RgbaVolume>,
+    /// Object space [-1, 1]³ → world (uniform scale), one per instance.
+    pub instances: Vec<DAffine3>,
+}
+
 /// An ordinary triangle mesh drawn into the same G-buffer (stencil = triangle).
 #[derive(Debug, Clone)]
 pub struct TriangleObject {
@@ -84,4 +96,6 @@ pub struct Scene {
     pub triangles: Vec<TriangleObject>,
     /// The light (the same model as the CPU reference).
     pub light: Light,
+    /// Translucent RGBA volumes.
+    pub volumes: Vec<VolumeObject>,
 }

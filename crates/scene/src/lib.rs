@@ -15,6 +15,10 @@
 //! )
 //! ```
 
+pub mod volumes;
+
+pub use volumes::{VolumeDesc, VolumeSource};
+
 use glam::{DAffine3, DQuat, DVec3};
 use serde::Deserialize;
 use ssbvb_voxel::camera::Camera;
@@ -90,6 +94,9 @@ pub struct SceneFile {
     /// Triangle objects.
     #[serde(default)]
     pub triangles: Vec<TriangleDesc>,
+    /// Translucent RGBA volumes (drawn by a pipeline with `VolumeSlices`).
+    #[serde(default)]
+    pub volumes: Vec<volumes::VolumeDesc>,
     /// GPU memory budget in MiB: levels above the pinned coarse ones are paged in by
     /// demand (`--gpu-budget` overrides it).
     #[serde(default)]
@@ -361,6 +368,9 @@ impl SceneFile {
                     MAX_GPU_BUDGET_MIB
                 ));
             }
+        }
+        for (i, v) in self.volumes.iter().enumerate() {
+            out.extend(v.problems(i));
         }
         for (i, t) in self.triangles.iter().enumerate() {
             let TriangleDesc::Plane {

@@ -20,7 +20,9 @@
 //! Sources ([`sources`]): a procedural cloud, a VOX model (palette alpha) and a mesh
 //! voxelized with fractional coverage.
 
+pub mod atlas;
 pub mod integrate;
+pub mod slicing;
 pub mod sources;
 
 use thiserror::Error;

@@ -126,6 +126,11 @@ fn check(mode: &str) {
                         r.depth_error_voxels.median <= 0.6,
                         "{file} camera {ci}: {r:?}"
                     );
+                    // Flat billboards report the face their pixel's ray enters.
+                    assert!(
+                        r.normal_error_deg.median <= 1.0,
+                        "{file} camera {ci}: {r:?}"
+                    );
                 }
             }
         }

@@ -33,7 +33,7 @@ pub(crate) fn pipeline_src(mode: BillboardMode, size_scale: f32, normal_format: 
     "prepass_depth":    Texture(format: Depth32Float, size: Screen),
     "ssbvb":            Buffer(layout: VoxelSlot, count: ScreenPixels),
     "billboard_draw":   Buffer(layout: DrawIndirect, count: Fixed(1)),
-    "gbuffer_albedo":   Texture(format: Rgba8Unorm, size: Screen),
+    "gbuffer_albedo":   Texture(format: R32Uint, size: Screen),
     "gbuffer_normal":   Texture(format: {normal_format}, size: Screen),
     "gbuffer_position": Texture(format: Rgba32Float, size: Screen),
     // Geometric normal (the face or triangle hit), octahedral-encoded.

@@ -22,4 +22,5 @@ mod smooth_composite;
 mod splat;
 mod streaming;
 mod triangles;
+mod volumes;
 mod webgpu_limits;

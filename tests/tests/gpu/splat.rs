@@ -87,6 +87,7 @@ fn the_splat_draws_the_rasterized_gbuffer() {
             let stencil_diff = sa.iter().zip(&sb).filter(|(p, q)| p != q).count();
             let normals = differing(&a, &b, "gbuffer_normal", size);
             let albedo = differing(&a, &b, "gbuffer_albedo", size);
+            let faces = differing(&a, &b, "gbuffer_geometric_normal", size);
             eprintln!(
                 "{mode} {name}: {voxels} voxel px; differing stencil {stencil_diff}, normal \
                  {normals}, albedo {albedo}"
@@ -114,6 +115,10 @@ fn the_splat_draws_the_rasterized_gbuffer() {
             );
             assert!(normals <= 8, "{mode} {name}: {normals} normal px differ");
             assert!(albedo <= 8, "{mode} {name}: {albedo} albedo px differ");
+            assert!(
+                faces <= 8,
+                "{mode} {name}: {faces} geometric normal px differ"
+            );
             // The plane shows around the bunny in both (the splat's resolve is depth-tested
             // against it, and does not draw over it).
             let plane = |s: &[u8]| s.iter().filter(|&&v| v == 2).count();

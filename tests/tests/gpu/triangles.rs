@@ -13,7 +13,7 @@ use crate::billboards::{BUNNY, GBuffer, LEVEL, SIZE, draw, pipeline_src};
 
 const TRIANGLES_ONLY: &str = r#"Pipeline(
   resources: {
-    "gbuffer_albedo":   Texture(format: Rgba8Unorm, size: Screen),
+    "gbuffer_albedo":   Texture(format: R32Uint, size: Screen),
     "gbuffer_normal":   Texture(format: Rgba16Float, size: Screen),
     "gbuffer_position": Texture(format: Rgba32Float, size: Screen),
     // Geometric normal (the face or triangle hit), octahedral-encoded.

@@ -83,7 +83,8 @@ pub(super) fn matrix(args: &BenchArgs) -> Matrix {
         | Preset::Memory
         | Preset::Rastavox
         | Preset::Dynamic
-        | Preset::Vct => Matrix {
+        | Preset::Vct
+        | Preset::Volumes => Matrix {
             models: vec![bunny],
             levels: vec![5, 6],
             sizes: vec![(160, 120)],
@@ -151,7 +152,8 @@ pub(super) fn sweep_config(preset: Preset) -> SweepConfig {
         | Preset::Memory
         | Preset::Rastavox
         | Preset::Dynamic
-        | Preset::Vct => SweepConfig {
+        | Preset::Vct
+        | Preset::Volumes => SweepConfig {
             size: (160, 120),
             level: 6,
             warmup: 1,

@@ -8,7 +8,7 @@
 //! covers), `run` (measuring the cells), `sweep` (the knob sweeps), `plot` (PNG plots),
 //! `report` (JSON, CSV, Markdown), `scale` (`--preset scale`, its own table), `memory`
 //! (`--preset memory`), `rastavox` (`--preset rastavox`), `dynamic` (`--preset dynamic`)
-//! and `vct` (`--preset vct`).
+//! `vct` (`--preset vct`) and `volumes` (`--preset volumes`).
 
 mod dynamic;
 mod matrix;
@@ -21,6 +21,7 @@ mod scale;
 mod sweep;
 mod techniques;
 mod vct;
+mod volumes;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -69,6 +70,12 @@ pub enum Preset {
     /// the filter's and its errors (AO, shadow, bounce, lit output) against 256-sample
     /// Monte Carlo, and the defaults on 64 bunnies; writes vct.csv, vct.json and vct.md.
     Vct,
+    /// Volumetric billboards (seed 004): the cloud and the bunny's coverage volume against
+    /// the emission–absorption integral with the slice spacing and mip bias swept (time,
+    /// slice fragments per pixel, PSNR, SSIM), and the thesis's crossover: the cow and
+    /// bunny meshes against their 128³ volumes by screen size; writes volumes.csv,
+    /// volumes.json and volumes.md.
+    Volumes,
 }
 
 /// Arguments of `ssbvb bench`.
@@ -146,6 +153,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     if matches!(args.preset, Preset::Vct) {
         return vct::run(args);
+    }
+    if matches!(args.preset, Preset::Volumes) {
+        return volumes::run(args);
     }
     let m = matrix::matrix(args);
     let techniques = techniques::select(args)?;

@@ -4,6 +4,7 @@
 mod animation;
 mod cone_trace;
 mod rastavox;
+mod volumes;
 mod voxelize_gpu;
 
 use std::path::Path;
@@ -182,11 +183,12 @@ fn render_json_and_bench_quick() {
         let normal = num("normal_error_deg_median").unwrap();
         let (psnr, ssim) = (num("psnr_db").unwrap(), num("ssim").unwrap());
         // Bounds from this preset's measurements on lavapipe (docs/benchmarks.md) with a
-        // margin. Exact techniques (ray-box billboards, ray casters, cubes, RastaVox at pixel
-        // error 0): IoU 1.0, depth
-        // ~1e-6 voxel, face normals, PSNR 15.5 / SSIM 0.53 against the reference's stored
-        // normals (the documented shading-normal convention). Flat billboards: IoU 0.9976+,
-        // depth half a voxel (quads at the voxel centre), stored normals: PSNR 26.9+, SSIM
+        // margin. Every technique shades with the stored normal and reports the entered face
+        // as its geometric normal (normal error 0.00°). Exact techniques (ray-box
+        // billboards, ray casters, cubes, RastaVox at pixel error 0): IoU 1.0, depth ~1e-6
+        // voxel, PSNR 39.7-40.3 / SSIM 0.991+ (the bench pipelines smooth normals, the
+        // reference does not; 15.5 dB when they shaded with face normals). Flat billboards:
+        // IoU 0.9976+, depth half a voxel (quads at the voxel centre), PSNR 26.9+, SSIM
         // 0.957+.
         if matches!(
             r[col("technique")],
@@ -194,12 +196,12 @@ fn render_json_and_bench_quick() {
         ) {
             assert!(iou >= 0.995, "{r:?}");
             assert!((0.45..=0.55).contains(&depth), "{r:?}");
-            assert!(normal <= 45.0, "{r:?}");
+            assert!(normal <= 1.0, "{r:?}");
             assert!(psnr >= 25.0 && ssim >= 0.94, "{r:?}");
         } else {
             assert!(iou >= 0.999, "{r:?}");
             assert!(depth <= 1e-3 && normal <= 0.5, "{r:?}");
-            assert!(psnr >= 14.5 && ssim >= 0.48, "{r:?}");
+            assert!(psnr >= 36.0 && ssim >= 0.98, "{r:?}");
         }
         // Voxel ids per pixel come from the filter's per-pixel slots: the per-pixel SSBVB
         // rows have them (measured 1.0), the others leave the column empty.

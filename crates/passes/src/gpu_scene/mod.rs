@@ -397,6 +397,11 @@ impl GpuScene {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        // A scene without voxel objects (volumes only) still binds one LOD record: a
+        // shader's array binding must hold an element.
+        if lods.is_empty() {
+            lods.push(bytemuck::Zeroable::zeroed());
+        }
         let lod_buffer = storage(ctx, "lods", bytemuck::cast_slice(&lods))?;
         if normals.len() % 2 == 1 {
             normals.push(0);

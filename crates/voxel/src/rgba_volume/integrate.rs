@@ -127,6 +127,50 @@ pub fn integrate(
     ]
 }
 
+/// The reference frame of `volumes` over an opaque frame (or over nothing): per pixel of
+/// `camera` at `size`, the integral along the pixel's centre ray up to the opaque hit,
+/// composited over the opaque colour. Linear premultiplied RGBA, row 0 at the top; the
+/// GPU's output is this in sRGB.
+pub fn render(
+    volumes: &[PlacedVolume],
+    camera: &crate::camera::Camera,
+    size: (u32, u32),
+    opaque: Option<&crate::reference::ReferenceImage>,
+    steps_per_texel: u32,
+) -> Vec<[f32; 4]> {
+    use rayon::prelude::*;
+    let rays = camera.pixel_rays(size.0, size.1);
+    (0..size.0 as usize * size.1 as usize)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = ((i % size.0 as usize) as u32, (i / size.0 as usize) as u32);
+            let (o, d) = rays.ray(x, y);
+            let hit = opaque.and_then(|r| r.hits[i]);
+            let behind = opaque.map_or([0.0; 4], |r| r.colors[i]);
+            let t_end = hit.map_or(f64::INFINITY, |h| h.t);
+            let v = integrate(volumes, o, d, t_end, steps_per_texel);
+            let keep = 1.0 - v[3];
+            std::array::from_fn(|k| v[k] + keep * behind[k])
+        })
+        .collect()
+}
+
+/// Linear premultiplied RGBA → sRGB8 RGBA (the colour target's encoding).
+pub fn to_srgb8(image: &[[f32; 4]]) -> Vec<u8> {
+    use crate::shading::linear_to_srgb8;
+    image
+        .iter()
+        .flat_map(|c| {
+            [
+                linear_to_srgb8(c[0]),
+                linear_to_srgb8(c[1]),
+                linear_to_srgb8(c[2]),
+                (c[3].clamp(0.0, 1.0) * 255.0 + 0.5) as u8,
+            ]
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,0 +1,454 @@
+//! `ssbvb bench --preset volumes`: volumetric billboards (seed 004), two tables.
+//!
+//! 1. **Knobs.** The procedural cloud and the bunny's coverage volume (64³ each) alone at
+//!    the first `--sizes` (default 320x240): `slice_spacing` from 0.25 to 4 texels and
+//!    `mip_bias` 1 and 2, one at a time. Each row: the `VolumeSlices` pass time and the
+//!    frame time, the slices drawn and the slice fragments per covered pixel (counted on
+//!    the CPU from the slice polygons' projected areas: hardware-independent), and PSNR
+//!    and SSIM of the frame against the emission–absorption integral through the finest
+//!    level (4 steps per texel), over the pixels either shows.
+//! 2. **Crossover** (the thesis's chapter 4: when is a volumetric billboard cheaper than
+//!    the mesh it replaces?). The cow (2,903 vertices) and the bunny (35,947) drawn as
+//!    triangles against their 128³ coverage volumes at the default knobs, the object
+//!    `height` pixels tall on a 768x768 frame for heights 32 to 512: each row times the
+//!    `triangles` pass of the mesh frame and the `volumes` pass of the volume frame.
+//!
+//! Writes volumes.csv, volumes.json and volumes.md.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use anyhow::{Context, Result};
+use glam::{DAffine3, DMat4, DVec3, DVec4};
+use serde::Serialize;
+use ssbvb_passes::{GpuScene, Renderer, Scene, TriangleObject, VolumeObject};
+use ssbvb_voxel::camera::Camera;
+use ssbvb_voxel::model::{Mesh, ObjectSpace};
+use ssbvb_voxel::rgba_volume::RgbaVolume;
+use ssbvb_voxel::rgba_volume::integrate::{self, PlacedVolume};
+use ssbvb_voxel::rgba_volume::slicing::{SliceSettings, slice};
+use ssbvb_voxel::rgba_volume::sources::{Cloud, from_mesh_coverage};
+
+use super::BenchArgs;
+use super::run::TimedFrames;
+use crate::render_cmd::assets_dir;
+
+/// The default knobs as `volumetric.ron` writes them (the rows replace this text).
+const DEFAULT_KNOBS: &str = "VolumeSlices(slice_spacing: 0.5, mip_bias: 0.0)";
+
+#[derive(Debug, Serialize, Clone)]
+struct KnobRow {
+    subject: &'static str,
+    sweep: &'static str,
+    width: u32,
+    height: u32,
+    slice_spacing: f32,
+    mip_bias: f32,
+    level: usize,
+    slices: u32,
+    fragments_per_covered_pixel: f64,
+    covered_pixels: usize,
+    frame_ms: f64,
+    volume_ms: Option<f64>,
+    psnr_db: f64,
+    ssim: Option<f64>,
+}
+
+#[derive(Debug, Serialize, Clone)]
+struct CrossoverRow {
+    model: &'static str,
+    vertices: usize,
+    triangles: usize,
+    volume_edge: u32,
+    /// The object's height on screen (pixels).
+    screen_height: u32,
+    mesh_ms: Option<f64>,
+    volume_ms: Option<f64>,
+    /// volume_ms / mesh_ms: below 1 the volume is cheaper.
+    volume_vs_mesh: Option<f64>,
+    volume_fragments_per_covered_pixel: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct VolumesReport {
+    adapter: String,
+    adapter_is_software: bool,
+    knobs: Vec<KnobRow>,
+    crossover: Vec<CrossoverRow>,
+}
+
+/// A mesh as a triangle object in the object space its volume uses ([-1, 1]³ around its
+/// bounding box), grey, with area-weighted vertex normals.
+fn mesh_object(mesh: &Mesh, to_world: DAffine3) -> TriangleObject {
+    let (lo, hi) = mesh.positions.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(p.as_dvec3()), hi.max(p.as_dvec3())),
+    );
+    let space = ObjectSpace::from_bounds(lo, hi);
+    let positions: Vec<[f32; 3]> = mesh
+        .positions
+        .iter()
+        .map(|p| space.to_object(p.as_dvec3()).as_vec3().into())
+        .collect();
+    let mut normals = vec![glam::Vec3::ZERO; positions.len()];
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| glam::Vec3::from(positions[i as usize]));
+        let n = (b - a).cross(c - a);
+        for &i in t {
+            normals[i as usize] += n;
+        }
+    }
+    TriangleObject {
+        positions,
+        normals: normals
+            .iter()
+            .map(|n| n.normalize_or(glam::Vec3::Y).into())
+            .collect(),
+        indices: mesh.triangles.iter().flatten().copied().collect(),
+        color: [0.7, 0.7, 0.7, 1.0],
+        transform: to_world,
+    }
+}
+
+/// Sum of the slice triangles' projected areas (pixels): the fragments the slices would
+/// shade with no depth test and no discards.
+fn slice_fragments(
+    volumes: &[(&RgbaVolume, DAffine3)],
+    camera: &Camera,
+    size: (u32, u32),
+    settings: SliceSettings,
+) -> (f64, u32, usize) {
+    let g = slice(volumes, camera, size, settings);
+    let vp: DMat4 = camera.view_projection(f64::from(size.0) / f64::from(size.1));
+    let px = |p: [f32; 3]| {
+        let w = camera.position + DVec3::new(p[0].into(), p[1].into(), p[2].into());
+        let c: DVec4 = vp * w.extend(1.0);
+        DVec3::new(
+            (c.x / c.w * 0.5 + 0.5) * f64::from(size.0),
+            (c.y / c.w * 0.5 + 0.5) * f64::from(size.1),
+            0.0,
+        )
+    };
+    let area: f64 = g
+        .vertices
+        .chunks(3)
+        .map(|t| {
+            let [a, b, c] = [px(t[0].0), px(t[1].0), px(t[2].0)];
+            (b - a).cross(c - a).length() * 0.5
+        })
+        .sum();
+    let slices = g.volumes.iter().map(|v| v.slices).sum();
+    (area, slices, g.volumes.first().map_or(0, |v| v.level))
+}
+
+fn render_frame(
+    ctx: &ssbvb_gpu::GpuContext,
+    pipeline: &ssbvb_graph::ResolvedPipeline,
+    scene: Scene,
+    camera: &Camera,
+    size: (u32, u32),
+    frames: usize,
+) -> Result<(TimedFrames, Vec<u8>)> {
+    let mut gpu_scene = GpuScene::new(ctx, scene)?;
+    let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline.clone(), size)?;
+    let timed = TimedFrames::run(ctx, &mut renderer, &mut gpu_scene, camera, frames)?;
+    let i = renderer
+        .resource("color")
+        .context("the volumetric pipeline has no `color`")?;
+    let t = ctx.read_texture(
+        &renderer.resources.texture(i).texture,
+        ssbvb_gpu::wgpu::TextureAspect::All,
+    )?;
+    Ok((timed, t.bytes))
+}
+
+fn psnr_ssim(gpu: &[u8], reference: &[u8], size: (u32, u32)) -> (f64, Option<f64>, usize) {
+    let (mut sq, mut n) = (0.0f64, 0usize);
+    let mut a = Vec::with_capacity(gpu.len() / 4 * 3);
+    let mut b = Vec::with_capacity(gpu.len() / 4 * 3);
+    for (p, q) in gpu.chunks(4).zip(reference.chunks(4)) {
+        let drawn = p[3] > 0 || q[3] > 0;
+        if drawn {
+            sq += (0..3)
+                .map(|c| (f64::from(p[c]) - f64::from(q[c])).powi(2))
+                .sum::<f64>();
+            n += 1;
+        }
+        a.extend_from_slice(if drawn { &p[..3] } else { &[0, 0, 0] });
+        b.extend_from_slice(if drawn { &q[..3] } else { &[0, 0, 0] });
+    }
+    let psnr = 10.0 * (255.0f64 * 255.0 / (sq / (3 * n.max(1)) as f64).max(1e-12)).log10();
+    let ssim = match (
+        image::RgbImage::from_raw(size.0, size.1, a),
+        image::RgbImage::from_raw(size.0, size.1, b),
+    ) {
+        (Some(x), Some(y)) => {
+            image_compare::rgb_similarity_structure(&image_compare::Algorithm::MSSIMSimple, &x, &y)
+                .ok()
+                .map(|s| s.score)
+        }
+        _ => None,
+    };
+    (psnr, ssim, n)
+}
+
+fn camera_at(distance: f64) -> Camera {
+    let dir = DVec3::new(0.45, 0.3, 1.0).normalize();
+    let mut c = Camera::new(dir * distance, DVec3::ZERO);
+    c.near = 0.01;
+    c.far = 0.0;
+    c.far = f64::INFINITY;
+    c
+}
+
+/// Runs `ssbvb bench --preset volumes`.
+pub(super) fn run(args: &BenchArgs) -> Result<()> {
+    let path = assets_dir().join("pipelines/volumetric.ron");
+    let base =
+        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    anyhow::ensure!(
+        base.contains(DEFAULT_KNOBS),
+        "{} no longer writes `{DEFAULT_KNOBS}`",
+        path.display()
+    );
+    let resolve = |text: &str| {
+        ssbvb_graph::resolve_str(text, &path.display().to_string())
+            .map_err(|e| anyhow::anyhow!("{e}"))
+    };
+    let default = resolve(&base)?;
+    let ctx = crate::adapter_cmd::headless_context(&[&default])?;
+    let size = args
+        .sizes
+        .as_ref()
+        .and_then(|s| s.first().copied())
+        .unwrap_or((320, 240));
+    let frames = args.frames.unwrap_or(3).max(1);
+    let models = assets_dir().join("models");
+    let load_mesh =
+        |file: &str| -> Result<Mesh> { Ok(ssbvb_voxel::load::load_mesh(&models.join(file))?) };
+    let bunny = load_mesh("bunny.obj")?;
+    let subjects: [(&'static str, Arc<RgbaVolume>); 2] = [
+        ("cloud", Arc::new(Cloud::default().volume(64)?)),
+        ("bunny volume", Arc::new(from_mesh_coverage(&bunny, 6)?)),
+    ];
+    let mut knobs = Vec::new();
+    let camera = {
+        let mut c = Camera::new(DVec3::new(1.4, 0.9, 2.9), DVec3::ZERO);
+        c.near = 0.01;
+        c
+    };
+    for (subject, volume) in &subjects {
+        let xf = DAffine3::IDENTITY;
+        let placed = [PlacedVolume {
+            volume,
+            object_to_world: xf,
+            level: 0,
+        }];
+        let reference = integrate::to_srgb8(&integrate::render(&placed, &camera, size, None, 4));
+        let mut settings = vec![("default", 0.5f32, 0.0f32)];
+        for s in [0.25, 1.0, 2.0, 4.0] {
+            settings.push(("slice_spacing", s, 0.0));
+        }
+        for b in [1.0, 2.0] {
+            settings.push(("mip_bias", 0.5, b));
+        }
+        for (sweep, spacing, bias) in settings {
+            let text = base.replace(
+                DEFAULT_KNOBS,
+                &format!("VolumeSlices(slice_spacing: {spacing:?}, mip_bias: {bias:?})"),
+            );
+            let scene = Scene {
+                volumes: vec![VolumeObject {
+                    name: (*subject).into(),
+                    volume: volume.clone(),
+                    instances: vec![xf],
+                }],
+                ..Default::default()
+            };
+            let (timed, gpu) = render_frame(&ctx, &resolve(&text)?, scene, &camera, size, frames)?;
+            let s = SliceSettings {
+                spacing: f64::from(spacing),
+                mip_bias: f64::from(bias),
+            };
+            let (area, slices, level) = slice_fragments(&[(volume, xf)], &camera, size, s);
+            let (psnr, ssim, covered) = psnr_ssim(&gpu, &reference, size);
+            let row = KnobRow {
+                subject,
+                sweep,
+                width: size.0,
+                height: size.1,
+                slice_spacing: spacing,
+                mip_bias: bias,
+                level,
+                slices,
+                fragments_per_covered_pixel: area / covered.max(1) as f64,
+                covered_pixels: covered,
+                frame_ms: timed.frame_ms,
+                volume_ms: timed.pass_ms("volumes"),
+                psnr_db: psnr,
+                ssim,
+            };
+            if !args.json {
+                println!(
+                    "{subject} {sweep} spacing {spacing} bias {bias}: level {level}, {slices} \
+                     slices, {:.1} fragments / px, volume pass {} ms, PSNR {psnr:.2} dB",
+                    row.fragments_per_covered_pixel,
+                    row.volume_ms.map_or("-".into(), |v| format!("{v:.2}"))
+                );
+            }
+            knobs.push(row);
+        }
+    }
+    // The crossover on a square frame.
+    let square = (768, 768);
+    let fov = camera_at(1.0).fov_y_deg.to_radians();
+    let mut crossover = Vec::new();
+    for (model, file) in [("cow", "cow.obj"), ("bunny", "bunny.obj")] {
+        let mesh = load_mesh(file)?;
+        let volume = Arc::new(from_mesh_coverage(&mesh, 7)?);
+        for height in [32u32, 64, 128, 256, 512] {
+            // The object space's 2 units span `height` of the frame's rows.
+            let distance =
+                2.0 * f64::from(square.1) / (f64::from(height) * 2.0 * (fov * 0.5).tan());
+            let cam = camera_at(distance);
+            let mesh_scene = Scene {
+                triangles: vec![mesh_object(&mesh, DAffine3::IDENTITY)],
+                ..Default::default()
+            };
+            let volume_scene = Scene {
+                volumes: vec![VolumeObject {
+                    name: model.into(),
+                    volume: volume.clone(),
+                    instances: vec![DAffine3::IDENTITY],
+                }],
+                ..Default::default()
+            };
+            let (m, _) = render_frame(&ctx, &default, mesh_scene, &cam, square, frames)?;
+            let (v, img) = render_frame(&ctx, &default, volume_scene, &cam, square, frames)?;
+            let covered = img.chunks(4).filter(|p| p[3] > 0).count();
+            let (area, ..) = slice_fragments(
+                &[(&volume, DAffine3::IDENTITY)],
+                &cam,
+                square,
+                SliceSettings::default(),
+            );
+            let (mesh_ms, volume_ms) = (m.pass_ms("triangles"), v.pass_ms("volumes"));
+            let row = CrossoverRow {
+                model,
+                vertices: mesh.positions.len(),
+                triangles: mesh.triangles.len(),
+                volume_edge: 128,
+                screen_height: height,
+                mesh_ms,
+                volume_ms,
+                volume_vs_mesh: mesh_ms.zip(volume_ms).map(|(m, v)| v / m),
+                volume_fragments_per_covered_pixel: area / covered.max(1) as f64,
+            };
+            if !args.json {
+                println!(
+                    "crossover {model} at {height} px: mesh {} ms, volume {} ms",
+                    mesh_ms.map_or("-".into(), |v| format!("{v:.2}")),
+                    volume_ms.map_or("-".into(), |v| format!("{v:.2}"))
+                );
+            }
+            crossover.push(row);
+        }
+    }
+    let report = VolumesReport {
+        adapter: ctx.report().to_string(),
+        adapter_is_software: ctx.report().is_software,
+        knobs,
+        crossover,
+    };
+    write(&args.out, &report)?;
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        println!("wrote {}/volumes.{{csv,json,md}}", args.out.display());
+    }
+    Ok(())
+}
+
+fn opt(v: Option<f64>, digits: usize) -> String {
+    v.map_or("–".into(), |v| format!("{v:.digits$}"))
+}
+
+fn write(dir: &Path, r: &VolumesReport) -> Result<()> {
+    let mut md = format!(
+        "# Volumetric billboards\n\nAdapter: {}.\n\n## Knobs\n\n| subject | sweep | size | spacing (texels) | mip bias | level | slices | fragments / covered px | frame ms | volume pass ms | PSNR dB | SSIM |\n|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        r.adapter
+    );
+    let mut csv = String::from(
+        "table,subject,sweep,width,height,slice_spacing,mip_bias,level,slices,fragments_per_covered_pixel,covered_pixels,frame_ms,volume_ms,psnr_db,ssim,vertices,triangles,screen_height,mesh_ms,volume_vs_mesh\n",
+    );
+    let c = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.4}"));
+    for w in &r.knobs {
+        md.push_str(&format!(
+            "| {} | {} | {}x{} | {} | {} | {} | {} | {:.1} | {:.1} | {} | {:.2} | {} |\n",
+            w.subject,
+            w.sweep,
+            w.width,
+            w.height,
+            w.slice_spacing,
+            w.mip_bias,
+            w.level,
+            w.slices,
+            w.fragments_per_covered_pixel,
+            w.frame_ms,
+            opt(w.volume_ms, 2),
+            w.psnr_db,
+            opt(w.ssim, 4)
+        ));
+        csv.push_str(&format!(
+            "knobs,{},{},{},{},{},{},{},{},{:.3},{},{:.3},{},{:.3},{},,,,,\n",
+            w.subject,
+            w.sweep,
+            w.width,
+            w.height,
+            w.slice_spacing,
+            w.mip_bias,
+            w.level,
+            w.slices,
+            w.fragments_per_covered_pixel,
+            w.covered_pixels,
+            w.frame_ms,
+            c(w.volume_ms),
+            w.psnr_db,
+            c(w.ssim)
+        ));
+    }
+    md.push_str("\n## Crossover: volume against mesh by screen size (768x768)\n\n| model | vertices | triangles | volume | object height px | mesh pass ms | volume pass ms | volume / mesh | volume fragments / covered px |\n|---|---:|---:|---|---:|---:|---:|---:|---:|\n");
+    for w in &r.crossover {
+        md.push_str(&format!(
+            "| {} | {} | {} | {}³ | {} | {} | {} | {} | {:.1} |\n",
+            w.model,
+            w.vertices,
+            w.triangles,
+            w.volume_edge,
+            w.screen_height,
+            opt(w.mesh_ms, 2),
+            opt(w.volume_ms, 2),
+            opt(w.volume_vs_mesh, 2),
+            w.volume_fragments_per_covered_pixel
+        ));
+        csv.push_str(&format!(
+            "crossover,{},,768,768,0.5,0,,,{:.3},,,{},,,{},{},{},{},{}\n",
+            w.model,
+            w.volume_fragments_per_covered_pixel,
+            c(w.volume_ms),
+            w.vertices,
+            w.triangles,
+            w.screen_height,
+            c(w.mesh_ms),
+            c(w.volume_vs_mesh)
+        ));
+    }
+    super::report::write_files(
+        dir,
+        vec![
+            ("volumes.csv", csv),
+            ("volumes.json", serde_json::to_string_pretty(r)?),
+            ("volumes.md", md),
+        ],
+    )
+}
