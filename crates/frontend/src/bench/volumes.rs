@@ -10,7 +10,7 @@
 //! 2. **Crossover** (the thesis's chapter 4: when is a volumetric billboard cheaper than
 //!    the mesh it replaces?). The cow (2,903 vertices) and the bunny (35,947) drawn as
 //!    triangles against their 128³ coverage volumes at the default knobs, the object
-//!    `height` pixels tall on a 768x768 frame for heights 32 to 512: each row times the
+//!    `height` pixels tall on a 768x768 frame for heights 16 to 512: each row times the
 //!    `triangles` pass of the mesh frame and the `volumes` pass of the volume frame.
 //!
 //! Writes volumes.csv, volumes.json and volumes.md.
@@ -67,6 +67,12 @@ struct CrossoverRow {
     /// volume_ms / mesh_ms: below 1 the volume is cheaper.
     volume_vs_mesh: Option<f64>,
     volume_fragments_per_covered_pixel: f64,
+    /// GPU bytes of the volume's atlas (stored bricks with aprons, every level, tables).
+    volume_atlas_bytes: u64,
+    /// The same levels dense, 4 bytes a texel (the thesis's uncompressed 3D texture).
+    volume_dense_bytes: u64,
+    /// The mesh's vertex (position + normal, 24 bytes) and index (12 per triangle) bytes.
+    mesh_bytes: u64,
 }
 
 #[derive(Debug, Serialize)]
@@ -306,7 +312,9 @@ pub(super) fn run(args: &BenchArgs) -> Result<()> {
     for (model, file) in [("cow", "cow.obj"), ("bunny", "bunny.obj")] {
         let mesh = load_mesh(file)?;
         let volume = Arc::new(from_mesh_coverage(&mesh, 7)?);
-        for height in [32u32, 64, 128, 256, 512] {
+        let atlas = ssbvb_voxel::rgba_volume::atlas::VolumeAtlas::build(&[&volume], u32::MAX)
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        for height in [16u32, 24, 32, 48, 64, 128, 256, 512] {
             // The object space's 2 units span `height` of the frame's rows.
             let distance =
                 2.0 * f64::from(square.1) / (f64::from(height) * 2.0 * (fov * 0.5).tan());
@@ -343,6 +351,9 @@ pub(super) fn run(args: &BenchArgs) -> Result<()> {
                 volume_ms,
                 volume_vs_mesh: mesh_ms.zip(volume_ms).map(|(m, v)| v / m),
                 volume_fragments_per_covered_pixel: area / covered.max(1) as f64,
+                volume_atlas_bytes: atlas.bytes(),
+                volume_dense_bytes: volume.dense_bytes(),
+                mesh_bytes: mesh.positions.len() as u64 * 24 + mesh.triangles.len() as u64 * 12,
             };
             if !args.json {
                 println!(
@@ -417,14 +428,17 @@ fn write(dir: &Path, r: &VolumesReport) -> Result<()> {
             c(w.ssim)
         ));
     }
-    md.push_str("\n## Crossover: volume against mesh by screen size (768x768)\n\n| model | vertices | triangles | volume | object height px | mesh pass ms | volume pass ms | volume / mesh | volume fragments / covered px |\n|---|---:|---:|---|---:|---:|---:|---:|---:|\n");
+    md.push_str("\n## Crossover: volume against mesh by screen size (768x768)\n\n| model | vertices | triangles | mesh MiB | volume | atlas MiB | dense MiB | object height px | mesh pass ms | volume pass ms | volume / mesh | volume fragments / covered px |\n|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|\n");
     for w in &r.crossover {
         md.push_str(&format!(
-            "| {} | {} | {} | {}³ | {} | {} | {} | {} | {:.1} |\n",
+            "| {} | {} | {} | {:.2} | {}³ | {:.2} | {:.2} | {} | {} | {} | {} | {:.1} |\n",
             w.model,
             w.vertices,
             w.triangles,
+            w.mesh_bytes as f64 / 1048576.0,
             w.volume_edge,
+            w.volume_atlas_bytes as f64 / 1048576.0,
+            w.volume_dense_bytes as f64 / 1048576.0,
             w.screen_height,
             opt(w.mesh_ms, 2),
             opt(w.volume_ms, 2),
