@@ -24,8 +24,8 @@ struct SliceVolume {
 // Per brick of every level of every volume: its slot in the atlas, or EMPTY_BRICK.
 @group(1) @binding(3) var<storage, read> brick_table: array<u32>;
 @group(1) @binding(4) var<storage, read> slice_volumes: array<SliceVolume>;
-// Triangle vertices: camera-relative world position, w: the volume's index (bits).
-@group(1) @binding(5) var<storage, read> slice_vertices: array<vec4<f32>>;
+// Triangle vertices: camera-relative world position (f32 bits), w: the volume's index.
+@group(1) @binding(5) var<storage, read> slice_vertices: array<vec4<u32>>;
 // The slices' premultiplied sum (volume_slices.rs), read by the resolve.
 @group(1) @binding(6) var accumulated: texture_2d<f32>;
 
@@ -42,10 +42,11 @@ struct VsOut {
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32) -> VsOut {
     let v = slice_vertices[vi];
+    let p = bitcast<vec3<f32>>(v.xyz);
     var out: VsOut;
-    out.rel = v.xyz;
-    out.volume = bitcast<u32>(v.w);
-    out.clip = frame.view_proj * vec4(v.xyz, 1.0);
+    out.rel = p;
+    out.volume = v.w;
+    out.clip = frame.view_proj * vec4(p, 1.0);
     return out;
 }
 

@@ -13,8 +13,8 @@
 //!
 //! The volumes live in one atlas of bricks with aprons
 //! (`ssbvb_voxel::rgba_volume::atlas`, built when the pass is made): empty bricks are not
-//! stored, and one hardware-filtered fetch per slice fragment gives exactly the CPU
-//! reference's trilinear sample. A fragment corrects its alpha from the texel's reference
+//! stored, and one hardware-filtered fetch per slice fragment gives the CPU reference's
+//! trilinear sample (up to the GPU's filter-weight precision). A fragment corrects its alpha from the texel's reference
 //! length to the slab its slice stands for along the pixel's ray.
 
 use bytemuck::{Pod, Zeroable};
@@ -100,8 +100,25 @@ pub struct VolumeSlices {
 impl VolumeSlices {
     /// Bytes of the atlas and its brick tables on the GPU.
     pub fn atlas_bytes(&self) -> u64 {
-        self.atlas.bytes()
+        u64::from(self.atlas.dims[0])
+            * u64::from(self.atlas.dims[1])
+            * u64::from(self.atlas.dims[2])
+            * 4
+            + self.atlas.table.len() as u64 * 4
     }
+}
+
+/// Whether `m`'s linear part is a rotation times one positive scale.
+fn uniform_scale(m: &glam::DAffine3) -> bool {
+    let c = [m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis];
+    let s = c[0].length();
+    let tol = 1e-6 * s;
+    s > 0.0
+        && s.is_finite()
+        && c.iter().all(|a| (a.length() - s).abs() <= tol)
+        && c[0].dot(c[1]).abs() <= tol * s
+        && c[1].dot(c[2]).abs() <= tol * s
+        && c[0].dot(c[2]).abs() <= tol * s
 }
 
 fn upload_atlas(
@@ -239,11 +256,28 @@ impl PassImpl for VolumeSlices {
     fn new(init: &PassInit<'_>, params: &VolumeSlicesParams) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
         let d = &ctx.device;
+        // Texel lengths and the level by distance assume a uniform scale (no shear).
+        for v in &scene.scene.volumes {
+            for (j, m) in v.instances.iter().enumerate() {
+                if !uniform_scale(m) {
+                    return Err(PassError::BadScene(format!(
+                        "pass `{}`: volume `{}` instance {j} is scaled unevenly or sheared; \
+                         volumes take a rotation, one scale and a translation",
+                        pass.name, v.name
+                    )));
+                }
+            }
+        }
         let volumes: Vec<_> = scene.scene.volumes.iter().map(|v| &*v.volume).collect();
         let limit = d.limits().max_texture_dimension_3d;
         let atlas = VolumeAtlas::build(&volumes, limit)
             .map_err(|e| PassError::TooLarge(format!("pass `{}`: {e}", pass.name)))?;
         let (texture, table) = upload_atlas(ctx, &atlas);
+        // Only the levels' places are needed from here on, not the texels.
+        let atlas = VolumeAtlas {
+            texels: Vec::new(),
+            ..atlas
+        };
         let view = texture.create_view(&Default::default());
         let sampler = d.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("volume atlas"),
@@ -371,11 +405,30 @@ impl PassNode for VolumeSlices {
                 }
             })
             .collect();
-        let vertices: Vec<[f32; 4]> = geometry
+        // Position bits and the volume's index, read as u32 in the shader.
+        let vertices: Vec<[u32; 4]> = geometry
             .vertices
             .iter()
-            .map(|(p, v)| [p[0], p[1], p[2], f32::from_bits(*v)])
+            .map(|(p, v)| [p[0].to_bits(), p[1].to_bits(), p[2].to_bits(), *v])
             .collect();
+        let bytes = vertices.len() as u64 * 16;
+        let limit = rec.gpu.device.limits().max_storage_buffer_binding_size;
+        if bytes > limit {
+            let (k, most) = geometry
+                .volumes
+                .iter()
+                .zip(&owners)
+                .max_by_key(|(s, _)| s.slices)
+                .map(|(s, &k)| (k, s.slices))
+                .unwrap_or_default();
+            return Err(PassError::TooLarge(format!(
+                "pass `{}`: this view's volume slices take {bytes} bytes, beyond the device's \
+                 {limit} per binding (volume `{}` alone draws {most} slices); raise \
+                 slice_spacing or mip_bias, or show fewer volumes",
+                rec.pass.name,
+                rec.scene.scene.volumes.get(k).map_or("?", |v| v.name.as_str())
+            )));
+        }
         fill(
             rec.gpu,
             &mut self.volumes,

@@ -202,7 +202,6 @@ fn camera_at(distance: f64) -> Camera {
     let dir = DVec3::new(0.45, 0.3, 1.0).normalize();
     let mut c = Camera::new(dir * distance, DVec3::ZERO);
     c.near = 0.01;
-    c.far = 0.0;
     c.far = f64::INFINITY;
     c
 }

@@ -5,10 +5,11 @@
 //! holds texels `8b .. 8b + 7` of its level; stored with its neighbours' texels
 //! `8b − 1` and `8b + 8` around it (10³ texels), the whole footprint of any sample whose
 //! lower texel lies in the brick is inside the stored block, so one filtered fetch gives
-//! exactly [`RgbaVolume::sample`]. A brick is stored when any texel of its 10³ block is
+//! [`RgbaVolume::sample`] (exactly on the CPU; on a GPU up to its filter weights'
+//! precision, often 8 fractional bits). A brick is stored when any texel of its 10³ block is
 //! not empty, so a sample next to an empty brick still sees its neighbour's texels.
-//! [`VolumeAtlas::sample`] is the shader's lookup on the CPU (slicing.wgsl follows it
-//! line by line); the tests hold it to `RgbaVolume::sample`.
+//! [`VolumeAtlas::sample`] is the shader's lookup on the CPU (volume_slices.wgsl follows
+//! it line by line); the tests hold it to `RgbaVolume::sample`.
 
 use super::{BRICK, EMPTY_BRICK, RgbaVolume, unquantize};
 

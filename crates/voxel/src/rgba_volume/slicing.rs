@@ -4,8 +4,10 @@
 //! back to front. The thesis builds the polygons in a geometry shader on proxy prisms;
 //! wgpu has none, so they are built here and pulled by the vertex shader.
 //!
-//! Slice planes sit at whole multiples of the spacing in view depth (`z = k Δ`), so they do
-//! not swim as the volume moves. The reference ([`super::integrate`]) samples the same
+//! Slice planes sit at whole multiples of the spacing from the volume's centre in view
+//! depth (`z = z_centre + k Δ`), so moving the camera or the volume along the view axis
+//! does not move the samples through the volume (they still turn with the view). Volumes
+//! wholly outside the view frustum get no slices. The reference ([`super::integrate`]) samples the same
 //! level; a sample stands for the slab of thickness `Δ / cos θ` along its pixel's ray (θ
 //! between ray and view axis), which is what the shader's opacity correction uses.
 
@@ -127,14 +129,17 @@ pub fn slice(
         let lo = depth.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = depth.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let lo = lo.max(camera.near * 1.0001);
+        let centre = (m.translation - eye).dot(forward);
         let mut count = 0u32;
-        if hi > lo && lo.is_finite() && hi.is_finite() {
-            let first = (lo / spacing_world).floor() as i64 + 1;
-            let last = (hi / spacing_world).ceil() as i64 - 1;
-            // A guard against absurd counts (a huge volume at a tiny spacing).
+        let visible = in_frustum(&corners, (right, up, forward), camera, size);
+        if visible && hi > lo && lo.is_finite() && hi.is_finite() && centre.is_finite() {
+            let first = ((lo - centre) / spacing_world).floor() as i64 + 1;
+            let last = ((hi - centre) / spacing_world).ceil() as i64 - 1;
+            // The spacing is at least 0.05 texel of the volume's own level, so a volume
+            // has at most ~18,000 slices at any scale; this only stops a broken input.
             let last = last.min(first + 1_000_000);
             for k in first..=last {
-                let z = k as f64 * spacing_world;
+                let z = centre + k as f64 * spacing_world;
                 let poly = cut(&corners, &depth, z, right, up);
                 if poly.len() >= 3 {
                     slices.push((z, vi as u32, poly));
@@ -160,6 +165,28 @@ pub fn slice(
         }
     }
     out
+}
+
+/// Whether any part of the box with camera-relative `corners` can be in the view: false
+/// when all corners lie outside one plane of the frustum (near, left, right, bottom, top).
+fn in_frustum(
+    corners: &[DVec3],
+    (right, up, forward): (DVec3, DVec3, DVec3),
+    camera: &Camera,
+    size: (u32, u32),
+) -> bool {
+    let tan_y = (camera.fov_y_deg.to_radians() * 0.5).tan();
+    let tan_x = tan_y * f64::from(size.0.max(1)) / f64::from(size.1.max(1));
+    let view: Vec<DVec3> = corners
+        .iter()
+        .map(|c| DVec3::new(c.dot(right), c.dot(up), c.dot(forward)))
+        .collect();
+    let outside = |f: &dyn Fn(&DVec3) -> bool| view.iter().all(f);
+    !(outside(&|v| v.z < camera.near)
+        || outside(&|v| v.x > v.z * tan_x)
+        || outside(&|v| v.x < -v.z * tan_x)
+        || outside(&|v| v.y > v.z * tan_y)
+        || outside(&|v| v.y < -v.z * tan_y))
 }
 
 /// The convex polygon where the plane of view depth `z` cuts the box with `corners`
@@ -269,6 +296,44 @@ mod tests {
         );
         // The far volume's slices start before the near one's end.
         assert!(g.vertices.first().unwrap().1 == 1 && g.vertices.last().unwrap().1 == 0);
+    }
+
+    /// Moving the camera along its view axis by a fraction of the spacing keeps the slice
+    /// planes where they are in the volume (no swimming); a volume behind the camera or
+    /// beside the frustum gets no slices.
+    #[test]
+    fn planes_stay_put_in_the_volume_and_hidden_volumes_get_none() {
+        let v = solid(16);
+        let m = DAffine3::from_translation(DVec3::new(0.1, 0.0, -0.3));
+        let at = |z: f64| Camera::new(DVec3::new(0.0, 0.0, z), DVec3::new(0.0, 0.0, z - 1.0));
+        let planes = |c: &Camera| {
+            let g = slice(&[(&v, m)], c, (320, 240), SliceSettings::default());
+            let (.., forward) = c.basis();
+            let mut z: Vec<i64> = g
+                .vertices
+                .chunks(3)
+                .map(|t| {
+                    let p = DVec3::new(t[0].0[0].into(), t[0].0[1].into(), t[0].0[2].into());
+                    // World depth of the plane along -Z, in micro-units.
+                    ((c.position + p).dot(forward) * 1e6).round() as i64
+                })
+                .collect();
+            z.dedup();
+            z
+        };
+        let (a, b) = (planes(&at(4.0)), planes(&at(4.0 - 0.0137)));
+        assert!(a.len() > 20, "{}", a.len());
+        // World positions of the planes: the same set (up to f32 vertex rounding).
+        let close = |x: &Vec<i64>, y: &Vec<i64>| {
+            x.len() == y.len() && x.iter().zip(y).all(|(p, q)| (p - q).abs() <= 2)
+        };
+        assert!(close(&a, &b), "{:?}\n{:?}", &a[..3], &b[..3]);
+        let behind = Camera::new(DVec3::new(0.0, 0.0, -4.0), DVec3::new(0.0, 0.0, -10.0));
+        let beside = Camera::new(DVec3::new(30.0, 0.0, 4.0), DVec3::new(30.0, 0.0, 0.0));
+        for c in [behind, beside] {
+            let g = slice(&[(&v, m)], &c, (320, 240), SliceSettings::default());
+            assert!(g.vertices.is_empty() && g.volumes[0].slices == 0);
+        }
     }
 
     /// Far away the level coarsens, one level per doubling of distance; the bias moves it;
