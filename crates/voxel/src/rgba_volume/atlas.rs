@@ -254,6 +254,15 @@ mod tests {
         }
         assert!(lit > 1000, "{lit}");
         assert!(worst < 1e-6, "{worst}");
+        // The grid holds every stored brick without a wasted layer of slots.
+        let slots = atlas.grid.iter().product::<u32>();
+        assert!(
+            slots >= atlas.stored && slots < atlas.stored + atlas.grid[0] * atlas.grid[1],
+            "{:?} for {}",
+            atlas.grid,
+            atlas.stored
+        );
+        assert_eq!(atlas.dims, atlas.grid.map(|g| g * 10));
     }
 
     /// Empty bricks are not stored, and a too-small device limit names what is needed.
@@ -273,9 +282,15 @@ mod tests {
         let atlas = VolumeAtlas::build(&[&v], 2048).unwrap();
         // One brick per level, 7 levels (64 → 1).
         assert_eq!(atlas.stored, 7);
-        let err = VolumeAtlas::build(&[&v], 16).unwrap_err();
-        assert_eq!(err.limit, 16);
-        assert!(err.needed.iter().any(|&d| d > 16), "{err}");
+        // Seven 10³ blocks in a 2×2×2 grid: 20³ texels of 4 bytes, and one table entry per
+        // brick position of every level (512 + 64 + 8 + 1 + 1 + 1 + 1).
+        assert_eq!(atlas.dims, [20; 3]);
+        assert_eq!(atlas.bytes(), 20 * 20 * 20 * 4 + 588 * 4);
+        // An edge limit equal to the size needed is enough; one less is refused.
+        assert!(VolumeAtlas::build(&[&v], 20).is_ok());
+        let err = VolumeAtlas::build(&[&v], 19).unwrap_err();
+        assert_eq!(err.limit, 19);
+        assert_eq!(err.needed, [20; 3]);
         assert!(err.to_string().contains("7 bricks"), "{err}");
     }
 }

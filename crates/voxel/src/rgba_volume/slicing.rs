@@ -259,12 +259,34 @@ mod tests {
         assert_eq!(g.volumes.len(), 2);
         assert!(g.vertices.len().is_multiple_of(3));
         for (vi, (m, sv)) in [a, b].iter().zip(&g.volumes).enumerate() {
-            let half = level_box(&v, sv.level);
+            // Level 0 of 16³ at this distance: the box [-1, 1]³ widened by half a texel
+            // (1/16), the reference length a texel edge (2/16) times the scale, and the
+            // slices half of that apart.
+            assert_eq!(sv.level, 0);
+            let half = DVec3::splat(1.0 + 1.0 / 16.0);
+            let scale = m.matrix3.x_axis.length();
+            assert!((sv.h_world - 2.0 / 16.0 * scale).abs() < 1e-12, "{sv:?}");
+            assert!(
+                (sv.spacing_world - 0.5 * sv.h_world).abs() < 1e-12,
+                "{sv:?}"
+            );
             let tris: Vec<_> = g
                 .vertices
                 .chunks(3)
                 .filter(|t| t[0].1 == vi as u32)
                 .collect();
+            // One reported slice per distinct plane among its triangles.
+            let (.., forward) = camera.basis();
+            let mut planes: Vec<i64> = tris
+                .iter()
+                .map(|t| {
+                    let p = t[0].0;
+                    let z = DVec3::new(p[0].into(), p[1].into(), p[2].into()).dot(forward);
+                    (z / sv.spacing_world).round() as i64
+                })
+                .collect();
+            planes.dedup();
+            assert_eq!(sv.slices as usize, planes.len(), "volume {vi}");
             let summed: f64 = tris.iter().map(|t| area(t)).sum::<f64>() * sv.spacing_world;
             let exact = (2.0 * half.x) * (2.0 * half.y) * (2.0 * half.z) * m.matrix3.determinant();
             assert!(
@@ -334,6 +356,94 @@ mod tests {
             let g = slice(&[(&v, m)], &c, (320, 240), SliceSettings::default());
             assert!(g.vertices.is_empty() && g.volumes[0].slices == 0);
         }
+    }
+
+    /// The level switches where a level-0 texel (2 / 64 object units, times the scale)
+    /// covers exactly 2^k pixels at the distance from the eye to the volume's bounding
+    /// sphere (radius √3 × scale): 1 % either side of the switch gives k − 1 and k.
+    #[test]
+    fn the_level_switches_where_a_texel_covers_a_power_of_two_pixels() {
+        let v = solid(64);
+        let (scale, centre) = (1.5, DVec3::new(3.0, -2.0, 5.0));
+        let m = DAffine3::from_scale_rotation_translation(
+            DVec3::splat(scale),
+            glam::DQuat::from_rotation_y(0.4),
+            centre,
+        );
+        let texel = 2.0 / 64.0 * scale;
+        let tan = (45f64.to_radians() * 0.5).tan();
+        for k in 1..4 {
+            for (factor, want) in [(0.99, k - 1), (1.01, k)] {
+                // pixel = 2 d tan(fov / 2) / 240 = 2^k texel × factor.
+                let d = f64::from(1u32 << k) * texel * factor * 240.0 / (2.0 * tan);
+                let eye = centre + DVec3::new(0.6, 0.0, 0.8) * (d + 3f64.sqrt() * scale);
+                let mut c = Camera::new(eye, centre);
+                c.fov_y_deg = 45.0;
+                assert_eq!(
+                    choose_level(&v, &m, &c, 240, 0.0),
+                    want as usize,
+                    "k {k} × {factor}"
+                );
+            }
+        }
+    }
+
+    /// A volume just outside each edge of the frustum (1 % of the edge's distance) gets no
+    /// slices; moved 1 % inside, it gets some. Camera down -Z, 320×240, 45° vertical.
+    #[test]
+    fn culling_follows_each_frustum_plane() {
+        let v = solid(8);
+        let c = Camera::new(DVec3::ZERO, DVec3::NEG_Z);
+        let half = 1.0 + 1.0 / 8.0;
+        let (z, scale) = (20.0, 0.5);
+        let tan_y = (22.5f64).to_radians().tan();
+        let tan_x = tan_y * 320.0 / 240.0;
+        for (axis, tan) in [
+            (DVec3::X, tan_x),
+            (DVec3::NEG_X, tan_x),
+            (DVec3::Y, tan_y),
+            (DVec3::NEG_Y, tan_y),
+        ] {
+            // The last corner to leave is the box's inner edge on its far face (depth
+            // z + half·scale): it sits on the frustum plane when the centre is this far out.
+            let far_face = z + half * scale;
+            let edge = far_face * tan + half * scale;
+            for (factor, drawn) in [(1.01, false), (0.99, true)] {
+                let m = DAffine3::from_scale_rotation_translation(
+                    DVec3::splat(scale),
+                    glam::DQuat::IDENTITY,
+                    axis * edge * factor - DVec3::Z * z,
+                );
+                let g = slice(&[(&v, m)], &c, (320, 240), SliceSettings::default());
+                assert_eq!(g.volumes[0].slices > 0, drawn, "{axis:?} × {factor}");
+            }
+        }
+    }
+
+    /// With the eye inside the box, slices run from just beyond the near plane.
+    #[test]
+    fn inside_a_volume_slices_start_at_the_near_plane() {
+        let v = solid(16);
+        let mut c = Camera::new(DVec3::new(0.2, 0.1, 0.3), DVec3::new(0.2, 0.1, -1.0));
+        c.near = 0.05;
+        let g = slice(
+            &[(&v, DAffine3::IDENTITY)],
+            &c,
+            (320, 240),
+            SliceSettings::default(),
+        );
+        let (.., forward) = c.basis();
+        let nearest = g
+            .vertices
+            .iter()
+            .map(|(p, _)| DVec3::new(p[0].into(), p[1].into(), p[2].into()).dot(forward))
+            .fold(f64::INFINITY, f64::min);
+        let spacing = g.volumes[0].spacing_world;
+        assert!(
+            nearest >= c.near && nearest <= c.near + spacing + 1e-6,
+            "{nearest} (near {}, spacing {spacing})",
+            c.near
+        );
     }
 
     /// Far away the level coarsens, one level per doubling of distance; the bias moves it;
