@@ -420,6 +420,58 @@ mod tests {
         }
     }
 
+    /// Every slice polygon comes out convex, in cyclic order, without repeated points, for
+    /// a rotated box well off the view axis (where a wrong pivot for the angle sort would
+    /// show).
+    #[test]
+    fn slice_polygons_are_convex_and_in_cyclic_order() {
+        let v = solid(8);
+        let m = DAffine3::from_scale_rotation_translation(
+            DVec3::splat(0.8),
+            glam::DQuat::from_rotation_y(0.7) * glam::DQuat::from_rotation_x(0.5),
+            DVec3::new(2.5, -1.2, -6.0),
+        );
+        let c = Camera::new(DVec3::ZERO, DVec3::NEG_Z);
+        let (right, up, forward) = c.basis();
+        let half = level_box(&v, 0);
+        let corners: Vec<DVec3> = (0..8)
+            .map(|k| {
+                let s = DVec3::new(
+                    if k & 1 == 0 { -1.0 } else { 1.0 },
+                    if k & 2 == 0 { -1.0 } else { 1.0 },
+                    if k & 4 == 0 { -1.0 } else { 1.0 },
+                );
+                m.translation + m.matrix3 * (s * half)
+            })
+            .collect();
+        let depth: Vec<f64> = corners.iter().map(|p| p.dot(forward)).collect();
+        let (lo, hi) = (
+            depth.iter().copied().fold(f64::INFINITY, f64::min),
+            depth.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        );
+        let mut checked = 0;
+        for i in 1..40 {
+            let z = lo + (hi - lo) * f64::from(i) / 40.0;
+            let poly = cut(&corners, &depth, z, right, up);
+            assert!(
+                (3..=6).contains(&poly.len()),
+                "{} points at {z}",
+                poly.len()
+            );
+            let n = poly.len();
+            for j in 0..n {
+                let (a, b, d) = (poly[j], poly[(j + 1) % n], poly[(j + 2) % n]);
+                assert!((b - a).length() > 1e-9, "repeated point at {z}");
+                // Every turn the same way about the view axis: convex and cyclic
+                // (counter-clockwise in (right, up), so against `forward`).
+                let turn = (b - a).cross(d - b).dot(forward);
+                assert!(turn < 0.0, "turn {turn} at plane {z}, point {j}");
+            }
+            checked += 1;
+        }
+        assert_eq!(checked, 39);
+    }
+
     /// With the eye inside the box, slices run from just beyond the near plane.
     #[test]
     fn inside_a_volume_slices_start_at_the_near_plane() {
