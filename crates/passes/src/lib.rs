@@ -21,6 +21,7 @@ pub mod gpu_radix_sort;
 pub mod gpu_scan;
 pub mod gpu_scene;
 pub mod gpu_voxelize;
+pub mod level_splice;
 pub mod measure;
 pub mod measure_lighting;
 pub mod page_cache;

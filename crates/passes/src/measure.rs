@@ -40,17 +40,54 @@ pub(crate) fn read(
 /// of the SSBVB slot its pixel's ray filled (else `[u32::MAX; 3]`, which never counts as
 /// the same voxel; meaningful only for a filter at screen resolution without
 /// `unique_voxels`, whose slots are one per covered pixel).
-/// Instance 0 is assumed (single-object scenes).
+/// Instance 0 is assumed (single-instance scenes; [`gbuffer_hits_in`] names instances).
 pub fn gbuffer_hits(ctx: &GpuContext, r: &Renderer) -> Result<Vec<Option<GpuHit>>, PassError> {
+    hits(ctx, r, None)
+}
+
+/// [`gbuffer_hits`] with each hit's instance (its index in the scene's flattened instance
+/// list, as the reference numbers them) taken from the SSBVB slot of its pixel through the
+/// frame's visible instances of `scene`; needs a filter (an error without one).
+pub fn gbuffer_hits_in(
+    ctx: &GpuContext,
+    r: &Renderer,
+    scene: &crate::GpuScene,
+) -> Result<Vec<Option<GpuHit>>, PassError> {
+    if r.fill_count(ctx)?.is_none() {
+        return Err(PassError::BadScene(
+            "naming the instance of each pixel needs a pipeline with a filter".into(),
+        ));
+    }
+    hits(ctx, r, Some(scene))
+}
+
+fn hits(
+    ctx: &GpuContext,
+    r: &Renderer,
+    scene: Option<&crate::GpuScene>,
+) -> Result<Vec<Option<GpuHit>>, PassError> {
     let albedo = read(ctx, r, "gbuffer_albedo")?;
     let pos = read(ctx, r, "gbuffer_position")?.as_f32();
     let normal = geometric_normals(&read(ctx, r, "gbuffer_geometric_normal")?)?;
     let n = (albedo.width * albedo.height) as usize;
     let mut cells = vec![[u32::MAX; 3]; n];
+    let mut instances = vec![0u32; n];
     if r.fill_count(ctx)?.is_some() {
         for s in crate::ray_march_filter::read_slots(ctx, r)? {
             if let Some(c) = cells.get_mut(s.pixel as usize) {
                 *c = s.voxel.cell();
+            }
+            if let Some(scene) = scene {
+                let Some(v) = scene.visible.get(s.instance as usize) else {
+                    return Err(PassError::BadScene(format!(
+                        "a slot names visible instance {}, the frame has {}",
+                        s.instance,
+                        scene.visible.len()
+                    )));
+                };
+                if let Some(i) = instances.get_mut(s.pixel as usize) {
+                    *i = v.scene_index;
+                }
             }
         }
     }
@@ -59,7 +96,7 @@ pub fn gbuffer_hits(ctx: &GpuContext, r: &Renderer) -> Result<Vec<Option<GpuHit>
             (albedo.bytes[i * 4 + 3] > 0).then(|| {
                 let p = &pos[i * 4..i * 4 + 3];
                 GpuHit {
-                    instance: 0,
+                    instance: instances[i],
                     cell: cells[i],
                     t: (p[0] as f64).hypot(p[1] as f64).hypot(p[2] as f64),
                     normal: normal[i],

@@ -158,15 +158,77 @@ impl Edit {
 }
 
 /// A voxel's normal, colour and texture coordinate.
-type Attrs = ([f32; 3], [f32; 4], [f32; 2]);
+pub(crate) type Attrs = ([f32; 3], [f32; 4], [f32; 2]);
+
+/// The cells of `level` whose centre may lie inside edit `index` (`e`), first and last per
+/// axis (unclipped: they may lie outside the grid); an error when `e` is unusable or
+/// covers more than [`MAX_BRUSH_CELLS`].
+pub(crate) fn brush_cells(
+    index: usize,
+    e: &Edit,
+    level: u32,
+) -> Result<(glam::I64Vec3, glam::I64Vec3), EditError> {
+    if let Some(message) = e.problem() {
+        return Err(EditError::Invalid { index, message });
+    }
+    let s = cell_size(level);
+    let (lo, hi) = e.shape();
+    // Cells whose centre may be inside: centre −1 + (i + ½)s in [lo, hi].
+    let first = ((lo + 1.0) / s - 0.5).ceil();
+    let last = ((hi + 1.0) / s - 0.5).floor();
+    let span = (last - first + 1.0).max(DVec3::ZERO);
+    let count = span.x * span.y * span.z;
+    if count > MAX_BRUSH_CELLS as f64 {
+        return Err(EditError::TooLarge {
+            index,
+            cells: count as u64,
+        });
+    }
+    Ok((first.as_i64vec3(), last.as_i64vec3()))
+}
+
+/// Applies edit `index` (`e`) to `cells` (code → attributes) at `level`, counting into
+/// `report`; `cells` need only hold the cells of the brush's box.
+pub(crate) fn apply_edit(
+    cells: &mut BTreeMap<u64, Attrs>,
+    index: usize,
+    e: &Edit,
+    level: u32,
+    report: &mut EditReport,
+) -> Result<(), EditError> {
+    let n = 1i64 << level;
+    let s = cell_size(level);
+    let (f, l) = brush_cells(index, e, level)?;
+    for z in f.z..=l.z {
+        for y in f.y..=l.y {
+            for x in f.x..=l.x {
+                let p = (DVec3::new(x as f64, y as f64, z as f64) + 0.5) * s - 1.0;
+                if !e.contains(p) {
+                    continue;
+                }
+                if [x, y, z].iter().any(|&c| c < 0 || c >= n) {
+                    report.clipped += 1;
+                    continue;
+                }
+                let code = morton_encode([x as u32, y as u32, z as u32]);
+                match e.color() {
+                    Some(color) => {
+                        let new = cells.insert(code, (e.normal(p), color, [0.0; 2]));
+                        report.added += u64::from(new.is_none());
+                    }
+                    None => report.removed += u64::from(cells.remove(&code).is_some()),
+                }
+            }
+        }
+    }
+    Ok(())
+}
 
 /// `voxels` with `edits` applied in order.
 pub fn apply_edits(
     voxels: &LevelVoxels,
     edits: &[Edit],
 ) -> Result<(LevelVoxels, EditReport), EditError> {
-    let n = 1i64 << voxels.level;
-    let s = cell_size(voxels.level);
     let mut report = EditReport::default();
     // code → (normal, colour, uv), in Morton order.
     let mut cells: BTreeMap<u64, Attrs> = voxels
@@ -176,47 +238,15 @@ pub fn apply_edits(
         .map(|(i, &c)| (c, (voxels.normals[i], voxels.colors[i], voxels.uvs[i])))
         .collect();
     for (index, e) in edits.iter().enumerate() {
-        if let Some(message) = e.problem() {
-            return Err(EditError::Invalid { index, message });
-        }
-        let (lo, hi) = e.shape();
-        // Cells whose centre may be inside: centre −1 + (i + ½)s in [lo, hi].
-        let first = ((lo + 1.0) / s - 0.5).ceil();
-        let last = ((hi + 1.0) / s - 0.5).floor();
-        let span = (last - first + 1.0).max(DVec3::ZERO);
-        let count = span.x * span.y * span.z;
-        if count > MAX_BRUSH_CELLS as f64 {
-            return Err(EditError::TooLarge {
-                index,
-                cells: count as u64,
-            });
-        }
-        let (f, l) = (first.as_i64vec3(), last.as_i64vec3());
-        for z in f.z..=l.z {
-            for y in f.y..=l.y {
-                for x in f.x..=l.x {
-                    let p = (DVec3::new(x as f64, y as f64, z as f64) + 0.5) * s - 1.0;
-                    if !e.contains(p) {
-                        continue;
-                    }
-                    if [x, y, z].iter().any(|&c| c < 0 || c >= n) {
-                        report.clipped += 1;
-                        continue;
-                    }
-                    let code = morton_encode([x as u32, y as u32, z as u32]);
-                    match e.color() {
-                        Some(color) => {
-                            let new = cells.insert(code, (e.normal(p), color, [0.0; 2]));
-                            report.added += u64::from(new.is_none());
-                        }
-                        None => report.removed += u64::from(cells.remove(&code).is_some()),
-                    }
-                }
-            }
-        }
+        apply_edit(&mut cells, index, e, voxels.level, &mut report)?;
     }
+    Ok((set_of(voxels.level, cells), report))
+}
+
+/// The voxel set of `cells` (which must come in Morton order, as a `BTreeMap` iterates).
+pub(crate) fn set_of(level: u32, cells: impl IntoIterator<Item = (u64, Attrs)>) -> LevelVoxels {
     let mut out = LevelVoxels {
-        level: voxels.level,
+        level,
         ..Default::default()
     };
     for (code, (normal, color, uv)) in cells {
@@ -225,7 +255,7 @@ pub fn apply_edits(
         out.colors.push(color);
         out.uvs.push(uv);
     }
-    Ok((out, report))
+    out
 }
 
 /// A prepared level as a voxel set (the attributes as the point cloud stores them), to edit.

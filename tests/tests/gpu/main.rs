@@ -12,6 +12,7 @@ mod embed;
 mod empty_space;
 mod gpu_sort;
 mod gpu_voxelize;
+mod local_edit;
 mod octree_ray_cast;
 mod pipeline;
 mod rastavox;

@@ -5,7 +5,9 @@
 //! stages on the GPU (deform, voxelize, LOD chain and lookups, copy into the scene) and the
 //! frame after it; and the CPU path for the same update (voxelize and prepare on the CPU),
 //! to compare the GPU build with; and an edit (a sphere of radius 8 voxels carved into the
-//! bunny, its levels rebuilt on the GPU) against the full rebuild. Writes dynamic.csv,
+//! bunny, its levels rebuilt on the GPU) against the full rebuild, and the same edit
+//! region-local (its blocks recomputed on the CPU, every level spliced on the GPU:
+//! `ssbvb_voxel::local_edit`, `ssbvb_passes::level_splice`). Writes dynamic.csv,
 //! dynamic.json and dynamic.md.
 
 use std::path::Path;
@@ -15,8 +17,11 @@ use std::time::Instant;
 use anyhow::{Result, bail};
 use serde::Serialize;
 use ssbvb_passes::animated::{AnimatedMesh, Animator, UpdateTimes};
+use ssbvb_passes::level_splice::{LevelSplicer, SpliceStats};
 use ssbvb_passes::{DynamicRoom, GpuScene, LodPolicy, Profiling, Renderer, Scene, VoxelObject};
 use ssbvb_voxel::animate::MeshAnimation;
+use ssbvb_voxel::edit::Edit;
+use ssbvb_voxel::local_edit::LocalEditor;
 use ssbvb_voxel::model::Model;
 
 use super::BenchArgs;
@@ -54,6 +59,22 @@ struct DynamicRow {
     edit_removed: u64,
     /// edit_ms / the full GPU rebuild (update_ms).
     edit_vs_rebuild: f64,
+    /// The same edit region-local: CPU blocks and GPU splice, waited for (median, ms).
+    local_edit_ms: f64,
+    /// Its CPU part: the edit on the touched blocks, every level's patch (median, ms).
+    local_edit_cpu_ms: f64,
+    /// Its GPU part: uploading the patches and splicing every level (median, ms).
+    local_edit_gpu_ms: f64,
+    /// Blocks the edit touched at the finest level, and their side (cells).
+    local_edit_blocks: usize,
+    local_edit_block_side: u32,
+    /// What the splice moved and uploaded (hardware-independent counts).
+    #[serde(flatten)]
+    local_edit_splice: SpliceStats,
+    /// local_edit_ms / the full GPU rebuild (update_ms).
+    local_edit_vs_rebuild: f64,
+    /// local_edit_ms / rebuilding the levels alone on the GPU (lod_ms + copy_ms).
+    local_edit_vs_lod_rebuild: f64,
 }
 
 #[derive(Debug, Serialize)]
@@ -162,6 +183,43 @@ pub(super) fn run(args: &BenchArgs) -> Result<()> {
             removed = r.removed;
         }
         let edit_ms = median(edits);
+        // The same edit region-local. The room first holds the levels of `finest` (built
+        // on the GPU: codes and lookups equal the CPU's, which is what the patches need);
+        // then the ball is carved and filled back in turn, and the carving is timed.
+        animator.stream(&ctx, &mut gpu_scene, 0, &finest)?;
+        let splicer = LevelSplicer::new(&ctx)?;
+        let mut editor = LocalEditor::new(finest.clone());
+        let Edit::RemoveSphere { center, radius } = edit else {
+            unreachable!("the bench's edit is a carving")
+        };
+        let refill = Edit::AddSphere {
+            center,
+            radius,
+            color: (0.8, 0.8, 0.8, 1.0),
+        };
+        let (mut local_cpu, mut local_gpu) = (Vec::new(), Vec::new());
+        let mut local_last = (0, 0, SpliceStats::default());
+        for i in 0..2 * frames {
+            let carve = i % 2 == 0;
+            let t0 = Instant::now();
+            let local = editor.apply(&[if carve { edit } else { refill }])?;
+            let t1 = Instant::now();
+            let stats = splicer.apply(&ctx, &mut gpu_scene, 0, &local.patches)?;
+            ctx.wait_idle()?;
+            if carve {
+                local_cpu.push((t1 - t0).as_secs_f64() * 1e3);
+                local_gpu.push(t1.elapsed().as_secs_f64() * 1e3);
+                local_last = (local.blocks, local.block_side, stats);
+            }
+        }
+        let local_total: Vec<f64> = local_cpu
+            .iter()
+            .zip(&local_gpu)
+            .map(|(a, b)| a + b)
+            .collect();
+        let local_edit_ms = median(local_total);
+        // The object still draws after the splices.
+        frame(&mut gpu_scene, &mut renderer)?;
         let animated_ms = median(animated);
         let cpu_ms = median(cpu);
         let row = DynamicRow {
@@ -179,10 +237,18 @@ pub(super) fn run(args: &BenchArgs) -> Result<()> {
             edit_ms,
             edit_removed: removed,
             edit_vs_rebuild: edit_ms / update_ms,
+            local_edit_ms,
+            local_edit_cpu_ms: median(local_cpu),
+            local_edit_gpu_ms: median(local_gpu),
+            local_edit_blocks: local_last.0,
+            local_edit_block_side: local_last.1,
+            local_edit_splice: local_last.2,
+            local_edit_vs_rebuild: local_edit_ms / update_ms,
+            local_edit_vs_lod_rebuild: local_edit_ms / (update.lod_ms + update.copy_ms),
         };
         if !args.json {
             eprintln!(
-                "dynamic L{level}: static {:.1} ms; update {:.1} ms (voxelize {:.1}, LOD {:.1}, copy {:.2}) + frame {:.1} ms; CPU update {:.1} ms; edit {:.1} ms",
+                "dynamic L{level}: static {:.1} ms; update {:.1} ms (voxelize {:.1}, LOD {:.1}, copy {:.2}) + frame {:.1} ms; CPU update {:.1} ms; edit {:.1} ms, local {:.1} ms",
                 row.static_frame_ms,
                 row.update_ms,
                 row.update.voxelize_ms,
@@ -190,7 +256,8 @@ pub(super) fn run(args: &BenchArgs) -> Result<()> {
                 row.update.copy_ms,
                 row.animated_frame_ms,
                 row.cpu_update_ms,
-                row.edit_ms
+                row.edit_ms,
+                row.local_edit_ms
             );
         }
         rows.push(row);
@@ -215,8 +282,22 @@ fn write(dir: &Path, r: &DynamicReport) -> Result<()> {
         r.adapter
     );
     let mut csv = String::from(
-        "level,width,height,voxels,static_frame_ms,update_ms,deform_ms,voxelize_ms,lod_ms,copy_ms,animated_frame_ms,ratio_to_static,cpu_update_ms,gpu_speedup,edit_ms,edit_removed,edit_vs_rebuild\n",
+        "level,width,height,voxels,static_frame_ms,update_ms,deform_ms,voxelize_ms,lod_ms,copy_ms,animated_frame_ms,ratio_to_static,cpu_update_ms,gpu_speedup,edit_ms,edit_removed,edit_vs_rebuild,local_edit_ms,local_edit_cpu_ms,local_edit_gpu_ms,local_edit_blocks,local_edit_block_side,local_edit_words_uploaded,local_edit_voxels_rewritten,local_edit_vs_rebuild,local_edit_vs_lod_rebuild\n",
     );
+    let mut edits = String::from(
+        "\n## The edit, region-local\n\n| level | voxels | whole-set edit ms | local edit ms | CPU ms | GPU ms | blocks | block side | levels spliced | voxels rewritten | nodes rewritten | words uploaded | local / full rebuild | local / levels rebuild | local / whole-set edit |\n|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for w in &r.rows {
+        let sp = &w.local_edit_splice;
+        edits.push_str(&format!(
+            "| {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {} | {} | {} | {} | {} | {} | {:.4} | {:.3} | {:.3} |\n",
+            w.level, w.voxels, w.edit_ms, w.local_edit_ms, w.local_edit_cpu_ms,
+            w.local_edit_gpu_ms, w.local_edit_blocks, w.local_edit_block_side, sp.levels,
+            sp.voxels_rewritten, sp.nodes_rewritten, sp.words_uploaded,
+            w.local_edit_vs_rebuild, w.local_edit_vs_lod_rebuild,
+            w.local_edit_ms / w.edit_ms
+        ));
+    }
     for w in &r.rows {
         md.push_str(&format!(
             "| {} | {}x{} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {:.1} | {:.2} | {:.1} | {:.2} | {:.1} | {} | {:.3} |\n",
@@ -226,7 +307,7 @@ fn write(dir: &Path, r: &DynamicReport) -> Result<()> {
             w.edit_vs_rebuild
         ));
         csv.push_str(&format!(
-            "{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.4},{:.3},{:.4},{:.3},{},{:.4}\n",
+            "{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.4},{:.3},{:.4},{:.3},{},{:.4},{:.3},{:.3},{:.3},{},{},{},{},{:.5},{:.4}\n",
             w.level,
             w.width,
             w.height,
@@ -243,7 +324,16 @@ fn write(dir: &Path, r: &DynamicReport) -> Result<()> {
             w.gpu_speedup,
             w.edit_ms,
             w.edit_removed,
-            w.edit_vs_rebuild
+            w.edit_vs_rebuild,
+            w.local_edit_ms,
+            w.local_edit_cpu_ms,
+            w.local_edit_gpu_ms,
+            w.local_edit_blocks,
+            w.local_edit_block_side,
+            w.local_edit_splice.words_uploaded,
+            w.local_edit_splice.voxels_rewritten,
+            w.local_edit_vs_rebuild,
+            w.local_edit_vs_lod_rebuild
         ));
     }
     super::report::write_files(
@@ -251,7 +341,7 @@ fn write(dir: &Path, r: &DynamicReport) -> Result<()> {
         vec![
             ("dynamic.csv", csv),
             ("dynamic.json", serde_json::to_string_pretty(r)?),
-            ("dynamic.md", md),
+            ("dynamic.md", md + &edits),
         ],
     )
 }

@@ -49,6 +49,8 @@ pub struct DynamicLevel {
     pub node_capacity: u32,
     /// Voxels now.
     pub voxels: u32,
+    /// Lookup nodes now.
+    pub nodes: u32,
 }
 
 /// A dynamic object's room, per level.
@@ -87,9 +89,28 @@ pub(super) fn object_box() -> ssbvb_voxel::asset::ProxyMesh {
     }
 }
 
+/// Copies `words` words of a stream split in bindings of `chunk_words` words, from stream
+/// word `src_word`, into `dst` (from word 0).
+pub(crate) fn copy_words_from_chunks(
+    enc: &mut wgpu::CommandEncoder,
+    chunks: &[wgpu::Buffer],
+    chunk_words: u64,
+    src_word: u64,
+    dst: &wgpu::Buffer,
+    words: u64,
+) {
+    let (mut s, mut d, mut left) = (src_word, 0, words);
+    while left > 0 {
+        let (chunk, within) = ((s / chunk_words) as usize, s % chunk_words);
+        let n = left.min(chunk_words - within);
+        enc.copy_buffer_to_buffer(&chunks[chunk], 4 * within, dst, 4 * d, 4 * n);
+        (s, d, left) = (s + n, d + n, left - n);
+    }
+}
+
 /// Copies `words` words from `src` (at word `src_word`) into a stream split in bindings of
 /// `chunk_words` words, starting at stream word `dst_word`.
-fn copy_words(
+pub(crate) fn copy_words(
     enc: &mut wgpu::CommandEncoder,
     src: &wgpu::Buffer,
     src_word: u64,
@@ -185,6 +206,7 @@ impl GpuScene {
                 NODE_WORDS as u64 * u64::from(g.node_count),
             );
             room.voxels = g.count;
+            room.nodes = g.node_count;
         }
         ctx.queue.submit([enc.finish()]);
         Ok(())

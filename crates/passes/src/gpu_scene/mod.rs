@@ -20,6 +20,7 @@ mod layout;
 mod pools;
 
 pub use dynamic::{DynamicLevel, DynamicObject, DynamicRoom};
+pub(crate) use dynamic::{copy_words, copy_words_from_chunks};
 
 use crate::visibility::{frame_uniform, instance_bvh, mat, visible_instances};
 pub use layout::*;
@@ -297,6 +298,7 @@ impl GpuScene {
                             node_offset: info.node_offset,
                             node_capacity: checked_u32(ncap, "lookup nodes")?,
                             voxels: checked_u32(n, "voxel count")?,
+                            nodes: checked_u32(node_count, "lookup nodes")?,
                         });
                     }
                 }
