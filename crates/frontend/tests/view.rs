@@ -316,3 +316,92 @@ fn view_animates_a_twisting_mesh() {
         "the pose must change over time: {differ} pixels differ"
     );
 }
+
+/// `ssbvb view --brush`: a click (`--paint`) on the bunny carves a ball there, spliced into
+/// the object on the GPU. The viewer prints the edit in a scene file's syntax; the same
+/// scene with that edit listed (applied to the voxel set and prepared on the CPU) rendered
+/// by `ssbvb render` is the oracle of the window.
+#[test]
+fn view_brush_carves_where_clicked_like_the_edited_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    // A bunny pixel near the image centre, from the CPU reference of the default view.
+    let exact = render_default_scene(&dir.path().join("reference.png"), &["--reference"]);
+    let (x, y, _) = exact
+        .enumerate_pixels()
+        .filter(|(_, y, p)| *y >= 80 && p[3] > 0)
+        .min_by_key(|(x, y, _)| (i64::from(*x) - 160).pow(2) + (i64::from(*y) - 130).pow(2))
+        .unwrap();
+    let at = format!("{x},{y}");
+    let shot = dir.path().join("painted.png");
+    let mut c = Command::new(xvfb_run());
+    ssbvb_env(&mut c);
+    let out = c
+        .args(["-a", "-s", "-screen 0 1280x800x24"])
+        .arg(env!("CARGO_BIN_EXE_ssbvb"))
+        .args([
+            "view",
+            "--size",
+            "320x240",
+            "--frames",
+            "3",
+            "--brush-radius",
+            "16",
+        ])
+        .args(["--paint", &at, "--screenshot"])
+        .arg(&shot)
+        .output()
+        .unwrap();
+    let log = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(out.status.success(), "ssbvb view --paint failed:\n{log}");
+    let painted = read_png(&shot);
+    let edit = log
+        .lines()
+        .find_map(|l| l.strip_prefix("brush: object 0: "))
+        .unwrap_or_else(|| panic!("no brush edit printed:\n{log}"));
+    assert!(edit.starts_with("RemoveSphere("), "{edit}");
+
+    // The default scene with the printed edit, rendered offline.
+    let text = std::fs::read_to_string(root().join("assets/scenes/default.ron"))
+        .unwrap()
+        .replace(
+            "lod: Fixed(8))",
+            &format!("lod: Fixed(8), edits: [{edit}])"),
+        )
+        .replace("\"../", &format!("\"{}/assets/", root().display()));
+    let scene = dir.path().join("edited.ron");
+    std::fs::write(&scene, text).unwrap();
+    let s = scene.display().to_string();
+    let edited = render_default_scene(&dir.path().join("edited.png"), &[&s]);
+    let plain = render_default_scene(&dir.path().join("plain.png"), &[]);
+    // Where the edit changed the offline image, and whether the window agrees.
+    let (mut changed, mut agree, mut same) = (0usize, 0usize, 0usize);
+    let close = |a: &image::Rgba<u8>, b: &image::Rgba<u8>| {
+        (0..3).all(|c| (i32::from(a[c]) - i32::from(b[c])).abs() <= 3)
+    };
+    let mut scene_px = 0usize;
+    for (px, py, e) in edited.enumerate_pixels() {
+        if py < 60 || e[3] == 0 {
+            continue;
+        }
+        scene_px += 1;
+        let w = painted.get_pixel(px, py);
+        same += close(w, e) as usize;
+        if !close(plain.get_pixel(px, py), e) {
+            changed += 1;
+            agree += close(w, e) as usize;
+        }
+    }
+    eprintln!(
+        "brush at {at}: {edit}; the edit changed {changed} pixels offline, the window matches {agree} of them and {same} of {scene_px} scene pixels"
+    );
+    // Radius 16 voxels at level 8 in a 320x240 view: a hole of ~20 pixels across.
+    assert!(
+        changed > 100,
+        "the edit must show: {changed} pixels changed"
+    );
+    assert!(agree as f64 >= 0.9 * changed as f64, "{agree} of {changed}");
+    assert!(
+        same as f64 >= 0.97 * scene_px as f64,
+        "{same} of {scene_px}"
+    );
+}

@@ -13,7 +13,7 @@ use ssbvb_graph::{PassKind, PipelineWatcher, ReloadOutcome, ResolvedPipeline};
 use ssbvb_passes::{GpuScene, Renderer, Scene};
 use ssbvb_voxel::camera::Camera;
 use winit::application::ApplicationHandler;
-use winit::event::{ElementState, WindowEvent};
+use winit::event::{ElementState, MouseButton, WindowEvent};
 use winit::event_loop::ActiveEventLoop;
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
@@ -43,6 +43,8 @@ pub struct Options {
     pub techniques: Vec<PathBuf>,
     /// With --frames: write process and device memory at the start and end here.
     pub memory_report: Option<PathBuf>,
+    /// Automation: window pixels the brush paints at, after the first frame.
+    pub paint: Vec<(u32, u32)>,
 }
 
 /// What is loaded before the window exists.
@@ -57,6 +59,8 @@ pub struct Loaded {
     pub streaming: Option<ssbvb_passes::StreamingOptions>,
     /// Animated objects, re-voxelized on the GPU every frame at the time since start.
     pub animated: Vec<ssbvb_passes::animated::AnimatedMesh>,
+    /// With --brush: the editable objects (uploaded with room to change).
+    pub brush: Option<super::brush::Brush>,
 }
 
 /// The application: waiting for `resumed`, then running, or failed.
@@ -156,6 +160,8 @@ struct Viewer {
     /// Animated objects and what updates them (none without animated objects).
     animated: Vec<ssbvb_passes::animated::AnimatedMesh>,
     animator: Option<ssbvb_passes::animated::Animator>,
+    /// With --brush: Ctrl + left click edits the voxel under the cursor.
+    brush: Option<super::brush::Brush>,
     /// The animation clock's start.
     started: Instant,
     watcher: PipelineWatcher,
@@ -207,13 +213,11 @@ impl Viewer {
         )?;
         let ctx = &gpu.ctx;
         let blit = Blit::new(ctx, gpu.config.format)?;
+        let mut rooms = crate::animation::rooms(&loaded.animated);
+        rooms.extend(loaded.brush.iter().flat_map(|b| b.rooms()));
         let scene = match &loaded.streaming {
             Some(o) => GpuScene::streamed(ctx, loaded.scene, o),
-            None if !loaded.animated.is_empty() => GpuScene::with_dynamic(
-                ctx,
-                loaded.scene,
-                &crate::animation::rooms(&loaded.animated),
-            ),
+            None if !rooms.is_empty() => GpuScene::with_dynamic(ctx, loaded.scene, &rooms),
             None => GpuScene::new(ctx, loaded.scene),
         }
         .context("uploading the scene")?;
@@ -246,6 +250,7 @@ impl Viewer {
             renderer,
             animated: loaded.animated,
             animator,
+            brush: loaded.brush,
             started: Instant::now(),
             watcher: loaded.watcher,
             streaming: loaded.streaming,
@@ -300,7 +305,16 @@ impl Viewer {
                 }
             }
             WindowEvent::MouseInput { state, button, .. } => {
-                self.input.button(*button, *state, over_overlay);
+                let paint = *button == MouseButton::Left
+                    && *state == ElementState::Pressed
+                    && !over_overlay
+                    && self.input.ctrl_held()
+                    && self.brush.is_some();
+                match self.cursor {
+                    // A brush click does not start an orbit drag.
+                    Some((x, y)) if paint => self.paint(x as u32, y as u32),
+                    _ => self.input.button(*button, *state, over_overlay),
+                }
             }
             WindowEvent::CursorMoved { position, .. } => {
                 let h = f64::from(self.gpu.size().1);
@@ -454,6 +468,29 @@ impl Viewer {
             }
             Action::Screenshot => self.screenshot_next = Some(capture::default_path()),
             Action::Budget(mib) => self.set_budget(mib),
+            Action::Brush(settings) => {
+                if let Some(b) = &mut self.brush {
+                    b.settings = settings;
+                }
+            }
+        }
+    }
+
+    /// Applies the brush at window pixel `(x, y)` of the frame on screen. Each edit is
+    /// printed in a scene file's syntax (a session's edits can go into `edits:`).
+    fn paint(&mut self, x: u32, y: u32) {
+        let Some(brush) = &mut self.brush else {
+            return;
+        };
+        let camera = self.rig.camera();
+        match brush.paint(&self.gpu.ctx, &mut self.scene, &camera, x, y) {
+            Ok(Some(p)) => {
+                let edit = ron::to_string(&p.edit).unwrap_or_else(|e| e.to_string());
+                eprintln!("brush: object {}: {edit}", p.object);
+                self.status = Some(p.status);
+            }
+            Ok(None) => self.status = Some("brush: no editable voxel under the cursor".into()),
+            Err(e) => self.error = Some(format!("brush: {e:#}")),
         }
     }
 
@@ -503,6 +540,12 @@ impl Viewer {
         self.last_frame = now;
         self.input.update(&mut self.rig, dt);
         self.poll_reload();
+        // Automation: --paint, once the first frame has set the view.
+        if self.frame == 1 {
+            for &(x, y) in &options.paint {
+                self.paint(x, y);
+            }
+        }
         if self.needs_rebuild {
             self.rebuild();
         }
@@ -582,6 +625,7 @@ impl Viewer {
             status: self.status.as_deref(),
             size: self.gpu.size(),
             streaming: self.scene.streaming_stats(),
+            brush: self.brush.as_ref().map(|b| b.settings),
         };
         let overlay_state = &mut self.overlay;
         let mut actions = Vec::new();

@@ -98,6 +98,12 @@ impl CameraInput {
         }
     }
 
+    /// Whether a Ctrl key is held (Ctrl + left click is the brush).
+    pub fn ctrl_held(&self) -> bool {
+        self.held_keys.contains(&KeyCode::ControlLeft)
+            || self.held_keys.contains(&KeyCode::ControlRight)
+    }
+
     /// Movement axes from the held keys.
     pub fn movement(&self) -> MoveInput {
         let axis = |plus: KeyCode, minus: KeyCode| {

@@ -11,13 +11,15 @@
 //!   mouse and keyboard events drive it;
 //! - [`overlay`]: the egui panel; [`knobs`]: generic editing of pass parameters;
 //!   [`techniques`]: the pipeline files to switch between; [`stats`]: timings;
-//! - [`blit`]: output texture → surface; [`capture`]: screenshots.
+//! - [`blit`]: output texture → surface; [`capture`]: screenshots;
+//! - [`brush`]: editing voxel objects with the mouse (`--brush`).
 //!
 //! Hot reload is `ssbvb_graph::PipelineWatcher`: an edit that does not resolve keeps the
 //! last good pipeline rendering and shows the errors in the overlay.
 
 mod app;
 mod blit;
+mod brush;
 mod camera_control;
 mod capture;
 mod display;
@@ -71,6 +73,31 @@ pub struct ViewArgs {
     /// end, and the pipeline reloads seen, as JSON (a soak of the viewer and hot reload).
     #[arg(long, value_name = "FILE", requires = "frames")]
     pub memory_report: Option<PathBuf>,
+    /// Make the scene's voxel objects editable: Ctrl + left click carves or adds a sphere
+    /// or box at the voxel under the cursor (the overlay's Brush section sets which), each
+    /// edit region-local on the GPU.
+    #[arg(long)]
+    pub brush: bool,
+    /// The brush's radius at start, in voxels of the edited object's finest level.
+    #[arg(long, value_name = "VOXELS", default_value_t = 6.0)]
+    pub brush_radius: f64,
+    /// Automation: apply the brush (carving a sphere of --brush-radius) at window pixel
+    /// X,Y after the first frame; repeatable; implies --brush.
+    #[arg(long, value_name = "X,Y", value_parser = parse_pixel, requires = "frames")]
+    pub paint: Vec<(u32, u32)>,
+}
+
+/// A window pixel `X,Y`.
+fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
+    let (x, y) = s
+        .split_once(',')
+        .ok_or_else(|| format!("expected X,Y, got `{s}`"))?;
+    let p = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|e| format!("bad pixel `{s}`: {e}"))
+    };
+    Ok((p(x)?, p(y)?))
 }
 
 /// Pages the viewer streams in before one frame at most.
@@ -102,6 +129,22 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     if !animated.is_empty() && args.gpu_budget.or(gpu_budget_mib).is_some() {
         anyhow::bail!("animated objects cannot be paged under a GPU budget; drop --gpu-budget");
     }
+    let editable = args.brush || !args.paint.is_empty();
+    if !(args.brush_radius.is_finite() && args.brush_radius > 0.0 && args.brush_radius <= 1024.0) {
+        anyhow::bail!(
+            "--brush-radius must be a number of voxels in (0, 1024], got {}",
+            args.brush_radius
+        );
+    }
+    if editable && args.gpu_budget.or(gpu_budget_mib).is_some() {
+        anyhow::bail!("edited objects cannot be paged under a GPU budget; drop --gpu-budget");
+    }
+    let brush = editable.then(|| {
+        let skip: Vec<usize> = animated.iter().map(|a| a.object).collect();
+        let mut b = brush::Brush::new(&scene, &skip);
+        b.settings.radius_voxels = args.brush_radius;
+        b
+    });
     progress.finish();
     // Pages streamed per frame at most: a camera cut fills the view over a few frames
     // rather than stalling one.
@@ -134,6 +177,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         screenshot: args.screenshot.clone(),
         techniques: techniques::list(&assets_dir().join("pipelines")),
         memory_report: args.memory_report.clone(),
+        paint: args.paint.clone(),
     };
     let mut app = app::App::new(
         options,
@@ -143,6 +187,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
             watcher,
             streaming,
             animated,
+            brush,
         },
     );
     event_loop

@@ -12,6 +12,7 @@ use ssbvb_gpu::AdapterReport;
 use ssbvb_graph::{PassKind, ResolvedPipeline};
 use ssbvb_passes::LodPolicy;
 
+use super::brush::{BrushMode, BrushSettings, BrushShape};
 use super::camera_control::CameraMode;
 use super::knobs;
 use super::stats::{SLOW_SAMPLE_EVERY, Stats, TIMESTAMP_EVERY, TimingSource};
@@ -48,6 +49,8 @@ pub enum Action {
     Screenshot,
     /// Re-upload the scene under this GPU budget (MiB).
     Budget(u64),
+    /// New brush settings.
+    Brush(BrushSettings),
 }
 
 /// One voxel object's LOD as the overlay shows it.
@@ -105,6 +108,8 @@ pub struct OverlayView<'a> {
     pub size: (u32, u32),
     /// Under a GPU budget: what the page cache holds and did.
     pub streaming: Option<&'a ssbvb_passes::StreamingStats>,
+    /// With --brush: its settings.
+    pub brush: Option<BrushSettings>,
 }
 
 /// Overlay state kept between frames: knob values being edited.
@@ -151,6 +156,10 @@ pub fn draw(ctx: &egui::Context, view: &OverlayView<'_>, state: &mut OverlayStat
             }
             camera(ui, view, &mut actions);
             ui.separator();
+            if let Some(b) = view.brush {
+                brush(ui, b, &mut actions);
+                ui.separator();
+            }
             ui.horizontal(|ui| {
                 if ui.button("Screenshot (F12)").clicked() {
                     actions.push(Action::Screenshot);
@@ -161,6 +170,30 @@ pub fn draw(ctx: &egui::Context, view: &OverlayView<'_>, state: &mut OverlayStat
             }
         });
     actions
+}
+
+/// The brush section: mode, shape, radius and colour (Ctrl + left click paints).
+fn brush(ui: &mut egui::Ui, mut b: BrushSettings, actions: &mut Vec<Action>) {
+    let before = b;
+    ui.collapsing("Brush (Ctrl + left click)", |ui| {
+        ui.horizontal(|ui| {
+            ui.radio_value(&mut b.mode, BrushMode::Carve, "Carve");
+            ui.radio_value(&mut b.mode, BrushMode::Add, "Add");
+            ui.separator();
+            ui.radio_value(&mut b.shape, BrushShape::Sphere, "Sphere");
+            ui.radio_value(&mut b.shape, BrushShape::Cube, "Cube");
+        });
+        ui.add(egui::Slider::new(&mut b.radius_voxels, 0.5..=64.0).text("radius (voxels)"));
+        if b.mode == BrushMode::Add {
+            ui.horizontal(|ui| {
+                ui.label("colour");
+                ui.color_edit_button_rgb(&mut b.color);
+            });
+        }
+    });
+    if b != before {
+        actions.push(Action::Brush(b));
+    }
 }
 
 fn ms(v: Option<f64>) -> String {

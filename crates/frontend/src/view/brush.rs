@@ -1,0 +1,342 @@
+//! The viewer's brush (`ssbvb view --brush`): Ctrl + left click on a voxel object carves
+//! or adds a sphere or box there. The voxel under the cursor is found by the CPU reference
+//! caster on each editable object's current finest level, whose lookup is kept current by
+//! the patches' CPU twin; the edit is applied region-locally ([`LocalEditor`]) and spliced
+//! into the object's room on the GPU ([`LevelSplicer`]), so a click costs the touched
+//! blocks, not a rebuild. Every instance of the object shows the edit (they share it).
+
+use std::time::Instant;
+
+use anyhow::{Result, bail};
+use glam::DVec3;
+use ssbvb_gpu::GpuContext;
+use ssbvb_passes::level_splice::LevelSplicer;
+use ssbvb_passes::{DynamicRoom, GpuScene, Scene};
+use ssbvb_voxel::camera::Camera;
+use ssbvb_voxel::edit::{Edit, level_voxels};
+use ssbvb_voxel::local_edit::LocalEditor;
+use ssbvb_voxel::lookup::SparseLookup;
+use ssbvb_voxel::model::cell_size;
+use ssbvb_voxel::reference::{Traversal, trace_object_ray};
+
+/// Room per level for an editable object, as a multiple of its voxels and nodes.
+const GROWTH: f64 = 2.0;
+
+/// Carve or add.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BrushMode {
+    /// Remove the cells inside the brush.
+    Carve,
+    /// Add the cells inside the brush, in the brush's colour.
+    Add,
+}
+
+/// The brush's shape.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BrushShape {
+    /// A ball of the radius.
+    Sphere,
+    /// A cube of half-side the radius.
+    Cube,
+}
+
+/// What a click does.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BrushSettings {
+    /// Carve or add.
+    pub mode: BrushMode,
+    /// Ball or cube.
+    pub shape: BrushShape,
+    /// Radius in voxels of the object's finest level.
+    pub radius_voxels: f64,
+    /// Linear RGB of added cells.
+    pub color: [f32; 3],
+}
+
+impl Default for BrushSettings {
+    fn default() -> Self {
+        Self {
+            mode: BrushMode::Carve,
+            shape: BrushShape::Sphere,
+            radius_voxels: 6.0,
+            color: [0.85, 0.2, 0.15],
+        }
+    }
+}
+
+impl BrushSettings {
+    /// The edit centred on `center` (object space) of an object voxelized at `level`.
+    pub fn edit_at(&self, center: DVec3, level: u32) -> Edit {
+        let r = self.radius_voxels.max(0.5) * cell_size(level);
+        let c = (center.x, center.y, center.z);
+        let (lo, hi) = ((c.0 - r, c.1 - r, c.2 - r), (c.0 + r, c.1 + r, c.2 + r));
+        let [red, green, blue] = self.color.map(|v| v.clamp(0.0, 1.0));
+        let color = (red, green, blue, 1.0);
+        match (self.mode, self.shape) {
+            (BrushMode::Carve, BrushShape::Sphere) => Edit::RemoveSphere {
+                center: c,
+                radius: r,
+            },
+            (BrushMode::Add, BrushShape::Sphere) => Edit::AddSphere {
+                center: c,
+                radius: r,
+                color,
+            },
+            (BrushMode::Carve, BrushShape::Cube) => Edit::RemoveBox { min: lo, max: hi },
+            (BrushMode::Add, BrushShape::Cube) => Edit::AddBox {
+                min: lo,
+                max: hi,
+                color,
+            },
+        }
+    }
+}
+
+/// One editable object.
+struct Editable {
+    /// Its index in the scene's objects.
+    object: usize,
+    editor: LocalEditor,
+    /// Its finest level's lookup as edited (for picking).
+    lookup: SparseLookup,
+}
+
+/// The voxel under a pixel.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pick {
+    /// The scene object.
+    pub object: usize,
+    /// Index of the instance within the object's instances.
+    pub instance: usize,
+    /// The hit voxel's centre in object space.
+    pub center: DVec3,
+    /// World distance from the eye.
+    pub t: f64,
+}
+
+/// One applied brush stroke.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Painted {
+    /// The scene object edited.
+    pub object: usize,
+    /// The edit, in the object's space (what a scene file's `edits:` would list).
+    pub edit: Edit,
+    /// What it did and cost, for the status line.
+    pub status: String,
+}
+
+/// The brush tool: its settings and the editable objects.
+pub struct Brush {
+    /// What a click does.
+    pub settings: BrushSettings,
+    objects: Vec<Editable>,
+    splicer: Option<LevelSplicer>,
+}
+
+impl Brush {
+    /// Editors for the voxel objects of `scene` except `skip` (animated ones).
+    pub fn new(scene: &Scene, skip: &[usize]) -> Self {
+        let objects = scene
+            .objects
+            .iter()
+            .enumerate()
+            .filter(|(i, o)| !skip.contains(i) && !o.asset.lods.is_empty())
+            .map(|(object, o)| {
+                let finest = o.asset.lods.len() - 1;
+                Editable {
+                    object,
+                    editor: LocalEditor::new(level_voxels(&o.asset.lods[finest])),
+                    lookup: o.asset.lods[finest].lookup.clone(),
+                }
+            })
+            .collect();
+        Self {
+            settings: BrushSettings::default(),
+            objects,
+            splicer: None,
+        }
+    }
+
+    /// The room the editable objects need in the GPU scene.
+    pub fn rooms(&self) -> Vec<DynamicRoom> {
+        self.objects
+            .iter()
+            .map(|e| DynamicRoom {
+                object: e.object,
+                growth: GROWTH,
+            })
+            .collect()
+    }
+
+    /// The first voxel of an editable object under pixel `(px, py)` of a `size` view.
+    pub fn pick(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        px: u32,
+        py: u32,
+        size: (u32, u32),
+    ) -> Option<Pick> {
+        let (origin, dir) = camera.pixel_rays(size.0, size.1).ray(px, py);
+        let mut best: Option<Pick> = None;
+        for e in &self.objects {
+            let s = cell_size(e.lookup.level);
+            for (instance, xf) in scene.objects[e.object].instances.iter().enumerate() {
+                let inv = xf.inverse();
+                if !inv.matrix3.is_finite() || !inv.translation.is_finite() {
+                    continue;
+                }
+                // An affine map keeps the ray parameter: t is the world distance.
+                let (o, d) = (inv.transform_point3(origin), inv.transform_vector3(dir));
+                let Some(h) = trace_object_ray(&e.lookup, o, d, Traversal::Hierarchical) else {
+                    continue;
+                };
+                if best.is_none_or(|b| h.t < b.t) {
+                    let center = DVec3::from(h.cell.map(|c| (f64::from(c) + 0.5) * s - 1.0));
+                    best = Some(Pick {
+                        object: e.object,
+                        instance,
+                        center,
+                        t: h.t,
+                    });
+                }
+            }
+        }
+        best
+    }
+
+    /// Applies the brush at pixel `(px, py)`: the stroke, or `None` when no editable voxel
+    /// is under it.
+    pub fn paint(
+        &mut self,
+        ctx: &GpuContext,
+        gpu_scene: &mut GpuScene,
+        camera: &Camera,
+        px: u32,
+        py: u32,
+    ) -> Result<Option<Painted>> {
+        let size = gpu_scene.screen;
+        let Some(pick) = self.pick(&gpu_scene.scene, camera, px, py, size) else {
+            return Ok(None);
+        };
+        if self.splicer.is_none() {
+            self.splicer = Some(LevelSplicer::new(ctx)?);
+        }
+        let Some(splicer) = &self.splicer else {
+            bail!("the splice kernels did not compile");
+        };
+        let Some(e) = self.objects.iter_mut().find(|e| e.object == pick.object) else {
+            bail!("object {} is not editable", pick.object);
+        };
+        let t0 = Instant::now();
+        let edit = self.settings.edit_at(pick.center, e.lookup.level);
+        let local = e.editor.apply(&[edit])?;
+        let stats = splicer.apply(ctx, gpu_scene, pick.object, &local.patches)?;
+        ctx.wait_idle()?;
+        if let Some(finest) = local.patches.last() {
+            e.lookup.nodes = finest.apply_nodes(&e.lookup.nodes);
+        }
+        let r = local.report;
+        let status = format!(
+            "brush on object {}: +{} −{} voxels ({} blocks of {}³, {} words uploaded) in {:.1} ms",
+            pick.object,
+            r.added,
+            r.removed,
+            local.blocks,
+            local.block_side,
+            stats.words_uploaded,
+            t0.elapsed().as_secs_f64() * 1e3
+        );
+        Ok(Some(Painted {
+            object: pick.object,
+            edit,
+            status,
+        }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DAffine3;
+    use ssbvb_passes::{LodPolicy, VoxelObject};
+    use ssbvb_voxel::procedural::ProceduralModel;
+    use ssbvb_voxel::progress::NoProgress;
+    use std::sync::Arc;
+
+    /// The filled ball inscribed in the grid at level 5, two instances: at the origin, and
+    /// moved +3 x and scaled 0.5.
+    fn scene() -> Scene {
+        let set = ProceduralModel::FilledBall.voxels(5).unwrap();
+        let (asset, _) = ssbvb_voxel::prepare::prepare_voxel_set(set, &NoProgress);
+        Scene {
+            objects: vec![VoxelObject {
+                asset: Arc::new(asset),
+                instances: vec![
+                    DAffine3::IDENTITY,
+                    DAffine3::from_translation(DVec3::new(3.0, 0.0, 0.0))
+                        * DAffine3::from_scale(DVec3::splat(0.5)),
+                ],
+                lod: LodPolicy::Fixed(5),
+            }],
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn the_pick_is_the_nearest_voxel_under_the_pixel_in_object_space() {
+        let scene = scene();
+        let brush = Brush::new(&scene, &[]);
+        let size = (64, 64);
+        // Looking down −z at the first instance: the centre pixel hits the ball's front.
+        let cam = Camera::new(DVec3::new(0.0, 0.0, 4.0), DVec3::ZERO);
+        let p = brush.pick(&scene, &cam, 32, 32, size).unwrap();
+        assert_eq!((p.object, p.instance), (0, 0));
+        // The front cell's centre is half a cell (1/32) inside the ball's surface at z = 1.
+        assert!((p.center.z - (1.0 - 1.0 / 32.0)).abs() < 1e-9, "{p:?}");
+        assert!(p.center.x.abs() < 0.07 && p.center.y.abs() < 0.07, "{p:?}");
+        assert!((p.t - 3.0).abs() < 0.01, "{p:?}");
+        // The second instance, seen along the same axis: object space is scaled by 2.
+        let cam = Camera::new(DVec3::new(3.0, 0.0, 4.0), DVec3::new(3.0, 0.0, 0.0));
+        let p = brush.pick(&scene, &cam, 32, 32, size).unwrap();
+        assert_eq!((p.object, p.instance), (0, 1));
+        assert!((p.center.z - (1.0 - 1.0 / 32.0)).abs() < 1e-9, "{p:?}");
+        assert!((p.t - 3.5).abs() < 0.01, "{p:?}");
+        // A corner pixel misses.
+        assert_eq!(brush.pick(&scene, &cam, 0, 0, size), None);
+        // Nothing is editable when the object is skipped (animated).
+        let none = Brush::new(&scene, &[0]);
+        assert!(none.rooms().is_empty());
+        assert_eq!(none.pick(&scene, &cam, 32, 32, size), None);
+    }
+
+    #[test]
+    fn brush_settings_make_the_edit_of_their_mode_shape_and_radius() {
+        let s = cell_size(6);
+        let c = DVec3::new(0.1, -0.2, 0.3);
+        let mut b = BrushSettings::default();
+        assert_eq!(
+            b.edit_at(c, 6),
+            Edit::RemoveSphere {
+                center: (0.1, -0.2, 0.3),
+                radius: 6.0 * s
+            }
+        );
+        b.mode = BrushMode::Add;
+        b.shape = BrushShape::Cube;
+        b.radius_voxels = 2.0;
+        b.color = [2.0, 0.5, -1.0];
+        let Edit::AddBox { min, max, color } = b.edit_at(c, 6) else {
+            panic!("an added cube");
+        };
+        assert!((min.0 - (0.1 - 2.0 * s)).abs() < 1e-12 && (max.2 - (0.3 + 2.0 * s)).abs() < 1e-12);
+        // Colours are clamped into [0, 1].
+        assert_eq!(color, (1.0, 0.5, 0.0, 1.0));
+        // A radius under half a voxel still covers one.
+        b.radius_voxels = 0.0;
+        let Edit::AddBox { min, max, .. } = b.edit_at(c, 6) else {
+            panic!("an added cube");
+        };
+        assert!((max.0 - min.0 - s).abs() < 1e-12);
+    }
+}
