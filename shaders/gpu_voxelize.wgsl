@@ -1,4 +1,5 @@
 //#include "voxel_codes.inc.wgsl"
+//#include "voxel_texture.inc.wgsl"
 // GPU voxelization the seed's way (seed 003, after Crassin & Green; gpu_voxelize.rs drives
 // it): each triangle is rasterized along the dominant axis of its normal into a 2^L × 2^L
 // viewport (one pixel per cell column), enlarged so that every pixel whose square it
@@ -30,6 +31,9 @@ struct Fragment {
 @group(0) @binding(0) var<uniform> params: VoxParams;
 @group(0) @binding(1) var<storage, read> corners: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> corner_colors: array<vec4<f32>>;
+// Per corner: u, v, texture index (−1: none), 0; and the textures (voxel_texture.inc.wgsl).
+@group(0) @binding(5) var<storage, read> corner_uvs: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read> textures: array<u32>;
 @group(0) @binding(3) var<storage, read_write> fragments: array<Fragment>;
 // [0]: fragments written (may exceed the capacity: the host then reruns with more room).
 @group(0) @binding(4) var<storage, read_write> counter: array<atomic<u32>>;
@@ -161,8 +165,12 @@ fn append_cells(in: VertexOut) {
         w = max(vec3(1.0 - w1 - w2, w1, w2), vec3(0.0));
         w = w / max(w.x + w.y + w.z, 1e-20);
     }
-    let color = w.x * corner_colors[3u * t] + w.y * corner_colors[3u * t + 1u]
-        + w.z * corner_colors[3u * t + 2u];
+    let corner_colors_at = mat3x4(
+        corner_colors[3u * t],
+        corner_colors[3u * t + 1u],
+        corner_colors[3u * t + 2u],
+    );
+    let color = voxel_color(t, w, corner_colors_at);
     let packed_color = pack_color(color);
     let packed_normal = encode_octahedral(nrm);
     for (var c = first; c <= last && c < first + 64u; c++) {

@@ -1,4 +1,5 @@
 //#include "voxel_codes.inc.wgsl"
+//#include "voxel_texture.inc.wgsl"
 // Exact GPU voxelization (gpu_voxelize.rs, GpuVoxelizeMethod::Exact; needs SHADER_F64): the
 // CPU voxelizer's separating-axis test (ssbvb_voxel::voxelize::triangle_box_overlap: closed
 // cells, 13 axes, in f64 with the same operations in the same order, each product written
@@ -30,6 +31,9 @@ struct Fragment {
 // Nine per triangle: its corners in grid units (cell i spans [i, i + 1]), as the CPU maps them.
 @group(0) @binding(1) var<storage, read> verts: array<f64>;
 @group(0) @binding(2) var<storage, read> corner_colors: array<vec4<f32>>;
+// Per corner: u, v, texture index (−1: none), 0; and the textures (voxel_texture.inc.wgsl).
+@group(0) @binding(6) var<storage, read> corner_uvs: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read> textures: array<u32>;
 @group(0) @binding(3) var<storage, read_write> fragments: array<Fragment>;
 @group(0) @binding(4) var<storage, read_write> counter: array<atomic<u32>>;
 // Columns per triangle, then (after the scan) the first column of each triangle.
@@ -193,8 +197,12 @@ fn exact_columns(
         w = max(vec3(1.0 - w1 - w2, w1, w2), vec3(0.0));
         w = w / max(w.x + w.y + w.z, 1e-20);
     }
-    let color = w.x * corner_colors[3u * t] + w.y * corner_colors[3u * t + 1u]
-        + w.z * corner_colors[3u * t + 2u];
+    let corner_colors_at = mat3x4(
+        corner_colors[3u * t],
+        corner_colors[3u * t + 1u],
+        corner_colors[3u * t + 2u],
+    );
+    let color = voxel_color(t, w, corner_colors_at);
     let packed_color = pack4x8unorm(clamp(color, vec4(0.0), vec4(1.0)));
     let packed_normal = encode_octahedral(nrm);
     for (var cw = first; cw <= last_c; cw++) {

@@ -17,8 +17,11 @@
 //! (`shaders/gpu_voxelize_exact.wgsl`, on adapters with f64 shaders) runs the CPU's test
 //! itself on the cells near each triangle's plane, one thread per cell column, and gives
 //! the CPU's voxel set exactly (tested on every shared mesh up to level 10); it is the
-//! default of `voxelize --gpu` where available. Colours are material × vertex colour at the
-//! column centre in both; textures are not sampled yet.
+//! default of `voxelize --gpu` where available. Colours are material × vertex colour ×
+//! base-colour texture (bilinear, wrapping, as the CPU samples it) at the column centre in
+//! both ([`inputs`]); the CPU takes them at the centroid of the triangle's part in each cell,
+//! so textured colours differ by the texture's change across a cell (measured in the GPU
+//! tests).
 //!
 //! A fragment list that overflows its buffer is rebuilt larger (the count is exact), and
 //! one beyond the device's storage-binding limit is refused with the size it needs, never
@@ -29,9 +32,9 @@ use std::time::Instant;
 use glam::DVec3;
 use ssbvb_gpu::wgpu::util::DeviceExt;
 use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_voxel::model::{Material, Mesh, ObjectSpace};
+use ssbvb_voxel::model::{Mesh, ObjectSpace};
 use ssbvb_voxel::svo::LevelVoxels;
-use ssbvb_voxel::voxelize::{VoxelSet, VoxelizeError, VoxelizeReport, mesh_bounds};
+use ssbvb_voxel::voxelize::{VoxelSet, VoxelizeError, mesh_bounds};
 
 use crate::compute_kernels::{
     Bind, Kernels, WORKGROUP, read_words, storage, storage_init, uniform,
@@ -39,6 +42,20 @@ use crate::compute_kernels::{
 use crate::gpu_radix_sort::{GpuRadixSort, SortBuffers};
 use crate::gpu_scan::GpuScan;
 use crate::{PassError, shaders};
+
+mod inputs;
+use inputs::{TriangleInputs, triangle_inputs};
+
+/// The textures' words as a storage buffer (one word when there are none: a binding must
+/// hold something).
+fn texture_buffer(d: &wgpu::Device, words: &[u32]) -> wgpu::Buffer {
+    let words: &[u32] = if words.is_empty() { &[0] } else { words };
+    d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("voxelizer textures"),
+        contents: bytemuck::cast_slice(words),
+        usage: wgpu::BufferUsages::STORAGE,
+    })
+}
 
 /// Bytes of one voxel fragment (key, colour, normal).
 const FRAGMENT_BYTES: u64 = 16;
@@ -115,6 +132,8 @@ impl GpuVoxelizer {
                     layout_entry(2, read),
                     layout_entry(3, write),
                     layout_entry(4, write),
+                    layout_entry(5, read),
+                    layout_entry(6, read),
                 ],
             });
             let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -154,7 +173,9 @@ impl GpuVoxelizer {
             Some(Kernels::new(
                 ctx,
                 "gpu_voxelize_exact.wgsl",
-                &[Uniform, Read, Read, ReadWrite, ReadWrite, ReadWrite],
+                &[
+                    Uniform, Read, Read, ReadWrite, ReadWrite, ReadWrite, Read, Read,
+                ],
                 &["count_columns", "exact_columns"],
             )?)
         } else {
@@ -279,14 +300,22 @@ impl GpuVoxelizer {
             }
             None => ObjectSpace::from_bounds(lo, hi),
         };
-        let (corners, colors, grid, report) = triangle_corners(mesh, &object_space, level);
-        let triangles = (corners.len() / 12) as u32;
+        let inputs = triangle_inputs(mesh, &object_space, level);
+        let triangles = inputs.triangles();
+        let report = inputs.report.clone();
         let mut stats = GpuVoxelizeStats {
             triangles_drawn: u64::from(triangles),
             ..Default::default()
         };
         let t0 = Instant::now();
         let limit = ctx.device.limits().max_storage_buffer_binding_size;
+        let texture_bytes = 4 * inputs.textures.len() as u64;
+        if texture_bytes > limit {
+            return Err(PassError::TooLarge(format!(
+                "GPU voxelization: the mesh's textures take {texture_bytes} bytes, above the \
+                 device's storage binding limit of {limit}"
+            )));
+        }
         let mut capacity = capacity
             .unwrap_or((u64::from(triangles) * FRAGMENTS_PER_TRIANGLE).max(1 << 20))
             .max(1);
@@ -294,11 +323,11 @@ impl GpuVoxelizer {
             capacity = capacity.min(limit / FRAGMENT_BYTES);
             let fragments = storage(&ctx.device, "voxel fragments", capacity * 4);
             let count = match method {
-                GpuVoxelizeMethod::Raster => self.raster(
-                    ctx, &corners, &colors, triangles, level, &fragments, capacity,
-                )?,
+                GpuVoxelizeMethod::Raster => {
+                    self.raster(ctx, &inputs, level, &fragments, capacity)?
+                }
                 GpuVoxelizeMethod::Exact => {
-                    self.exact(ctx, &grid, &colors, triangles, level, &fragments, capacity)?
+                    self.exact(ctx, &inputs, level, &fragments, capacity)?
                 }
             };
             stats.raster_passes += 1;
@@ -340,9 +369,7 @@ impl GpuVoxelizer {
     fn raster(
         &self,
         ctx: &GpuContext,
-        corners: &[f32],
-        colors: &[f32],
-        triangles: u32,
+        inputs: &TriangleInputs,
         level: u32,
         fragments: &wgpu::Buffer,
         capacity: u64,
@@ -357,9 +384,15 @@ impl GpuVoxelizer {
                 usage: wgpu::BufferUsages::STORAGE,
             })
         };
+        let triangles = inputs.triangles();
         let counter = storage(d, "voxel fragment counter", 1);
         let params = uniform(d, "voxelize", &[triangles, level, capacity as u32, 0]);
-        let (corner_buf, color_buf) = (init("corners", corners), init("corner colours", colors));
+        let (corner_buf, color_buf) = (
+            init("corners", &inputs.corners),
+            init("corner colours", &inputs.colors),
+        );
+        let uv_buf = init("corner uvs", &inputs.uvs);
+        let texture_buf = texture_buffer(d, &inputs.textures);
         ctx.validated("GPU voxelization raster", |d| {
             let target = d.create_texture(&wgpu::TextureDescriptor {
                 label: Some("voxelization viewport"),
@@ -379,14 +412,22 @@ impl GpuVoxelizer {
             let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("voxelize"),
                 layout: &self.layout,
-                entries: &[&params, &corner_buf, &color_buf, fragments, &counter]
-                    .iter()
-                    .enumerate()
-                    .map(|(i, b)| wgpu::BindGroupEntry {
-                        binding: i as u32,
-                        resource: b.as_entire_binding(),
-                    })
-                    .collect::<Vec<_>>(),
+                entries: &[
+                    &params,
+                    &corner_buf,
+                    &color_buf,
+                    fragments,
+                    &counter,
+                    &uv_buf,
+                    &texture_buf,
+                ]
+                .iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupEntry {
+                    binding: i as u32,
+                    resource: b.as_entire_binding(),
+                })
+                .collect::<Vec<_>>(),
             });
             let mut enc = d.create_command_encoder(&Default::default());
             {
@@ -421,9 +462,7 @@ impl GpuVoxelizer {
     fn exact(
         &self,
         ctx: &GpuContext,
-        grid: &[f64],
-        colors: &[f32],
-        triangles: u32,
+        inputs: &TriangleInputs,
         level: u32,
         fragments: &wgpu::Buffer,
         capacity: u64,
@@ -437,12 +476,20 @@ impl GpuVoxelizer {
                 usage: wgpu::BufferUsages::STORAGE,
             })
         };
+        let triangles = inputs.triangles();
         let counter = storage(d, "voxel fragment counter", 1);
         let offsets = storage(d, "column offsets", u64::from(triangles));
-        let verts = init("grid corners", bytemuck::cast_slice(grid));
-        let cols = init("corner colours", bytemuck::cast_slice(colors));
+        let verts = init("grid corners", bytemuck::cast_slice(&inputs.grid));
+        let cols = init("corner colours", bytemuck::cast_slice(&inputs.colors));
+        let uvs = init("corner uvs", bytemuck::cast_slice(&inputs.uvs));
+        let textures = texture_buffer(d, &inputs.textures);
         let bind = |params: &wgpu::Buffer| {
-            kernels.bind_group(d, &[params, &verts, &cols, fragments, &counter, &offsets])
+            kernels.bind_group(
+                d,
+                &[
+                    params, &verts, &cols, fragments, &counter, &offsets, &uvs, &textures,
+                ],
+            )
         };
         // Columns per triangle, their offsets, then one thread per column.
         let params = uniform(d, "exact voxelize", &[triangles, level, capacity as u32, 0]);
@@ -610,54 +657,4 @@ impl GpuVoxels {
             uvs: vec![[0.0; 2]; n as usize],
         })
     }
-}
-
-/// Per drawable triangle its corners in grid units as f32 (x, y, z, 1) for the raster path
-/// and as f64 (x, y, z) for the exact path, exactly as the CPU voxelizer maps them; its
-/// corner colours (material base colour × vertex colour); and the report of what was
-/// skipped, counted as the CPU voxelizer counts it.
-fn triangle_corners(
-    mesh: &Mesh,
-    space: &ssbvb_voxel::model::ObjectSpace,
-    level: u32,
-) -> (Vec<f32>, Vec<f32>, Vec<f64>, VoxelizeReport) {
-    let half = (1u64 << level) as f64 * 0.5;
-    let mut report = VoxelizeReport {
-        triangles: mesh.triangles.len() as u64,
-        ..Default::default()
-    };
-    let (mut corners, mut colors, mut grid) = (Vec::new(), Vec::new(), Vec::new());
-    for (ti, t) in mesh.triangles.iter().enumerate() {
-        let Some(p) = t
-            .iter()
-            .map(|&i| mesh.positions.get(i as usize))
-            .collect::<Option<Vec<_>>>()
-        else {
-            report.skipped_bad_index += 1;
-            continue;
-        };
-        if p.iter().any(|p| !p.is_finite()) {
-            report.skipped_non_finite += 1;
-            continue;
-        }
-        let g: Vec<DVec3> = p
-            .iter()
-            .map(|p| (space.to_object(p.as_dvec3()) + 1.0) * half)
-            .collect();
-        if (g[1] - g[0]).cross(g[2] - g[0]) == DVec3::ZERO {
-            report.degenerate += 1;
-        }
-        let material = mesh
-            .triangle_materials
-            .get(ti)
-            .and_then(|&m| mesh.materials.get(m as usize))
-            .map_or(Material::DEFAULT.base_color, |m| m.base_color);
-        for (k, gk) in g.iter().enumerate() {
-            corners.extend([gk.x as f32, gk.y as f32, gk.z as f32, 1.0]);
-            grid.extend([gk.x, gk.y, gk.z]);
-            let vc = mesh.colors.get(t[k] as usize).copied().unwrap_or([1.0; 4]);
-            colors.extend((0..4).map(|c| material[c] * vc[c]));
-        }
-    }
-    (corners, colors, grid, report)
 }
