@@ -34,6 +34,8 @@ pub struct LocalEdit {
     pub block_side: u32,
     /// Blocks touched at the finest level.
     pub blocks: usize,
+    /// `undo[l]`: the blocks of level `l` as they were ([`LocalEditor::revert`]).
+    undo: Vec<Vec<((u64, u64), LevelVoxels)>>,
 }
 
 impl LocalEditor {
@@ -125,6 +127,7 @@ impl LocalEditor {
             })
             .collect();
 
+        let mut undo = vec![keep(&self.levels[top], &contents)];
         let mut patches = vec![self.levels[top].splice(&contents)];
         for l in (0..top).rev() {
             let shift = top - l;
@@ -138,16 +141,39 @@ impl LocalEditor {
                 .into_iter()
                 .map(|r| (r, voxels_in(finer, (r.0 << 3, r.1 << 3)).coarsen()))
                 .collect();
+            undo.push(keep(&self.levels[l], &contents));
             patches.push(self.levels[l].splice(&contents));
         }
         patches.reverse();
+        undo.reverse();
         Ok(LocalEdit {
             report,
             patches,
             block_side: side as u32,
             blocks: finest_ranges.len(),
+            undo,
         })
     }
+
+    /// Undoes `edit`, the last edit applied, when its patches could not be applied (a room
+    /// too small, a device error): splicing the blocks' old content back restores every
+    /// level exactly.
+    pub fn revert(&mut self, edit: &LocalEdit) {
+        for (level, old) in self.levels.iter_mut().zip(&edit.undo) {
+            level.splice(old);
+        }
+    }
+}
+
+/// The voxels of `level` in the blocks of `contents`, to undo their splice.
+fn keep(
+    level: &LevelMirror,
+    contents: &[((u64, u64), LevelVoxels)],
+) -> Vec<((u64, u64), LevelVoxels)> {
+    contents
+        .iter()
+        .map(|(r, _)| (*r, voxels_in(&level.voxels, *r)))
+        .collect()
 }
 
 #[cfg(test)]
@@ -351,6 +377,19 @@ mod tests {
             ])
             .unwrap_err();
         assert!(matches!(err, EditError::Invalid { index: 1, .. }), "{err}");
+        assert_eq!(editor, before);
+        // An applied edit reverted (its patches could not be spliced) restores every level.
+        let s = crate::model::cell_size(4);
+        let edit = editor
+            .apply(&[Edit::AddSphere {
+                center: (0.3, 0.0, 0.0),
+                radius: 3.0 * s,
+                color: (1.0, 0.0, 0.0, 1.0),
+            }])
+            .unwrap();
+        assert!(edit.report.added > 0);
+        assert_ne!(editor, before);
+        editor.revert(&edit);
         assert_eq!(editor, before);
     }
 

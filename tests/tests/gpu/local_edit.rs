@@ -210,14 +210,13 @@ fn a_local_edit_rewrites_the_room_exactly_and_draws_like_the_edited_asset() {
         }
     }
     // Patches made for other counts than the room holds are refused, and change nothing.
+    let hollow = [Edit::RemoveSphere {
+        center: (0.0, 0.0, 0.0),
+        radius: 0.3,
+    }];
     let mut stale = editor.clone();
-    let patches = stale
-        .apply(&[Edit::RemoveSphere {
-            center: (0.0, 0.0, 0.0),
-            radius: 0.3,
-        }])
-        .unwrap()
-        .patches;
+    let patches = stale.apply(&hollow).unwrap().patches;
+    expected = apply_edits(&expected, &hollow).unwrap().0;
     splicer.apply(ctx, &mut gpu_scene, 0, &patches).unwrap();
     let now = room_streams(&gpu_scene);
     let err = splicer.apply(ctx, &mut gpu_scene, 0, &patches).unwrap_err();
@@ -226,9 +225,10 @@ fn a_local_edit_rewrites_the_room_exactly_and_draws_like_the_edited_asset() {
         "{err}"
     );
     assert_same(&room_streams(&gpu_scene), &now, "after a refused patch");
-    // A patch that outgrows the room names the room needed.
-    let mut big = stale;
-    let fill = big
+    // A patch that outgrows the room names the room needed; the editor is reverted and
+    // goes on editing the same room.
+    let mut editor = stale;
+    let fill = editor
         .apply(&[Edit::AddBox {
             min: (-1.0, -1.0, -1.0),
             max: (1.0, 1.0, 1.0),
@@ -243,4 +243,19 @@ fn a_local_edit_rewrites_the_room_exactly_and_draws_like_the_edited_asset() {
         "{err}"
     );
     assert_same(&room_streams(&gpu_scene), &now, "after a refused growth");
+    editor.revert(&fill);
+    let dent = [Edit::RemoveSphere {
+        center: (-0.3, 0.6, 0.0),
+        radius: 4.0 * s,
+    }];
+    let local = editor.apply(&dent).unwrap();
+    splicer
+        .apply(ctx, &mut gpu_scene, 0, &local.patches)
+        .unwrap();
+    let want = apply_edits(&expected, &dent).unwrap().0;
+    assert_same(
+        &room_streams(&gpu_scene),
+        &asset_streams(&prepared(want, &bunny)),
+        "an edit after a revert",
+    );
 }

@@ -22,6 +22,10 @@ use ssbvb_voxel::reference::{Traversal, trace_object_ray};
 /// Room per level for an editable object, as a multiple of its voxels and nodes.
 const GROWTH: f64 = 2.0;
 
+/// The largest brush radius in voxels (the overlay's slider and `--brush-radius`): a cube
+/// of that half-side stays under `ssbvb_voxel::edit::MAX_BRUSH_CELLS`.
+pub const MAX_RADIUS_VOXELS: f64 = 64.0;
+
 /// Carve or add.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BrushMode {
@@ -231,7 +235,14 @@ impl Brush {
         let t0 = Instant::now();
         let edit = self.settings.edit_at(pick.center, e.lookup.level);
         let local = e.editor.apply(&[edit])?;
-        let stats = splicer.apply(ctx, gpu_scene, pick.object, &local.patches)?;
+        let stats = match splicer.apply(ctx, gpu_scene, pick.object, &local.patches) {
+            Ok(s) => s,
+            Err(err) => {
+                // Nothing reached the GPU: the editor goes back to what the room holds.
+                e.editor.revert(&local);
+                return Err(err.into());
+            }
+        };
         ctx.wait_idle()?;
         if let Some(finest) = local.patches.last() {
             e.lookup.nodes = finest.apply_nodes(&e.lookup.nodes);

@@ -130,9 +130,13 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         anyhow::bail!("animated objects cannot be paged under a GPU budget; drop --gpu-budget");
     }
     let editable = args.brush || !args.paint.is_empty();
-    if !(args.brush_radius.is_finite() && args.brush_radius > 0.0 && args.brush_radius <= 1024.0) {
+    if !(args.brush_radius.is_finite()
+        && args.brush_radius > 0.0
+        && args.brush_radius <= brush::MAX_RADIUS_VOXELS)
+    {
         anyhow::bail!(
-            "--brush-radius must be a number of voxels in (0, 1024], got {}",
+            "--brush-radius must be a number of voxels in (0, {}], got {}",
+            brush::MAX_RADIUS_VOXELS,
             args.brush_radius
         );
     }

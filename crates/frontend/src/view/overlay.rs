@@ -183,7 +183,8 @@ fn brush(ui: &mut egui::Ui, mut b: BrushSettings, actions: &mut Vec<Action>) {
             ui.radio_value(&mut b.shape, BrushShape::Sphere, "Sphere");
             ui.radio_value(&mut b.shape, BrushShape::Cube, "Cube");
         });
-        ui.add(egui::Slider::new(&mut b.radius_voxels, 0.5..=64.0).text("radius (voxels)"));
+        let range = 0.5..=super::brush::MAX_RADIUS_VOXELS;
+        ui.add(egui::Slider::new(&mut b.radius_voxels, range).text("radius (voxels)"));
         if b.mode == BrushMode::Add {
             ui.horizontal(|ui| {
                 ui.label("colour");

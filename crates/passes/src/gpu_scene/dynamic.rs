@@ -29,10 +29,11 @@ pub struct DynamicRoom {
 }
 
 impl DynamicRoom {
-    /// Slots for a level with `n` entries now: `growth × n`, and at least 1024 more.
+    /// Slots for a level with `n` entries now: `growth × n`, and at least 1024 more;
+    /// even, so a level's normal words (two per word) never reach past its room.
     pub(super) fn capacity(&self, n: usize) -> usize {
         let grown = (n as f64 * self.growth.max(1.0)).ceil() as usize;
-        grown.max(n + 1024)
+        grown.max(n + 1024).next_multiple_of(2)
     }
 }
 

@@ -19,7 +19,7 @@
 //! the CPU's voxel set exactly (tested on every shared mesh up to level 10); it is the
 //! default of `voxelize --gpu` where available. Colours are material × vertex colour ×
 //! base-colour texture (bilinear, wrapping, as the CPU samples it) at the column centre in
-//! both ([`inputs`]); the CPU takes them at the centroid of the triangle's part in each cell,
+//! both (`gpu_voxelize/inputs.rs`); the CPU takes them at the centroid of the triangle's part in each cell,
 //! so textured colours differ by the texture's change across a cell (measured in the GPU
 //! tests).
 //!
