@@ -391,6 +391,14 @@ mod edit_tests {
             "Scene(objects: [(model: \"tri.obj\", level: 4, edits: [RemoveSphere(center: (0.0, 0.0, 0.0), radius: -1.0)])])",
         );
         assert!(e.contains("objects[0].edits[0]: a negative radius"), "{e}");
+        // Edits of an animated object are refused, not ignored.
+        let e = err(
+            "Scene(objects: [(model: \"tri.obj\", level: 4, animate: Twist(degrees_per_second: 90.0), edits: [RemoveSphere(center: (0.0, 0.0, 0.0), radius: 0.2)])])",
+        );
+        assert!(
+            e.contains("objects[0]: edits and animate together are not supported yet"),
+            "{e}"
+        );
     }
 }
 
