@@ -158,91 +158,61 @@ impl LevelSplicer {
                 + p.colors.len()
                 + halves.len()
                 + p.node_words.len()) as u64;
-            let params = |count: u64, first: u32, segs: usize, total: u32| {
-                uniform(
-                    d,
-                    "splice params",
-                    &[count as u32, first, segs as u32, first, total, 0, 0, 0],
-                )
-            };
-            // Colours.
-            let old = storage(d, "splice old colours", old_n);
-            let out = storage(d, "splice new colours", new_n);
-            copy_words_from_chunks(&mut enc, &scene.color_buffers, color_words, at, &old, old_n);
-            let u = params(new_n, first, p.voxel_segments.len(), p.voxels);
-            let bg = self
-                .kernels
-                .bind_group(d, &[&u, &voxel_segs, &old, &patch_colors, &out]);
-            self.kernels
-                .dispatch(&mut enc, "splice_colors", &bg, groups(new_n));
-            copy_words(
+            // Colours, one word per voxel.
+            keep.extend(self.splice_stream(
+                d,
                 &mut enc,
-                &out,
-                0,
-                &scene.color_buffers,
-                color_words,
-                at,
-                new_n,
-            );
-            keep.extend([old, out, u]);
+                Stream {
+                    entry: "splice_colors",
+                    words_per_thread: 1,
+                    chunks: &scene.color_buffers,
+                    chunk_words: color_words,
+                    at,
+                    old_words: old_n,
+                    new_words: new_n,
+                    first,
+                    segments: (&voxel_segs, p.voxel_segments.len()),
+                    patch: &patch_colors,
+                    total: p.voxels,
+                },
+            ));
             // Normals, two per word; a level's room starts on a word.
-            let (old_w, new_w) = (old_n.div_ceil(2), new_n.div_ceil(2));
-            let old = storage(d, "splice old normals", old_w);
-            let out = storage(d, "splice new normals", new_w);
-            copy_words_from_chunks(
+            keep.extend(self.splice_stream(
+                d,
                 &mut enc,
-                &scene.normal_buffers,
-                color_words,
-                at / 2,
-                &old,
-                old_w,
-            );
-            let u = params(new_w, first, p.voxel_segments.len(), p.voxels);
-            let bg = self
-                .kernels
-                .bind_group(d, &[&u, &voxel_segs, &old, &patch_normals, &out]);
-            self.kernels
-                .dispatch(&mut enc, "splice_normals", &bg, groups(new_w));
-            copy_words(
-                &mut enc,
-                &out,
-                0,
-                &scene.normal_buffers,
-                color_words,
-                at / 2,
-                new_w,
-            );
-            keep.extend([old, out, u]);
+                Stream {
+                    entry: "splice_normals",
+                    words_per_thread: 1,
+                    chunks: &scene.normal_buffers,
+                    chunk_words: color_words,
+                    at: at / 2,
+                    old_words: old_n.div_ceil(2),
+                    new_words: new_n.div_ceil(2),
+                    first,
+                    segments: (&voxel_segs, p.voxel_segments.len()),
+                    patch: &patch_normals,
+                    total: p.voxels,
+                },
+            ));
             // Every node of the level (bases before the blocks move too).
             let w = NODE_WORDS as u64;
-            let node_at = w * u64::from(room.node_offset);
-            let (old_nw, new_nw) = (w * u64::from(p.old_nodes), w * u64::from(p.nodes));
-            let old = storage(d, "splice old nodes", old_nw);
-            let out = storage(d, "splice new nodes", new_nw);
-            copy_words_from_chunks(
+            keep.extend(self.splice_stream(
+                d,
                 &mut enc,
-                &scene.lookup_buffers,
-                node_chunk_words,
-                node_at,
-                &old,
-                old_nw,
-            );
-            let u = params(u64::from(p.nodes), 0, p.node_segments.len(), p.nodes);
-            let bg = self
-                .kernels
-                .bind_group(d, &[&u, &node_segs, &old, &patch_nodes, &out]);
-            self.kernels
-                .dispatch(&mut enc, "splice_nodes", &bg, groups(u64::from(p.nodes)));
-            copy_words(
-                &mut enc,
-                &out,
-                0,
-                &scene.lookup_buffers,
-                node_chunk_words,
-                node_at,
-                new_nw,
-            );
-            keep.extend([old, out, u]);
+                Stream {
+                    entry: "splice_nodes",
+                    words_per_thread: w,
+                    chunks: &scene.lookup_buffers,
+                    chunk_words: node_chunk_words,
+                    at: w * u64::from(room.node_offset),
+                    old_words: w * u64::from(p.old_nodes),
+                    new_words: w * u64::from(p.nodes),
+                    first: 0,
+                    segments: (&node_segs, p.node_segments.len()),
+                    patch: &patch_nodes,
+                    total: p.nodes,
+                },
+            ));
             stats.voxels_rewritten += new_n;
             stats.nodes_rewritten += u64::from(p.nodes);
         }
@@ -253,6 +223,59 @@ impl LevelSplicer {
             room.nodes = p.nodes;
         }
         Ok(stats)
+    }
+}
+
+/// One stream of a level to splice: its words `at..` in `chunks` (bindings of
+/// `chunk_words`), rebuilt by kernel `entry` from element `first` on.
+struct Stream<'a> {
+    entry: &'static str,
+    /// Words each thread writes (a colour, two normals, a node).
+    words_per_thread: u64,
+    chunks: &'a [wgpu::Buffer],
+    chunk_words: u64,
+    at: u64,
+    old_words: u64,
+    new_words: u64,
+    first: u32,
+    segments: (&'a wgpu::Buffer, usize),
+    patch: &'a wgpu::Buffer,
+    total: u32,
+}
+
+impl LevelSplicer {
+    /// Records the copy out of the room, the kernel and the copy back of one stream;
+    /// returns the buffers to keep until the submit.
+    fn splice_stream(
+        &self,
+        d: &wgpu::Device,
+        enc: &mut wgpu::CommandEncoder,
+        s: Stream,
+    ) -> [wgpu::Buffer; 3] {
+        let old = storage(d, "splice old words", s.old_words);
+        let out = storage(d, "splice new words", s.new_words);
+        copy_words_from_chunks(enc, s.chunks, s.chunk_words, s.at, &old, s.old_words);
+        let threads = s.new_words / s.words_per_thread;
+        let params = uniform(
+            d,
+            "splice params",
+            &[
+                threads as u32,
+                s.first,
+                s.segments.1 as u32,
+                s.first,
+                s.total,
+                0,
+                0,
+                0,
+            ],
+        );
+        let bg = self
+            .kernels
+            .bind_group(d, &[&params, s.segments.0, &old, s.patch, &out]);
+        self.kernels.dispatch(enc, s.entry, &bg, groups(threads));
+        copy_words(enc, &out, 0, s.chunks, s.chunk_words, s.at, s.new_words);
+        [old, out, params]
     }
 }
 
