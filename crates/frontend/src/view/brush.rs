@@ -172,7 +172,8 @@ impl Brush {
             .collect()
     }
 
-    /// The first voxel of an editable object under pixel `(px, py)` of a `size` view.
+    /// The first voxel of an editable object under pixel `(px, py)` of a `size` view
+    /// (`None` for a pixel outside it).
     pub fn pick(
         &self,
         scene: &Scene,
@@ -181,6 +182,9 @@ impl Brush {
         py: u32,
         size: (u32, u32),
     ) -> Option<Pick> {
+        if px >= size.0 || py >= size.1 {
+            return None; // outside the view (`--paint` can name any pixel)
+        }
         let (origin, dir) = camera.pixel_rays(size.0, size.1).ray(px, py);
         let mut best: Option<Pick> = None;
         for e in &self.objects {
@@ -313,8 +317,9 @@ mod tests {
         assert_eq!((p.object, p.instance), (0, 1));
         assert!((p.center.z - (1.0 - 1.0 / 32.0)).abs() < 1e-9, "{p:?}");
         assert!((p.t - 3.5).abs() < 0.01, "{p:?}");
-        // A corner pixel misses.
+        // A corner pixel misses, and so does a pixel outside the view.
         assert_eq!(brush.pick(&scene, &cam, 0, 0, size), None);
+        assert_eq!(brush.pick(&scene, &cam, 64, 32, size), None);
         // Nothing is editable when the object is skipped (animated).
         let none = Brush::new(&scene, &[0]);
         assert!(none.rooms().is_empty());
