@@ -198,11 +198,13 @@ pub fn hash_source(path: &Path) -> Result<u128, CacheError> {
 /// Where caches go by default: `$SSBVB_CACHE_DIR`, else `$XDG_CACHE_HOME/ssbvb`, else
 /// `$HOME/.cache/ssbvb`, else `<temp dir>/ssbvb-cache` (never next to the source).
 pub fn default_cache_dir() -> PathBuf {
-    let env = |k: &str| {
-        std::env::var_os(k)
-            .filter(|v| !v.is_empty())
-            .map(PathBuf::from)
-    };
+    cache_dir_from(|k| std::env::var_os(k))
+}
+
+/// [`default_cache_dir`] with the environment read through `var` (empty values count as
+/// unset).
+fn cache_dir_from(var: impl Fn(&str) -> Option<std::ffi::OsString>) -> PathBuf {
+    let env = |k: &str| var(k).filter(|v| !v.is_empty()).map(PathBuf::from);
     if let Some(d) = env("SSBVB_CACHE_DIR") {
         return d;
     }

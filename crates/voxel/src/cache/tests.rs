@@ -376,3 +376,155 @@ fn a_page_file_reads_every_page_and_refuses_a_damaged_one_alone() {
     std::fs::write(&path, &bad).unwrap();
     assert!(PageFile::open(&path, 5, 5).is_err());
 }
+
+#[test]
+fn the_source_hash_is_xxh3_128_of_the_whole_file() {
+    let dir = tempfile::tempdir().unwrap();
+    // Empty, short, and longer than the 1 MiB read buffer (several reads).
+    let mut long = Vec::with_capacity(3 << 20);
+    let mut x = 0x9E37_79B9u32;
+    while long.len() < (3 << 20) + 17 {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        long.push(x as u8);
+    }
+    let mut hashes = Vec::new();
+    for (i, bytes) in [&b""[..], b"abc", b"abd", &long].into_iter().enumerate() {
+        let path = dir.path().join(format!("{i}.obj"));
+        std::fs::write(&path, bytes).unwrap();
+        let h = hash_source(&path).unwrap();
+        assert_eq!(h, xxhash_rust::xxh3::xxh3_128(bytes), "file {i}");
+        hashes.push(h);
+    }
+    hashes.dedup();
+    assert_eq!(hashes.len(), 4, "different files must hash apart");
+    assert!(matches!(
+        hash_source(&dir.path().join("none.obj")),
+        Err(CacheError::Io { .. })
+    ));
+}
+
+#[test]
+fn cache_names_and_the_default_folder() {
+    assert_eq!(
+        cache_file_name(0xab, 7),
+        "000000000000000000000000000000ab-L7.ssbvbast"
+    );
+    assert_eq!(
+        cache_file_name(u128::MAX, 12),
+        format!("{}-L12.ssbvbast", "f".repeat(32))
+    );
+    let env = |pairs: &'static [(&'static str, &'static str)]| {
+        move |k: &str| {
+            pairs
+                .iter()
+                .find(|(n, _)| *n == k)
+                .map(|(_, v)| std::ffi::OsString::from(v))
+        }
+    };
+    const ALL: [(&str, &str); 3] = [
+        ("SSBVB_CACHE_DIR", "/a"),
+        ("XDG_CACHE_HOME", "/x"),
+        ("HOME", "/h"),
+    ];
+    assert_eq!(cache_dir_from(env(&ALL)), PathBuf::from("/a"));
+    assert_eq!(cache_dir_from(env(&ALL[1..])), PathBuf::from("/x/ssbvb"));
+    assert_eq!(
+        cache_dir_from(env(&ALL[2..])),
+        PathBuf::from("/h/.cache/ssbvb")
+    );
+    // Empty values count as unset.
+    const EMPTY: [(&str, &str); 3] = [
+        ("SSBVB_CACHE_DIR", ""),
+        ("XDG_CACHE_HOME", ""),
+        ("HOME", "/h"),
+    ];
+    assert_eq!(
+        cache_dir_from(env(&EMPTY)),
+        PathBuf::from("/h/.cache/ssbvb")
+    );
+    assert_eq!(
+        cache_dir_from(env(&[])),
+        std::env::temp_dir().join("ssbvb-cache")
+    );
+}
+
+/// The header of `good` with the u32 at `offset` replaced and the header checksum
+/// recomputed, so only the field's meaning is wrong.
+fn with_header_field(good: &[u8], offset: usize, value: u32) -> Vec<u8> {
+    let mut b = good.to_vec();
+    b[offset..offset + 4].copy_from_slice(&value.to_le_bytes());
+    let sum = xxhash_rust::xxh3::xxh3_64(&b[..80]);
+    b[80..88].copy_from_slice(&sum.to_le_bytes());
+    b
+}
+
+#[test]
+fn damaged_headers_and_sections_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("a.ssbvbast");
+    write_cache(&path, &asset(), 99, 5).unwrap();
+    let good = std::fs::read(&path).unwrap();
+    let bad = dir.path().join("bad.ssbvbast");
+    let read = |bytes: &[u8], level: u32| {
+        std::fs::write(&bad, bytes).unwrap();
+        read_cache(&bad, 99, level).unwrap_err()
+    };
+    // Shorter than the magic: not a cache file; the magic alone: a truncated one.
+    assert!(matches!(read(&good[..3], 5), CacheError::BadMagic { .. }));
+    assert!(matches!(read(&good[..8], 5), CacheError::Truncated { .. }));
+    // Section counts that disagree with the level, under a valid checksum.
+    for (offset, value) in [(36, 7), (72, 25), (72, 0)] {
+        let e = read(&with_header_field(&good, offset, value), 5);
+        assert!(
+            e.to_string()
+                .contains("inconsistent level / section counts"),
+            "{offset}: {e}"
+        );
+    }
+    // Level 16 is the most there is: its header passes (the file then ends); 17 does not.
+    let mut top = with_header_field(&good, 32, 16);
+    top = with_header_field(&top, 36, 17);
+    top = with_header_field(&top, 72, 68);
+    let e = read(&top[..HEADER_BYTES], 16);
+    assert!(matches!(e, CacheError::Truncated { .. }), "{e}");
+    let mut over = with_header_field(&good, 32, 17);
+    over = with_header_field(&over, 36, 18);
+    over = with_header_field(&over, 72, 72);
+    let e = read(&over[..HEADER_BYTES], 17);
+    assert!(
+        e.to_string()
+            .contains("inconsistent level / section counts"),
+        "{e}"
+    );
+    // A flipped payload byte is a checksum error naming its section, for every kind.
+    let mut at = HEADER_BYTES;
+    let mut named = std::collections::BTreeSet::new();
+    while at + SECTION_HEADER_BYTES <= good.len() {
+        let u32_at = |o: usize| u32::from_le_bytes(good[o..o + 4].try_into().unwrap());
+        let (kind, lod) = (u32_at(at), u32_at(at + 4));
+        let len = u64::from_le_bytes(good[at + 8..at + 16].try_into().unwrap()) as usize;
+        if len > 0 && named.insert(kind) {
+            let mut b = good.clone();
+            b[at + SECTION_HEADER_BYTES] ^= 0x10;
+            let e = read(&b, 5);
+            let want = format!("{} of level {lod}", kind_name(kind));
+            match &e {
+                CacheError::Checksum { section, .. } => assert_eq!(section, &want),
+                other => panic!("{want}: {other}"),
+            }
+        }
+        at += SECTION_HEADER_BYTES + len;
+    }
+    let names: Vec<&str> = named.iter().map(|&k| kind_name(k)).collect();
+    assert_eq!(
+        names,
+        [
+            "point_cloud",
+            "proxy_positions",
+            "proxy_triangles",
+            "page_index"
+        ]
+    );
+}
