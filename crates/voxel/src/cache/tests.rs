@@ -450,14 +450,19 @@ fn cache_names_and_the_default_folder() {
     );
 }
 
-/// The header of `good` with the u32 at `offset` replaced and the header checksum
-/// recomputed, so only the field's meaning is wrong.
-fn with_header_field(good: &[u8], offset: usize, value: u32) -> Vec<u8> {
+/// The header of `good` with the bytes at `offset` replaced by `value` and the header
+/// checksum recomputed, so only the field's meaning is wrong.
+fn with_header_bytes(good: &[u8], offset: usize, value: &[u8]) -> Vec<u8> {
     let mut b = good.to_vec();
-    b[offset..offset + 4].copy_from_slice(&value.to_le_bytes());
+    b[offset..offset + value.len()].copy_from_slice(value);
     let sum = xxhash_rust::xxh3::xxh3_64(&b[..80]);
     b[80..88].copy_from_slice(&sum.to_le_bytes());
     b
+}
+
+/// [`with_header_bytes`] for a u32 field.
+fn with_header_field(good: &[u8], offset: usize, value: u32) -> Vec<u8> {
+    with_header_bytes(good, offset, &value.to_le_bytes())
 }
 
 #[test]
@@ -498,6 +503,21 @@ fn damaged_headers_and_sections_are_named() {
             .contains("inconsistent level / section counts"),
         "{e}"
     );
+    // An object space that is not one, under a valid checksum: a scale of zero, below
+    // zero or infinite, a centre not finite (centre at bytes 40..64, scale at 64..72).
+    for (offset, value) in [
+        (64, 0.0),
+        (64, -1.0),
+        (64, f64::INFINITY),
+        (40, f64::NAN),
+        (56, f64::NEG_INFINITY),
+    ] {
+        let e = read(&with_header_bytes(&good, offset, &value.to_le_bytes()), 5);
+        assert!(
+            e.to_string().contains("non-finite object space"),
+            "{offset} = {value}: {e}"
+        );
+    }
     // A flipped payload byte is a checksum error naming its section, for every kind.
     let mut at = HEADER_BYTES;
     let mut named = std::collections::BTreeSet::new();
