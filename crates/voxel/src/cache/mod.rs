@@ -662,4 +662,6 @@ fn validated_codes(
 }
 
 #[cfg(test)]
+mod page_tests;
+#[cfg(test)]
 mod tests;

@@ -137,7 +137,7 @@ impl PageFile {
 
 /// A level's page index must be usable for seeking: pages in strict Morton order inside
 /// the grid, first voxels strictly increasing from 0 and inside the point cloud.
-fn check_entries(
+pub(super) fn check_entries(
     path: &Path,
     lod: u32,
     pages: &[PageEntry],

@@ -518,6 +518,23 @@ fn damaged_headers_and_sections_are_named() {
             "{offset} = {value}: {e}"
         );
     }
+    // A section of the right kind for another level, or of another kind for this one.
+    let mut b = good.clone();
+    b[HEADER_BYTES + 4..HEADER_BYTES + 8].copy_from_slice(&1u32.to_le_bytes());
+    let e = read(&b, 5);
+    assert!(
+        e.to_string()
+            .contains("expected section page_index of level 0, found page_index of level 1"),
+        "{e}"
+    );
+    let mut b = good.clone();
+    b[HEADER_BYTES..HEADER_BYTES + 4].copy_from_slice(&1u32.to_le_bytes());
+    let e = read(&b, 5);
+    assert!(
+        e.to_string()
+            .contains("expected section page_index of level 0, found point_cloud of level 0"),
+        "{e}"
+    );
     // A flipped payload byte is a checksum error naming its section, for every kind.
     let mut at = HEADER_BYTES;
     let mut named = std::collections::BTreeSet::new();
