@@ -448,6 +448,8 @@ fn cache_names_and_the_default_folder() {
         cache_dir_from(env(&[])),
         std::env::temp_dir().join("ssbvb-cache")
     );
+    // The real environment gives some folder, whichever variable is set here.
+    assert!(!default_cache_dir().as_os_str().is_empty());
 }
 
 /// The header of `good` with the bytes at `offset` replaced by `value` and the header
