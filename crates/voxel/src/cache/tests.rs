@@ -390,7 +390,8 @@ fn the_source_hash_is_xxh3_128_of_the_whole_file() {
         long.push(x as u8);
     }
     let mut hashes = Vec::new();
-    for (i, bytes) in [&b""[..], b"abc", b"abd", &long].into_iter().enumerate() {
+    // The empty file last: a reader that never stops at the end hangs on it.
+    for (i, bytes) in [&b"abc"[..], b"abd", &long, b""].into_iter().enumerate() {
         let path = dir.path().join(format!("{i}.obj"));
         std::fs::write(&path, bytes).unwrap();
         let h = hash_source(&path).unwrap();
