@@ -106,14 +106,14 @@ fn check(level: u32, old_codes: Vec<u64>, blocks: &[([u32; 3], u32)], new_in: Ve
         old_c[..first.min(old_c.len())],
         new_c[..first.min(new_c.len())]
     );
-    // It is the first block's start when a block's content goes in; with only emptied
-    // or empty blocks it may be later (nothing moved before the first removed voxel).
+    // It is the first block's start when that block's content goes in; an emptied or
+    // empty first block may leave it later (nothing moves before the first change).
     let start = old.codes.partition_point(|&c| c < ranges[0].0);
-    if patch
+    let fills_first = patch
         .voxel_segments
         .iter()
-        .any(|s| matches!(s.source, Source::Patch { .. }))
-    {
+        .any(|s| matches!(s.source, Source::Patch { .. }) && s.start as usize == start);
+    if fills_first {
         assert_eq!(first, start);
     } else {
         assert!(first >= start, "{first} < {start}");
