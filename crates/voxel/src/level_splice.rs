@@ -235,6 +235,23 @@ pub fn stream_words(v: &LevelVoxels, i: usize) -> (u32, u16) {
     (p.color, (p.z_normal >> 16) as u16)
 }
 
+/// Per level of `asset`: the colour words, normal halves and lookup nodes the scene's
+/// streams hold for it, what a level's patches apply to (for checks and tests).
+pub fn asset_streams(asset: &crate::asset::VoxelAsset) -> Vec<(Vec<u32>, Vec<u16>, Vec<u32>)> {
+    asset
+        .lods
+        .iter()
+        .map(|lod| {
+            let v = &lod.point_cloud.voxels;
+            (
+                v.iter().map(|p| p.color).collect(),
+                v.iter().map(|p| (p.z_normal >> 16) as u16).collect(),
+                lod.lookup.nodes.clone(),
+            )
+        })
+        .collect()
+}
+
 impl LevelMirror {
     /// The mirror of a level's voxels.
     pub fn new(voxels: LevelVoxels) -> Self {

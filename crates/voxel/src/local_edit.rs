@@ -181,6 +181,7 @@ mod tests {
     use super::*;
     use crate::asset::VoxelAsset;
     use crate::edit::apply_edits;
+    use crate::level_splice::asset_streams;
     use crate::lookup::SparseLookup;
     use crate::model::ObjectSpace;
     use crate::prepare::prepare_voxel_set;
@@ -230,21 +231,6 @@ mod tests {
         prepare_voxel_set(set, &NoProgress).0
     }
 
-    /// The object's streams as the scene uploads them: colour words, normal halves, nodes.
-    fn streams(a: &VoxelAsset) -> Vec<(Vec<u32>, Vec<u16>, Vec<u32>)> {
-        a.lods
-            .iter()
-            .map(|lod| {
-                let v = &lod.point_cloud.voxels;
-                (
-                    v.iter().map(|p| p.color).collect(),
-                    v.iter().map(|p| (p.z_normal >> 16) as u16).collect(),
-                    lod.lookup.nodes.clone(),
-                )
-            })
-            .collect()
-    }
-
     /// Local edits equal the whole-set edit, and their patches turn the prepared streams of
     /// the old set into those of the edited set exactly, at every level.
     fn check(level: u32, edits: &[Edit]) -> LocalEdit {
@@ -254,8 +240,8 @@ mod tests {
         let edit = editor.apply(edits).unwrap();
         assert_eq!(edit.report, report);
         assert_eq!(editor.finest(), &expected);
-        let old = streams(&prepared(before));
-        let new = streams(&prepared(expected.clone()));
+        let old = asset_streams(&prepared(before));
+        let new = asset_streams(&prepared(expected.clone()));
         assert_eq!(edit.patches.len(), new.len());
         for (l, p) in edit.patches.iter().enumerate() {
             assert_eq!(p.level, l as u32);

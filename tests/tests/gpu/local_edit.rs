@@ -13,6 +13,7 @@ use ssbvb_voxel::accuracy;
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::edit::{Edit, apply_edits, level_voxels};
+use ssbvb_voxel::level_splice::asset_streams;
 use ssbvb_voxel::local_edit::LocalEditor;
 use ssbvb_voxel::svo::LevelVoxels;
 
@@ -29,20 +30,6 @@ fn prepared(voxels: LevelVoxels, like: &VoxelAsset) -> Arc<VoxelAsset> {
         report: Default::default(),
     };
     Arc::new(ssbvb_voxel::prepare::prepare_voxel_set(set, &ssbvb_voxel::progress::NoProgress).0)
-}
-
-fn asset_streams(a: &VoxelAsset) -> Streams {
-    a.lods
-        .iter()
-        .map(|lod| {
-            let v = &lod.point_cloud.voxels;
-            (
-                v.iter().map(|p| p.color).collect(),
-                v.iter().map(|p| (p.z_normal >> 16) as u16).collect(),
-                lod.lookup.nodes.clone(),
-            )
-        })
-        .collect()
 }
 
 /// Words `start..start + len` of a stream split in bindings of `chunk` words.
