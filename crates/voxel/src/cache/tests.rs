@@ -378,6 +378,67 @@ fn a_page_file_reads_every_page_and_refuses_a_damaged_one_alone() {
 }
 
 #[test]
+fn a_page_index_wrong_under_a_valid_checksum_is_refused_by_the_single_page_read() {
+    // The index of level 5 rewritten so that page 0 ends where it starts, and its
+    // section's checksum recomputed: only `read_page`'s own entry check can see it.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("p.ssbvbast");
+    let a = asset();
+    write_cache(&path, &a, 5, 5).unwrap();
+    let mut index = page_index(&a.lods[5].point_cloud.voxels);
+    assert!(index.len() >= 2 && index[1].first_voxel > 0);
+    let good = std::fs::read(&path).unwrap();
+    let ix: &[u8] = bytemuck::cast_slice(&index);
+    let at = good.windows(ix.len()).position(|w| w == ix).unwrap();
+    index[1].first_voxel = index[0].first_voxel;
+    let payload: &[u8] = bytemuck::cast_slice(&index);
+    let mut bad = good.clone();
+    bad[at..at + payload.len()].copy_from_slice(payload);
+    let sum = section_checksum(KIND_PAGE_INDEX, 5, payload);
+    bad[at - 8..at].copy_from_slice(&sum.to_le_bytes());
+    std::fs::write(&path, &bad).unwrap();
+    let p = crate::svo::morton_decode(index[0].page);
+    let e = read_page(&path, 5, 5, 5, p).unwrap_err();
+    assert!(
+        matches!(&e, CacheError::Corrupt { reason, .. } if reason.ends_with("bad index entry")),
+        "{e}"
+    );
+    // The untouched levels still read; the whole file is refused.
+    assert!(!read_page(&path, 5, 5, 4, [0; 3]).unwrap().is_empty());
+    assert!(PageFile::open(&path, 5, 5).is_err());
+}
+
+#[test]
+fn a_page_file_cut_short_after_opening_reports_the_page_as_truncated() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("p.ssbvbast");
+    let a = asset();
+    write_cache(&path, &a, 5, 5).unwrap();
+    let file = PageFile::open(&path, 5, 5).unwrap();
+    let last = file.pages(5).len() - 1;
+    let good = std::fs::read(&path).unwrap();
+    let needle: &[u8] = bytemuck::cast_slice(&a.lods[5].point_cloud.voxels);
+    let pc = good
+        .windows(needle.len())
+        .position(|w| w == needle)
+        .unwrap();
+    // Cut inside the last page, half a voxel into it.
+    let cut = pc as u64 + file.pages(5)[last].first_voxel * 16 + 8;
+    std::fs::OpenOptions::new()
+        .write(true)
+        .open(&path)
+        .unwrap()
+        .set_len(cut)
+        .unwrap();
+    let e = file.read_page(5, last).unwrap_err();
+    assert!(
+        matches!(&e, CacheError::Truncated { what, .. } if what.starts_with("page [")),
+        "{e}"
+    );
+    assert!(file.read_page(5, 0).is_ok());
+}
+
+#[test]
 fn the_source_hash_is_xxh3_128_of_the_whole_file() {
     let dir = tempfile::tempdir().unwrap();
     // Empty, short, and longer than the 1 MiB read buffer (several reads).
