@@ -26,7 +26,10 @@ use glam::{DAffine3, DMat3, DVec3};
 use image::ImageEncoder;
 use rayon::prelude::*;
 
-pub use self::dda::{ObjectHit, Traversal, trace_object_ray, trace_object_ray_faces};
+pub use self::dda::{
+    ObjectHit, TraceCount, Traversal, trace_object_ray, trace_object_ray_counted,
+    trace_object_ray_faces,
+};
 use crate::asset::LodLevel;
 use crate::camera::{Camera, normalize_or};
 use crate::instance_bvh::{Aabb, InstanceBvh};

@@ -166,6 +166,39 @@ pub fn trace_object_ray_faces(
     dir: DVec3,
     traversal: Traversal,
 ) -> Option<ObjectHit> {
+    trace_object_ray_counted(lookup, faces, origin, dir, traversal).0
+}
+
+/// The work of one traversal: hardware-independent counts for comparing traversals.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct TraceCount {
+    /// Crossing events visited after the start (each tests the cells touched at one time).
+    pub events: u32,
+    /// Empty regions jumped over (hierarchical traversal only).
+    pub skips: u32,
+}
+
+/// [`trace_object_ray_faces`], also returning how much work the traversal did.
+pub fn trace_object_ray_counted(
+    lookup: &SparseLookup,
+    faces: Option<&[u8]>,
+    origin: DVec3,
+    dir: DVec3,
+    traversal: Traversal,
+) -> (Option<ObjectHit>, TraceCount) {
+    let mut count = TraceCount::default();
+    let hit = trace(lookup, faces, origin, dir, traversal, &mut count);
+    (hit, count)
+}
+
+fn trace(
+    lookup: &SparseLookup,
+    faces: Option<&[u8]>,
+    origin: DVec3,
+    dir: DVec3,
+    traversal: Traversal,
+    count: &mut TraceCount,
+) -> Option<ObjectHit> {
     if !origin.is_finite() || !dir.is_finite() || dir == DVec3::ZERO {
         return None;
     }
@@ -193,18 +226,18 @@ pub fn trace_object_ray_faces(
                 return None;
             }
             f.o[a] = o;
-            // Cells whose closed extent holds `o`: estimate, then settle with exact
-            // comparisons against the (exact) boundaries.
+            // Cells whose closed extent holds `o`. The boundaries `b(k)` are exact and
+            // rounding is monotone, so `(o + 1) / s` is never below the cell `c` with
+            // `b(c) <= o < b(c + 1)` and at most one above it (when `o + 1` rounds up onto
+            // `b(c + 1) + 1`): one comparison settles it. On an inner boundary the cell
+            // below touches `o` too.
             let b = |k: i64| -1.0 + k as f64 * f.s;
-            let mut i = (((o + 1.0) / f.s).floor() as i64).clamp(0, n - 1);
-            while i > 0 && b(i) > o {
+            let mut i = (((o + 1.0) / f.s).floor() as i64).min(n - 1);
+            if b(i) > o {
                 i -= 1;
             }
-            while i < n - 1 && b(i + 1) < o {
-                i += 1;
-            }
             st.lo[a] = if i > 0 && b(i) == o { i - 1 } else { i };
-            st.hi[a] = if i < n - 1 && b(i + 1) == o { i + 1 } else { i };
+            st.hi[a] = i;
         } else {
             f.moving[a] = true;
             f.mirrored[a] = dir[a] < 0.0;
@@ -238,9 +271,10 @@ pub fn trace_object_ray_faces(
         if (0..3).any(|a| f.moving[a] && st.next[a] > n) {
             return None;
         }
-        if traversal == Traversal::Hierarchical {
-            skip.try_skip(&f, &mut st, lookup);
+        if traversal == Traversal::Hierarchical && skip.try_skip(&f, &mut st, lookup) {
+            count.skips += 1;
         }
+        count.events += 1;
         let mut t = f64::INFINITY;
         for a in 0..3 {
             if f.moving[a] {
@@ -254,6 +288,8 @@ pub fn trace_object_ray_faces(
         for a in (0..3).filter(|&a| f.moving[a]) {
             let k1 = st.next[a];
             if st.t_next[a] == t {
+                // Several planes of one axis cross at once when the origin is so far away
+                // that `b - o` rounds consecutive boundaries to one value.
                 let mut k2 = k1 + 1;
                 while k2 <= n && f.t(a, k2) == t {
                     k2 += 1;

@@ -12,6 +12,7 @@ mod oracle;
 mod outputs;
 mod rules;
 mod surface;
+mod traversal;
 
 use glam::{DAffine3, DVec2, DVec3};
 use ssbvb_voxel::asset::{LodLevel, PackedVoxel, PointCloud, ProxyMesh, SparseLookup};
