@@ -78,30 +78,22 @@ impl Poly {
                 out.n += 1;
             }
         };
-        match self.n {
-            0 => {}
-            1 => {
-                if sign * self.p[0][axis] - bound <= 0.0 {
-                    push(self.p[0]);
-                }
+        // A single point (n = 1) is its own edge: kept when inside, never crossing.
+        let n = self.n;
+        for i in 0..n {
+            let a = self.p[i];
+            let b = self.p[(i + 1) % n];
+            let da = sign * a[axis] - bound;
+            let db = sign * b[axis] - bound;
+            if da <= 0.0 {
+                push(a);
             }
-            n => {
-                for i in 0..n {
-                    let a = self.p[i];
-                    let b = self.p[(i + 1) % n];
-                    let da = sign * a[axis] - bound;
-                    let db = sign * b[axis] - bound;
-                    if da <= 0.0 {
-                        push(a);
-                    }
-                    if (da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0) {
-                        let t = da / (da - db);
-                        let mut q = a + (b - a) * t;
-                        // Land exactly on the plane so later range tests see it there.
-                        q[axis] = sign * bound;
-                        push(q);
-                    }
-                }
+            if (da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0) {
+                let t = da / (da - db);
+                let mut q = a + (b - a) * t;
+                // Land exactly on the plane so later range tests see it there.
+                q[axis] = sign * bound;
+                push(q);
             }
         }
         out
@@ -251,3 +243,7 @@ pub(super) fn cell_estimate(t: &[DVec3; 3]) -> f64 {
     let depth = t[0][w].max(t[1][w]).max(t[2][w]) - t[0][w].min(t[1][w]).min(t[2][w]);
     (area + 2.0 * perim + 4.0) * 3.0 + depth + 2.0
 }
+
+#[cfg(test)]
+#[path = "geometry_tests.rs"]
+mod tests;

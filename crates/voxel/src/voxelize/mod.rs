@@ -50,6 +50,8 @@
 //! bounded memory in `regions`, colour and normal sampling in `attributes`, and the
 //! resampling of voxel models in `resample`.
 
+#[cfg(test)]
+mod attribute_tests;
 mod attributes;
 mod geometry;
 mod mesh;
