@@ -214,3 +214,45 @@ fn cancelling_faces_take_the_normal_of_their_largest_part() {
         assert!(n[..2] == [0.0, 0.0] && n[2].abs() == 1.0, "{n:?}");
     }
 }
+
+#[test]
+fn voxels_without_a_surface_take_the_occupancy_gradient_then_the_direction_from_the_centre() {
+    // Segments and a point have no area: every voxel falls back to minus the sum of its
+    // occupied 26-neighbours' unit offsets, recomputed here from the output cells; the
+    // isolated point's voxel has no neighbour and points away from the grid centre.
+    let level = 4;
+    let n = 1i64 << level;
+    let m = Mesh {
+        positions: vec![
+            Vec3::new(-0.7, -0.6, -0.5),
+            Vec3::new(0.6, 0.2, 0.3),
+            Vec3::new(0.1, 0.8, -0.4),
+            Vec3::new(-0.8, 0.7, 0.7),
+        ],
+        triangles: vec![[0, 1, 1], [1, 2, 2], [3, 3, 3]],
+        ..Default::default()
+    };
+    let set = voxelize_mesh_in(&m, level, Some(IDENTITY), &NoProgress).unwrap();
+    let cells: std::collections::BTreeSet<[i64; 3]> = (0..set.voxels.len())
+        .map(|i| set.voxels.cell(i).map(i64::from))
+        .collect();
+    assert_eq!(set.report.normal_fallbacks, set.voxels.len() as u64);
+    assert!(cells.contains(&[1, 13, 13]) && cells.len() > 30);
+    for i in 0..set.voxels.len() {
+        let c = &set.voxels.cell(i).map(i64::from);
+        let mut g = DVec3::ZERO;
+        for d in (0..27).map(|k| [k % 3 - 1, k / 3 % 3 - 1, k / 9 - 1]) {
+            if d != [0; 3] && cells.contains(&[c[0] + d[0], c[1] + d[1], c[2] + d[2]]) {
+                let d = DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64);
+                g -= d / d.length();
+            }
+        }
+        let from_centre = DVec3::from(c.map(|x| x as f64 + 0.5 - n as f64 / 2.0));
+        let want = if g.length() > 1e-12 { g } else { from_centre }.normalize();
+        let got = DVec3::from(set.voxels.normals[i].map(f64::from));
+        assert!((got - want).length() < 1e-6, "{c:?}: {got} against {want}");
+    }
+    // Level 0: one cell, centred on the grid: the last resort +z.
+    let set = voxelize_mesh_in(&m, 0, Some(IDENTITY), &NoProgress).unwrap();
+    assert_eq!(set.voxels.normals, vec![[0.0, 0.0, 1.0]]);
+}
