@@ -176,6 +176,8 @@ pub struct TraceCount {
     pub events: u32,
     /// Empty regions jumped over (hierarchical traversal only).
     pub skips: u32,
+    /// Cells looked up in the sparse lookup (including any outside the grid).
+    pub lookups: u32,
 }
 
 /// [`trace_object_ray_faces`], also returning how much work the traversal did.
@@ -262,7 +264,7 @@ fn trace(
         st.next[a] = k2;
         st.t_next[a] = if k2 <= n { f.t(a, k2) } else { f64::INFINITY };
     }
-    if let Some(hit) = best_touched(&f, &st, lookup, faces, t0, [false; 3]) {
+    if let Some(hit) = best_touched(&f, &st, lookup, faces, t0, [false; 3], count) {
         return Some(hit);
     }
     let mut skip = SkipCache::default();
@@ -304,7 +306,7 @@ fn trace(
                 st.hi[a] = k1 - 1;
             }
         }
-        if let Some(hit) = best_touched(&f, &st, lookup, faces, t, crossing) {
+        if let Some(hit) = best_touched(&f, &st, lookup, faces, t, crossing, count) {
             return Some(hit);
         }
     }
@@ -321,6 +323,7 @@ fn best_touched(
     faces: Option<&[u8]>,
     t: f64,
     crossing: [bool; 3],
+    count: &mut TraceCount,
 ) -> Option<ObjectHit> {
     let any_crossing = crossing.iter().any(|&c| c);
     let mut best: Option<(u64, u32, [i64; 3])> = None;
@@ -332,6 +335,7 @@ fn best_touched(
                     continue;
                 }
                 let cell = [0, 1, 2].map(|a| f.orig(a, c[a]) as u32);
+                count.lookups += 1;
                 let Some(voxel) = lookup.get(cell) else {
                     continue;
                 };
