@@ -23,8 +23,9 @@ pub fn voxel_model_object_space(model: &VoxelModel) -> Option<ObjectSpace> {
 /// Integer bounds `[min, max)` of a voxel model's cubes.
 fn voxel_bounds(model: &VoxelModel) -> Option<([i64; 3], [i64; 3])> {
     let first = model.voxels.first()?;
+    // The loop covers the first voxel too.
     let mut min = first.map(i64::from);
-    let mut max = min.map(|v| v + 1);
+    let mut max = min;
     for v in &model.voxels {
         for k in 0..3 {
             min[k] = min[k].min(i64::from(v[k]));
