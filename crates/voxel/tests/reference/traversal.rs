@@ -124,6 +124,12 @@ fn each_event_looks_up_only_the_cells_it_newly_touches() {
             [(7, 0, 8), (4, 1, 5)],
         ),
         (
+            "leaving through the +x face",
+            DVec3::new(1.0, c, c),
+            DVec3::X,
+            [(0, 0, 1), (0, 0, 1)],
+        ),
+        (
             "diagonal",
             DVec3::new(-2.0, -1.9, -1.8),
             DVec3::ONE,
