@@ -637,7 +637,13 @@ fn voxel_model_edge_cases() {
     // Solid upsampling to a huge grid is refused up front.
     assert!(matches!(
         voxelize_voxels_with(&one, 12, VoxelFill::Solid, &NoProgress),
-        Err(VoxelizeError::TooLarge { .. })
+        Err(VoxelizeError::TooLarge { estimate, .. }) if estimate == 1 << 36
+    ));
+    // The estimate is exact for one voxel: all 4096³ cells solid, or the six 8192² faces
+    // of its block as a shell (over the limit at level 13, not at 12).
+    assert!(matches!(
+        voxelize_voxels_with(&one, 13, VoxelFill::Shell, &NoProgress),
+        Err(VoxelizeError::TooLarge { estimate, .. }) if estimate == 6 << 26
     ));
     // Downsampling a large solid block: grouped, not scanned per cell.
     let block = VoxelModel {
@@ -648,6 +654,7 @@ fn voxel_model_edge_cases() {
     };
     let solid = voxelize_voxels_with(&block, 3, VoxelFill::Solid, &NoProgress).unwrap();
     assert_eq!(solid.voxels.len(), 512);
+    assert_eq!(solid.report.source_voxels, 64 * 64 * 64);
     assert!(
         solid
             .voxels
