@@ -174,6 +174,14 @@ fn load_or_prepare_reports_what_it_did() {
     assert!(e.to_string().contains("nope.obj"), "{e}");
 }
 
+/// Byte offset of a level's point cloud in the bytes of a cache file.
+fn offset_of(file: &[u8], voxels: &[PackedVoxel]) -> usize {
+    let needle: &[u8] = bytemuck::cast_slice(voxels);
+    file.windows(needle.len())
+        .position(|w| w == needle)
+        .expect("the point cloud in the file")
+}
+
 #[test]
 fn one_page_reads_alone_and_is_checked_alone() {
     let dir = tempfile::tempdir().unwrap();
@@ -220,11 +228,7 @@ fn one_page_reads_alone_and_is_checked_alone() {
     let index = page_index(&finest.point_cloud.voxels);
     assert!(index.len() >= 2);
     let good = std::fs::read(&path).unwrap();
-    let needle: &[u8] = bytemuck::cast_slice(&finest.point_cloud.voxels);
-    let pc = good
-        .windows(needle.len())
-        .position(|w| w == needle)
-        .expect("level-5 point cloud in the file");
+    let pc = offset_of(&good, &finest.point_cloud.voxels);
     let victim = index[1];
     let mut bad = good.clone();
     bad[pc + victim.first_voxel as usize * 16 + 5] ^= 0x10;
@@ -352,11 +356,7 @@ fn a_page_file_reads_every_page_and_refuses_a_damaged_one_alone() {
     // neighbours still read.
     let finest = &a.lods[5];
     let good = std::fs::read(&path).unwrap();
-    let needle: &[u8] = bytemuck::cast_slice(&finest.point_cloud.voxels);
-    let pc = good
-        .windows(needle.len())
-        .position(|w| w == needle)
-        .unwrap();
+    let pc = offset_of(&good, &finest.point_cloud.voxels);
     let index = file.pages(5).to_vec();
     let mut bad = good.clone();
     bad[pc + index[1].first_voxel as usize * 16 + 3] ^= 0x01;
@@ -417,11 +417,7 @@ fn a_page_file_cut_short_after_opening_reports_the_page_as_truncated() {
     let file = PageFile::open(&path, 5, 5).unwrap();
     let last = file.pages(5).len() - 1;
     let good = std::fs::read(&path).unwrap();
-    let needle: &[u8] = bytemuck::cast_slice(&a.lods[5].point_cloud.voxels);
-    let pc = good
-        .windows(needle.len())
-        .position(|w| w == needle)
-        .unwrap();
+    let pc = offset_of(&good, &a.lods[5].point_cloud.voxels);
     // Cut inside the last page, half a voxel into it.
     let cut = pc as u64 + file.pages(5)[last].first_voxel * 16 + 8;
     std::fs::OpenOptions::new()
