@@ -1,0 +1,131 @@
+//! Colours and normals of resampled voxel models against an f64 oracle (the occupancy
+//! oracle in `tests.rs` never looked at either; the mutation run showed that the source
+//! index of a voxel past the first 1024 and the centre fallback went unchecked).
+
+use std::collections::BTreeMap;
+
+use glam::DVec3;
+
+use super::*;
+use crate::model::{VoxelModel, cell_size};
+use crate::progress::NoProgress;
+
+/// A 12³ block with a hole pattern (over 1024 voxels, so the resampler's chunks matter),
+/// one isolated voxel, and two positions listed twice (the later entry wins). Every entry
+/// has its own colour.
+fn model() -> VoxelModel {
+    let mut voxels = Vec::new();
+    for z in 0..12 {
+        for y in 0..12 {
+            for x in 0..12 {
+                if (x + 2 * y + 3 * z) % 11 != 0 {
+                    voxels.push([x, y, z]);
+                }
+            }
+        }
+    }
+    voxels.push([20, 5, 9]);
+    voxels.push([3, 4, 5]);
+    voxels.push([11, 11, 11]);
+    let colors = (0..voxels.len())
+        .map(|i| {
+            let v: [i32; 3] = voxels[i];
+            [
+                v[0] as f32 / 20.0,
+                v[1] as f32 / 12.0,
+                ((i * 37) % 101) as f32 / 100.0,
+                ((i * 53) % 97) as f32 / 96.0,
+            ]
+        })
+        .collect();
+    VoxelModel { voxels, colors }
+}
+
+/// Per occupied cell: the sum of the colours of the distinct source positions it overlaps
+/// (f64 object space, the last entry of a position) and their count.
+fn oracle(model: &VoxelModel, level: u32) -> BTreeMap<[i64; 3], ([f64; 4], f64)> {
+    let os = voxel_model_object_space(model).unwrap();
+    let s = cell_size(level);
+    let mut last = BTreeMap::new();
+    for (v, c) in model.voxels.iter().zip(&model.colors) {
+        last.insert(*v, *c);
+    }
+    let mut cells: BTreeMap<[i64; 3], ([f64; 4], f64)> = BTreeMap::new();
+    for (v, col) in last {
+        let lo = os.to_object(DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64));
+        let hi = os.to_object(DVec3::new(
+            v[0] as f64 + 1.0,
+            v[1] as f64 + 1.0,
+            v[2] as f64 + 1.0,
+        ));
+        // Cells overlapping [lo, hi) by more than a rounding tolerance.
+        let range = |k: usize| {
+            let a = ((lo[k] + 1.0) / s + 1e-9).floor() as i64;
+            let b = ((hi[k] + 1.0) / s - 1e-9).ceil() as i64 - 1;
+            a..=b
+        };
+        for z in range(2) {
+            for y in range(1) {
+                for x in range(0) {
+                    let e = cells.entry([x, y, z]).or_default();
+                    for (s, c) in e.0.iter_mut().zip(col) {
+                        *s += f64::from(c);
+                    }
+                    e.1 += 1.0;
+                }
+            }
+        }
+    }
+    cells
+}
+
+#[test]
+fn resampled_voxels_take_the_mean_colour_of_their_sources_and_the_occupancy_gradient() {
+    let m = model();
+    assert!(m.voxels.len() > 1024);
+    // Extent 21: levels 3 and 4 group source voxels into coarser cells, level 5 splits
+    // them.
+    for level in 3..=5u32 {
+        let n = 1i64 << level;
+        let want = oracle(&m, level);
+        for fill in [VoxelFill::Shell, VoxelFill::Solid] {
+            let set = voxelize_voxels_with(&m, level, fill, &NoProgress).unwrap();
+            let mut fallbacks = 0;
+            for i in 0..set.voxels.len() {
+                let c = set.voxels.cell(i).map(i64::from);
+                let (sum, count) = want[&c];
+                let got = set.voxels.colors[i];
+                for k in 0..4 {
+                    assert!(
+                        (f64::from(got[k]) - sum[k] / count).abs() < 1e-5,
+                        "level {level} {fill:?} {c:?}: colour {got:?} against {sum:?} / {count}"
+                    );
+                }
+                let mut g = DVec3::ZERO;
+                for d in (0..27).map(|k| [k % 3 - 1, k / 3 % 3 - 1, k / 9 - 1]) {
+                    if d != [0; 3] && want.contains_key(&[c[0] + d[0], c[1] + d[1], c[2] + d[2]]) {
+                        let d = DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64);
+                        g -= d / d.length();
+                    }
+                }
+                let from_centre = DVec3::from(c.map(|x| x as f64 + 0.5 - n as f64 / 2.0));
+                if g.length() <= 1e-12 {
+                    fallbacks += 1;
+                }
+                let want_n = if g.length() > 1e-12 { g } else { from_centre }.normalize();
+                let got_n = DVec3::from(set.voxels.normals[i].map(f64::from));
+                assert!(
+                    (got_n - want_n).length() < 1e-6,
+                    "level {level} {fill:?} {c:?}: normal {got_n} against {want_n}"
+                );
+            }
+            // Cells without a gradient take the direction from the centre: the inner cells
+            // of the solid block, and the isolated voxel's one cell at level 3 (it spans
+            // two cells along z at level 4).
+            assert!(
+                (fill == VoxelFill::Shell && level > 3) || fallbacks >= 1,
+                "level {level} {fill:?}"
+            );
+        }
+    }
+}
