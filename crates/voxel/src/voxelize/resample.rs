@@ -164,10 +164,10 @@ pub fn voxelize_voxels_with(
         ..Default::default()
     };
 
-    // The target cells overlapped by a source voxel form a block; only its boundary layer
-    // can hold shell cells, and with cells no larger than a source voxel only the layers
-    // facing an absent source neighbour can (the cells across a face with a source
-    // neighbour overlap that neighbour, so they are occupied).
+    // The target cells overlapped by a source voxel form a block; only the layers of its
+    // boundary that face an absent source neighbour can hold shell cells (see the
+    // estimate). The two paths below differ in cost, not in result: upsampling looks at
+    // those layers and finds colours per cell, downsampling groups whole blocks.
     let block =
         |v: &[i32; 3]| -> [(i64, i64); 3] { [0, 1, 2].map(|k| rs.cells_of(k, i64::from(v[k]))) };
     let fine = rs.a >= rs.e2 / 2; // cells per source unit A/E >= 1
@@ -182,13 +182,19 @@ pub fn voxelize_voxels_with(
         .map(|v| {
             let b = block(v);
             let d = b.map(|(lo, hi)| (hi - lo + 1).max(0) as u128);
+            let volume = d[0] * d[1] * d[2];
             match fill {
-                VoxelFill::Solid => d[0] * d[1] * d[2],
-                VoxelFill::Shell if !fine => d[0] * d[1] * d[2],
-                VoxelFill::Shell => (0..6)
-                    .filter(|f| exposed(v, f / 2, if f.is_multiple_of(2) { -1 } else { 1 }))
-                    .map(|f| d[(f / 2 + 1) % 3] * d[(f / 2 + 2) % 3])
-                    .sum(),
+                VoxelFill::Solid => volume,
+                // A shell cell lies in an exposed layer of some source voxel at any cell
+                // size: along an axis where its neighbour cell is empty, the source voxel
+                // reaching furthest into the cell has no source neighbour. Small blocks
+                // have more face area than volume.
+                VoxelFill::Shell => volume.min(
+                    (0..6)
+                        .filter(|f| exposed(v, f / 2, if f.is_multiple_of(2) { -1 } else { 1 }))
+                        .map(|f| d[(f / 2 + 1) % 3] * d[(f / 2 + 2) % 3])
+                        .sum(),
+                ),
             }
         })
         .sum();

@@ -645,6 +645,20 @@ fn voxel_model_edge_cases() {
         voxelize_voxels_with(&one, 13, VoxelFill::Shell, &NoProgress),
         Err(VoxelizeError::TooLarge { estimate, .. }) if estimate == 6 << 26
     ));
+    // Two voxels side by side (blocks off the grid origin, each 4096³ at level 13 and
+    // 8192³ at level 14): the shell counts the ten faces that have no source neighbour.
+    let two = VoxelModel {
+        voxels: vec![[5, -3, 8], [6, -3, 8]],
+        colors: vec![],
+    };
+    assert!(matches!(
+        voxelize_voxels_with(&two, 13, VoxelFill::Solid, &NoProgress),
+        Err(VoxelizeError::TooLarge { estimate, .. }) if estimate == 1 << 37
+    ));
+    assert!(matches!(
+        voxelize_voxels_with(&two, 14, VoxelFill::Shell, &NoProgress),
+        Err(VoxelizeError::TooLarge { estimate, .. }) if estimate == 10 << 26
+    ));
     // Downsampling a large solid block: grouped, not scanned per cell.
     let block = VoxelModel {
         voxels: (0..64 * 64 * 64)
