@@ -252,39 +252,18 @@ pub fn voxelize_voxels_with(
     let mut codes: Vec<u64>;
     let mut grouped_colors: Vec<[f32; 4]> = Vec::new();
     if fine {
-        codes = model
-            .voxels
-            .par_chunks(1024)
-            .enumerate()
-            .flat_map_iter(|(chunk, vs)| {
-                let mut out = Vec::new();
-                for (i, v) in vs.iter().enumerate() {
-                    candidates_of((chunk * 1024 + i) as u32, v, &mut |c| out.push(c));
-                }
-                progress.advance(vs.len() as u64);
-                out
-            })
-            .collect();
+        codes = per_source(model, progress, |id, v, out| {
+            candidates_of(id, v, &mut |c| out.push(c));
+        });
         codes.par_sort_unstable();
         codes.dedup();
     } else {
         // Every occupied cell with the source voxel it came from: colours are averaged by
         // grouping instead of scanning large source ranges per cell, and the codes are
         // the complete occupancy, searched for neighbours below.
-        let mut pairs: Vec<(u64, u32)> = model
-            .voxels
-            .par_chunks(1024)
-            .enumerate()
-            .flat_map_iter(|(chunk, vs)| {
-                let mut out = Vec::new();
-                for (i, v) in vs.iter().enumerate() {
-                    let id = (chunk * 1024 + i) as u32;
-                    candidates_of(id, v, &mut |c| out.push((c, id)));
-                }
-                progress.advance(vs.len() as u64);
-                out
-            })
-            .collect();
+        let mut pairs: Vec<(u64, u32)> = per_source(model, progress, |id, v, out| {
+            candidates_of(id, v, &mut |c| out.push((c, id)));
+        });
         pairs.par_sort_unstable();
         codes = Vec::with_capacity(pairs.len());
         let mut start = 0;
@@ -428,4 +407,27 @@ pub fn voxelize_voxels_with(
         voxels,
         report,
     })
+}
+
+/// Calls `each(index, voxel, out)` for every source voxel, in parallel chunks, and
+/// concatenates the outputs in source order.
+fn per_source<T: Send>(
+    model: &VoxelModel,
+    progress: &dyn Progress,
+    each: impl Fn(u32, &[i32; 3], &mut Vec<T>) + Sync,
+) -> Vec<T> {
+    const CHUNK: usize = 1024;
+    model
+        .voxels
+        .par_chunks(CHUNK)
+        .enumerate()
+        .flat_map_iter(|(chunk, vs)| {
+            let mut out = Vec::new();
+            for (i, v) in vs.iter().enumerate() {
+                each((chunk * CHUNK + i) as u32, v, &mut out);
+            }
+            progress.advance(vs.len() as u64);
+            out
+        })
+        .collect()
 }

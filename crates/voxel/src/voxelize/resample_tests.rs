@@ -129,3 +129,61 @@ fn resampled_voxels_take_the_mean_colour_of_their_sources_and_the_occupancy_grad
         }
     }
 }
+
+/// The refusal estimate in f64: per source voxel, the cells its cube overlaps per axis;
+/// solid counts the block, the shell the smaller of the block and the faces without a
+/// source neighbour.
+fn estimate_oracle(model: &VoxelModel, level: u32, fill: VoxelFill) -> u64 {
+    let os = voxel_model_object_space(model).unwrap();
+    let hc = (1u64 << level) as f64 / 2.0;
+    let grid =
+        |x: [i32; 3]| (os.to_object(DVec3::new(x[0] as f64, x[1] as f64, x[2] as f64)) + 1.0) * hc;
+    let mut total = 0u64;
+    for v in &model.voxels {
+        let (lo, hi) = (grid(*v), grid(v.map(|x| x + 1)));
+        let d: Vec<u64> = (0..3)
+            .map(|k| ((hi[k] - 1e-6).ceil() - (lo[k] + 1e-6).floor()) as u64)
+            .collect();
+        let volume = d[0] * d[1] * d[2];
+        let mut faces = 0;
+        for k in 0..3 {
+            for dir in [-1, 1] {
+                let mut q = *v;
+                q[k] += dir;
+                if !model.voxels.contains(&q) {
+                    faces += d[(k + 1) % 3] * d[(k + 2) % 3];
+                }
+            }
+        }
+        total += match fill {
+            VoxelFill::Solid => volume,
+            VoxelFill::Shell => volume.min(faces),
+        };
+    }
+    total
+}
+
+#[test]
+fn the_refusal_estimate_counts_each_axis_and_each_exposed_face() {
+    // Five voxels in a row along x at level 15: 6553.6 cells per voxel, so blocks span
+    // 6554 or 6555 cells along x and 6554 across; the shell has 22 exposed faces.
+    let row = VoxelModel {
+        voxels: (0..5).map(|x| [x - 2, 7, -1]).collect(),
+        colors: vec![],
+    };
+    let shell = estimate_oracle(&row, 15, VoxelFill::Shell);
+    assert_eq!(shell, 4 * 6554 * (3 * 6554 + 2 * 6555) + 2 * 6554 * 6554);
+    for (fill, want) in [
+        (VoxelFill::Shell, shell),
+        (
+            VoxelFill::Solid,
+            estimate_oracle(&row, 15, VoxelFill::Solid),
+        ),
+    ] {
+        let got = voxelize_voxels_with(&row, 15, fill, &NoProgress);
+        assert!(
+            matches!(got, Err(VoxelizeError::TooLarge { estimate, .. }) if estimate == want),
+            "{fill:?}: {got:?}, want {want}"
+        );
+    }
+}
