@@ -229,9 +229,13 @@ pub(super) fn for_each_cell(
     }
 }
 
-/// Rough upper bound of the cells a triangle (in grid units) overlaps: its projection on
-/// the dominant plane grown by the touched border, times the cells per column, plus its
-/// depth extent (which is what a degenerate, segment-like triangle covers).
+/// Upper bound of the cells a triangle (in grid units) overlaps, counted per column along
+/// the walk axis `w`. The columns touched by the triangle's projection lie inside that
+/// projection grown by one cell: at most its area + √2·perimeter + 4 of them (bounded
+/// with 2·perimeter). In a column the triangle's `w` range ℓ touches at most ℓ + 2
+/// closed cells; ℓ is at most the depth extent and at most the rise across one column:
+/// the plane's slopes `(|n_a| + |n_b|) / |n_w|` (≤ 2, `w` being the dominant normal axis),
+/// or for a segment-like triangle its rise along a chord of √2.
 pub(super) fn cell_estimate(t: &[DVec3; 3]) -> f64 {
     let w = depth_axis(t);
     let a = (w + 1) % 3;
@@ -239,9 +243,22 @@ pub(super) fn cell_estimate(t: &[DVec3; 3]) -> f64 {
     let p = |v: DVec3| glam::DVec2::new(v[a], v[b]);
     let (p0, p1, p2) = (p(t[0]), p(t[1]), p(t[2]));
     let area = 0.5 * (p1 - p0).perp_dot(p2 - p0).abs();
-    let perim = (p1 - p0).length() + (p2 - p1).length() + (p0 - p2).length();
+    let edges = [(p1 - p0).length(), (p2 - p1).length(), (p0 - p2).length()];
+    let perim = edges[0] + edges[1] + edges[2];
     let depth = t[0][w].max(t[1][w]).max(t[2][w]) - t[0][w].min(t[1][w]).min(t[2][w]);
-    (area + 2.0 * perim + 4.0) * 3.0 + depth + 2.0
+    let n = (t[1] - t[0]).cross(t[2] - t[0]);
+    let longest = (t[1] - t[0])
+        .length()
+        .max((t[2] - t[1]).length())
+        .max((t[0] - t[2]).length());
+    // A normal within rounding of zero says nothing about the slopes.
+    let rise = if n.length() > 1e-9 * longest * longest {
+        (n[a].abs() + n[b].abs()) / n[w].abs()
+    } else {
+        std::f64::consts::SQRT_2 * depth / edges[0].max(edges[1]).max(edges[2])
+    };
+    // NaN (a point: 0 / 0) falls back to the depth.
+    (area + 2.0 * perim + 4.0) * (depth.min(rise) + 2.0)
 }
 
 #[cfg(test)]
