@@ -256,3 +256,66 @@ fn voxels_without_a_surface_take_the_occupancy_gradient_then_the_direction_from_
     let set = voxelize_mesh_in(&m, 0, Some(IDENTITY), &NoProgress).unwrap();
     assert_eq!(set.voxels.normals, vec![[0.0, 0.0, 1.0]]);
 }
+
+/// A mesh from triangles given in grid units of a level-2 grid (object space = model
+/// space), voxelized.
+fn voxelize_grid_triangles(tris: &[[DVec3; 3]]) -> VoxelSet {
+    let m = Mesh {
+        positions: tris
+            .iter()
+            .flatten()
+            .map(|g| (*g / half_cells(2) - DVec3::ONE).as_vec3())
+            .collect(),
+        triangles: (0..tris.len() as u32)
+            .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+            .collect(),
+        ..Default::default()
+    };
+    voxelize_mesh_in(&m, 2, Some(IDENTITY), &NoProgress).unwrap()
+}
+
+/// A triangle in the plane `axis` = 0.5 (y or z) from a base at x = 0.2 to a tip at
+/// x = 2 + `poke` (0.5 cell on the other axes): its part in cell (2, 0, 0) is the tip.
+fn tip(axis: usize, poke: f64) -> [DVec3; 3] {
+    let base = |s: f64| {
+        let mut p = DVec3::new(0.2, 0.5, 0.5);
+        p[3 - axis] = s;
+        p
+    };
+    [base(0.2), base(0.8), DVec3::new(2.0 + poke, 0.5, 0.5)]
+}
+
+#[test]
+fn parts_under_1e_14_of_a_cell_only_touch_and_small_parts_still_mix_their_normals() {
+    // A tip 1e-8 deep (part area ~2e-15 with the EPS slab) counts as touching: the voxel
+    // takes the occupancy gradient (+x, away from its neighbour); 1e-6 deep (~2e-13) is
+    // a surface with the triangle's normal (-z).
+    let at_tip =
+        |set: &VoxelSet| DVec3::from(set.voxels.normals[voxel_of(set, [2, 0, 0])].map(f64::from));
+    let touch = voxelize_grid_triangles(&[tip(2, 1e-8)]);
+    assert_eq!(touch.report.normal_fallbacks, 1);
+    assert!(
+        (at_tip(&touch) - DVec3::X).length() < 1e-6,
+        "{}",
+        at_tip(&touch)
+    );
+    let surface = voxelize_grid_triangles(&[tip(2, 1e-6)]);
+    assert_eq!(surface.report.normal_fallbacks, 0);
+    assert!(
+        (at_tip(&surface) + DVec3::Z).length() < 1e-6,
+        "{}",
+        at_tip(&surface)
+    );
+    // Two tips of ~1.7e-7 and ~6.7e-7 cell² (normals -z and +y): the voxel's normal is
+    // their area-weighted mean however small the total area. Part areas 0.3·d²/(1.8 + d)
+    // with d the depth in the cell (EPS included; its effect is below the tolerance).
+    let (d1, d2) = (1e-3, 2e-3);
+    let mixed = voxelize_grid_triangles(&[tip(2, d1), tip(1, d2)]);
+    let a = |d: f64| 0.3 * d * d / (1.8 + d);
+    let want = (DVec3::NEG_Z * a(d1) + DVec3::Y * a(d2)).normalize();
+    assert!(
+        (at_tip(&mixed) - want).length() < 1e-3,
+        "{} against {want}",
+        at_tip(&mixed)
+    );
+}
