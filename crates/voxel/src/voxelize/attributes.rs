@@ -136,3 +136,7 @@ fn sample_texture(tex: &Texture, uv: [f64; 2]) -> [f32; 4] {
     }
     out
 }
+
+#[cfg(test)]
+#[path = "sampling_tests.rs"]
+mod tests;

@@ -691,3 +691,35 @@ fn voxel_model_edge_cases() {
     let set = voxelize_voxels(&sparse, 4, &NoProgress).unwrap();
     assert_eq!(cells(&set), voxel_oracle(&sparse, 4, VoxelFill::Shell));
 }
+
+#[test]
+fn regions_arrive_one_at_a_time_in_morton_order_and_make_up_the_grid() {
+    let m = sphere_mesh(Vec3::ZERO, 1.0, 12, 16);
+    let whole = voxelize_mesh(&m, 7, &NoProgress).unwrap();
+    for region_log in [5u32, 6] {
+        let mut batches: Vec<LevelVoxels> = Vec::new();
+        let (space, report) =
+            voxelize_mesh_regions(&m, 7, region_log, &NoProgress, |v| batches.push(v)).unwrap();
+        assert_eq!(space, whole.object_space);
+        assert_eq!(report.triangles, whole.report.triangles);
+        let region = |code: u64| code >> (3 * region_log);
+        let mut codes = Vec::new();
+        for (i, b) in batches.iter().enumerate() {
+            assert!(!b.codes.is_empty(), "2^{region_log}: batch {i} is empty");
+            let r = region(b.codes[0]);
+            assert!(
+                b.codes.iter().all(|&c| region(c) == r),
+                "2^{region_log}: batch {i} spans regions"
+            );
+            assert!(i == 0 || region(batches[i - 1].codes[0]) < r);
+            codes.extend_from_slice(&b.codes);
+        }
+        // The sphere crosses every region of 2^6 (8 of them), and more of 2^5.
+        assert!(
+            batches.len() >= 8,
+            "2^{region_log}: {} batches",
+            batches.len()
+        );
+        assert_eq!(codes, whole.voxels.codes, "2^{region_log}");
+    }
+}
