@@ -81,12 +81,12 @@ fn degenerate_triangles_put_all_weight_on_the_nearest_vertex() {
     assert_eq!(barycentric(&sliver, DVec3::X * 30.0), [1.0, 0.0, 0.0]);
 }
 
-/// 3×2 texels with distinct channels: red 30·(x + 3y), green 255 − red, blue 100·x.
+/// 3×3 texels (so that the rows above and below a row differ) with distinct channels: red 30·(x + 3y), green 255 − red, blue 100·x.
 fn texture() -> Texture {
     Texture {
         width: 3,
-        height: 2,
-        texels: (0..6)
+        height: 3,
+        texels: (0..9)
             .map(|i| {
                 let r = 30 * i as u8;
                 [r, 255 - r, 100 * (i % 3) as u8, 255]
@@ -115,7 +115,7 @@ fn mix(parts: &[(f32, [f32; 4])]) -> [f32; 4] {
 fn texture_samples_are_bilinear_between_texel_centres_and_wrap_around() {
     let tex = texture();
     // uv of texel coordinates (x, y), whose centres are at half-integers.
-    let uv = |x: f64, y: f64| [(x + 0.5) / 3.0, (y + 0.5) / 2.0];
+    let uv = |x: f64, y: f64| [(x + 0.5) / 3.0, (y + 0.5) / 3.0];
     let near = |a: [f32; 4], b: [f32; 4]| (0..4).all(|k| (a[k] - b[k]).abs() < 1e-6);
     let cases = [
         (uv(1.0, 0.0), texel(1, 0)),
@@ -132,13 +132,20 @@ fn texture_samples_are_bilinear_between_texel_centres_and_wrap_around() {
             ]),
         ),
         // Across the left and top edges: the last column and row.
-        ([0.0, 0.25], mix(&[(0.5, texel(2, 0)), (0.5, texel(0, 0))])),
         (
-            [0.5 / 3.0, 0.0],
-            mix(&[(0.5, texel(0, 1)), (0.5, texel(0, 0))]),
+            uv(-0.5, 0.0),
+            mix(&[(0.5, texel(2, 0)), (0.5, texel(0, 0))]),
+        ),
+        (
+            uv(0.0, -0.5),
+            mix(&[(0.5, texel(0, 2)), (0.5, texel(0, 0))]),
+        ),
+        (
+            uv(1.0, 1.75),
+            mix(&[(0.25, texel(1, 1)), (0.75, texel(1, 2))]),
         ),
         // Whole periods away.
-        ([1.5 / 3.0 + 5.0, 0.25 - 3.0], texel(1, 0)),
+        ([1.5 / 3.0 + 5.0, 0.5 / 3.0 - 3.0], texel(1, 0)),
     ];
     for (at, want) in cases {
         let got = sample_texture(&tex, at);
@@ -155,7 +162,7 @@ fn texture_samples_are_bilinear_between_texel_centres_and_wrap_around() {
             ..texture()
         },
         Texture {
-            texels: texture().texels[..5].to_vec(),
+            texels: texture().texels[..8].to_vec(),
             ..texture()
         },
     ] {
