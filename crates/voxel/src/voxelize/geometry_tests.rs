@@ -242,6 +242,31 @@ fn the_cell_estimate_holds_where_closed_cells_touch_the_most() {
 }
 
 #[test]
+fn a_normal_counts_as_zero_below_1e_9_of_the_longest_edge_squared() {
+    // A sliver 1000 cells from the origin: a segment d = (40, 10, 5) with its midpoint
+    // lifted by δ across it, so |n| = |d|·δ. Relative to the longest edge (|d|², 1787
+    // cells²) the normal is 2.4e-9 of it at δ = 1e-7 (slopes: rise 0.147) and 4.8e-10
+    // at δ = 2e-8 (a segment: √2·depth / longest projected edge = 0.171). The two rises
+    // give estimates 362.69 and 366.82 (worked out with the formula in f64 Python).
+    // Every rotation of the vertices makes each edge the longest once; measured against
+    // the vertex positions instead of the edges, or against 1e-9 alone, the threshold
+    // would flip one of the two.
+    let o = DVec3::splat(1000.5);
+    let d = DVec3::new(40.0, 10.0, 5.0);
+    let u = DVec3::new(1.0, -4.0, 0.0).normalize();
+    for (delta, estimate) in [(1e-7, 362.69), (2e-8, 366.82)] {
+        let (a, b, m) = (o, o + d, o + d * 0.5 + u * delta);
+        for t in [[a, b, m], [m, a, b], [b, m, a]] {
+            let got = cell_estimate(&t);
+            assert!((got - estimate).abs() < 0.01, "δ {delta}, {t:?}: {got}");
+            let mut cells = 0u64;
+            for_each_cell(&t, [0; 3], [1 << 20; 3], |_, _| cells += 1);
+            assert!(got >= cells as f64, "{cells} cells");
+        }
+    }
+}
+
+#[test]
 fn a_speck_within_eps_of_a_corner_sets_only_its_own_cell() {
     // The speck is inside the widened slabs of the cell across the corner, and so is the
     // mean of its clipped part: only the separating axis test may reject that cell (the
