@@ -58,8 +58,6 @@ mod mesh;
 mod regions;
 mod resample;
 #[cfg(test)]
-mod resample_tests;
-#[cfg(test)]
 mod tests;
 
 use serde::Serialize;

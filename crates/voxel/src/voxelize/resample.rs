@@ -50,6 +50,21 @@ struct Resample {
 // i64 suffices: source coordinates are i32 (extent < 2^33, |S| < 2^34) and A ≤ 2^16, so
 // every product below stays under 2^51.
 impl Resample {
+    /// The mapping of the source bounds `[min, max)` onto a level-`level` grid.
+    fn new(min: [i64; 3], max: [i64; 3], level: u32) -> Resample {
+        let extent = (0..3).map(|k| max[k] - min[k]).max().unwrap_or(1);
+        Resample {
+            a: 1i64 << level,
+            e2: 2 * extent,
+            s: [0, 1, 2].map(|k| min[k] + max[k] - extent),
+        }
+    }
+
+    /// The block of target cells a source voxel overlaps, as an inclusive range per axis.
+    fn block(&self, v: &[i32; 3]) -> [(i64, i64); 3] {
+        [0, 1, 2].map(|k| self.cells_of(k, i64::from(v[k])))
+    }
+
     /// Target cells overlapping source voxel coordinate `x` with positive length.
     fn cells_of(&self, k: usize, x: i64) -> (i64, i64) {
         let lo = (self.a * (2 * x - self.s[k])).div_euclid(self.e2);
@@ -114,6 +129,14 @@ impl SourceIndex {
             .then(|| (l[0] + self.dims[0] * (l[1] + self.dims[1] * l[2])) as usize)
     }
 
+    /// Whether the source neighbour of `v` one step along axis `k` in direction `dir` is
+    /// empty.
+    fn exposed(&self, v: &[i32; 3], k: usize, dir: i64) -> bool {
+        let mut q = v.map(i64::from);
+        q[k] += dir;
+        self.get(q).is_none()
+    }
+
     fn get(&self, p: [i64; 3]) -> Option<u32> {
         if self.dense.is_empty() {
             self.sparse.get(&p).copied()
@@ -151,12 +174,7 @@ pub fn voxelize_voxels_with(
         .ok_or_else(|| VoxelizeError::Empty("the voxel model has no voxels".into()))?;
     let object_space = voxel_model_object_space(model)
         .ok_or_else(|| VoxelizeError::Empty("the voxel model has no voxels".into()))?;
-    let extent = (0..3).map(|k| max[k] - min[k]).max().unwrap_or(1);
-    let rs = Resample {
-        a: 1i64 << level,
-        e2: 2 * extent,
-        s: [0, 1, 2].map(|k| min[k] + max[k] - extent),
-    };
+    let rs = Resample::new(min, max, level);
     let index = SourceIndex::new(model, min, max);
     let n = 1i64 << level;
     let report = VoxelizeReport {
@@ -164,40 +182,13 @@ pub fn voxelize_voxels_with(
         ..Default::default()
     };
 
-    // The target cells overlapped by a source voxel form a block; only the layers of its
-    // boundary that face an absent source neighbour can hold shell cells (see the
-    // estimate). The two paths below differ in cost, not in result: upsampling looks at
-    // those layers and finds colours per cell, downsampling groups whole blocks.
-    let block =
-        |v: &[i32; 3]| -> [(i64, i64); 3] { [0, 1, 2].map(|k| rs.cells_of(k, i64::from(v[k]))) };
+    // The two candidate paths below differ in cost, not in result: upsampling looks at
+    // the exposed layers of each block (see `refusal_estimate`) and finds colours per
+    // cell, downsampling groups whole blocks.
+    let block = |v: &[i32; 3]| rs.block(v);
     let fine = rs.a >= rs.e2 / 2; // cells per source unit A/E >= 1
-    let exposed = |v: &[i32; 3], k: usize, dir: i64| {
-        let mut q = v.map(i64::from);
-        q[k] += dir;
-        index.get(q).is_none()
-    };
-    let estimate: u128 = model
-        .voxels
-        .par_iter()
-        .map(|v| {
-            let b = block(v);
-            let d = b.map(|(lo, hi)| (hi - lo + 1).max(0) as u128);
-            let volume = d[0] * d[1] * d[2];
-            match fill {
-                VoxelFill::Solid => volume,
-                // A shell cell lies in an exposed layer of some source voxel at any cell
-                // size: along an axis where its neighbour cell is empty, the source voxel
-                // reaching furthest into the cell has no source neighbour. Small blocks
-                // have more face area than volume.
-                VoxelFill::Shell => volume.min(
-                    (0..6)
-                        .filter(|f| exposed(v, f / 2, if f.is_multiple_of(2) { -1 } else { 1 }))
-                        .map(|f| d[(f / 2 + 1) % 3] * d[(f / 2 + 2) % 3])
-                        .sum(),
-                ),
-            }
-        })
-        .sum();
+    let exposed = |v: &[i32; 3], k: usize, dir: i64| index.exposed(v, k, dir);
+    let estimate = refusal_estimate(model, &rs, &index, fill);
     if estimate > u128::from(MAX_VOXELS) {
         return Err(VoxelizeError::TooLarge {
             level,
@@ -431,3 +422,41 @@ fn per_source<T: Send>(
         })
         .collect()
 }
+
+/// Upper bound of the cells a resampling keeps, summed per source voxel before anything is
+/// allocated: its whole block ([`VoxelFill::Solid`]), or for [`VoxelFill::Shell`] the
+/// smaller of the block and its layers facing an absent source neighbour.
+fn refusal_estimate(
+    model: &VoxelModel,
+    rs: &Resample,
+    index: &SourceIndex,
+    fill: VoxelFill,
+) -> u128 {
+    model
+        .voxels
+        .par_iter()
+        .map(|v| {
+            let d = rs.block(v).map(|(lo, hi)| (hi - lo + 1).max(0) as u128);
+            let volume = d[0] * d[1] * d[2];
+            match fill {
+                VoxelFill::Solid => volume,
+                // Only these layers can hold shell cells, at any cell size: along an axis
+                // where a shell cell's neighbour cell is empty, the source voxel reaching
+                // furthest into the cell has no source neighbour. Small blocks have more
+                // face area than volume.
+                VoxelFill::Shell => volume.min(
+                    (0..6)
+                        .filter(|f| {
+                            index.exposed(v, f / 2, if f.is_multiple_of(2) { -1 } else { 1 })
+                        })
+                        .map(|f| d[(f / 2 + 1) % 3] * d[(f / 2 + 2) % 3])
+                        .sum(),
+                ),
+            }
+        })
+        .sum()
+}
+
+#[cfg(test)]
+#[path = "resample_tests.rs"]
+mod tests;

@@ -1,6 +1,7 @@
-//! Colours and normals of resampled voxel models against an f64 oracle (the occupancy
-//! oracle in `tests.rs` never looked at either; the mutation run showed that the source
-//! index of a voxel past the first 1024 and the centre fallback went unchecked).
+//! Colours and normals of resampled voxel models, and the refusal estimate, against f64
+//! oracles (the occupancy oracle in `tests.rs` never looked at either; the mutation runs
+//! showed that the source index of a voxel past the first 1024, the centre fallback and
+//! the direction of an exposed face went unchecked).
 
 use std::collections::BTreeMap;
 
@@ -185,5 +186,43 @@ fn the_refusal_estimate_counts_each_axis_and_each_exposed_face() {
             matches!(got, Err(VoxelizeError::TooLarge { estimate, .. }) if estimate == want),
             "{fill:?}: {got:?}, want {want}"
         );
+    }
+}
+
+#[test]
+fn the_refusal_estimate_bounds_the_output_and_takes_faces_by_direction_where_blocks_are_small() {
+    // A pair of voxels along each axis and a lone voxel, 13 voxels wide. The exposed faces
+    // of a row are symmetric (one start, one end), so a face looked up in the wrong
+    // direction changes the sum only where `min(volume, faces)` clips one voxel of a
+    // pair: blocks of 5 cells (4 < volume / face area < 6), here at level 6 (64/13 =
+    // 4.9 cells per voxel).
+    let m = VoxelModel {
+        voxels: vec![
+            [0, 0, 0],
+            [1, 0, 0],
+            [4, 0, 0],
+            [4, 1, 0],
+            [8, 0, 0],
+            [8, 0, 1],
+            [12, 0, 0],
+        ],
+        colors: vec![],
+    };
+    let (min, max) = voxel_bounds(&m).unwrap();
+    let index = SourceIndex::new(&m, min, max);
+    for level in 2..=10 {
+        let rs = Resample::new(min, max, level);
+        for fill in [VoxelFill::Shell, VoxelFill::Solid] {
+            let estimate = refusal_estimate(&m, &rs, &index, fill);
+            let want = estimate_oracle(&m, level, fill);
+            assert_eq!(estimate, u128::from(want), "level {level}, {fill:?}");
+            if level <= 8 {
+                let kept = voxelize_voxels_with(&m, level, fill, &NoProgress)
+                    .unwrap()
+                    .voxels
+                    .len();
+                assert!(kept as u128 <= estimate, "level {level}, {fill:?}: {kept}");
+            }
+        }
     }
 }
