@@ -162,8 +162,7 @@ fn billboard_quad(slot: VoxelSlot) -> Quad {
 // Pixels by which a rasterized quad is widened and then trimmed back per fragment with
 // `quad_covers`: the rasterizer snaps vertices to its sub-pixel grid (Vulkan guarantees
 // 1/16 pixel or finer), which moves a quad's edge by up to 1/32 pixel, more than its
-// guard. Voxels smaller than a pixel lost their own pixel to that (bunny level 12 at
-// 640x480: IoU 0.9961 against the reference; 1.0 widened and trimmed).
+// guard. Voxels smaller than a pixel lost their own pixel to that (docs/benchmarks.md).
 const RASTER_MARGIN: f32 = 0.0625;
 
 // The slope (x / -z, y / -z in view space) of the ray through pixel position `px`,

@@ -61,23 +61,6 @@ struct VsOut {
     @location(4) @interpolate(flat) axis: vec2<f32>,
 }
 
-struct GBuffer {
-    // Linear RGBA8, packed (pack4x8unorm).
-    @location(0) albedo: u32,
-    @location(1) normal: vec4<f32>,
-    @location(2) position: vec4<f32>,
-    @location(3) geometric_normal: vec2<f32>,
-}
-
-struct GBufferDepth {
-    // Linear RGBA8, packed (pack4x8unorm).
-    @location(0) albedo: u32,
-    @location(1) normal: vec4<f32>,
-    @location(2) position: vec4<f32>,
-    @location(3) geometric_normal: vec2<f32>,
-    @builtin(frag_depth) depth: f32,
-}
-
 // Corner k (0..5) of a quad's two triangles, in [0, 1]^2.
 fn corner(k: u32) -> vec2<f32> {
     switch k {

@@ -406,3 +406,22 @@ fn safe_normalize(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
     }
     return fallback;
 }
+
+// The G-buffer outputs of a geometry pass (its colour attachments, in slot order).
+struct GBuffer {
+    // Linear RGBA8, packed (pack4x8unorm).
+    @location(0) albedo: u32,
+    @location(1) normal: vec4<f32>,
+    @location(2) position: vec4<f32>,
+    @location(3) geometric_normal: vec2<f32>,
+}
+
+// The G-buffer outputs with the fragment's depth written (ray casters, ray-box billboards).
+struct GBufferDepth {
+    // Linear RGBA8, packed (pack4x8unorm).
+    @location(0) albedo: u32,
+    @location(1) normal: vec4<f32>,
+    @location(2) position: vec4<f32>,
+    @location(3) geometric_normal: vec2<f32>,
+    @builtin(frag_depth) depth: f32,
+}

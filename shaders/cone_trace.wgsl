@@ -64,8 +64,8 @@ fn volume_exit(p: vec3<f32>, d: vec3<f32>) -> f32 {
 // footprint is kept above that plane (a cone near the horizon would otherwise sample the
 // receiver's own surface, which its hemisphere does not contain). A trilinear lookup of
 // texels of width D blends texels whose boxes reach about 2D from the sample (further
-// along a diagonal), hence D <= height / 2; measured against Monte Carlo, 2 × height
-// doubles the AO error of voxel receivers and 0.3 × height gains 0.002.
+// along a diagonal), hence D <= height / 2: a looser bound costs AO accuracy and a tighter
+// one gains little (against Monte Carlo, docs/benchmarks.md).
 fn trace_cone(
     p: vec3<f32>,
     d: vec3<f32>,

@@ -1,6 +1,6 @@
 //#include "common.inc.wgsl"
 //#include "face_raster.inc.wgsl"
-// Instanced cube rasterization (baseline; seed 002, §3.3.1): one instanced draw per
+// Instanced cube rasterization (baseline): one instanced draw per
 // visible instance draws its LOD level's cubes (`cubes`, group 1: one per voxel, or one
 // per completely full octree node when merged; ssbvb_voxel::cube_list). No vertex buffer:
 // the 18 vertices of a cube come from `vertex_index` — at most three faces of a box can

@@ -1,18 +1,10 @@
-// What the face rasterizers share (cube_raster.wgsl, rastavox.wgsl): the G-buffer outputs,
-// the corners of a face quad, and the fragment's exact hit. The pixel's ray (the same
+// What the face rasterizers share (cube_raster.wgsl, rastavox.wgsl): the G-buffer outputs
+// (common.inc.wgsl's `GBuffer`), the corners of a face quad, and the fragment's exact hit. The pixel's ray (the same
 // `pixel_ray` and object-space ray as the ray casters, so depth and cell agree with the CPU
 // reference up to f32 rounding) meets the face's plane at t; the G-buffer gets the face's
 // shading normal (the voxel's stored one), the face's geometric normal, the
 // camera-relative hit and its linear depth. Depth is the rasterized face
 // depth (no frag_depth, so early depth testing stays on).
-
-struct GBuffer {
-    // Linear RGBA8, packed (pack4x8unorm).
-    @location(0) albedo: u32,
-    @location(1) normal: vec4<f32>,
-    @location(2) position: vec4<f32>,
-    @location(3) geometric_normal: vec2<f32>,
-}
 
 // Corners (u, v) of the face quad's two triangles.
 const QUAD = array<vec2<u32>, 6>(

@@ -1,6 +1,7 @@
 //#include "voxel_codes.inc.wgsl"
-// The renderer's structures of a voxel set built on the GPU (seed 003's level-by-level
-// octree build; gpu_lod_build.rs drives it): the LOD chain (runs of siblings, `code >> 3`,
+//#include "runs.inc.wgsl"
+// The renderer's structures of a voxel set built on the GPU (a level-by-level octree
+// build; lod_build.rs drives it): the LOD chain (runs of siblings, `code >> 3`,
 // averaged bottom-up) and each level's sparse lookup (ssbvb_voxel::lookup: a 64-ary tree
 // built from the leaves up, one node per run of `key >> 6`). Runs are found as everywhere
 // here: a flag where the shifted key changes, a scan (gpu_scan.wgsl), the starts scattered.
@@ -36,43 +37,15 @@ struct LodParams {
 @group(0) @binding(13) var<storage, read_write> packed_normals: array<u32>;
 
 fn key_shifted(i: u32, s: u32) -> vec2<u32> {
-    let lo = key_lo[i];
-    let hi = key_hi[i];
-    if s == 0u {
-        return vec2(lo, hi);
-    }
-    if s >= 32u {
-        return vec2(hi >> (s - 32u), 0u);
-    }
-    return vec2((lo >> s) | (hi << (32u - s)), hi >> s);
+    return shift_key(key_lo[i], key_hi[i], s);
 }
 
 fn starts_run(i: u32) -> bool {
     return i == 0u || any(key_shifted(i, params.shift) != key_shifted(i - 1u, params.shift));
 }
 
-@compute @workgroup_size(256)
-fn run_flags(
-    @builtin(local_invocation_index) li: u32,
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-) {
-    let i = thread_id(li, wg, nwg);
-    if i < params.n {
-        flags[i] = select(0u, 1u, starts_run(i));
-    }
-}
-
-@compute @workgroup_size(256)
-fn run_starts(
-    @builtin(local_invocation_index) li: u32,
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-) {
-    let i = thread_id(li, wg, nwg);
-    if i < params.n && starts_run(i) {
-        starts[flags[i]] = i;
-    }
+fn store_run_start(run: u32, i: u32) {
+    starts[run] = i;
 }
 
 fn run_end(r: u32) -> u32 {

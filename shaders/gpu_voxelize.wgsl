@@ -1,8 +1,8 @@
 //#include "voxel_codes.inc.wgsl"
 //#include "voxel_texture.inc.wgsl"
-// GPU voxelization the seed's way (seed 003, after Crassin & Green; gpu_voxelize.rs drives
-// it): each triangle is rasterized along the dominant axis of its normal into a 2^L × 2^L
-// viewport (one pixel per cell column), enlarged so that every pixel whose square it
+// GPU voxelization by conservative rasterization (voxelize/mod.rs drives it): each
+// triangle is rasterized along the dominant axis of its normal into a 2^L × 2^L viewport
+// (one pixel per cell column), enlarged so that every pixel whose square it
 // touches gets a fragment (Hertel et al.: each edge moved out by the pixel's semi-diagonal
 // along its normal, new corners where the moved edges meet; the overshoot at sharp corners
 // is clipped against the triangle's 2D bounds in the fragment stage). There is no geometry
@@ -156,21 +156,7 @@ fn append_cells(in: VertexOut) {
     let q0 = project(p0, a);
     let q1 = project(p1, a);
     let q2 = project(p2, a);
-    let x = vec2(fu + 0.5, fv + 0.5);
-    let area = (q1.x - q0.x) * (q2.y - q0.y) - (q1.y - q0.y) * (q2.x - q0.x);
-    var w = vec3(1.0 / 3.0);
-    if area != 0.0 {
-        let w1 = ((x.x - q0.x) * (q2.y - q0.y) - (x.y - q0.y) * (q2.x - q0.x)) / area;
-        let w2 = ((q1.x - q0.x) * (x.y - q0.y) - (q1.y - q0.y) * (x.x - q0.x)) / area;
-        w = max(vec3(1.0 - w1 - w2, w1, w2), vec3(0.0));
-        w = w / max(w.x + w.y + w.z, 1e-20);
-    }
-    let corner_colors_at = mat3x4(
-        corner_colors[3u * t],
-        corner_colors[3u * t + 1u],
-        corner_colors[3u * t + 2u],
-    );
-    let color = voxel_color(t, w, corner_colors_at);
+    let color = voxel_color_at(t, q0, q1, q2, vec2(fu + 0.5, fv + 0.5));
     let packed_color = pack_color(color);
     let packed_normal = encode_octahedral(nrm);
     for (var c = first; c <= last && c < first + 64u; c++) {

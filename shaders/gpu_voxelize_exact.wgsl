@@ -1,6 +1,6 @@
 //#include "voxel_codes.inc.wgsl"
 //#include "voxel_texture.inc.wgsl"
-// Exact GPU voxelization (gpu_voxelize.rs, GpuVoxelizeMethod::Exact; needs SHADER_F64): the
+// Exact GPU voxelization (voxelize/mod.rs, GpuVoxelizeMethod::Exact; needs SHADER_F64): the
 // CPU voxelizer's separating-axis test (ssbvb_voxel::voxelize::triangle_box_overlap: closed
 // cells, 13 axes, in f64 with the same operations in the same order, each product written
 // out so no dot() or cross() builtin can regroup them) on the cells near each triangle's
@@ -8,8 +8,8 @@
 // merges it). Work is balanced by columns: `count_columns` counts the cell columns of each
 // triangle's bounds along its dominant axis, a scan (gpu_scan.wgsl) turns the counts into
 // offsets, and `exact_columns` runs one thread per column (its triangle found by binary
-// search in the offsets). One thread per triangle lost cells on lavapipe for triangles
-// spanning hundreds of columns (measured on the cow at level 9), and left the GPU idle
+// search in the offsets). One thread per triangle lost cells on the software adapter for
+// triangles spanning hundreds of columns (docs/benchmarks.md), and left the GPU idle
 // behind the largest triangle anyway.
 
 struct ExactParams {
@@ -188,21 +188,7 @@ fn exact_columns(
     let q0 = vec2(f32(p0[u]), f32(p0[v]));
     let q1 = vec2(f32(p1[u]), f32(p1[v]));
     let q2 = vec2(f32(p2[u]), f32(p2[v]));
-    let area = (q1.x - q0.x) * (q2.y - q0.y) - (q1.y - q0.y) * (q2.x - q0.x);
-    let c2 = vec2(f32(cu) + 0.5, f32(cv) + 0.5);
-    var w = vec3(1.0 / 3.0);
-    if area != 0.0 {
-        let w1 = ((c2.x - q0.x) * (q2.y - q0.y) - (c2.y - q0.y) * (q2.x - q0.x)) / area;
-        let w2 = ((q1.x - q0.x) * (c2.y - q0.y) - (q1.y - q0.y) * (c2.x - q0.x)) / area;
-        w = max(vec3(1.0 - w1 - w2, w1, w2), vec3(0.0));
-        w = w / max(w.x + w.y + w.z, 1e-20);
-    }
-    let corner_colors_at = mat3x4(
-        corner_colors[3u * t],
-        corner_colors[3u * t + 1u],
-        corner_colors[3u * t + 2u],
-    );
-    let color = voxel_color(t, w, corner_colors_at);
+    let color = voxel_color_at(t, q0, q1, q2, vec2(f32(cu) + 0.5, f32(cv) + 0.5));
     let packed_color = pack4x8unorm(clamp(color, vec4(0.0), vec4(1.0)));
     let packed_normal = encode_octahedral(nrm);
     for (var cw = first; cw <= last_c; cw++) {

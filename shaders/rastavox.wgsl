@@ -1,6 +1,6 @@
 //#include "common.inc.wgsl"
 //#include "face_raster.inc.wgsl"
-// RastaVox (seed 001): surface voxels rasterized as their masked camera-facing faces
+// RastaVox: surface voxels rasterized as their masked camera-facing faces
 // (rastavox.rs picks, per visible chunk of each instance, the pixel-error LOD and issues
 // one instanced draw of that chunk's voxels). No vertex buffer and no geometry shader:
 // the draw starts at vertex 18 × d, so `vertex_index / 18` is the draw `d` (its instance,

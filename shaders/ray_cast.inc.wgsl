@@ -1,5 +1,5 @@
 // Shared by the ray-casting baselines (dense_dda.wgsl, octree_ray_cast.wgsl): the
-// G-buffer output with exact depth, the hit record, the fullscreen triangle, and the
+// G-buffer output with exact depth (common.inc.wgsl's `GBufferDepth`), the hit record, the fullscreen triangle, and the
 // per-plane crossing helpers that follow the CPU reference's conventions.
 // Needs common.inc.wgsl before it, and the including file must define
 // `fn trace(inst: Instance, o: vec3<f32>, d: vec3<f32>, t_best: f32) -> Hit` (the technique:
@@ -18,15 +18,6 @@ var<private> cast_steps: u32;
 // Counters (ray_cast_counters.rs): per lane (pixel x + y mod 64, spreading the atomics)
 // the pixels that cast a ray and the steps they took (low and high words).
 const COUNTER_LANES: u32 = 64u;
-
-struct GBufferDepth {
-    // Linear RGBA8, packed (pack4x8unorm).
-    @location(0) albedo: u32,
-    @location(1) normal: vec4<f32>,
-    @location(2) position: vec4<f32>,
-    @location(3) geometric_normal: vec2<f32>,
-    @builtin(frag_depth) depth: f32,
-}
 
 struct Hit {
     hit: bool,

@@ -137,15 +137,6 @@ fn splat_main(
     splat(entry_index(wg, nwg, li), nwg.z - 1u);
 }
 
-struct GBufferDepth {
-    // Linear RGBA8, packed (pack4x8unorm).
-    @location(0) albedo: u32,
-    @location(1) normal: vec4<f32>,
-    @location(2) position: vec4<f32>,
-    @location(3) geometric_normal: vec2<f32>,
-    @builtin(frag_depth) depth: f32,
-}
-
 @fragment
 fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     let pix = vec2<u32>(frag.xy);

@@ -1,5 +1,6 @@
 //#include "voxel_codes.inc.wgsl"
-// The RastaVox build on the GPU (seed 001, §3; surface_build.rs drives it): surface
+//#include "runs.inc.wgsl"
+// The RastaVox build on the GPU (surface_build.rs drives it): surface
 // extraction with an atomic output slot, then per LOD the OR-merge of runs of children.
 // The sort between them is gpu_radix_sort.wgsl, the run starts come from gpu_scan.wgsl.
 //
@@ -136,44 +137,15 @@ fn gather_finest(
 
 // Key of `i` shifted right by 3·s bits (mask bits dropped).
 fn shifted(i: u32, s: u32) -> vec2<u32> {
-    let h = key_hi[i] & 0xffffffu;
-    let b = 3u * s;
-    if b == 0u {
-        return vec2(key_lo[i], h);
-    }
-    if b >= 32u {
-        return vec2(h >> (b - 32u), 0u);
-    }
-    return vec2((key_lo[i] >> b) | (h << (32u - b)), h >> b);
+    return shift_key(key_lo[i], key_hi[i] & 0xffffffu, 3u * s);
 }
 
 fn starts_run(i: u32) -> bool {
     return i == 0u || any(shifted(i, 1u) != shifted(i - 1u, 1u));
 }
 
-@compute @workgroup_size(256)
-fn run_flags(
-    @builtin(local_invocation_index) li: u32,
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-) {
-    let i = thread_id(li, wg, nwg);
-    if i < params.n {
-        flags[i] = select(0u, 1u, starts_run(i));
-    }
-}
-
-// After the scan, `flags[i]` is the run index of a run's first voxel.
-@compute @workgroup_size(256)
-fn run_starts(
-    @builtin(local_invocation_index) li: u32,
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-) {
-    let i = thread_id(li, wg, nwg);
-    if i < params.n && starts_run(i) {
-        val[flags[i]] = i;
-    }
+fn store_run_start(run: u32, i: u32) {
+    val[run] = i;
 }
 
 fn octahedral_l1(code: u32) -> vec3<f32> {

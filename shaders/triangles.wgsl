@@ -36,14 +36,6 @@ struct VsOut {
     @location(1) normal: vec3<f32>,
 }
 
-struct GBuffer {
-    // Linear RGBA8, packed (pack4x8unorm).
-    @location(0) albedo: u32,
-    @location(1) normal: vec4<f32>,
-    @location(2) position: vec4<f32>,
-    @location(3) geometric_normal: vec2<f32>,
-}
-
 @vertex
 fn vs_main(v: VsIn) -> VsOut {
     var out: VsOut;

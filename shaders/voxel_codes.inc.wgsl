@@ -8,6 +8,17 @@ fn thread_id(li: u32, wg: vec3<u32>, nwg: vec3<u32>) -> u32 {
     return (wg.x + wg.y * nwg.x) * 256u + li;
 }
 
+// A 64-bit key (low, high word) shifted right by `s` bits.
+fn shift_key(lo: u32, hi: u32, s: u32) -> vec2<u32> {
+    if s == 0u {
+        return vec2(lo, hi);
+    }
+    if s >= 32u {
+        return vec2(hi >> (s - 32u), 0u);
+    }
+    return vec2((lo >> s) | (hi << (32u - s)), hi >> s);
+}
+
 // Morton code of a cell (16 bits per axis): bits 0..32 and 32..48 (low, high word).
 fn morton(c: vec3<u32>) -> vec2<u32> {
     var lo = 0u;

@@ -1,4 +1,5 @@
 //#include "voxel_codes.inc.wgsl"
+//#include "runs.inc.wgsl"
 // The voxel fragment list of gpu_voxelize.wgsl turned into voxels (gpu_voxelize.rs): the
 // keys are copied out and radix-sorted (gpu_radix_sort.wgsl) with the fragment index as
 // payload, runs of equal keys are found by a scan (gpu_scan.wgsl), and one thread per run
@@ -50,28 +51,8 @@ fn starts_run(i: u32) -> bool {
     return i == 0u || key_lo[i] != key_lo[i - 1u] || key_hi[i] != key_hi[i - 1u];
 }
 
-@compute @workgroup_size(256)
-fn run_flags(
-    @builtin(local_invocation_index) li: u32,
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-) {
-    let i = thread_id(li, wg, nwg);
-    if i < params.n {
-        flags[i] = select(0u, 1u, starts_run(i));
-    }
-}
-
-@compute @workgroup_size(256)
-fn run_starts(
-    @builtin(local_invocation_index) li: u32,
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-) {
-    let i = thread_id(li, wg, nwg);
-    if i < params.n && starts_run(i) {
-        starts[flags[i]] = i;
-    }
+fn store_run_start(run: u32, i: u32) {
+    starts[run] = i;
 }
 
 @compute @workgroup_size(256)

@@ -7,9 +7,10 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex, OnceLock};
 
 use glam::DAffine3;
+use ssbvb_gpu::scene::{GpuScene, LodPolicy, Scene, StreamChunks};
 use ssbvb_gpu::{ContextOptions, GpuContext, wgpu};
-use ssbvb_passes::frame::FrameResource;
-use ssbvb_passes::{GpuScene, LodPolicy, Profiling, Renderer, Scene, StreamChunks};
+use ssbvb_passes::runtime::resources::FrameResource;
+use ssbvb_passes::{Profiling, Renderer};
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::reference::{self, ReferenceImage};
@@ -57,7 +58,7 @@ pub fn model_asset(file: &str, level: u32) -> Arc<VoxelAsset> {
 /// A scene with one asset placed once with its object space as world space.
 pub fn single_object_scene(asset: Arc<VoxelAsset>, level: u32) -> Scene {
     Scene {
-        objects: vec![ssbvb_passes::VoxelObject {
+        objects: vec![ssbvb_gpu::scene::VoxelObject {
             asset,
             instances: vec![DAffine3::IDENTITY],
             lod: LodPolicy::Fixed(level),
@@ -156,7 +157,7 @@ pub fn reference_of(scene: &Scene, camera: &Camera, size: (u32, u32)) -> Referen
     for o in &scene.objects {
         let max = o.asset.lods.len() as u32 - 1;
         for xf in &o.instances {
-            let level = ssbvb_passes::gpu_scene::choose_level(o.lod, xf, camera, size, max);
+            let level = ssbvb_gpu::scene::choose_level(o.lod, xf, camera, size, max);
             instances.push(reference::Instance {
                 lod: &o.asset.lods[level as usize],
                 object_to_world: *xf,
@@ -179,7 +180,7 @@ pub fn read_half4(frame: &Frame, name: &str) -> Vec<[f32; 4]> {
 }
 
 /// The geometric normals of a frame's `gbuffer_geometric_normal` (octahedral `Rg16Float`
-/// codes, decoded by `ssbvb_passes::gbuffer::oct_decode`; a non-finite code decodes to
+/// codes, decoded by `ssbvb_passes::kinds::gbuffer::oct_decode`; a non-finite code decodes to
 /// NaN, so checks for finite normals still see it).
 pub fn read_geometric_normals(frame: &Frame) -> Vec<[f32; 3]> {
     frame
@@ -189,7 +190,7 @@ pub fn read_geometric_normals(frame: &Frame) -> Vec<[f32; 3]> {
             let h = |i: usize| f16_to_f32(u16::from_le_bytes([c[i], c[i + 1]]));
             let code = [h(0), h(2)];
             if code.iter().all(|v| v.is_finite()) {
-                ssbvb_passes::gbuffer::oct_decode(code)
+                ssbvb_passes::kinds::gbuffer::oct_decode(code)
             } else {
                 [f32::NAN; 3]
             }

@@ -3,8 +3,8 @@
 //! WGSL struct's size and member offsets (naga computes WGSL's layout rules for us).
 
 use ssbvb_graph::PassKind;
-use ssbvb_passes::bindings::{PASS_GROUP, binding_names};
-use ssbvb_passes::wgsl_layout::{StructLayout, is_padding};
+use ssbvb_passes::kinds::wgsl_layout::{StructLayout, is_padding};
+use ssbvb_passes::runtime::bindings::{PASS_GROUP, binding_names};
 
 /// Each declared binding of `kind` (slots, then `own`) must be the WGSL global of that
 /// name at `@group(1) @binding(position)`, and group 1 may hold nothing else.
@@ -12,7 +12,7 @@ pub fn check_bindings(
     file: &str,
     module: &naga::Module,
     kind: &PassKind,
-    own: &[ssbvb_passes::bindings::OwnBinding],
+    own: &[ssbvb_passes::runtime::registry::OwnBinding],
 ) -> Vec<String> {
     let mut errors = Vec::new();
     let names = binding_names(kind.slots(), own);

@@ -1,7 +1,8 @@
 //! Project tasks: `cargo xtask validate-shaders [--dir DIR]`, `cargo xtask test [ARGS]`,
-//! `cargo xtask fuzz [TARGET ...] [--seconds N]`.
+//! `cargo xtask imports`, `cargo xtask fuzz [TARGET ...] [--seconds N]`.
 
 mod fuzz;
+mod imports;
 mod layout_check;
 mod shaders;
 mod standalone;
@@ -14,10 +15,13 @@ use anyhow::{Context, Result, bail};
 const USAGE: &str = "usage:
   cargo xtask validate-shaders [--dir DIR]   parse and validate every .wgsl under shaders/ (or DIR)
   cargo xtask test [CARGO TEST ARGS]         make sure a GPU adapter exists, check formatting, check that
-                                             no tracked file refers outside the repository, validate
-                                             shaders, run clippy (-D warnings), build the docs (warnings
-                                             denied), run all workspace tests and fuzz
-                                             every parser for 20 s
+                                             no tracked file refers outside the repository, check the
+                                             import circles (see imports), validate shaders, run
+                                             clippy (-D warnings), build the docs (warnings denied),
+                                             run all workspace tests and fuzz every parser for 20 s
+  cargo xtask imports [--root DIR]           the files of each crate as an import graph: files, arrows,
+                                             floors and circles (files importing each other); fails
+                                             when crates/passes, crates/gpu or crates/gpu-build has one
   cargo xtask fuzz [TARGET ...] [--seconds N] [--runs N] [--artifacts DIR] [--report FILE]
                                              coverage-guided fuzzing of every parser on stable
                                              (see `cargo xtask fuzz --help`)";
@@ -28,6 +32,7 @@ fn main() -> ExitCode {
         Some("validate-shaders") => validate_shaders(&args[1..]),
         Some("test") => test(&args[1..]),
         Some("fuzz") => fuzz::run(&workspace_root(), &args[1..]),
+        Some("imports") => imports::run(&workspace_root(), &args[1..]),
         Some("-h" | "--help") | None => {
             println!("{USAGE}");
             Ok(true)
@@ -184,6 +189,9 @@ fn test(extra: &[String]) -> Result<bool> {
         return Ok(false);
     }
     if !standalone::check(&root)? {
+        return Ok(false);
+    }
+    if !imports::run(&root, &[])? {
         return Ok(false);
     }
     if !validate_shaders(&[])? {

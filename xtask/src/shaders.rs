@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use ssbvb_graph::{PassKind, PassStage};
-use ssbvb_passes::bindings::OwnBinding;
+use ssbvb_passes::runtime::registry::OwnBinding;
 
 /// Outcome of validating a folder of shaders.
 #[derive(Debug, Default)]
@@ -113,7 +113,7 @@ pub type Registered = (PassKind, &'static str, &'static [OwnBinding]);
 pub fn registered() -> Vec<Registered> {
     ssbvb_passes::registered_kinds()
         .into_iter()
-        .filter_map(|k| ssbvb_passes::registry::registration(&k).map(|r| (k, r.shader, r.own)))
+        .filter_map(|k| ssbvb_passes::kinds::registration(&k).map(|r| (k, r.shader, r.own)))
         .collect()
 }
 
@@ -179,7 +179,7 @@ pub fn validate_dir(dir: &Path, kinds: &[Registered]) -> Result<Report> {
             Err(e) => report.errors.extend(e),
         }
     }
-    let layouts = ssbvb_passes::wgsl_layout::shared_structs();
+    let layouts = ssbvb_passes::kinds::wgsl_layout::shared_structs();
     let mut mirrored = std::collections::BTreeSet::new();
     let mut names: Vec<_> = modules.keys().cloned().collect();
     names.sort();

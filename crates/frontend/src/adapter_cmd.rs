@@ -9,7 +9,7 @@ use clap::Args;
 use ssbvb_gpu::{ContextOptions, GpuContext, Requirements};
 use ssbvb_graph::ResolvedPipeline;
 
-use crate::render_cmd::assets_dir;
+use crate::bundled::assets_dir;
 
 /// Arguments of `ssbvb adapter`.
 #[derive(Args, Debug)]

@@ -8,9 +8,9 @@ use std::sync::Arc;
 use anyhow::{Context, Result};
 use serde::Serialize;
 use ssbvb_gpu::GpuContext;
-use ssbvb_passes::animated::{AnimatedMesh, Animator, UpdateTimes};
-use ssbvb_passes::gpu_voxelize::GpuVoxelizeMethod;
-use ssbvb_passes::{DynamicRoom, GpuScene, Scene};
+use ssbvb_gpu::scene::{DynamicRoom, GpuScene, Scene};
+use ssbvb_gpu_build::animated::{AnimatedMesh, Animator, UpdateTimes};
+use ssbvb_gpu_build::voxelize::GpuVoxelizeMethod;
 
 /// Voxel room reserved per level for an animated object, as a multiple of its rest pose.
 const GROWTH: f64 = 1.5;

@@ -1,5 +1,5 @@
 //! `--gpu-budget` and `gpu_budget_mib`: a scene uploaded under a GPU memory budget, its
-//! pages streamed from the assets' cache files (`ssbvb_passes::streaming`), and what the
+//! pages streamed from the assets' cache files (`ssbvb_gpu::scene::streaming`), and what the
 //! commands report about it.
 
 use std::path::PathBuf;
@@ -8,12 +8,13 @@ use std::sync::Arc;
 use anyhow::Result;
 use serde::Serialize;
 use ssbvb_gpu::GpuContext;
-use ssbvb_passes::{GpuScene, Profiling, Renderer, StreamingOptions, StreamingStats};
+use ssbvb_gpu::scene::{GpuScene, StreamingOptions, StreamingStats};
+use ssbvb_passes::{Profiling, Renderer};
 use ssbvb_voxel::cache::{PageFile, PrepareOutcome};
 use ssbvb_voxel::camera::Camera;
 
 /// Largest budget accepted (MiB): 1 TiB, as in scene files.
-pub const MAX_BUDGET_MIB: u64 = ssbvb_scene::MAX_GPU_BUDGET_MIB;
+pub const MAX_BUDGET_MIB: u64 = ssbvb_scene_file::MAX_GPU_BUDGET_MIB;
 
 /// Where one object's pages can be read: its asset's cache file.
 #[derive(Debug, Clone)]

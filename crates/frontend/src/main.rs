@@ -13,6 +13,7 @@ mod soak;
 mod view;
 mod voxelize_cmd;
 mod voxelize_gpu;
+mod voxelize_report;
 
 use std::process::ExitCode;
 

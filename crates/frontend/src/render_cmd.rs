@@ -10,7 +10,8 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use glam::{DAffine3, DVec3};
 use serde::Serialize;
-use ssbvb_passes::{GpuScene, LodPolicy, Profiling, Renderer, Scene, VoxelObject};
+use ssbvb_gpu::scene::{GpuScene, LodPolicy, Scene, VoxelObject};
+use ssbvb_passes::{Profiling, Renderer};
 use ssbvb_voxel::camera::Camera;
 
 use crate::pipeline_cmd::parse_size;
@@ -143,7 +144,7 @@ struct Report {
 struct ObjectReport {
     object: usize,
     #[serde(flatten)]
-    memory: ssbvb_passes::ObjectMemory,
+    memory: ssbvb_gpu::scene::ObjectMemory,
     total: u64,
     /// Lookup plus voxel attributes per voxel, over all levels.
     bytes_per_voxel: f64,
@@ -164,7 +165,7 @@ pub struct LoadedInput {
     /// Per object, the cache file its pages stream from under a budget.
     pub page_sources: Vec<Option<crate::budget::PageSourceRef>>,
     /// The scene's animated objects.
-    pub animated: Vec<ssbvb_passes::animated::AnimatedMesh>,
+    pub animated: Vec<ssbvb_gpu_build::animated::AnimatedMesh>,
 }
 
 /// Loads a scene file (`.ron`) or prepares a model file at `level` (default 8), placed at
@@ -226,7 +227,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         scene,
         mut camera,
         pipeline: scene_pipeline,
-        mut notes,
+        notes,
         gpu_budget_mib,
         page_sources,
         animated,
@@ -242,6 +243,33 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         bail!("animated objects cannot be paged under a GPU budget; drop --gpu-budget");
     }
     progress.finish();
+    apply_camera_args(args, &mut camera)?;
+    let warnings = clipping_warnings(&scene, &camera);
+    if args.reference && args.frames > 1 {
+        bail!("--frames (a soak of the GPU renderer) does not apply to --reference");
+    }
+    let report = if args.reference {
+        render_reference(args, &scene, &animated, camera, warnings, notes)?
+    } else {
+        let input = GpuInput {
+            scene,
+            pipeline: scene_pipeline,
+            budget,
+            page_sources,
+            animated,
+        };
+        render_gpu(args, input, camera, warnings, notes)?
+    };
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_report(&report);
+    }
+    Ok(())
+}
+
+/// The camera flags over the scene's camera, each checked.
+fn apply_camera_args(args: &RenderArgs, camera: &mut Camera) -> Result<()> {
     if let Some(p) = args.camera_pos {
         camera.position = p;
     }
@@ -279,204 +307,241 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if camera.position == camera.look_at {
         bail!("the camera position and --look-at are the same point");
     }
-    let mut warnings = clipping_warnings(&scene, &camera);
-    let (w, h) = args.size;
+    Ok(())
+}
+
+/// `render --reference`: the CPU reference ray caster at the levels the GPU would pick.
+fn render_reference(
+    args: &RenderArgs,
+    scene: &Scene,
+    animated: &[ssbvb_gpu_build::animated::AnimatedMesh],
+    camera: Camera,
+    warnings: Vec<String>,
+    notes: Vec<String>,
+) -> Result<Report> {
     let start = Instant::now();
-    if args.reference && args.frames > 1 {
-        bail!("--frames (a soak of the GPU renderer) does not apply to --reference");
+    let (w, h) = args.size;
+    let scene = crate::animation::posed(scene, animated, args.time)?;
+    let mut instances = Vec::new();
+    let mut lod_histogram = std::collections::BTreeMap::new();
+    for o in &scene.objects {
+        let max = o.asset.lods.len() as u32 - 1;
+        for xf in &o.instances {
+            let level = ssbvb_gpu::scene::choose_level(o.lod, xf, &camera, args.size, max);
+            *lod_histogram.entry(level).or_insert(0) += 1;
+            instances.push(ssbvb_voxel::reference::Instance {
+                lod: &o.asset.lods[level as usize],
+                object_to_world: *xf,
+                faces: None,
+            });
+        }
     }
-    let report = if args.reference {
-        let scene = crate::animation::posed(&scene, &animated, args.time)?;
-        let mut instances = Vec::new();
-        let mut lod_histogram = std::collections::BTreeMap::new();
-        for o in &scene.objects {
-            let max = o.asset.lods.len() as u32 - 1;
-            for xf in &o.instances {
-                let level =
-                    ssbvb_passes::gpu_scene::choose_level(o.lod, xf, &camera, args.size, max);
-                *lod_histogram.entry(level).or_insert(0) += 1;
-                instances.push(ssbvb_voxel::reference::Instance {
-                    lod: &o.asset.lods[level as usize],
-                    object_to_world: *xf,
-                    faces: None,
-                });
-            }
+    if !scene.triangles.is_empty() && !args.json {
+        eprintln!(
+            "note: the CPU reference renders voxel objects only; triangle objects are left out"
+        );
+    }
+    let img = ssbvb_voxel::reference::render(&instances, &camera, w, h, &scene.light);
+    img.to_png(&args.output)
+        .with_context(|| format!("writing {}", args.output.display()))?;
+    Ok(Report {
+        output: args.output.display().to_string(),
+        mode: "reference",
+        adapter: None,
+        adapter_is_software: None,
+        fallbacks: Vec::new(),
+        size: [w, h],
+        camera,
+        pipeline: None,
+        passes: Vec::new(),
+        frame_wall_ms: start.elapsed().as_secs_f64() * 1e3,
+        ssbvb_fill_count: None,
+        covered_pixels: Some(img.coverage()),
+        voxel_pixels: Some(img.coverage()),
+        visible_instances: instances.len(),
+        counters: Default::default(),
+        lod_histogram,
+        warnings,
+        streaming: None,
+        soak: None,
+        animation: (!animated.is_empty()).then(|| crate::animation::AnimationReport {
+            time_s: args.time,
+            method: None,
+            objects: Vec::new(),
+        }),
+        gpu_memory_bytes: Vec::new(),
+        asset_notes: notes,
+    })
+}
+
+/// What the GPU path renders: the scene and where its pipeline, pages and animation come
+/// from.
+struct GpuInput {
+    scene: Scene,
+    pipeline: Option<PathBuf>,
+    budget: Option<u64>,
+    page_sources: Vec<Option<crate::budget::PageSourceRef>>,
+    animated: Vec<ssbvb_gpu_build::animated::AnimatedMesh>,
+}
+
+/// `render` on the GPU: warm-up frames (under a budget, until no page is missing), the
+/// optional soak, then the measured frame.
+fn render_gpu(
+    args: &RenderArgs,
+    input: GpuInput,
+    camera: Camera,
+    mut warnings: Vec<String>,
+    mut notes: Vec<String>,
+) -> Result<Report> {
+    let GpuInput {
+        scene,
+        pipeline: scene_pipeline,
+        budget,
+        page_sources,
+        animated,
+    } = input;
+    let (w, h) = args.size;
+    let pipeline_path = args
+        .pipeline
+        .clone()
+        .or(scene_pipeline)
+        .unwrap_or_else(|| assets_dir().join("pipelines/ssbvb.ron"));
+    let pipeline = crate::adapter_cmd::resolve(&pipeline_path)?;
+    let ctx = crate::adapter_cmd::headless_context(&[&pipeline])?;
+    let mut gpu_scene = match budget {
+        Some(mib) => {
+            // Offline: stream every page a frame asks for before the next one.
+            let options = crate::budget::options(mib, &page_sources, usize::MAX, &mut notes)?;
+            GpuScene::streamed(&ctx, scene, &options)?
         }
-        if !scene.triangles.is_empty() && !args.json {
-            eprintln!(
-                "note: the CPU reference renders voxel objects only; triangle objects are left out"
-            );
+        None if !animated.is_empty() => {
+            GpuScene::with_dynamic(&ctx, scene, &crate::animation::rooms(&animated))?
         }
-        let img = ssbvb_voxel::reference::render(&instances, &camera, w, h, &scene.light);
-        img.to_png(&args.output)
-            .with_context(|| format!("writing {}", args.output.display()))?;
-        Report {
-            output: args.output.display().to_string(),
-            mode: "reference",
-            adapter: None,
-            adapter_is_software: None,
-            fallbacks: Vec::new(),
-            size: [w, h],
-            camera,
-            pipeline: None,
-            passes: Vec::new(),
-            frame_wall_ms: start.elapsed().as_secs_f64() * 1e3,
-            ssbvb_fill_count: None,
-            covered_pixels: Some(img.coverage()),
-            voxel_pixels: Some(img.coverage()),
-            visible_instances: instances.len(),
-            counters: Default::default(),
-            lod_histogram,
-            warnings,
-            streaming: None,
-            soak: None,
-            animation: (!animated.is_empty()).then(|| crate::animation::AnimationReport {
-                time_s: args.time,
-                method: None,
-                objects: Vec::new(),
-            }),
-            gpu_memory_bytes: Vec::new(),
-            asset_notes: notes,
-        }
+        None => GpuScene::new(&ctx, scene)?,
+    };
+    let animation = if animated.is_empty() {
+        None
     } else {
-        let pipeline_path = args
-            .pipeline
-            .clone()
-            .or(scene_pipeline)
-            .unwrap_or_else(|| assets_dir().join("pipelines/ssbvb.ron"));
-        let pipeline = crate::adapter_cmd::resolve(&pipeline_path)?;
-        let ctx = crate::adapter_cmd::headless_context(&[&pipeline])?;
-        let mut gpu_scene = match budget {
-            Some(mib) => {
-                // Offline: stream every page a frame asks for before the next one.
-                let options = crate::budget::options(mib, &page_sources, usize::MAX, &mut notes)?;
-                GpuScene::streamed(&ctx, scene, &options)?
-            }
-            None if !animated.is_empty() => {
-                GpuScene::with_dynamic(&ctx, scene, &crate::animation::rooms(&animated))?
-            }
-            None => GpuScene::new(&ctx, scene)?,
-        };
-        let animation = if animated.is_empty() {
-            None
-        } else {
-            let animator = ssbvb_passes::animated::Animator::new(&ctx)?;
-            Some(crate::animation::update_all(
-                &ctx,
-                &mut gpu_scene,
-                &animator,
-                &animated,
-                args.time,
-            )?)
-        };
-        let mut renderer = Renderer::new(&ctx, &gpu_scene, pipeline, args.size)?;
-        let profiling = if ctx.report().is_software {
-            Profiling::TimestampsAndWall
-        } else {
-            Profiling::Timestamps
-        };
-        // Warm-up frames (pipeline caches, lazy allocations; under a budget, until no page
-        // is missing), then the measured one.
-        let (frames, converged) = crate::budget::converge(
+        let animator = ssbvb_gpu_build::animated::Animator::new(&ctx)?;
+        Some(crate::animation::update_all(
+            &ctx,
+            &mut gpu_scene,
+            &animator,
+            &animated,
+            args.time,
+        )?)
+    };
+    let mut renderer = Renderer::new(&ctx, &gpu_scene, pipeline, args.size)?;
+    let profiling = if ctx.report().is_software {
+        Profiling::TimestampsAndWall
+    } else {
+        Profiling::Timestamps
+    };
+    // Warm-up frames (pipeline caches, lazy allocations; under a budget, until no page
+    // is missing), then the measured one.
+    let (frames, converged) = crate::budget::converge(
+        &ctx,
+        &mut renderer,
+        &mut gpu_scene,
+        &camera,
+        args.max_frames,
+    )?;
+    let streaming = crate::budget::StreamingReport::of(&gpu_scene, frames, converged);
+    streaming_warnings(streaming.as_ref(), frames, &mut warnings);
+    let soak = if args.frames > 1 {
+        let r = crate::soak::run(
             &ctx,
             &mut renderer,
             &mut gpu_scene,
             &camera,
-            args.max_frames,
+            args.camera_path,
+            args.frames as usize,
         )?;
-        let streaming = crate::budget::StreamingReport::of(&gpu_scene, frames, converged);
-        if let Some(s) = &streaming {
-            if !s.converged {
-                warnings.push(format!(
-                    "not converged in {frames} frames under a {} MiB GPU budget: {} pages \
-                     still missing{}; those rays show coarser voxels",
-                    s.stats.budget_bytes >> 20,
-                    s.stats.pages_missing,
-                    if s.stats.over_budget {
-                        " (the view needs more pages than the budget holds)"
-                    } else {
-                        " (raise --max-frames)"
-                    }
-                ));
-            }
-            if let Some(cap) = s.stats.level_cap {
-                warnings.push(format!(
-                    "the view's pages do not fit a {} MiB GPU budget at the levels asked for: \
-                     drawn at level {cap} at most",
-                    s.stats.budget_bytes >> 20
-                ));
-            }
-            if s.stats.pages_failed > 0 {
-                warnings.push(format!(
-                    "{} pages refused (damaged cache file?); their rays show coarser voxels: {}",
-                    s.stats.pages_failed,
-                    s.page_errors.first().map_or("", String::as_str)
-                ));
-            }
-        }
-        let soak = if args.frames > 1 {
-            let r = crate::soak::run(
-                &ctx,
-                &mut renderer,
-                &mut gpu_scene,
-                &camera,
-                args.camera_path,
-                args.frames as usize,
-            )?;
-            Some(r)
-        } else {
-            None
-        };
-        let stats = renderer.render(&ctx, &mut gpu_scene, &camera, profiling)?;
-        let out = ctx.read_texture(
-            &renderer.output().texture,
-            ssbvb_gpu::wgpu::TextureAspect::All,
-        )?;
-        let rgba = to_rgba8(&out)?;
-        ssbvb_gpu::readback::write_png_rgba8(&args.output, w, h, &rgba)?;
-        let fill = renderer.fill_count(&ctx)?;
-        let counters = renderer.counters(&ctx)?;
-        Report {
-            output: args.output.display().to_string(),
-            mode: "gpu",
-            adapter: Some(ctx.report().to_string()),
-            adapter_is_software: Some(ctx.report().is_software),
-            fallbacks: ctx.report().fallbacks.clone(),
-            size: [w, h],
-            camera,
-            pipeline: Some(pipeline_path.display().to_string()),
-            passes: stats.passes,
-            frame_wall_ms: stats.frame_wall_ms,
-            ssbvb_fill_count: fill,
-            covered_pixels: Some(rgba.chunks(4).filter(|p| p[3] > 0).count()),
-            voxel_pixels: ssbvb_passes::measure::voxel_pixels(&ctx, &renderer)?,
-            visible_instances: stats.visible_instances,
-            counters,
-            lod_histogram: gpu_scene.lod_histogram(),
-            warnings,
-            streaming,
-            soak,
-            animation,
-            gpu_memory_bytes: gpu_scene
-                .memory
-                .iter()
-                .enumerate()
-                .map(|(i, m)| ObjectReport {
-                    object: i,
-                    memory: *m,
-                    total: m.total(),
-                    bytes_per_voxel: m.bytes_per_voxel(),
-                })
-                .collect(),
-            asset_notes: notes,
-        }
-    };
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        Some(r)
     } else {
-        print_report(&report);
+        None
+    };
+    let stats = renderer.render(&ctx, &mut gpu_scene, &camera, profiling)?;
+    let out = ctx.read_texture(
+        &renderer.output().texture,
+        ssbvb_gpu::wgpu::TextureAspect::All,
+    )?;
+    let rgba = to_rgba8(&out)?;
+    ssbvb_gpu::readback::write_png_rgba8(&args.output, w, h, &rgba)?;
+    let fill = renderer.fill_count(&ctx)?;
+    let counters = renderer.counters(&ctx)?;
+    Ok(Report {
+        output: args.output.display().to_string(),
+        mode: "gpu",
+        adapter: Some(ctx.report().to_string()),
+        adapter_is_software: Some(ctx.report().is_software),
+        fallbacks: ctx.report().fallbacks.clone(),
+        size: [w, h],
+        camera,
+        pipeline: Some(pipeline_path.display().to_string()),
+        passes: stats.passes,
+        frame_wall_ms: stats.frame_wall_ms,
+        ssbvb_fill_count: fill,
+        covered_pixels: Some(rgba.chunks(4).filter(|p| p[3] > 0).count()),
+        voxel_pixels: ssbvb_passes::measure::voxel_pixels(&ctx, &renderer)?,
+        visible_instances: stats.visible_instances,
+        counters,
+        lod_histogram: gpu_scene.lod_histogram(),
+        warnings,
+        streaming,
+        soak,
+        animation,
+        gpu_memory_bytes: gpu_scene
+            .memory
+            .iter()
+            .enumerate()
+            .map(|(i, m)| ObjectReport {
+                object: i,
+                memory: *m,
+                total: m.total(),
+                bytes_per_voxel: m.bytes_per_voxel(),
+            })
+            .collect(),
+        asset_notes: notes,
+    })
+}
+
+/// Warnings about a budgeted render that did not settle at the levels asked for.
+fn streaming_warnings(
+    streaming: Option<&crate::budget::StreamingReport>,
+    frames: usize,
+    warnings: &mut Vec<String>,
+) {
+    let Some(s) = streaming else {
+        return;
+    };
+    if !s.converged {
+        warnings.push(format!(
+            "not converged in {frames} frames under a {} MiB GPU budget: {} pages \
+             still missing{}; those rays show coarser voxels",
+            s.stats.budget_bytes >> 20,
+            s.stats.pages_missing,
+            if s.stats.over_budget {
+                " (the view needs more pages than the budget holds)"
+            } else {
+                " (raise --max-frames)"
+            }
+        ));
     }
-    Ok(())
+    if let Some(cap) = s.stats.level_cap {
+        warnings.push(format!(
+            "the view's pages do not fit a {} MiB GPU budget at the levels asked for: \
+             drawn at level {cap} at most",
+            s.stats.budget_bytes >> 20
+        ));
+    }
+    if s.stats.pages_failed > 0 {
+        warnings.push(format!(
+            "{} pages refused (damaged cache file?); their rays show coarser voxels: {}",
+            s.stats.pages_failed,
+            s.page_errors.first().map_or("", String::as_str)
+        ));
+    }
 }
 
 /// Why a view may show nothing, from the scene and camera alone: every voxel instance

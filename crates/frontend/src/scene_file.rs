@@ -18,8 +18,8 @@ use std::sync::Arc;
 
 use anyhow::{Context, Result, bail};
 use glam::DVec3;
-use ssbvb_passes::{LodPolicy, Scene, TriangleObject, VolumeObject, VoxelObject};
-use ssbvb_scene::{InstanceDesc, LodDesc, TriangleDesc, VolumeDesc, VolumeSource};
+use ssbvb_gpu::scene::{LodPolicy, Scene, TriangleObject, VolumeObject, VoxelObject};
+use ssbvb_scene_file::{InstanceDesc, LodDesc, TriangleDesc, VolumeDesc, VolumeSource};
 use ssbvb_voxel::camera::Camera;
 
 /// A scene ready to upload, with its camera and pipeline path.
@@ -37,7 +37,7 @@ pub struct LoadedScene {
     /// Per object, the cache file its pages stream from under a budget.
     pub page_sources: Vec<Option<crate::budget::PageSourceRef>>,
     /// The animated objects (their assets are their rest pose, prepared on the CPU).
-    pub animated: Vec<ssbvb_passes::animated::AnimatedMesh>,
+    pub animated: Vec<ssbvb_gpu_build::animated::AnimatedMesh>,
 }
 
 /// Reads a scene file and prepares (or loads from cache) every object's asset.
@@ -53,7 +53,7 @@ fn load_with_cache(
 ) -> Result<LoadedScene> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("cannot read scene {}", path.display()))?;
-    let file = ssbvb_scene::parse(&text, &path.display().to_string())?;
+    let file = ssbvb_scene_file::parse(&text, &path.display().to_string())?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut scene = Scene {
         light: file.light.unwrap_or_default(),
@@ -72,7 +72,7 @@ fn load_with_cache(
             else {
                 bail!("{}: animate needs a mesh model (OBJ, PLY, glTF)", what());
             };
-            let anim = ssbvb_passes::animated::AnimatedMesh::new(oi, mesh, animation, o.level)
+            let anim = ssbvb_gpu_build::animated::AnimatedMesh::new(oi, mesh, animation, o.level)
                 .with_context(what)?;
             let rest = anim.cpu_asset(0.0).with_context(what)?;
             notes.push(format!(
@@ -188,7 +188,7 @@ fn edited(
 mod tests {
     use super::*;
     use glam::DAffine3;
-    use ssbvb_scene::MAX_INSTANCES;
+    use ssbvb_scene_file::MAX_INSTANCES;
     use ssbvb_voxel::progress::NoProgress;
 
     /// Writes `text` as a scene beside a tiny OBJ (`tri.obj`) and loads it.
@@ -426,11 +426,11 @@ fn volume_object(dir: &Path, v: &VolumeDesc, i: usize) -> Result<VolumeObject> {
             let model_path = dir.join(file);
             let volume = match ssbvb_voxel::load::load_model(&model_path)? {
                 ssbvb_voxel::model::Model::Mesh(mesh) => {
-                    if v.edge > ssbvb_scene::volumes::MAX_MESH_VOLUME_EDGE {
+                    if v.edge > ssbvb_scene_file::volumes::MAX_MESH_VOLUME_EDGE {
                         bail!(
                             "{}: a mesh volume is at most {} texels per edge, got {}",
                             model_path.display(),
-                            ssbvb_scene::volumes::MAX_MESH_VOLUME_EDGE,
+                            ssbvb_scene_file::volumes::MAX_MESH_VOLUME_EDGE,
                             v.edge
                         );
                     }

@@ -13,7 +13,8 @@ use anyhow::{Result, bail};
 use glam::{DQuat, DVec3};
 use serde::Serialize;
 use ssbvb_gpu::GpuContext;
-use ssbvb_passes::{GpuScene, Profiling, Renderer};
+use ssbvb_gpu::scene::GpuScene;
+use ssbvb_passes::{Profiling, Renderer};
 use ssbvb_voxel::camera::Camera;
 
 /// How the camera moves during a soak.

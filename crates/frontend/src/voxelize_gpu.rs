@@ -8,8 +8,7 @@
 use std::time::Instant;
 
 use anyhow::{Context, bail};
-use serde::Serialize;
-use ssbvb_passes::gpu_voxelize::{GpuVoxelizeMethod, GpuVoxelizeStats, GpuVoxelizer};
+use ssbvb_gpu_build::voxelize::{GpuVoxelizeMethod, GpuVoxelizer};
 use ssbvb_voxel::cache::{hash_source, write_cache};
 use ssbvb_voxel::load::load_model;
 use ssbvb_voxel::model::Model;
@@ -17,36 +16,9 @@ use ssbvb_voxel::prepare::prepare_voxel_set;
 use ssbvb_voxel::progress::NoProgress;
 use ssbvb_voxel::voxelize::voxelize_mesh;
 
-use crate::voxelize_cmd::{CacheReport, GpuMethodArg, Report, VoxelizeArgs};
-
-/// One level of `differs_from_cpu`.
-#[derive(Debug, Clone, Serialize)]
-pub(crate) struct LevelDiff {
-    pub(crate) level: u32,
-    pub(crate) gpu_voxels: u64,
-    pub(crate) cpu_voxels: u64,
-    /// Cells the GPU sets and the CPU does not.
-    pub(crate) extra: u64,
-    /// Cells the CPU sets and the GPU does not.
-    pub(crate) missing: u64,
-}
-
-/// `gpu` in the report.
-#[derive(Debug, Clone, Serialize)]
-pub(crate) struct GpuReport {
-    pub(crate) adapter: String,
-    pub(crate) adapter_is_software: bool,
-    /// `Exact` or `Raster`.
-    pub(crate) method: GpuVoxelizeMethod,
-    #[serde(flatten)]
-    pub(crate) stats: GpuVoxelizeStats,
-    /// GPU voxelization, host wall clock (raster, sort, merge, readback).
-    pub(crate) gpu_seconds: f64,
-    /// The CPU voxelizer on the same mesh and level, on this machine.
-    pub(crate) cpu_seconds: f64,
-    /// `cpu_seconds / gpu_seconds`.
-    pub(crate) speedup: f64,
-}
+use crate::voxelize_report::{
+    CacheReport, GpuMethodArg, GpuReport, LevelDiff, Report, VoxelizeArgs,
+};
 
 /// Per level from the finest down: extra and missing cells between two Morton-sorted sets.
 fn differences(level: u32, mut gpu: Vec<u64>, mut cpu: Vec<u64>) -> Vec<LevelDiff> {

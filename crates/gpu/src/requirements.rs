@@ -246,41 +246,28 @@ impl Requirements {
     }
 }
 
-/// `max_bind_groups` at least `n`.
-pub const fn max_bind_groups(n: u64) -> LimitNeed {
-    LimitNeed {
-        name: "max_bind_groups",
-        at_least: n,
-        get: |l| l.max_bind_groups as u64,
-    }
+/// Declares, for each named field of wgpu's [`Limits`], `pub const fn FIELD(n: u64) ->
+/// LimitNeed`: that limit at least `n`.
+macro_rules! limit_needs {
+    ($($field:ident),* $(,)?) => {$(
+        #[doc = concat!("`", stringify!($field), "` at least `n`.")]
+        pub const fn $field(n: u64) -> LimitNeed {
+            LimitNeed {
+                name: stringify!($field),
+                at_least: n,
+                get: |l| l.$field as u64,
+            }
+        }
+    )*};
 }
 
-/// `max_storage_buffers_per_shader_stage` at least `n`.
-pub const fn max_storage_buffers_per_shader_stage(n: u64) -> LimitNeed {
-    LimitNeed {
-        name: "max_storage_buffers_per_shader_stage",
-        at_least: n,
-        get: |l| l.max_storage_buffers_per_shader_stage as u64,
-    }
-}
-
-/// `max_texture_dimension_3d` at least `n`.
-pub const fn max_texture_dimension_3d(n: u64) -> LimitNeed {
-    LimitNeed {
-        name: "max_texture_dimension_3d",
-        at_least: n,
-        get: |l| l.max_texture_dimension_3d as u64,
-    }
-}
-
-/// `max_color_attachment_bytes_per_sample` at least `n`.
-pub const fn max_color_attachment_bytes_per_sample(n: u64) -> LimitNeed {
-    LimitNeed {
-        name: "max_color_attachment_bytes_per_sample",
-        at_least: n,
-        get: |l| l.max_color_attachment_bytes_per_sample as u64,
-    }
-}
+limit_needs!(
+    max_bind_groups,
+    max_storage_buffers_per_shader_stage,
+    max_texture_dimension_3d,
+    max_color_attachment_bytes_per_sample,
+    max_compute_invocations_per_workgroup,
+);
 
 /// WebGPU's bytes per sample of colour attachments `formats` bound together (in location
 /// order): each format's render-target byte cost, placed at its component alignment.
@@ -293,18 +280,16 @@ pub fn color_attachment_bytes(formats: &[TextureFormat]) -> u64 {
     total
 }
 
-/// `max_compute_invocations_per_workgroup` at least `n`.
-pub const fn max_compute_invocations_per_workgroup(n: u64) -> LimitNeed {
-    LimitNeed {
-        name: "max_compute_invocations_per_workgroup",
-        at_least: n,
-        get: |l| l.max_compute_invocations_per_workgroup as u64,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Asserts that `message` contains every one of `parts`.
+    fn assert_contains_all(message: &str, parts: &[&str]) {
+        for part in parts {
+            assert!(message.contains(part), "{message:?} lacks {part:?}");
+        }
+    }
 
     fn needs() -> Requirements {
         let mut r = Requirements::default();
@@ -355,20 +340,18 @@ mod tests {
         });
         assert!(!v.fits());
         assert_eq!(v.missing.len(), 3, "{:#?}", v.missing);
-        assert!(v.missing[0].contains("pass `smooth`") && v.missing[0].contains("read-only"));
-        assert!(
-            v.missing[1].contains("resource `entry`")
-                && v.missing[1].contains("Rgba32Float")
-                && v.missing[1].contains("render attachment"),
-            "{}",
-            v.missing[1]
+        assert_contains_all(&v.missing[0], &["pass `smooth`", "read-only"]);
+        assert_contains_all(
+            &v.missing[1],
+            &["resource `entry`", "Rgba32Float", "render attachment"],
         );
-        assert!(
-            v.missing[2].contains("max_storage_buffers_per_shader_stage >= 10")
-                && v.missing[2].contains("pass `filter2`")
-                && v.missing[2].contains("has 8"),
-            "{}",
-            v.missing[2]
+        assert_contains_all(
+            &v.missing[2],
+            &[
+                "max_storage_buffers_per_shader_stage >= 10",
+                "pass `filter2`",
+                "has 8",
+            ],
         );
         assert_eq!(
             v.fallbacks,

@@ -26,6 +26,56 @@ fn assert_no_uncaptured() {
     assert!(errs.is_empty(), "uncaptured wgpu errors: {errs:#?}");
 }
 
+/// The smoke shader's `fill` compute pipeline and a bind group with `buf` at binding 0.
+fn fill_pipeline(
+    d: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    label: Option<&str>,
+    buf: &wgpu::Buffer,
+) -> (wgpu::ComputePipeline, wgpu::BindGroup) {
+    let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label,
+        layout: None,
+        module,
+        entry_point: Some("fill"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: buf.as_entire_binding(),
+        }],
+    });
+    (pipeline, bg)
+}
+
+/// A `w`×`h` render target of `format` that can be copied out.
+fn target(
+    c: &GpuContext,
+    label: &str,
+    format: wgpu::TextureFormat,
+    w: u32,
+    h: u32,
+) -> wgpu::Texture {
+    c.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
+}
+
 #[test]
 fn compute_pass_writes_exact_values() {
     let c = ctx();
@@ -40,22 +90,7 @@ fn compute_pass_writes_exact_values() {
         .shader("smoke.wgsl", SMOKE)
         .expect("smoke shader compiles");
     c.validated("compute smoke", |d| {
-        let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("fill"),
-            layout: None,
-            module: &module,
-            entry_point: Some("fill"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: None,
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: buf.as_entire_binding(),
-            }],
-        });
+        let (pipeline, bg) = fill_pipeline(d, &module, Some("fill"), &buf);
         let mut enc = d.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
@@ -77,34 +112,8 @@ fn render_pass_with_depth_and_stencil_is_exact() {
     let c = ctx();
     let (w, h) = (64u32, 16u32);
     let ds_format = c.depth_stencil_format();
-    let color = c.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("color"),
-        size: wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8Unorm,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
-    let ds = c.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("depth_stencil"),
-        size: wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: ds_format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
+    let color = target(c, "color", wgpu::TextureFormat::Rgba8Unorm, w, h);
+    let ds = target(c, "depth_stencil", ds_format, w, h);
     let module = c.shader("smoke.wgsl", SMOKE).unwrap();
     // Quad A: left half, depth 0.5, stencil replaced by 3 (red). Quad B: whole screen, depth
     // 0.75, depth test Less: only the right half survives (green); its stencil op keeps the
@@ -274,28 +283,13 @@ fn shader_errors_fail_with_a_message() {
     // A binding that does not match the shader is a validation error too.
     let module = c.shader("smoke.wgsl", SMOKE).unwrap();
     let r = c.validated("mismatched bind group", |d| {
-        let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: None,
-            layout: None,
-            module: &module,
-            entry_point: Some("fill"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
         let tiny = d.create_buffer(&wgpu::BufferDescriptor {
             label: None,
             size: 4,
             usage: wgpu::BufferUsages::UNIFORM,
             mapped_at_creation: false,
         });
-        let _ = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: None,
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: tiny.as_entire_binding(),
-            }],
-        });
+        let _ = fill_pipeline(d, &module, None, &tiny);
     });
     assert!(
         matches!(

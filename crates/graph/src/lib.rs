@@ -13,29 +13,22 @@
 //! The crate needs no GPU (it depends on `wgpu-types` only), so all of this is unit-tested
 //! on any machine. Executing a resolved pipeline is `ssbvb-passes`' job.
 
-pub mod cone_kinds;
 pub mod edit;
 pub mod error;
+pub mod format;
 pub mod kinds;
 pub mod locate;
-pub mod pass_kind;
 pub mod resolve;
 pub mod schema;
-pub mod volume_kinds;
 pub mod watch;
 
-pub use cone_kinds::*;
 pub use error::{GraphError, Loc, PipelineErrors};
+pub use format::{BufferLayout, Format};
 pub use kinds::*;
 pub use locate::Position;
-pub use pass_kind::{Access, KindSpec, OfKind, PassStage, SlotClass, SlotDesc};
 pub use resolve::{
     BoundSlot, Dependency, MemoryReport, PhysicalResource, ResolvedPipeline, ResolvedResource,
     ResourceUsage, ScheduledPass, resolve_desc, resolve_file, resolve_str,
 };
-pub use schema::{
-    Binding, Bindings, BufferLayout, CountDesc, Format, PassDesc, PipelineDesc, ResourceDesc,
-    SizeDesc,
-};
-pub use volume_kinds::*;
+pub use schema::{Binding, Bindings, CountDesc, PassDesc, PipelineDesc, ResourceDesc, SizeDesc};
 pub use watch::{PipelineWatcher, ReloadOutcome};

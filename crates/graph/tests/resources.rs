@@ -3,8 +3,8 @@
 //! mutation campaign (`docs/reliability.md`) found untested.
 
 use ssbvb_graph::{
-    BufferLayout, CountDesc, Format, GraphError, PassKind, ResourceDesc, ResourceUsage, SizeDesc,
-    resolve_str,
+    BillboardMode, BillboardsParams, BufferLayout, CountDesc, Format, GraphError, PassKind,
+    ResourceDesc, ResourceUsage, SizeDesc, SplatBillboardsParams, resolve_str,
 };
 use wgpu_types::{BufferUsages, TextureUsages};
 
@@ -252,6 +252,31 @@ fn omitted_parameters_take_their_defaults() {
             assert_eq!((d.max_steps, o.max_steps), (4096, 4096))
         }
         k => panic!("{k:?}"),
+    }
+}
+
+#[test]
+fn splat_billboards_take_the_billboards_parameters() {
+    const SPLAT: &str = include_str!("../../../assets/pipelines/ssbvb_splat.ron");
+    const WRITTEN: &str = "SplatBillboards(mode: Flat, size_scale: 1.0)";
+    assert!(SPLAT.contains(WRITTEN));
+    let ray_box = BillboardsParams {
+        mode: BillboardMode::RayBox,
+        size_scale: 1.5,
+    };
+    for (text, want) in [
+        (WRITTEN, BillboardsParams::default()),
+        ("SplatBillboards(mode: RayBox, size_scale: 1.5)", ray_box),
+        ("SplatBillboards()", BillboardsParams::default()),
+    ] {
+        let p = resolve_str(&SPLAT.replace(WRITTEN, text), "ssbvb_splat.ron")
+            .unwrap_or_else(|e| panic!("{text}: {e}"));
+        let splat = p.passes.iter().find(|s| s.kind.name() == "SplatBillboards");
+        assert_eq!(
+            splat.map(|s| &s.kind),
+            Some(&PassKind::SplatBillboards(SplatBillboardsParams(want))),
+            "{text}"
+        );
     }
 }
 

@@ -1,6 +1,6 @@
 //! Embedding ssbvb in an existing wgpu renderer, headless: this program creates its own
 //! device, draws its own triangle geometry (a ground quad) into its own colour and
-//! depth-stencil targets, then lets `ssbvb_passes::embed::VoxelLayer` draw the Stanford
+//! depth-stencil targets, then lets `ssbvb_passes::runtime::embed::VoxelLayer` draw the Stanford
 //! bunny into the same targets, depth-tested against the quad, and writes `embed.png`.
 //!
 //! `cargo run --release -p ssbvb-passes --example embed [-- OUT.png]`
@@ -8,10 +8,11 @@
 use std::sync::Arc;
 
 use glam::{DAffine3, DVec3, Mat4};
+use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject};
 use ssbvb_gpu::wgpu;
 use ssbvb_gpu::wgpu::util::DeviceExt;
-use ssbvb_passes::embed::VoxelLayer;
-use ssbvb_passes::{LodPolicy, Profiling, Scene, VoxelObject};
+use ssbvb_passes::Profiling;
+use ssbvb_passes::runtime::embed::VoxelLayer;
 use ssbvb_voxel::camera::Camera;
 
 const SIZE: (u32, u32) = (480, 360);
@@ -26,11 +27,43 @@ struct Out { @builtin(position) pos: vec4<f32>, @location(0) color: vec3<f32> }
 @fragment fn fs(i: Out) -> @location(0) vec4<f32> { return vec4(i.color, 1.0); }
 "#;
 
+/// The host's device: any adapter, its full limits, `Depth32FloatStencil8` when it has it.
+struct Host {
+    instance: wgpu::Instance,
+    adapter: wgpu::Adapter,
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    depth_format: wgpu::TextureFormat,
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let out = std::env::args()
         .nth(1)
         .unwrap_or_else(|| "embed.png".into());
-    // The host's device (any device works; ssbvb uses what it was given).
+    let host = host_device()?;
+    let (color, depth) = host_targets(&host);
+    let camera = Camera {
+        position: DVec3::new(1.9, 0.9, 2.7),
+        look_at: DVec3::new(0.0, -0.15, 0.0),
+        fov_y_deg: 40.0,
+        ..Camera::default()
+    };
+    draw_ground(&host, &camera, &color, &depth);
+    draw_voxels(&host, &camera, &color, &depth)?;
+    let ctx = ssbvb_gpu::GpuContext::from_parts(
+        host.instance.clone(),
+        host.adapter.clone(),
+        host.device.clone(),
+        host.queue.clone(),
+    );
+    let img = ctx.read_texture(&color, wgpu::TextureAspect::All)?;
+    ssbvb_gpu::readback::write_png_rgba8(out.as_ref(), SIZE.0, SIZE.1, &img.bytes)?;
+    println!("wrote {out}");
+    Ok(())
+}
+
+/// Creates the host's device (ssbvb uses whatever device it is given).
+fn host_device() -> Result<Host, Box<dyn std::error::Error>> {
     let instance =
         wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle().with_env());
     let adapter = pollster::block_on(instance.request_adapter(&Default::default()))?;
@@ -47,6 +80,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     } else {
         wgpu::TextureFormat::Depth24PlusStencil8
     };
+    Ok(Host {
+        instance,
+        adapter,
+        device,
+        queue,
+        depth_format,
+    })
+}
+
+/// The host's colour and depth-stencil targets.
+fn host_targets(host: &Host) -> (wgpu::Texture, wgpu::Texture) {
+    let (device, depth_format) = (&host.device, host.depth_format);
     let target = |format, usage| {
         device.create_texture(&wgpu::TextureDescriptor {
             label: None,
@@ -74,12 +119,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             | wgpu::TextureUsages::COPY_SRC,
     );
 
-    let camera = Camera {
-        position: DVec3::new(1.9, 0.9, 2.7),
-        look_at: DVec3::new(0.0, -0.15, 0.0),
-        fov_y_deg: 40.0,
-        ..Camera::default()
-    };
+    (color, depth)
+}
+
+/// The host's own forward pass: a ground quad into its colour and depth-stencil targets.
+fn draw_ground(host: &Host, camera: &Camera, color: &wgpu::Texture, depth: &wgpu::Texture) {
+    let (device, queue, depth_format) = (&host.device, &host.queue, host.depth_format);
     // The host draws its ground quad with the same camera conventions (camera-relative
     // positions, reversed Z).
     let view_proj: Mat4 = (camera.projection(SIZE.0 as f64 / SIZE.1 as f64)
@@ -199,7 +244,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         pass.draw_indexed(0..6, 0, 0..1);
     }
     queue.submit([enc.finish()]);
+}
 
+/// ssbvb's layer: the bunny drawn into the host's targets, depth-tested against its quad.
+fn draw_voxels(
+    host: &Host,
+    camera: &Camera,
+    color: &wgpu::Texture,
+    depth: &wgpu::Texture,
+) -> Result<(), Box<dyn std::error::Error>> {
     // ssbvb draws the voxel objects into the same targets.
     let bunny = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/models/bunny.obj");
     let (asset, outcome) = ssbvb_voxel::cache::load_or_prepare(
@@ -218,22 +271,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..Default::default()
     };
     let mut layer = VoxelLayer::new(
-        &instance, &adapter, &device, &queue, scene, None, &color, &depth,
+        &host.instance,
+        &host.adapter,
+        &host.device,
+        &host.queue,
+        scene,
+        None,
+        color,
+        depth,
     )?;
-    let stats = layer.render(&camera, Profiling::Timestamps)?;
+    let stats = layer.render(camera, Profiling::Timestamps)?;
     println!(
         "voxel layer: {:.2} ms wall, {} visible instance(s)",
         stats.frame_wall_ms, stats.visible_instances
     );
-
-    let ctx = ssbvb_gpu::GpuContext::from_parts(
-        instance.clone(),
-        adapter.clone(),
-        device.clone(),
-        queue.clone(),
-    );
-    let img = ctx.read_texture(&color, wgpu::TextureAspect::All)?;
-    ssbvb_gpu::readback::write_png_rgba8(out.as_ref(), SIZE.0, SIZE.1, &img.bytes)?;
-    println!("wrote {out}");
     Ok(())
 }

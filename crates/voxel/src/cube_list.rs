@@ -1,10 +1,10 @@
-//! The instance data of the instanced cube rasterization baseline (seed 002, §3.3.1): the
-//! list of axis-aligned cubes that cover one LOD level's voxels, one instance each.
+//! The instance data of the instanced cube rasterization baseline: the list of
+//! axis-aligned cubes that cover one LOD level's voxels, one instance each.
 //!
 //! Without merging every voxel is a unit cube. With merging, every *completely full*
 //! octree node — all 8 children present and themselves full, recursively — becomes ONE
-//! cube of its node size, as the paper's octree versions send "each fully filled node"
-//! (its Table 2). The merge runs bottom-up over the Morton-sorted cells: at each size,
+//! cube of its node size, as the octree variants of instanced cube rasterization send
+//! each fully filled node. The merge runs bottom-up over the Morton-sorted cells: at each size,
 //! eight consecutive full nodes that share a parent (`code >> 3`) form a full parent;
 //! everything else is emitted at its current size. The cubes are disjoint and their union
 //! is exactly the voxel set.
@@ -15,8 +15,8 @@
 //! reported here are what the GPU really receives.
 //!
 //! Packing ([`Cube`], 8 bytes): the cube's minimum cell at the level (16 bits per axis, as
-//! [`PackedVoxel`](crate::asset::PackedVoxel)) and log2 of its edge in cells. The paper
-//! used four 32-bit floats (16 bytes) per cube.
+//! [`PackedVoxel`](crate::asset::PackedVoxel)) and log2 of its edge in cells. The original
+//! instanced cube rasterization used four 32-bit floats (16 bytes) per cube.
 
 use bytemuck::{Pod, Zeroable};
 

@@ -3,7 +3,7 @@
 //! remove them. A cell is inside a brush when its centre is. Added cells are solid (the
 //! brush's interior too) with normals pointing out of the brush; cells of a brush outside
 //! the grid are clipped and counted. The result is a new Morton-sorted voxel set, which the
-//! GPU turns into the renderer's levels (`ssbvb_passes::animated::Animator::stream`) or the
+//! GPU turns into the renderer's levels (`ssbvb_gpu_build::animated::Animator::stream`) or the
 //! CPU prepares (`prepare_voxel_set`).
 
 use std::collections::BTreeMap;

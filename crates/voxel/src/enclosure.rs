@@ -8,10 +8,10 @@ fn index(dims: [u32; 3], c: [u32; 3]) -> usize {
 /// The surface and the cells it encloses: an empty cell is inside when the surface lies
 /// on all six of its axis directions. Unlike a flood fill from outside, this fills most of
 /// a shell with a hole (the Stanford bunny's open base): a hollow shell's coarse mip levels
-/// are far more transparent than the solid it bounds. Measured on the bunny on its plane
-/// (AO mean absolute error against Monte Carlo): hollow, the plane's receivers are off by
-/// 0.035 (too open), filled by 0.011; five of six directions over-fills concave parts
-/// (voxel receivers +0.004, lit PSNR −2.8 dB).
+/// are far more transparent than the solid it bounds (filled, the AO error of the plane
+/// under the bunny drops: docs/architecture.md). Measured on the bunny on its plane (AO
+/// mean absolute error against Monte Carlo): five of six directions over-fills concave
+/// parts (voxel receivers +0.004, lit PSNR −2.8 dB).
 pub fn enclosed(surface: &[bool], dims: [u32; 3]) -> Vec<bool> {
     // Per cell, how many of the six directions meet the surface.
     let mut seen = vec![0u8; surface.len()];

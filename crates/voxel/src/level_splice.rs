@@ -7,7 +7,7 @@
 //! content put in, and every old run between them kept with its node bases moved by one
 //! constant. A [`LevelPatch`] says exactly that: a list of [`Segment`]s per array (old run
 //! with a base delta, or patch run) and the patch words. Only the blocks' content is
-//! computed and uploaded; the GPU (`ssbvb_passes::level_splice`) moves the rest, and
+//! computed and uploaded; the GPU (`ssbvb_gpu_build::level_splice`) moves the rest, and
 //! [`LevelPatch::apply_colors`] and friends are its CPU twin.
 //!
 //! [`LevelMirror`] keeps what computing a patch needs: the level's voxels (codes and
@@ -292,46 +292,31 @@ impl LevelMirror {
                 (lower_bound(codes, *lo), lower_bound(codes, *hi))
             })
             .collect();
-        let (mut colors, mut normals) = (Vec::new(), Vec::new());
-        let mut voxel_segments = Vec::new();
-        // (end of block, voxels added minus removed up to it): leaf bases after it move.
-        let mut voxel_delta: Vec<(u64, i64)> = Vec::new();
-        let (mut prev, mut delta, mut at) = (0usize, 0i64, 0u32);
-        for (((_, hi), content), &(r0, r1)) in blocks.iter().zip(&spans) {
-            let head = Source::Old {
-                from: prev as u32,
-                base_delta: 0,
-            };
-            push(&mut voxel_segments, &mut at, r0 - prev, head);
-            let from = colors.len() as u32;
-            push(
-                &mut voxel_segments,
-                &mut at,
-                content.len(),
-                Source::Patch { from },
-            );
-            for i in 0..content.len() {
-                let (c, n) = stream_words(content, i);
-                colors.push(c);
-                normals.push(n);
-            }
-            delta += content.len() as i64 - (r1 - r0) as i64;
-            voxel_delta.push((*hi, delta));
-            prev = r1;
+        let voxel_runs = VoxelRuns::new(blocks, &spans, old_voxels);
+        self.splice_voxels(blocks, &spans);
+        let (changes, new_keys) = self.spliced_keys(blocks);
+        let (node_words, node_segments) = self.node_runs(&changes, &new_keys, &voxel_runs.delta);
+        self.keys = new_keys;
+        LevelPatch {
+            level: self.voxels.level,
+            old_voxels,
+            voxels: self.voxels.len() as u32,
+            old_nodes,
+            nodes: self.node_count() as u32,
+            voxel_segments: voxel_runs.segments,
+            node_segments,
+            colors: voxel_runs.colors,
+            normals: voxel_runs.normals,
+            node_words,
         }
-        let tail = Source::Old {
-            from: prev as u32,
-            base_delta: 0,
-        };
-        push(
-            &mut voxel_segments,
-            &mut at,
-            old_voxels as usize - prev,
-            tail,
-        );
-        // The mirror's voxels, from the last block back (earlier spans stay valid): each
-        // splice moves the tail once.
-        for (((lo, hi), content), &(r0, r1)) in blocks.iter().zip(&spans).rev() {
+    }
+
+    /// Replaces the mirror's voxels in each block's old span (`spans[i]`, indices into the
+    /// old voxels) by the block's content.
+    fn splice_voxels(&mut self, blocks: &[((u64, u64), LevelVoxels)], spans: &[(usize, usize)]) {
+        // From the last block back (earlier spans stay valid): each splice moves the tail
+        // once.
+        for (((lo, hi), content), &(r0, r1)) in blocks.iter().zip(spans).rev() {
             debug_assert!(content.codes.iter().all(|c| (*lo..*hi).contains(c)));
             let v = &mut self.voxels;
             v.codes.splice(r0..r1, content.codes.iter().copied());
@@ -339,8 +324,15 @@ impl LevelMirror {
             v.colors.splice(r0..r1, content.colors.iter().copied());
             v.uvs.splice(r0..r1, content.uvs.iter().copied());
         }
-        let new = &self.voxels;
+    }
 
+    /// The node keys per depth after the mirror's voxels were spliced, and per depth the
+    /// runs of nodes each block's interval of keys replaced.
+    fn spliced_keys(
+        &self,
+        blocks: &[((u64, u64), LevelVoxels)],
+    ) -> (Vec<Vec<Change>>, Vec<Vec<u64>>) {
+        let new = &self.voxels;
         // Keys per depth, deepest first (a node's mask needs its children's keys).
         let depth = self.depth as usize;
         let mut changes: Vec<Vec<Change>> = vec![Vec::new(); depth];
@@ -388,17 +380,21 @@ impl LevelMirror {
             keys.extend_from_slice(&old_keys[prev..]);
             new_keys[d] = keys;
         }
-        let offsets = |k: &[Vec<u64>]| -> Vec<usize> {
-            k.iter()
-                .scan(0usize, |s, v| {
-                    let o = *s;
-                    *s += v.len();
-                    Some(o)
-                })
-                .collect()
-        };
-        let (old_off, new_off) = (offsets(&self.keys), offsets(&new_keys));
+        (changes, new_keys)
+    }
 
+    /// The patch node words and the runs of the new node array, from the old keys (still
+    /// in the mirror), the `changes` and `new_keys` of [`Self::spliced_keys`] and the
+    /// voxel deltas of [`VoxelRuns`].
+    fn node_runs(
+        &self,
+        changes: &[Vec<Change>],
+        new_keys: &[Vec<u64>],
+        voxel_delta: &[(u64, i64)],
+    ) -> (Vec<u32>, Vec<Segment>) {
+        let new = &self.voxels;
+        let depth = self.depth as usize;
+        let (old_off, new_off) = (depth_offsets(&self.keys), depth_offsets(new_keys));
         let mut node_words = Vec::new();
         let mut node_segments = Vec::new();
         let mut at = 0u32;
@@ -458,18 +454,82 @@ impl LevelMirror {
                 push(&mut node_segments, &mut at, old_keys.len() - prev, source);
             }
         }
-        self.keys = new_keys;
-        LevelPatch {
-            level: self.voxels.level,
-            old_voxels,
-            voxels: self.voxels.len() as u32,
-            old_nodes,
-            nodes: self.node_count() as u32,
-            voxel_segments,
-            node_segments,
+        (node_words, node_segments)
+    }
+}
+
+/// Index of each depth's first node in the level's node array, from the keys per depth.
+fn depth_offsets(keys: &[Vec<u64>]) -> Vec<usize> {
+    keys.iter()
+        .scan(0usize, |s, v| {
+            let o = *s;
+            *s += v.len();
+            Some(o)
+        })
+        .collect()
+}
+
+/// The voxel half of a level's patch: runs of the new voxel streams and the patch words.
+struct VoxelRuns {
+    /// Runs of the new colour and normal streams.
+    segments: Vec<Segment>,
+    /// Patch colours.
+    colors: Vec<u32>,
+    /// Patch normals.
+    normals: Vec<u16>,
+    /// (end of block, voxels added minus removed up to it): leaf bases after it move.
+    delta: Vec<(u64, i64)>,
+}
+
+impl VoxelRuns {
+    /// The runs that put each block's content in place of its old span (`spans[i]`) of a
+    /// level of `old_voxels` voxels.
+    fn new(
+        blocks: &[((u64, u64), LevelVoxels)],
+        spans: &[(usize, usize)],
+        old_voxels: u32,
+    ) -> Self {
+        let (mut colors, mut normals) = (Vec::new(), Vec::new());
+        let mut voxel_segments = Vec::new();
+        let mut voxel_delta: Vec<(u64, i64)> = Vec::new();
+        let (mut prev, mut delta, mut at) = (0usize, 0i64, 0u32);
+        for (((_, hi), content), &(r0, r1)) in blocks.iter().zip(spans) {
+            let head = Source::Old {
+                from: prev as u32,
+                base_delta: 0,
+            };
+            push(&mut voxel_segments, &mut at, r0 - prev, head);
+            let from = colors.len() as u32;
+            push(
+                &mut voxel_segments,
+                &mut at,
+                content.len(),
+                Source::Patch { from },
+            );
+            for i in 0..content.len() {
+                let (c, n) = stream_words(content, i);
+                colors.push(c);
+                normals.push(n);
+            }
+            delta += content.len() as i64 - (r1 - r0) as i64;
+            voxel_delta.push((*hi, delta));
+            prev = r1;
+        }
+        let tail = Source::Old {
+            from: prev as u32,
+            base_delta: 0,
+        };
+        push(
+            &mut voxel_segments,
+            &mut at,
+            old_voxels as usize - prev,
+            tail,
+        );
+        Self {
+            segments: voxel_segments,
             colors,
             normals,
-            node_words,
+            delta: voxel_delta,
         }
     }
 }

@@ -1,6 +1,6 @@
-//! Light from the voxels (seed 003's voxel cone tracing, Crassin et al. 2011): the
-//! pre-filtered scene volume the GPU cone tracer reads ([`volume`]) and the exact Monte
-//! Carlo reference its error is measured against ([`monte_carlo`]).
+//! Light from the voxels (voxel cone tracing): the pre-filtered scene volume the GPU cone
+//! tracer reads ([`volume`]) and the exact Monte Carlo reference its error is measured
+//! against ([`monte_carlo`]).
 //!
 //! Both answer the same three questions for a receiver point `p` with unit normal `n` (a
 //! G-buffer sample: a voxel or a triangle pixel). Voxel objects are the only occluders and

@@ -27,183 +27,26 @@
 //!   alternate winding as usual; strip triangles that repeat an *index* are dropped, since
 //!   they are stitching artefacts of the strip encoding rather than surface.
 
+mod common;
+mod error;
 mod gltf2;
 mod obj;
 mod ply;
 mod raw;
 mod vox;
 
-use std::fmt;
 use std::fs;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::model::{Mesh, Model, VoxelModel};
+use common::{SOURCES, read_file};
 
-/// Most vertices a mesh may have (after de-indexing / instancing).
-pub const MAX_VERTICES: usize = 1 << 28;
-/// Most triangles a mesh may have (after triangulation / instancing).
-pub const MAX_TRIANGLES: usize = 1 << 28;
-/// Most voxels a voxel model may have (after scene-graph instancing).
-pub const MAX_VOXELS: usize = 1 << 28;
-/// Largest raw grid edge: a raw grid holds at most `4096³` cells.
-pub const MAX_RAW_DIM: u32 = 4096;
-/// Largest file the in-memory loaders read (raw grids are streamed and exempt).
-pub const MAX_FILE_BYTES: u64 = 8 << 30;
-
-/// Everything that can go wrong while loading a model.
-///
-/// The `Display` text always starts with the file name, followed by `:line` for text
-/// formats or `: byte N` for binary formats where the position is known, so that it can be
-/// shown to a user as is.
-#[derive(Debug, thiserror::Error)]
-pub enum LoadError {
-    /// The file (or a file it references, such as an MTL library) could not be read.
-    #[error("{}: {source}", .path.display())]
-    Io {
-        /// The file that could not be read.
-        path: PathBuf,
-        /// The operating system's error.
-        #[source]
-        source: io::Error,
-    },
-    /// The file's content is malformed.
-    #[error("{}: {message}", Location(.path, *.line, *.offset))]
-    Parse {
-        /// The malformed file.
-        path: PathBuf,
-        /// 1-based line number (text formats).
-        line: Option<usize>,
-        /// Byte offset from the start of the file (binary formats).
-        offset: Option<u64>,
-        /// What is wrong.
-        message: String,
-    },
-    /// The format could not be determined, or is not one this module reads.
-    #[error(
-        "{}: unsupported model format {ext:?} (expected .obj, .ply, .gltf, .glb, .vox or .raw)",
-        .path.display()
-    )]
-    UnsupportedFormat {
-        /// The file.
-        path: PathBuf,
-        /// Its extension (empty when it has none).
-        ext: String,
-    },
-    /// The file declares (or would produce) more of something than the limits allow.
-    #[error("{}: {count} {what} exceeds the limit of {limit}", .path.display())]
-    TooLarge {
-        /// The file.
-        path: PathBuf,
-        /// What was counted (for example `"vertices"`).
-        what: String,
-        /// How many the file declares or produces.
-        count: u64,
-        /// The limit.
-        limit: u64,
-    },
-    /// The file parsed but holds no triangles / voxels.
-    #[error("{}: the file holds no geometry", .path.display())]
-    Empty {
-        /// The file.
-        path: PathBuf,
-    },
-}
-
-/// `path`, `path:line` or `path: byte N`, for error messages.
-struct Location<'a>(&'a Path, Option<usize>, Option<u64>);
-
-impl fmt::Display for Location<'_> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.0.display())?;
-        if let Some(line) = self.1 {
-            write!(f, ":{line}")?;
-        }
-        if let Some(offset) = self.2 {
-            write!(f, ": byte {offset}")?;
-        }
-        Ok(())
-    }
-}
-
-impl LoadError {
-    /// The file the error is about.
-    pub fn path(&self) -> &Path {
-        match self {
-            LoadError::Io { path, .. }
-            | LoadError::Parse { path, .. }
-            | LoadError::UnsupportedFormat { path, .. }
-            | LoadError::TooLarge { path, .. }
-            | LoadError::Empty { path } => path,
-        }
-    }
-
-    /// The 1-based line of a parse error in a text format, when known.
-    pub fn line(&self) -> Option<usize> {
-        match self {
-            LoadError::Parse { line, .. } => *line,
-            _ => None,
-        }
-    }
-
-    /// The byte offset of a parse error in a binary format, when known.
-    pub fn offset(&self) -> Option<u64> {
-        match self {
-            LoadError::Parse { offset, .. } => *offset,
-            _ => None,
-        }
-    }
-
-    pub(crate) fn io(path: &Path, source: io::Error) -> Self {
-        LoadError::Io {
-            path: path.to_path_buf(),
-            source,
-        }
-    }
-
-    pub(crate) fn at_line(path: &Path, line: usize, message: impl Into<String>) -> Self {
-        LoadError::Parse {
-            path: path.to_path_buf(),
-            line: Some(line),
-            offset: None,
-            message: message.into(),
-        }
-    }
-
-    pub(crate) fn at_offset(path: &Path, offset: u64, message: impl Into<String>) -> Self {
-        LoadError::Parse {
-            path: path.to_path_buf(),
-            line: None,
-            offset: Some(offset),
-            message: message.into(),
-        }
-    }
-
-    pub(crate) fn parse(path: &Path, message: impl Into<String>) -> Self {
-        LoadError::Parse {
-            path: path.to_path_buf(),
-            line: None,
-            offset: None,
-            message: message.into(),
-        }
-    }
-
-    pub(crate) fn too_large(path: &Path, what: &str, count: u64, limit: u64) -> Self {
-        LoadError::TooLarge {
-            path: path.to_path_buf(),
-            what: what.to_string(),
-            count,
-            limit,
-        }
-    }
-
-    pub(crate) fn empty(path: &Path) -> Self {
-        LoadError::Empty {
-            path: path.to_path_buf(),
-        }
-    }
-}
+pub use common::{
+    MAX_FILE_BYTES, MAX_RAW_DIM, MAX_TRIANGLES, MAX_VERTICES, MAX_VOXELS, srgb_to_linear,
+};
+pub use error::LoadError;
 
 /// The file formats this module reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -509,47 +352,6 @@ fn read_head(path: &Path, buf: &mut [u8]) -> Result<usize, LoadError> {
     Ok(n)
 }
 
-thread_local! {
-    /// The files the load running on this thread has read or looked for (see
-    /// [`Loaded::sources`]); `None` outside [`load_model_with`]. The loaders read every
-    /// file on the calling thread, so a thread-local sees them all without passing a
-    /// recorder through every parser.
-    static SOURCES: std::cell::RefCell<Option<Vec<PathBuf>>> =
-        const { std::cell::RefCell::new(None) };
-}
-
-/// Notes that the running load depends on `path` (read, or looked for and not found).
-pub(crate) fn record_source(path: &Path) {
-    SOURCES.with(|s| {
-        if let Some(v) = s.borrow_mut().as_mut() {
-            if !v.iter().any(|p| p == path) {
-                v.push(path.to_path_buf());
-            }
-        }
-    });
-}
-
-/// Reads a whole file, refusing files larger than [`MAX_FILE_BYTES`] before reading.
-pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, LoadError> {
-    record_source(path);
-    let meta = fs::metadata(path).map_err(|e| LoadError::io(path, e))?;
-    if meta.is_dir() {
-        return Err(LoadError::io(
-            path,
-            io::Error::other("is a directory, not a file"),
-        ));
-    }
-    if meta.len() > MAX_FILE_BYTES {
-        return Err(LoadError::too_large(
-            path,
-            "bytes in the file",
-            meta.len(),
-            MAX_FILE_BYTES,
-        ));
-    }
-    fs::read(path).map_err(|e| LoadError::io(path, e))
-}
-
 /// Verifies the [`Mesh`] invariants every loader promises, so that a loader bug surfaces
 /// as an error rather than as an out-of-bounds access in the voxelizer.
 fn check_mesh(mesh: &Mesh, path: &Path) -> Result<(), LoadError> {
@@ -583,56 +385,4 @@ fn check_mesh(mesh: &Mesh, path: &Path) -> Result<(), LoadError> {
         ));
     }
     Ok(())
-}
-
-/// sRGB transfer function decode: an sRGB-encoded value in [0, 1] to linear.
-pub fn srgb_to_linear(c: f32) -> f32 {
-    let c = c.clamp(0.0, 1.0);
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-/// sRGB byte → linear float, as a table (256 `powf` calls once per load instead of one per
-/// voxel or vertex).
-pub(crate) fn srgb_u8_table() -> [f32; 256] {
-    let mut t = [0.0; 256];
-    for (i, v) in t.iter_mut().enumerate() {
-        *v = srgb_to_linear(i as f32 / 255.0);
-    }
-    t
-}
-
-/// Decodes an image file's bytes to a linear RGBA8 [`Texture`](crate::model::Texture):
-/// colour channels are sRGB-decoded and re-quantised, alpha is kept.
-pub(crate) fn decode_texture(bytes: &[u8]) -> Result<crate::model::Texture, String> {
-    let reader = image::ImageReader::new(io::Cursor::new(bytes))
-        .with_guessed_format()
-        .map_err(|e| e.to_string())?;
-    // `ImageReader` applies the `image` crate's default limits (at most 512 MiB per
-    // allocation), so a forged header cannot make us allocate without bound.
-    let img = reader.decode().map_err(|e| e.to_string())?.to_rgba8();
-    let (width, height) = img.dimensions();
-    let mut lut = [0u8; 256];
-    for (i, v) in lut.iter_mut().enumerate() {
-        *v = (srgb_to_linear(i as f32 / 255.0) * 255.0).round() as u8;
-    }
-    let texels = img
-        .pixels()
-        .map(|p| {
-            [
-                lut[p.0[0] as usize],
-                lut[p.0[1] as usize],
-                lut[p.0[2] as usize],
-                p.0[3],
-            ]
-        })
-        .collect();
-    Ok(crate::model::Texture {
-        width,
-        height,
-        texels,
-    })
 }

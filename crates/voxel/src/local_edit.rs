@@ -1,6 +1,6 @@
 //! Region-local brush edits of a dynamic object: only the blocks a brush touches are
 //! recomputed, per level, and the result is a [`LevelPatch`] per level for the GPU
-//! (`ssbvb_passes::level_splice`) instead of a rebuild of the object's levels.
+//! (`ssbvb_gpu_build::level_splice`) instead of a rebuild of the object's levels.
 //!
 //! The blocks are aligned cubes of the finest grid, of the smallest power-of-two side that
 //! holds the largest brush's box, so a brush touches at most 2 × 2 × 2 of them; each is one

@@ -1,9 +1,9 @@
 //! The sparse lookup of one LOD level: a 64-ary occupancy tree whose leaves rank voxels.
 //!
-//! The paper's sparse 3D lookup texture maps a cell to its voxel. Stored as a virtual
-//! texture of 16³ pages of `u32`s it cost 16 KiB per page whatever the page held, ~63 bytes
-//! per surface voxel. Here every node covers 4³ children and holds only a 64-bit occupancy
-//! mask and one base index (12 bytes):
+//! SSBVB's sparse 3D lookup texture maps a cell to its voxel. Stored as a virtual texture
+//! of 16³ pages of `u32`s it cost 16 KiB per page whatever the page held
+//! (docs/architecture.md compares the bytes per voxel). Here every node covers 4³ children
+//! and holds only a 64-bit occupancy mask and one base index (12 bytes):
 //!
 //! - the root covers `4^depth ≥ 2^level` cells per axis, a node at depth `k` covers
 //!   `4^(depth - k)`, a node at depth `depth - 1` (a *leaf*) covers 4³ cells;
@@ -19,7 +19,7 @@
 //! Because every level's digit is a Morton digit, walking the tree in bit order visits the
 //! cells in Morton order, so **voxel id = Morton rank of the cell**: exactly the index in
 //! a prepared point cloud, and no id is stored anywhere. A surface voxel costs about one
-//! byte of lookup (bunny level 9: 898,293 voxels in 0.9 MB), and every node is also an
+//! byte of lookup (docs/benchmarks.md, "Compact voxels"), and every node is also an
 //! empty-space skip: a ray in an absent child of size `4^m` jumps over it in one step (see
 //! `reference/dda.rs` and `shaders/sparse_march.inc.wgsl`).
 //!

@@ -1,4 +1,4 @@
-//! RGBA volumes (seed 004, volumetric billboards): translucent objects stored as
+//! RGBA volumes (volumetric billboards): translucent objects stored as
 //! premultiplied RGBA texels over object space [-1, 1]³, mipmapped, kept sparse in bricks.
 //!
 //! - **Texels.** Level 0 has `dims` texels per axis; texel `c`'s centre is at
@@ -14,7 +14,7 @@
 //!   so a homogeneous medium keeps its transmittance at every level (plain alpha averaging
 //!   would make a coarse level half as opaque).
 //! - **Bricks.** Each level is cut into 8³ bricks; bricks whose texels are all empty are not
-//!   stored (the thesis's empty-space removal at a fixed granularity). Texels are 4 bytes
+//!   stored (volumetric billboards' empty-space removal at a fixed granularity). Texels are 4 bytes
 //!   (RGBA8, premultiplied), what the GPU samples; the CPU reference reads the same values.
 //!
 //! Sources ([`sources`]): a procedural cloud, a VOX model (palette alpha) and a mesh
@@ -89,8 +89,21 @@ pub fn max_edge(dims: [u32; 3]) -> u32 {
     dims[0].max(dims[1]).max(dims[2])
 }
 
-fn index(dims: [u32; 3], c: [u32; 3]) -> usize {
+/// Index of cell `c` in an x-fastest grid of `dims`.
+pub(crate) fn index(dims: [u32; 3], c: [u32; 3]) -> usize {
     c[0] as usize + dims[0] as usize * (c[1] as usize + dims[1] as usize * c[2] as usize)
+}
+
+/// The cells of a grid of `dims` under cell `parent` of the next coarser grid: its 2×2×2
+/// children that lie inside `dims`, x fastest, then y, then z.
+pub(crate) fn children(dims: [u32; 3], parent: [u32; 3]) -> impl Iterator<Item = [u32; 3]> {
+    (0..2)
+        .flat_map(move |dz| {
+            (0..2).flat_map(move |dy| {
+                (0..2).map(move |dx| [2 * parent[0] + dx, 2 * parent[1] + dy, 2 * parent[2] + dz])
+            })
+        })
+        .filter(move |c| c.iter().zip(dims).all(|(&c, d)| c < d))
 }
 
 /// Premultiplied f32 RGBA → RGBA8 (rounded; colour clamped to alpha so it stays
@@ -281,25 +294,17 @@ fn downsample(src: &[[f32; 4]], dims: [u32; 3]) -> (Vec<[f32; 4]>, [u32; 3]) {
                 let mut sigma = 0f64;
                 let mut emit = [0f64; 3];
                 let mut n = 0u32;
-                for dz in 0..2 {
-                    for dy in 0..2 {
-                        for dx in 0..2 {
-                            let c = [2 * x + dx, 2 * y + dy, 2 * z + dz];
-                            if c.iter().zip(dims).any(|(&c, d)| c >= d) {
-                                continue;
-                            }
-                            let t = src[index(dims, c)];
-                            let a = f64::from(t[3]).min(1.0 - 1e-7);
-                            let s = -(1.0 - a).ln();
-                            sigma += s;
-                            if a > 0.0 {
-                                for k in 0..3 {
-                                    emit[k] += f64::from(t[k]) / a * s;
-                                }
-                            }
-                            n += 1;
+                for c in children(dims, [x, y, z]) {
+                    let t = src[index(dims, c)];
+                    let a = f64::from(t[3]).min(1.0 - 1e-7);
+                    let s = -(1.0 - a).ln();
+                    sigma += s;
+                    if a > 0.0 {
+                        for k in 0..3 {
+                            emit[k] += f64::from(t[k]) / a * s;
                         }
                     }
+                    n += 1;
                 }
                 let n = f64::from(n.max(1));
                 let (sigma, emit) = (sigma / n, emit.map(|e| e / n));

@@ -1,4 +1,4 @@
-//! RastaVox surface voxels (seed 001, §3): the boundary of a voxel model in 4 bytes per
+//! RastaVox surface voxels: the boundary of a voxel model in 4 bytes per
 //! voxel, cut into chunks, with a level-of-detail chain built by OR-merging face masks.
 //!
 //! A **surface voxel** is a solid voxel with at least one empty 6-neighbour (outside the
@@ -9,12 +9,12 @@
 //! side buffers, one `u32` each per voxel. Interior voxels (solid VOX/raw grids) drop out;
 //! the shells the voxelizer writes keep almost every voxel.
 //!
-//! **Level of detail** (§3.2): level `k + 1` of a chunk merges the runs of level-`k`
+//! **Level of detail**: level `k + 1` of a chunk merges the runs of level-`k`
 //! voxels that share a parent cell (`position >> 1`). The face masks are OR-ed, so thin
 //! features grow instead of vanishing (a MIN on density); colours are averaged per channel
 //! with integer rounding and normals by summing their octahedral (L1-unit) vectors and
 //! encoding the sum. The chain runs down to one voxel per chunk. Voxels are kept in
-//! chunk-major, then Morton order: the paper's radix sort on positions with the low bit
+//! chunk-major, then Morton order: RastaVox's radix sort on positions with the low bit
 //! dropped is then a no-op on every level after the first, because a run of children is
 //! contiguous in Morton order and the merged output comes out in order (the GPU build in
 //! `ssbvb-passes` sorts only the extraction's output, whose order atomics scramble).
@@ -126,7 +126,7 @@ pub struct SurfaceModel {
     pub levels: Vec<SurfaceLevel>,
 }
 
-/// Memory of a surface model, split as the paper's Table 1 (base model, LOD).
+/// Memory of a surface model, split as RastaVox reports it (base model, LOD).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct SurfaceBytes {
     /// Surface voxels of the finest level (4 bytes each).
@@ -233,7 +233,7 @@ impl SurfaceModel {
         self.chunks.is_empty()
     }
 
-    /// Bytes, split as the paper's Table 1.
+    /// Bytes, split as RastaVox reports them.
     pub fn bytes(&self) -> SurfaceBytes {
         let per_voxel = SURFACE_VOXEL_BYTES + ATTRIBUTE_BYTES;
         let base = self.surface_voxels() as u64;
@@ -345,7 +345,7 @@ fn local_code(p: [u32; 3]) -> u64 {
     morton_encode(p)
 }
 
-/// One OR-merge step (§3.2): runs of voxels with the same parent become one voxel.
+/// One OR-merge step: runs of voxels with the same parent become one voxel.
 fn merge(prev: &SurfaceLevel) -> SurfaceLevel {
     let mut out = SurfaceLevel::default();
     for (c, _) in prev.ranges.iter().enumerate() {
@@ -384,7 +384,7 @@ fn merge(prev: &SurfaceLevel) -> SurfaceLevel {
     out
 }
 
-/// LOD by pixel error (§4, after Dick et al. 2009): the coarsest LOD `k ≤ max_k` whose
+/// LOD by pixel error (RastaVox's LOD selection, after Dick et al. 2009): the coarsest LOD `k ≤ max_k` whose
 /// voxel, `cell_world · 2^k` world units across, has a worst-case projected area of at most
 /// `pixel_error²` pixels at `distance` from the eye (`focal_px` pixels per unit of
 /// `size / distance`). A cube's largest silhouette, seen along its diagonal, is a hexagon of
@@ -422,7 +422,7 @@ pub struct ChunkDraw {
 }
 
 /// The chunks of one placed surface model that a camera sees, each with its pixel-error
-/// LOD (§4): chunks whose world box lies wholly outside one side plane of the view, or
+/// LOD: chunks whose world box lies wholly outside one side plane of the view, or
 /// wholly behind the eye, are culled; the LOD is [`pixel_error_lod`] at the chunk box's
 /// nearest view depth with the largest world size a cell takes under `object_to_world`.
 /// Chunk boxes are the tight `bounds` in finest cells of a `2^level` grid in [-1, 1]³.

@@ -12,20 +12,10 @@ use ssbvb_voxel::proxy::{
 };
 use ssbvb_voxel::reference::{Traversal, trace_object_ray};
 
-/// SplitMix64 (no dependency).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: u64) -> u64 {
-        self.next() % n
-    }
-}
+#[path = "support/rng.rs"]
+mod rng;
+
+use rng::Rng;
 
 /// Cells of a sphere shell: centre within `r` of the origin, some 6-neighbour outside.
 fn shell_cells(level: u32, r: f64) -> Vec<[u32; 3]> {

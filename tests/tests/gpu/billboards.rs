@@ -9,14 +9,16 @@
 use std::path::PathBuf;
 
 use glam::{DAffine3, DMat3, DQuat, DVec3};
+use ssbvb_gpu::scene::{GpuScene, LodPolicy, Scene, VoxelObject};
 use ssbvb_gpu::wgpu;
 use ssbvb_graph::{BillboardMode, ResolvedPipeline};
-use ssbvb_passes::billboards::{
+use ssbvb_passes::PassNode;
+use ssbvb_passes::kinds::billboards::{
     BillboardOptions, Billboards, DEFAULT_CULL_COS, Footprint, VoxelSlot,
 };
-use ssbvb_passes::frame::{FrameResources, Recorder};
-use ssbvb_passes::triangles::Triangles;
-use ssbvb_passes::{GpuScene, LodPolicy, PassNode, Scene, VoxelObject};
+use ssbvb_passes::kinds::triangles::Triangles;
+use ssbvb_passes::runtime::recorder::Recorder;
+use ssbvb_passes::runtime::resources::FrameResources;
 use ssbvb_passes::{PassImpl, PassInit};
 use ssbvb_tests::{ctx, model_asset, reference_of, single_object_scene};
 use ssbvb_voxel::accuracy::{self, ErrorStats, GpuHit};

@@ -6,7 +6,7 @@
 //! be empty.
 
 use glam::DVec3;
-use ssbvb_passes::StreamChunks;
+use ssbvb_gpu::scene::StreamChunks;
 use ssbvb_voxel::camera::Camera;
 
 const SIZE: (u32, u32) = (96, 72);

@@ -2,8 +2,8 @@
 //! one bounce on the bunny standing on the ground plane (voxel and triangle receivers).
 
 use glam::DVec3;
-use ssbvb_passes::measure_lighting::{LightingReport, lighting_error};
-use ssbvb_passes::{Scene, TriangleObject};
+use ssbvb_gpu::scene::{Scene, TriangleObject};
+use ssbvb_passes::measure::lighting::{LightingReport, lighting_error};
 use ssbvb_tests::{ctx, model_asset, read_half4, render, single_object_scene};
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::lighting::LightingSample;
@@ -157,7 +157,7 @@ fn an_odd_screen_size_keeps_the_half_resolution_mapping() {
 fn cone_targets_must_be_a_whole_fraction_of_the_screen() {
     let (scene, _) = bunny_on_plane();
     let c = ctx();
-    let gpu_scene = ssbvb_passes::GpuScene::new(c, scene).unwrap();
+    let gpu_scene = ssbvb_gpu::scene::GpuScene::new(c, scene).unwrap();
     let make = |scale: &str| {
         let text = VCT.replace("ScreenScaled(0.5)", scale);
         let p = ssbvb_graph::resolve_str(&text, "vct").unwrap();

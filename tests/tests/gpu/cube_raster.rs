@@ -15,7 +15,7 @@
 use std::sync::Arc;
 
 use glam::{DAffine3, DVec3};
-use ssbvb_passes::{LodPolicy, Scene, VoxelObject};
+use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject};
 use ssbvb_voxel::accuracy::{self, AccuracyReport, GpuHit};
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;

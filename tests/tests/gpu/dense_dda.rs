@@ -7,8 +7,9 @@
 use std::sync::Arc;
 
 use glam::DVec3;
-use ssbvb_passes::dense_dda::MAX_DENSE_LEVEL;
-use ssbvb_passes::{GpuScene, PassError, Profiling, Renderer};
+use ssbvb_gpu::scene::GpuScene;
+use ssbvb_passes::kinds::dense_dda::MAX_DENSE_LEVEL;
+use ssbvb_passes::{PassError, Profiling, Renderer};
 use ssbvb_voxel::accuracy;
 use ssbvb_voxel::asset::{LodLevel, PackedVoxel, PointCloud, ProxyMesh, SparseLookup};
 use ssbvb_voxel::camera::Camera;

@@ -6,9 +6,11 @@
 use std::sync::Arc;
 
 use glam::DVec3;
-use ssbvb_passes::gpu_lod_build::GpuLodBuilder;
-use ssbvb_passes::gpu_voxelize::{GpuVoxelizeMethod, GpuVoxelizer};
-use ssbvb_passes::{DynamicRoom, GpuScene, PassError, Profiling, Renderer, Scene};
+use ssbvb_gpu::ResourceError;
+use ssbvb_gpu::scene::{DynamicRoom, GpuScene, Scene};
+use ssbvb_gpu_build::lod_build::GpuLodBuilder;
+use ssbvb_gpu_build::voxelize::{GpuVoxelizeMethod, GpuVoxelizer};
+use ssbvb_passes::{Profiling, Renderer};
 use ssbvb_voxel::accuracy;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::load::load_model;
@@ -137,7 +139,7 @@ fn a_level_that_outgrows_its_room_is_refused_with_the_room_needed() {
         );
     }
     let e = gpu_scene.set_object_levels(ctx, 0, &levels).unwrap_err();
-    assert!(matches!(e, PassError::TooLarge(_)), "{e}");
+    assert!(matches!(e, ResourceError::TooLarge(_)), "{e}");
     assert!(e.to_string().contains("its room holds"), "{e}");
     // Not dynamic, wrong level count: refused too.
     assert!(gpu_scene.set_object_levels(ctx, 1, &levels).is_err());
@@ -148,7 +150,7 @@ fn a_level_that_outgrows_its_room_is_refused_with_the_room_needed() {
 /// its CPU voxelization at t, and differs from its rest pose.
 #[test]
 fn an_animated_mesh_drawn_at_time_t_matches_its_reference_at_t() {
-    use ssbvb_passes::animated::{AnimatedMesh, Animator};
+    use ssbvb_gpu_build::animated::{AnimatedMesh, Animator};
     use ssbvb_voxel::animate::MeshAnimation;
     let ctx = ssbvb_tests::ctx();
     let level = 6;
@@ -237,7 +239,7 @@ fn shell(level: u32, r: f64) -> ssbvb_voxel::svo::LevelVoxels {
 /// as the CPU-prepared asset of the same set; a malformed set is refused.
 #[test]
 fn streamed_voxels_draw_like_their_prepared_asset() {
-    use ssbvb_passes::animated::Animator;
+    use ssbvb_gpu_build::animated::Animator;
     let ctx = ssbvb_tests::ctx();
     let level = 6;
     let bunny = ssbvb_tests::model_asset("bunny.obj", level);
@@ -296,7 +298,7 @@ fn streamed_voxels_draw_like_their_prepared_asset() {
 /// draws like the CPU-prepared asset of the edited set.
 #[test]
 fn a_runtime_edit_draws_like_the_edited_asset() {
-    use ssbvb_passes::animated::Animator;
+    use ssbvb_gpu_build::animated::Animator;
     use ssbvb_voxel::edit::{Edit, apply_edits, level_voxels};
     let ctx = ssbvb_tests::ctx();
     let level = 6;

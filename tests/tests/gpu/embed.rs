@@ -5,7 +5,7 @@
 use glam::DVec3;
 use ssbvb_gpu::wgpu;
 use ssbvb_passes::Profiling;
-use ssbvb_passes::embed::VoxelLayer;
+use ssbvb_passes::runtime::embed::VoxelLayer;
 use ssbvb_voxel::camera::Camera;
 
 const SIZE: (u32, u32) = (96, 72);

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use glam::{DAffine3, DVec3};
-use ssbvb_passes::Scene;
+use ssbvb_gpu::scene::Scene;
 use ssbvb_tests::{Frame, model_asset, reference_of, render, single_object_scene};
 use ssbvb_voxel::asset::{LodLevel, PackedVoxel, PointCloud, SparseLookup, VoxelAsset};
 use ssbvb_voxel::camera::Camera;
@@ -290,13 +290,13 @@ fn instances_write_their_own_index() {
     // Two instances side by side: each pixel names the instance whose proxy it sees.
     let asset = synthetic_asset(3, &[[0, 0, 0], [7, 7, 7], [3, 4, 5]]);
     let scene = Scene {
-        objects: vec![ssbvb_passes::VoxelObject {
+        objects: vec![ssbvb_gpu::scene::VoxelObject {
             asset,
             instances: vec![
                 DAffine3::from_translation(DVec3::new(-1.5, 0.0, 0.0)),
                 DAffine3::from_translation(DVec3::new(1.5, 0.0, 0.0)),
             ],
-            lod: ssbvb_passes::LodPolicy::Fixed(3),
+            lod: ssbvb_gpu::scene::LodPolicy::Fixed(3),
         }],
         ..Default::default()
     };

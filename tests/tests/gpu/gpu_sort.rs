@@ -1,10 +1,10 @@
 //! The GPU scan and radix sort the RastaVox build relies on, against the CPU on sizes
 //! that span several tiles, blocks and rounds of the single-workgroup block scan.
 
+use ssbvb_gpu::kernels::radix_sort::{GpuRadixSort, SortBuffers};
+use ssbvb_gpu::kernels::scan::GpuScan;
+use ssbvb_gpu::kernels::{read_words, storage_init};
 use ssbvb_gpu::wgpu;
-use ssbvb_passes::compute_kernels::{read_words, storage_init};
-use ssbvb_passes::gpu_radix_sort::{GpuRadixSort, SortBuffers};
-use ssbvb_passes::gpu_scan::GpuScan;
 
 fn xorshift(seed: u64) -> impl FnMut() -> u64 {
     let mut s = seed;

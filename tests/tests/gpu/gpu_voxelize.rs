@@ -1,9 +1,9 @@
-//! The seed's GPU voxelization (dominant-axis conservative rasterization) against the
+//! GPU voxelization (dominant-axis conservative rasterization) against the
 //! exact CPU voxelizer: which cells it adds and misses, measured per model and level.
 
 use std::collections::BTreeSet;
 
-use ssbvb_passes::gpu_voxelize::GpuVoxelizer;
+use ssbvb_gpu_build::voxelize::GpuVoxelizer;
 use ssbvb_voxel::load::load_model;
 use ssbvb_voxel::model::{Mesh, Model};
 use ssbvb_voxel::progress::NoProgress;
@@ -127,7 +127,7 @@ fn an_overflowing_fragment_list_is_rebuilt_not_truncated() {
 /// against the CPU preparation of the same voxel set.
 #[test]
 fn gpu_lod_build_equals_the_cpu_preparation() {
-    use ssbvb_passes::gpu_lod_build::GpuLodBuilder;
+    use ssbvb_gpu_build::lod_build::GpuLodBuilder;
     let ctx = ssbvb_tests::ctx();
     let vox = GpuVoxelizer::new(ctx).unwrap();
     let builder = GpuLodBuilder::new(ctx).unwrap();
@@ -168,7 +168,7 @@ fn gpu_lod_build_equals_the_cpu_preparation() {
 /// CPU voxelizer's set exactly. A device without f64 shaders must say so, not pass.
 #[test]
 fn exact_gpu_voxelization_equals_the_cpu_voxel_set() {
-    use ssbvb_passes::gpu_voxelize::GpuVoxelizeMethod;
+    use ssbvb_gpu_build::voxelize::GpuVoxelizeMethod;
     let ctx = ssbvb_tests::ctx();
     let vox = GpuVoxelizer::new(ctx).unwrap();
     if !vox.has_exact() {
@@ -269,7 +269,7 @@ fn percentile(mut v: Vec<f32>, p: f64) -> f32 {
 /// the texture gives.
 #[test]
 fn gpu_voxelization_samples_textures_like_the_cpu() {
-    use ssbvb_passes::gpu_voxelize::GpuVoxelizeMethod;
+    use ssbvb_gpu_build::voxelize::GpuVoxelizeMethod;
     let ctx = ssbvb_tests::ctx();
     let vox = GpuVoxelizer::new(ctx).unwrap();
     let level = 5;

@@ -1,14 +1,16 @@
 //! Region-local edits of a dynamic object: the blocks a brush touches recomputed on the CPU
 //! (`ssbvb_voxel::local_edit`), every level's streams spliced on the GPU
-//! (`ssbvb_passes::level_splice`). Oracles: the room's words read back against the CPU
+//! (`ssbvb_gpu_build::level_splice`). Oracles: the room's words read back against the CPU
 //! preparation of the edited voxel set (exact), and the frame against the reference ray
 //! caster of that asset.
 
 use std::sync::Arc;
 
 use glam::{DAffine3, DVec3};
-use ssbvb_passes::level_splice::LevelSplicer;
-use ssbvb_passes::{DynamicRoom, GpuScene, PassError, Profiling, Renderer, Scene};
+use ssbvb_gpu::ResourceError;
+use ssbvb_gpu::scene::{DynamicRoom, GpuScene, Scene};
+use ssbvb_gpu_build::level_splice::LevelSplicer;
+use ssbvb_passes::{Profiling, Renderer};
 use ssbvb_voxel::accuracy;
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
@@ -40,12 +42,7 @@ fn read(buffers: &[ssbvb_gpu::wgpu::Buffer], chunk: u64, start: u64, len: u64) -
     while left > 0 {
         let within = at % chunk;
         let n = left.min(chunk - within);
-        let words = ssbvb_passes::compute_kernels::read_words(
-            ctx,
-            &buffers[(at / chunk) as usize],
-            within,
-            n,
-        );
+        let words = ssbvb_gpu::kernels::read_words(ctx, &buffers[(at / chunk) as usize], within, n);
         out.extend(words.unwrap());
         (at, left) = (at + n, left - n);
     }
@@ -208,7 +205,7 @@ fn a_local_edit_rewrites_the_room_exactly_and_draws_like_the_edited_asset() {
     let now = room_streams(&gpu_scene);
     let err = splicer.apply(ctx, &mut gpu_scene, 0, &patches).unwrap_err();
     assert!(
-        matches!(&err, PassError::BadScene(m) if m.contains("the editor and the scene disagree")),
+        matches!(&err, ResourceError::BadScene(m) if m.contains("the editor and the scene disagree")),
         "{err}"
     );
     assert_same(&room_streams(&gpu_scene), &now, "after a refused patch");
@@ -226,7 +223,7 @@ fn a_local_edit_rewrites_the_room_exactly_and_draws_like_the_edited_asset() {
         .apply(ctx, &mut gpu_scene, 0, &fill.patches)
         .unwrap_err();
     assert!(
-        matches!(&err, PassError::TooLarge(m) if m.contains("upload it with more growth")),
+        matches!(&err, ResourceError::TooLarge(m) if m.contains("upload it with more growth")),
         "{err}"
     );
     assert_same(&room_streams(&gpu_scene), &now, "after a refused growth");

@@ -1,13 +1,14 @@
 //! Executing pipelines: resources follow the graph, unimplemented kinds are reported.
 
-use ssbvb_passes::{GpuScene, PassError, Renderer, Scene};
+use ssbvb_gpu::scene::{GpuScene, Scene};
+use ssbvb_passes::{PassError, Renderer};
 
 #[test]
 fn frame_resources_follow_the_resolved_graph() {
     let c = ssbvb_tests::ctx();
     let src = include_str!("../../../assets/pipelines/ssbvb.ron");
     let p = ssbvb_graph::resolve_str(src, "ssbvb.ron").unwrap();
-    let res = ssbvb_passes::frame::FrameResources::new(c, &p, (32, 16)).unwrap();
+    let res = ssbvb_passes::runtime::resources::FrameResources::new(c, &p, (32, 16)).unwrap();
     // Aliased resources share one texture object.
     let entry = p.resource("entry").unwrap();
     let pos = p.resource("gbuffer_position").unwrap();
@@ -83,7 +84,7 @@ fn measured_gbuffer_hits_match_the_harness_and_the_reference() {
 #[test]
 fn auto_lod_picks_a_level_per_instance_and_matches_the_reference() {
     use glam::{DAffine3, DVec3};
-    use ssbvb_passes::{LodPolicy, Scene, VoxelObject};
+    use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject};
     let size = (160u32, 120u32);
     let asset = ssbvb_tests::model_asset("bunny.obj", 7);
     let at = [

@@ -1,10 +1,10 @@
-//! RastaVox (seed 001): the GPU surface build against the CPU build, and the rendered
+//! RastaVox: the GPU surface build against the CPU build, and the rendered
 //! G-buffer against the reference of the model it draws (each chunk's OR-merged LOD, hit
 //! only through its masked faces) and against the finest level.
 
 use glam::{DAffine3, DVec3};
-use ssbvb_passes::surface_build::SurfaceBuilder;
-use ssbvb_passes::{LodPolicy, Scene};
+use ssbvb_gpu::scene::{LodPolicy, Scene};
+use ssbvb_gpu_build::surface_build::SurfaceBuilder;
 use ssbvb_voxel::accuracy::{self, AccuracyReport};
 use ssbvb_voxel::asset::{LodLevel, PackedVoxel, PointCloud, SparseLookup};
 use ssbvb_voxel::camera::Camera;

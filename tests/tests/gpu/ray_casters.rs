@@ -13,7 +13,7 @@ const CUBES: &str = include_str!("../../../assets/pipelines/cube_raster.ron");
 const SIZE: (u32, u32) = (120, 90);
 const LEVEL: u32 = 5;
 
-fn check(name: &str, scene: &ssbvb_passes::Scene, cam: &Camera, min_px: usize) {
+fn check(name: &str, scene: &ssbvb_gpu::scene::Scene, cam: &Camera, min_px: usize) {
     check_at(name, scene, cam, min_px, LEVEL, false);
 }
 
@@ -21,7 +21,7 @@ fn check(name: &str, scene: &ssbvb_passes::Scene, cam: &Camera, min_px: usize) {
 /// every pixel is covered (elsewhere that means the camera sits inside a voxel).
 fn check_at(
     name: &str,
-    scene: &ssbvb_passes::Scene,
+    scene: &ssbvb_gpu::scene::Scene,
     cam: &Camera,
     min_px: usize,
     level: u32,
@@ -140,7 +140,7 @@ fn far_from_the_origin_and_close_up_match_the_reference() {
 /// atlas, and both match the reference like cube rasterization.
 #[test]
 fn ray_casters_and_cubes_draw_several_objects() {
-    use ssbvb_passes::{LodPolicy, Scene, VoxelObject};
+    use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject};
     let bunny = ssbvb_tests::model_asset("bunny.obj", 6);
     let teapot = ssbvb_tests::model_asset("teapot.obj", 6);
     let scene = Scene {
@@ -173,7 +173,7 @@ fn ray_casters_and_cubes_draw_several_objects() {
     let mut cells = Vec::new();
     for o in &scene.objects {
         for xf in &o.instances {
-            let l = ssbvb_passes::gpu_scene::choose_level(o.lod, xf, &cam, size, 6);
+            let l = ssbvb_gpu::scene::choose_level(o.lod, xf, &cam, size, 6);
             cells.push(2.0 * xf.matrix3.determinant().abs().cbrt() / (1u64 << l) as f64);
         }
     }

@@ -2,7 +2,8 @@
 //! counters, which show that a pixel's cost follows the instances its ray meets.
 
 use glam::{DAffine3, DQuat, DVec3};
-use ssbvb_passes::{FrameCounters, LodPolicy, Scene, VoxelObject};
+use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject};
+use ssbvb_passes::FrameCounters;
 use ssbvb_tests::{ctx, model_asset};
 use ssbvb_voxel::camera::Camera;
 

@@ -2,14 +2,14 @@
 //! smoothing, Eq. 1 at and around MinDist finite, shaded output against the CPU reference.
 
 use glam::DVec3;
-use ssbvb_passes::TriangleObject;
+use ssbvb_gpu::scene::TriangleObject;
 use ssbvb_tests::f16_to_f32;
 use ssbvb_voxel::camera::Camera;
 
 const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
 const SIZE: (u32, u32) = (160, 120);
 
-fn scene(level: u32) -> ssbvb_passes::Scene {
+fn scene(level: u32) -> ssbvb_gpu::scene::Scene {
     let mut s =
         ssbvb_tests::single_object_scene(ssbvb_tests::model_asset("bunny.obj", level), level);
     s.triangles.push(TriangleObject::ground_plane(
@@ -257,7 +257,7 @@ fn cpu_smooth(
     let i = (y * w + x) as usize;
     let p = &pos[i * 4..i * 4 + 3];
     let dist = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-    let offset = ssbvb_passes::smooth::smoothing_offset(dist, max_i, min_dist);
+    let offset = ssbvb_passes::kinds::smooth::smoothing_offset(dist, max_i, min_dist);
     let texel = |tx: i64, ty: i64| {
         let cx = tx.clamp(0, w as i64 - 1) as u32;
         let cy = ty.clamp(0, h as i64 - 1) as u32;

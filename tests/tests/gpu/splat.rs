@@ -4,7 +4,7 @@
 //! close (near-field quads) and with overlapping instances.
 
 use glam::{DAffine3, DVec3};
-use ssbvb_passes::{Scene, TriangleObject};
+use ssbvb_gpu::scene::{Scene, TriangleObject};
 use ssbvb_tests::{Frame, model_asset, render, single_object_scene};
 use ssbvb_voxel::camera::Camera;
 

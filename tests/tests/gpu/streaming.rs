@@ -7,8 +7,9 @@
 use std::sync::Arc;
 
 use glam::DVec3;
-use ssbvb_gpu::GpuContext;
-use ssbvb_passes::{GpuScene, PassError, Profiling, Renderer, StreamingOptions};
+use ssbvb_gpu::scene::{GpuScene, StreamingOptions};
+use ssbvb_gpu::{GpuContext, ResourceError};
+use ssbvb_passes::{PassError, Profiling, Renderer};
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
 
@@ -225,25 +226,25 @@ fn objects_and_instances_share_the_pools_and_converge_to_the_unbudgeted_image() 
             DVec3::new(x, 0.0, z),
         )
     };
-    let scene = ssbvb_passes::Scene {
+    let scene = ssbvb_gpu::scene::Scene {
         objects: vec![
-            ssbvb_passes::VoxelObject {
+            ssbvb_gpu::scene::VoxelObject {
                 asset: asset(),
                 instances: vec![
                     place(-0.6, 0.0, 0.5),
                     place(0.8, -2.0, 0.5),
                     place(-1.5, -6.0, 0.5),
                 ],
-                lod: ssbvb_passes::LodPolicy::AUTO,
+                lod: ssbvb_gpu::scene::LodPolicy::AUTO,
             },
-            ssbvb_passes::VoxelObject {
+            ssbvb_gpu::scene::VoxelObject {
                 asset: knight,
                 instances: vec![
                     place(0.5, 0.3, 0.4),
                     place(-0.9, -3.0, 0.4),
                     place(1.6, -5.0, 0.4),
                 ],
-                lod: ssbvb_passes::LodPolicy::AUTO,
+                lod: ssbvb_gpu::scene::LodPolicy::AUTO,
             },
         ],
         ..Default::default()
@@ -280,7 +281,7 @@ fn a_budget_below_the_fixed_part_is_an_error_naming_the_minimum() {
         Err(e) => e,
         Ok(_) => panic!("a zero budget was accepted"),
     };
-    let PassError::BudgetTooSmall { minimum, .. } = e else {
+    let ResourceError::BudgetTooSmall { minimum, .. } = e else {
         panic!("{e}");
     };
     let msg = e.to_string();

@@ -3,9 +3,9 @@
 //! billboards depth-tested against triangles (stencil 1 exactly on voxel pixels).
 
 use glam::DVec3;
+use ssbvb_gpu::scene::{Scene, TriangleObject};
 use ssbvb_graph::BillboardMode;
-use ssbvb_passes::billboards::{BillboardOptions, DEFAULT_CULL_COS, Footprint};
-use ssbvb_passes::{Scene, TriangleObject};
+use ssbvb_passes::kinds::billboards::{BillboardOptions, DEFAULT_CULL_COS, Footprint};
 use ssbvb_tests::{model_asset, reference_of, render, single_object_scene};
 use ssbvb_voxel::camera::Camera;
 

@@ -1,11 +1,11 @@
-//! Volumetric billboards (seed 004) against the emission–absorption reference: the cloud
+//! Volumetric billboards against the emission–absorption reference: the cloud
 //! and the bunny's coverage volume alone, and both mixed with an opaque bunny and the
 //! ground plane.
 
 use std::sync::Arc;
 
 use glam::{DAffine3, DVec3};
-use ssbvb_passes::{Scene, VolumeObject};
+use ssbvb_gpu::scene::{Scene, VolumeObject};
 use ssbvb_tests::render;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::rgba_volume::RgbaVolume;

@@ -8,8 +8,9 @@
 use std::sync::{Arc, Mutex};
 
 use glam::DVec3;
+use ssbvb_gpu::scene::GpuScene;
 use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_passes::{GpuScene, Profiling, Renderer};
+use ssbvb_passes::{Profiling, Renderer};
 use ssbvb_voxel::camera::Camera;
 
 const PIPELINES: [&str; 8] = [
@@ -97,9 +98,9 @@ fn each_pipeline_fits_webgpu_default_limits_or_is_refused_up_front() {
         PIPELINES.len()
     );
     // What each kind needs beyond WebGPU's defaults (the table in docs/architecture.md).
-    let scene = ssbvb_passes::gpu_scene::SCENE_STORAGE_BUFFERS as u64;
+    let scene = ssbvb_gpu::scene::SCENE_STORAGE_BUFFERS as u64;
     for kind in ssbvb_passes::registered_kinds() {
-        let n = ssbvb_passes::registry::registration(&kind).unwrap().needs;
+        let n = ssbvb_passes::kinds::registration(&kind).unwrap().needs;
         println!(
             "{}: {:?}, {} storage buffers per stage ({scene} of the scene), {} bind groups, \
              flags {:?}, limit {:?}",
@@ -122,8 +123,8 @@ fn every_pass_kind_shader_compiles_under_webgpu_default_limits() {
     let kinds = ssbvb_passes::registered_kinds();
     assert!(kinds.len() >= 10, "{} registered kinds", kinds.len());
     for kind in kinds {
-        let file = ssbvb_passes::registry::registration(&kind).unwrap().shader;
-        let src = ssbvb_passes::shaders::source(file).unwrap_or_else(|e| panic!("{e}"));
+        let file = ssbvb_passes::kinds::registration(&kind).unwrap().shader;
+        let src = ssbvb_gpu::shaders::source(file).unwrap_or_else(|e| panic!("{e}"));
         ctx.shader(file, &src)
             .unwrap_or_else(|e| panic!("{} ({file}) under WebGPU defaults: {e}", kind.name()));
     }

@@ -1,17 +1,13 @@
 //! PNG plots of `ssbvb bench` (plotters, bitmap backend, text in an embedded font): title,
 //! labelled axes and a legend in the image; the same description (axes, ranges, grid
 //! spacing, series colours) also goes into the report (JSON and Markdown). Which plots a
-//! run writes ([`write_plots`]) is decided here too.
+//! run writes is its report's or preset's business.
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
 use anyhow::{Result, anyhow};
 use plotters::prelude::*;
 use serde::Serialize;
-
-use super::run::Row;
-use super::sweep::SweepRow;
 
 const WIDTH: u32 = 800;
 const HEIGHT: u32 = 600;
@@ -242,126 +238,4 @@ pub(crate) fn markdown(plots: &[PlotInfo]) -> String {
         }
     }
     s
-}
-
-/// time_vs_level.png, time_vs_resolution.png (main matrix) and `trade_<knob>.png` (sweeps).
-pub(super) fn write_plots(dir: &Path, rows: &[Row], sweeps: &[SweepRow]) -> Result<Vec<PlotInfo>> {
-    let mut plots = Vec::new();
-    let mut models: Vec<&str> = rows.iter().map(|r| r.model.as_str()).collect();
-    models.sort_unstable();
-    models.dedup();
-    for model in &models {
-        let suffix = if models.len() > 1 {
-            format!(
-                "_{}",
-                model.replace(|c: char| !c.is_ascii_alphanumeric(), "_")
-            )
-        } else {
-            String::new()
-        };
-        plots.extend(model_plots(dir, model, rows, &suffix)?);
-    }
-    let mut knobs: Vec<&str> = sweeps.iter().map(|r| r.knob).collect();
-    knobs.dedup();
-    for knob in knobs {
-        plots.push(trade_plot(dir, knob, sweeps)?);
-    }
-    Ok(plots)
-}
-
-/// Points sorted by x.
-fn sorted(mut p: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
-    p.sort_by(|a, b| a.0.total_cmp(&b.0));
-    p
-}
-
-/// One model's frame time against level and against resolution, each technique one series
-/// per extreme size (or level).
-fn model_plots(dir: &Path, model: &str, rows: &[Row], suffix: &str) -> Result<[PlotInfo; 2]> {
-    type Points = Vec<(f64, f64)>;
-    let rows: Vec<&Row> = rows.iter().filter(|r| r.model == *model).collect();
-    // Only the extreme sizes and levels, so that a study's plots stay readable.
-    let mut sizes: Vec<(u32, u32)> = rows.iter().map(|r| (r.width, r.height)).collect();
-    sizes.sort_by_key(|&(w, h)| (w * h, w));
-    sizes.dedup();
-    let sizes = [sizes[0], sizes[sizes.len() - 1]];
-    let levels = (
-        rows.iter().map(|r| r.level).min().unwrap_or(0),
-        rows.iter().map(|r| r.level).max().unwrap_or(0),
-    );
-    let mut by_size: BTreeMap<(&str, u32, u32), Points> = BTreeMap::new();
-    let mut by_level: BTreeMap<(&str, u32), Points> = BTreeMap::new();
-    for r in &rows {
-        if sizes.contains(&(r.width, r.height)) {
-            by_size
-                .entry((r.technique, r.width, r.height))
-                .or_default()
-                .push((r.level as f64, r.frame_ms_median));
-        }
-        if r.level == levels.0 || r.level == levels.1 {
-            by_level
-                .entry((r.technique, r.level))
-                .or_default()
-                .push(((r.width * r.height) as f64 / 1e6, r.frame_ms_median));
-        }
-    }
-    let series: Vec<Series> = by_size
-        .into_iter()
-        .map(|((t, w, h), p)| Series {
-            name: format!("{t} {w}x{h}"),
-            points: sorted(p),
-        })
-        .collect();
-    let vs_level = plot(
-        dir,
-        &format!("time_vs_level{suffix}.png"),
-        &format!("{model}: frame time vs level"),
-        ("level (2^level cells per axis)", "frame ms (median)"),
-        &series,
-    )?;
-    let series: Vec<Series> = by_level
-        .into_iter()
-        .map(|((t, l), p)| Series {
-            name: format!("{t} level {l}"),
-            points: sorted(p),
-        })
-        .collect();
-    let vs_resolution = plot(
-        dir,
-        &format!("time_vs_resolution{suffix}.png"),
-        &format!("{model}: frame time vs resolution"),
-        ("megapixels", "frame ms (median)"),
-        &series,
-    )?;
-    Ok([vs_level, vs_resolution])
-}
-
-/// One knob's sweep: shaded error against frame time, a point per value.
-fn trade_plot(dir: &Path, knob: &str, sweeps: &[SweepRow]) -> Result<PlotInfo> {
-    let pts: Vec<&SweepRow> = sweeps
-        .iter()
-        .filter(|r| r.knob == knob && r.psnr_pixels > 0)
-        .collect();
-    let values: Vec<String> = pts.iter().map(|r| r.value.to_string()).collect();
-    // RMSE in 8-bit levels from the PSNR (0 where the images are identical).
-    let points = pts
-        .iter()
-        .map(|r| {
-            let rmse = r.psnr_db.map_or(0.0, |p| 255.0 * 10f64.powf(-p / 20.0));
-            (r.frame_ms_median, rmse)
-        })
-        .collect();
-    plot(
-        dir,
-        &format!("trade_{knob}.png"),
-        &format!("Shaded error vs frame time, {knob} swept"),
-        (
-            "frame ms (median)",
-            "composite RMSE vs reference (8-bit levels, pixels either covers)",
-        ),
-        &[Series {
-            name: format!("{knob} = {} (in this order)", values.join(", ")),
-            points,
-        }],
-    )
 }

@@ -8,9 +8,10 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, anyhow};
+use ssbvb_gpu::scene::{GpuScene, Scene};
 use ssbvb_gpu::wgpu;
 use ssbvb_graph::{PassKind, PipelineWatcher, ReloadOutcome, ResolvedPipeline};
-use ssbvb_passes::{GpuScene, Renderer, Scene};
+use ssbvb_passes::Renderer;
 use ssbvb_voxel::camera::Camera;
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, WindowEvent};
@@ -56,9 +57,9 @@ pub struct Loaded {
     /// The pipeline file, resolved once.
     pub watcher: PipelineWatcher,
     /// Under a GPU budget: how the scene streams (the budget changes live).
-    pub streaming: Option<ssbvb_passes::StreamingOptions>,
+    pub streaming: Option<ssbvb_gpu::scene::StreamingOptions>,
     /// Animated objects, re-voxelized on the GPU every frame at the time since start.
-    pub animated: Vec<ssbvb_passes::animated::AnimatedMesh>,
+    pub animated: Vec<ssbvb_gpu_build::animated::AnimatedMesh>,
     /// With --brush: the editable objects (uploaded with room to change).
     pub brush: Option<super::brush::Brush>,
 }
@@ -158,15 +159,15 @@ struct Viewer {
     scene: GpuScene,
     renderer: Renderer,
     /// Animated objects and what updates them (none without animated objects).
-    animated: Vec<ssbvb_passes::animated::AnimatedMesh>,
-    animator: Option<ssbvb_passes::animated::Animator>,
+    animated: Vec<ssbvb_gpu_build::animated::AnimatedMesh>,
+    animator: Option<ssbvb_gpu_build::animated::Animator>,
     /// With --brush: Ctrl + left click edits the voxel under the cursor.
     brush: Option<super::brush::Brush>,
     /// The animation clock's start.
     started: Instant,
     watcher: PipelineWatcher,
     /// Under a GPU budget: how the scene streams.
-    streaming: Option<ssbvb_passes::StreamingOptions>,
+    streaming: Option<ssbvb_gpu::scene::StreamingOptions>,
     /// Knob edits by pass name, applied over the file's pipeline.
     knob_edits: BTreeMap<String, PassKind>,
     rig: CameraRig,
@@ -224,7 +225,7 @@ impl Viewer {
         let animator = if loaded.animated.is_empty() {
             None
         } else {
-            Some(ssbvb_passes::animated::Animator::new(ctx)?)
+            Some(ssbvb_gpu_build::animated::Animator::new(ctx)?)
         };
         let renderer = Renderer::new(ctx, &scene, loaded.watcher.current().clone(), gpu.size())
             .with_context(|| format!("building {}", loaded.watcher.path().display()))?;

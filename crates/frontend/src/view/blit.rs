@@ -6,7 +6,7 @@
 //! shader when the surface format is not an sRGB one.
 
 use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_passes::pipelines::{RenderSpec, render_pipeline};
+use ssbvb_passes::runtime::pipelines::{RenderSpec, render_pipeline};
 
 /// The blit pipeline for one surface format, with the copy of the frame it reads.
 pub struct Blit {
@@ -19,7 +19,7 @@ impl Blit {
     /// Compiles the blit for `target` (the surface format).
     pub fn new(ctx: &GpuContext, target: wgpu::TextureFormat) -> anyhow::Result<Self> {
         let d = &ctx.device;
-        let source = ssbvb_passes::shaders::source("view_blit.wgsl")?;
+        let source = ssbvb_gpu::shaders::source("view_blit.wgsl")?;
         let module = ctx.shader("view_blit.wgsl", &source)?;
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("view blit"),

@@ -10,8 +10,8 @@ use std::time::Instant;
 use anyhow::{Result, bail};
 use glam::DVec3;
 use ssbvb_gpu::GpuContext;
-use ssbvb_passes::level_splice::LevelSplicer;
-use ssbvb_passes::{DynamicRoom, GpuScene, Scene};
+use ssbvb_gpu::scene::{DynamicRoom, GpuScene, Scene};
+use ssbvb_gpu_build::level_splice::LevelSplicer;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::edit::{Edit, level_voxels};
 use ssbvb_voxel::local_edit::LocalEditor;
@@ -274,7 +274,7 @@ impl Brush {
 mod tests {
     use super::*;
     use glam::DAffine3;
-    use ssbvb_passes::{LodPolicy, VoxelObject};
+    use ssbvb_gpu::scene::{LodPolicy, VoxelObject};
     use ssbvb_voxel::procedural::ProceduralModel;
     use ssbvb_voxel::progress::NoProgress;
     use std::sync::Arc;

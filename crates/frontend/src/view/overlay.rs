@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 use egui::{Color32, RichText};
 use serde_json::{Map, Value};
 use ssbvb_gpu::AdapterReport;
+use ssbvb_gpu::scene::LodPolicy;
 use ssbvb_graph::{PassKind, ResolvedPipeline};
-use ssbvb_passes::LodPolicy;
 
 use super::brush::{BrushMode, BrushSettings, BrushShape};
 use super::camera_control::CameraMode;
@@ -107,7 +107,7 @@ pub struct OverlayView<'a> {
     /// Window size in pixels.
     pub size: (u32, u32),
     /// Under a GPU budget: what the page cache holds and did.
-    pub streaming: Option<&'a ssbvb_passes::StreamingStats>,
+    pub streaming: Option<&'a ssbvb_gpu::scene::StreamingStats>,
     /// With --brush: its settings.
     pub brush: Option<BrushSettings>,
 }
@@ -428,7 +428,7 @@ fn field_editor(
 /// Residency under a GPU budget, and the budget itself (changed live).
 fn budget(
     ui: &mut egui::Ui,
-    s: &ssbvb_passes::StreamingStats,
+    s: &ssbvb_gpu::scene::StreamingStats,
     state: &mut OverlayState,
     actions: &mut Vec<Action>,
 ) {

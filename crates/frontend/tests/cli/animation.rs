@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use super::ssbvb;
+use super::{ssbvb, stdout_json, succeeded};
 
 fn render(scene: &Path, time: &str, out: &Path, extra: &[&str]) -> std::process::Output {
     ssbvb()
@@ -35,7 +35,7 @@ fn an_animated_scene_renders_at_the_time_asked_and_reports_its_update() {
             "{}",
             String::from_utf8_lossy(&out.stderr)
         );
-        let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let json = stdout_json(&out);
         let a = &json["animation"];
         assert_eq!(a["time_s"].as_f64(), Some(t.parse().unwrap()), "{a}");
         let o = &a["objects"][0];
@@ -61,7 +61,7 @@ fn an_animated_scene_renders_at_the_time_asked_and_reports_its_update() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let json = stdout_json(&out);
     assert_eq!(json["animation"]["method"], serde_json::Value::Null);
     // Bad input: a voxel model cannot be animated, a non-finite time or rate is refused.
     let vox = text.replace("bunny.obj", "chr_knight.vox");
@@ -92,18 +92,13 @@ fn an_animated_scene_renders_at_the_time_asked_and_reports_its_update() {
 #[test]
 fn bench_dynamic_reports_the_update_beside_the_static_frame() {
     let dir = tempfile::tempdir().unwrap();
-    let out = ssbvb()
-        .args([
-            "bench", "--preset", "dynamic", "--levels", "5", "--sizes", "64x48",
-        ])
-        .args(["--frames", "1", "--out"])
-        .arg(dir.path())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeeded(
+        ssbvb()
+            .args([
+                "bench", "--preset", "dynamic", "--levels", "5", "--sizes", "64x48",
+            ])
+            .args(["--frames", "1", "--out"])
+            .arg(dir.path()),
     );
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("dynamic.json")).unwrap())

@@ -8,7 +8,7 @@ mod volumes;
 mod voxelize_gpu;
 
 use std::path::Path;
-use std::process::Command;
+use std::process::{Command, Output};
 
 pub(crate) fn ssbvb() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_ssbvb"));
@@ -18,6 +18,56 @@ pub(crate) fn ssbvb() -> Command {
         std::env::var("WGPU_BACKEND").unwrap_or_else(|_| "vulkan".into()),
     );
     c
+}
+
+/// Runs `cmd` and asserts that it succeeded (its stderr is the failure message).
+pub(crate) fn succeeded(cmd: &mut Command) -> Output {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// Checks that `pipeline` passes `pipeline check`, and that each edit of its text (`from` →
+/// `to`) is refused on the line of `kind: {kind}(`, naming pass `pass` and the knob.
+pub(crate) fn assert_knobs_refused(
+    pipeline: &str,
+    pass: &str,
+    kind: &str,
+    edits: &[(&str, &str, &str)],
+) {
+    let (ok, text) = check(pipeline);
+    assert!(ok && text.contains(pass), "{text}");
+    let line = line_of(pipeline, &format!("kind: {kind}("));
+    for (from, to, knob) in edits {
+        let src = pipeline.replacen(from, to, 1);
+        assert_ne!(src, pipeline, "{from}");
+        let (ok, text) = check(&src);
+        assert!(!ok, "{to}: {text}");
+        assert!(
+            text.contains(&format!("p.ron:{line}:"))
+                && text.contains(&format!("pass `{pass}` ({kind}): {knob} must be")),
+            "{to}: {text}"
+        );
+    }
+}
+
+/// The names of the passes a `render --json` report timed, in order.
+pub(crate) fn pass_names(report: &serde_json::Value) -> Vec<String> {
+    report["passes"]
+        .as_array()
+        .expect("`passes` is an array")
+        .iter()
+        .map(|p| p["name"].as_str().expect("a pass has a name").to_string())
+        .collect()
+}
+
+/// The one JSON object a command printed on stdout.
+pub(crate) fn stdout_json(out: &Output) -> serde_json::Value {
+    serde_json::from_slice(&out.stdout).expect("stdout is one JSON object")
 }
 
 const SSBVB: &str = include_str!("../../../../assets/pipelines/ssbvb.ron");
@@ -123,46 +173,35 @@ fn render_json_and_bench_quick() {
     let dir = tempfile::tempdir().unwrap();
     let png = dir.path().join("r.png");
     let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/models/bunny.obj");
-    let out = ssbvb()
-        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
-        .arg("render")
-        .arg(&model)
-        .args([
-            "--level",
-            "5",
-            "--size",
-            "64x48",
-            "--camera-pos",
-            "0,0.3,2.6",
-            "--json",
-            "-o",
-        ])
-        .arg(&png)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = succeeded(
+        ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+            .arg("render")
+            .arg(&model)
+            .args([
+                "--level",
+                "5",
+                "--size",
+                "64x48",
+                "--camera-pos",
+                "0,0.3,2.6",
+                "--json",
+                "-o",
+            ])
+            .arg(&png),
     );
-    let json: serde_json::Value =
-        serde_json::from_slice(&out.stdout).expect("stdout is one JSON object");
+    let json = stdout_json(&out);
     assert_eq!(json["mode"], "gpu");
     assert!(json["adapter"].as_str().unwrap().len() > 3);
     let fill = json["ssbvb_fill_count"].as_u64().unwrap();
     assert!(fill > 100 && fill <= 64 * 48, "{fill}");
     assert!(png.is_file());
 
-    let out = ssbvb()
-        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
-        .args(["bench", "--preset", "quick", "--out"])
-        .arg(dir.path().join("bench"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = succeeded(
+        ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+            .args(["bench", "--preset", "quick", "--out"])
+            .arg(dir.path().join("bench")),
     );
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
@@ -232,16 +271,11 @@ fn render_json_and_bench_quick() {
 #[test]
 fn bench_quick_sweep_writes_sweeps_and_plots() {
     let dir = tempfile::tempdir().unwrap();
-    let out = ssbvb()
-        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
-        .args(["bench", "--preset", "quick", "--sweep", "--out"])
-        .arg(dir.path().join("bench"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = succeeded(
+        ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+            .args(["bench", "--preset", "quick", "--sweep", "--out"])
+            .arg(dir.path().join("bench")),
     );
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("## Knob sweeps"), "{stdout}");
@@ -472,25 +506,20 @@ fn near_and_far_planes() {
 #[test]
 fn bunny_grid_scene_reports_levels_and_counters() {
     let dir = tempfile::tempdir().unwrap();
-    let out = ssbvb()
-        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
-        .args([
-            "render",
-            "assets/scenes/bunnies_64.ron",
-            "--size",
-            "96x72",
-            "--json",
-            "-o",
-        ])
-        .arg(dir.path().join("grid.png"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = succeeded(
+        ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+            .args([
+                "render",
+                "assets/scenes/bunnies_64.ron",
+                "--size",
+                "96x72",
+                "--json",
+                "-o",
+            ])
+            .arg(dir.path().join("grid.png")),
     );
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let json = stdout_json(&out);
     let visible = json["visible_instances"].as_u64().unwrap();
     assert!(visible >= 40, "{json}");
     let levels = json["lod_histogram"].as_object().unwrap();
@@ -520,31 +549,26 @@ fn bunny_grid_scene_reports_levels_and_counters() {
 #[test]
 fn bench_scale_preset_writes_rows_per_view() {
     let dir = tempfile::tempdir().unwrap();
-    let out = ssbvb()
-        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
-        .args([
-            "bench",
-            "--preset",
-            "scale",
-            "--instances",
-            "1,4",
-            "--sizes",
-            "64x48",
-        ])
-        .args([
-            "--frames",
-            "1",
-            "--techniques",
-            "ssbvb-unique,octree",
-            "--out",
-        ])
-        .arg(dir.path().join("scale"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeeded(
+        ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+            .args([
+                "bench",
+                "--preset",
+                "scale",
+                "--instances",
+                "1,4",
+                "--sizes",
+                "64x48",
+            ])
+            .args([
+                "--frames",
+                "1",
+                "--techniques",
+                "ssbvb-unique,octree",
+                "--out",
+            ])
+            .arg(dir.path().join("scale")),
     );
     let csv = std::fs::read_to_string(dir.path().join("scale/scale.csv")).unwrap();
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
@@ -701,7 +725,7 @@ fn render_frames_soaks_and_reports_memory() {
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
-    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let r = stdout_json(&out);
     let s = &r["soak"];
     assert_eq!(s["frames"], 60, "{s}");
     assert_eq!(s["camera_path"], "orbit");
@@ -726,7 +750,7 @@ fn render_frames_soaks_and_reports_memory() {
         .arg(&png)
         .output()
         .unwrap();
-    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let r = stdout_json(&out);
     assert!(r["soak"].is_null());
     for (args, want) in [
         (&["--frames", "0"][..], "--frames"),

@@ -3,88 +3,68 @@
 
 use std::path::Path;
 
-use super::ssbvb;
+use super::{pass_names, ssbvb, stdout_json, succeeded};
 
 #[test]
 fn rastavox_renders_a_model_and_the_default_scene() {
     let dir = tempfile::tempdir().unwrap();
     let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/models/bunny.obj");
     let png = dir.path().join("bunny.png");
-    let out = ssbvb()
-        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
-        .arg("render")
-        .arg(&model)
-        .args([
-            "--level",
-            "6",
-            "--size",
-            "96x72",
-            "--camera-pos",
-            "0,0.3,2.6",
-        ])
-        .args([
-            "--pipeline",
-            "assets/pipelines/rastavox.ron",
-            "--json",
-            "-o",
-        ])
-        .arg(&png)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = succeeded(
+        ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+            .arg("render")
+            .arg(&model)
+            .args([
+                "--level",
+                "6",
+                "--size",
+                "96x72",
+                "--camera-pos",
+                "0,0.3,2.6",
+            ])
+            .args([
+                "--pipeline",
+                "assets/pipelines/rastavox.ron",
+                "--json",
+                "-o",
+            ])
+            .arg(&png),
     );
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let passes: Vec<&str> = json["passes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|p| p["name"].as_str().unwrap())
-        .collect();
-    assert!(passes.contains(&"rastavox"), "{passes:?}");
+    let json = stdout_json(&out);
+    let passes = pass_names(&json);
+    assert!(passes.iter().any(|p| p == "rastavox"), "{passes:?}");
     // The bunny fills a good part of the frame (measured 1 941 of 6 912 pixels).
     let img = image::open(&png).unwrap().to_rgba8();
     let lit = img.pixels().filter(|p| p[3] > 0 && p[0] > 40).count();
     assert!(lit > 1000, "{lit} lit pixels");
     // The bundled default scene (bunny on a ground plane) with this pipeline.
-    let out = ssbvb()
-        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
-        .args([
-            "render",
-            "--size",
-            "96x72",
-            "--pipeline",
-            "assets/pipelines/rastavox.ron",
-        ])
-        .arg("-o")
-        .arg(dir.path().join("scene.png"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeeded(
+        ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+            .args([
+                "render",
+                "--size",
+                "96x72",
+                "--pipeline",
+                "assets/pipelines/rastavox.ron",
+            ])
+            .arg("-o")
+            .arg(dir.path().join("scene.png")),
     );
 }
 
 #[test]
 fn bench_rastavox_preset_and_technique() {
     let dir = tempfile::tempdir().unwrap();
-    let out = ssbvb()
-        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
-        .args([
-            "bench", "--preset", "rastavox", "--levels", "4,6", "--sizes", "96x72",
-        ])
-        .args(["--frames", "1", "--instances", "4", "--out"])
-        .arg(dir.path().join("rv"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeeded(
+        ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+            .args([
+                "bench", "--preset", "rastavox", "--levels", "4,6", "--sizes", "96x72",
+            ])
+            .args(["--frames", "1", "--instances", "4", "--out"])
+            .arg(dir.path().join("rv")),
     );
     let json: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(dir.path().join("rv/rastavox.json")).unwrap(),
@@ -133,25 +113,20 @@ fn bench_rastavox_preset_and_technique() {
     let md = std::fs::read_to_string(dir.path().join("rv/rastavox.md")).unwrap();
     assert!(md.contains("| knight | 6 |"), "{md}");
     // The technique in the main matrix.
-    let out = ssbvb()
-        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
-        .args([
-            "bench",
-            "--techniques",
-            "rastavox",
-            "--levels",
-            "5",
-            "--frames",
-            "1",
-        ])
-        .arg("--out")
-        .arg(dir.path().join("main"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeeded(
+        ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+            .args([
+                "bench",
+                "--techniques",
+                "rastavox",
+                "--levels",
+                "5",
+                "--frames",
+                "1",
+            ])
+            .arg("--out")
+            .arg(dir.path().join("main")),
     );
     let csv = std::fs::read_to_string(dir.path().join("main/bench.csv")).unwrap();
     assert_eq!(

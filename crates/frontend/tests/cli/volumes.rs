@@ -2,34 +2,26 @@
 //! of range, `render assets/scenes/volumetric.ron` draws the translucent volumes over the
 //! opaque frame, and a scene with a bad volume is refused naming its field.
 
-use super::ssbvb;
+use super::{pass_names, ssbvb, stdout_json};
 
 const VOLUMETRIC: &str = include_str!("../../../../assets/pipelines/volumetric.ron");
 
 #[test]
 fn pipeline_check_rejects_each_slicing_knob_out_of_range_by_name() {
-    let (ok, text) = super::check(VOLUMETRIC);
-    assert!(ok && text.contains("volumes"), "{text}");
-    let line = super::line_of(VOLUMETRIC, "kind: VolumeSlices(");
-    for (to, knob) in [
+    let from = "VolumeSlices(slice_spacing: 0.5, mip_bias: 0.0)";
+    let edits: Vec<(String, &str)> = [
         ("slice_spacing: 0.0", "slice_spacing"),
         ("slice_spacing: 9.0", "slice_spacing"),
         ("slice_spacing: 0.5, mip_bias: 11.0", "mip_bias"),
-    ] {
-        let src = VOLUMETRIC.replacen(
-            "VolumeSlices(slice_spacing: 0.5, mip_bias: 0.0)",
-            &format!("VolumeSlices({to})"),
-            1,
-        );
-        assert_ne!(src, VOLUMETRIC, "{to}");
-        let (ok, text) = super::check(&src);
-        assert!(!ok, "{to}: {text}");
-        assert!(
-            text.contains(&format!("p.ron:{line}:"))
-                && text.contains(&format!("pass `volumes` (VolumeSlices): {knob} must be")),
-            "{to}: {text}"
-        );
-    }
+    ]
+    .into_iter()
+    .map(|(to, knob)| (format!("VolumeSlices({to})"), knob))
+    .collect();
+    let edits: Vec<(&str, &str, &str)> = edits
+        .iter()
+        .map(|(to, knob)| (from, to.as_str(), *knob))
+        .collect();
+    super::assert_knobs_refused(VOLUMETRIC, "volumes", "VolumeSlices", &edits);
 }
 
 #[test]
@@ -54,14 +46,9 @@ fn the_volumetric_scene_renders_and_bad_volumes_are_refused() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let passes: Vec<&str> = json["passes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|p| p["name"].as_str().unwrap())
-        .collect();
-    assert!(passes.contains(&"volumes"), "{passes:?}");
+    let json = stdout_json(&out);
+    let passes = pass_names(&json);
+    assert!(passes.iter().any(|p| p == "volumes"), "{passes:?}");
     // The same scene without its volumes: the cloud and the translucent bunny change
     // pixels, and some of the sky behind the opaque frame (alpha 0 there) gains alpha.
     let text = std::fs::read_to_string(scenes.join("volumetric.ron")).unwrap();

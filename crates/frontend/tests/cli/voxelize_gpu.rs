@@ -3,39 +3,29 @@
 
 use std::path::Path;
 
-use super::ssbvb;
+use super::{ssbvb, stdout_json, succeeded};
 
 #[test]
 fn voxelize_gpu_reports_the_cpu_keys_and_the_difference() {
     let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/models");
     let dir = tempfile::tempdir().unwrap();
-    let out = ssbvb()
-        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
-        .arg("voxelize")
-        .arg(models.join("bunny.obj"))
-        .args(["--level", "6", "--json"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = succeeded(
+        ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+            .arg("voxelize")
+            .arg(models.join("bunny.obj"))
+            .args(["--level", "6", "--json"]),
     );
-    let cpu: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let cpu = stdout_json(&out);
     let asset = dir.path().join("bunny_gpu.ssbvb");
-    let out = ssbvb()
-        .arg("voxelize")
-        .arg(models.join("bunny.obj"))
-        .args(["--level", "6", "--gpu", "--json", "-o"])
-        .arg(&asset)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = succeeded(
+        ssbvb()
+            .arg("voxelize")
+            .arg(models.join("bunny.obj"))
+            .args(["--level", "6", "--gpu", "--json", "-o"])
+            .arg(&asset),
     );
-    let gpu: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let gpu = stdout_json(&out);
     for key in cpu.as_object().unwrap().keys() {
         assert!(gpu.get(key).is_some(), "--gpu lacks `{key}`: {gpu}");
     }
@@ -59,18 +49,15 @@ fn voxelize_gpu_reports_the_cpu_keys_and_the_difference() {
     assert!(gpu["gpu"]["fragments"].as_u64().unwrap() >= cpu_voxels);
     assert!(gpu["gpu"]["cpu_seconds"].as_f64().unwrap() > 0.0);
     // The seed's raster path: a near superset (measured: 464 extra, 0 missing of 14 027).
-    let out = ssbvb()
-        .arg("voxelize")
-        .arg(models.join("bunny.obj"))
-        .args(["--level", "6", "--gpu", "--gpu-method", "raster", "--json"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let raster: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let out = succeeded(ssbvb().arg("voxelize").arg(models.join("bunny.obj")).args([
+        "--level",
+        "6",
+        "--gpu",
+        "--gpu-method",
+        "raster",
+        "--json",
+    ]));
+    let raster = stdout_json(&out);
     assert_eq!(raster["gpu"]["method"], "Raster");
     let finest = &raster["differs_from_cpu"][0];
     let extra = finest["extra"].as_u64().unwrap();

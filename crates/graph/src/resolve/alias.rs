@@ -7,11 +7,12 @@
 use std::collections::{BTreeSet, HashMap};
 
 use super::bind::RawBinding;
-use super::{
-    BoundSlot, Ctx, MAX_TEXTURE_EDGE, MemoryReport, PhysicalResource, ResolvedPipeline,
+use super::ctx::Ctx;
+use super::resolved::{
+    BoundSlot, MAX_TEXTURE_EDGE, MemoryReport, PhysicalResource, ResolvedPipeline,
     ResolvedResource, ResourceUsage, ScheduledPass,
 };
-use crate::pass_kind::{Access, SlotClass, SlotDesc};
+use crate::kinds::{Access, SlotClass, SlotDesc};
 use crate::schema::{CountDesc, ResourceDesc, SizeDesc};
 
 impl SizeDesc {

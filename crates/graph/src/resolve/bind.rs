@@ -5,10 +5,11 @@
 
 use std::collections::{BTreeSet, HashMap};
 
-use super::Ctx;
-use crate::error::{GraphError, suggest};
-use crate::pass_kind::{Access, SlotDesc};
-use crate::schema::{Format, PassDesc, ResourceDesc, SizeDesc};
+use super::ctx::Ctx;
+use crate::error::{GraphError, Loc, suggest};
+use crate::format::Format;
+use crate::kinds::{Access, SlotDesc};
+use crate::schema::{Binding, PassDesc, ResourceDesc, SizeDesc};
 
 /// A validated binding, before pruning: slot and resource declaration index.
 #[derive(Clone)]
@@ -91,57 +92,7 @@ impl Ctx<'_> {
                     continue;
                 };
                 let r = &desc.resources.0[ri].1;
-                let ok = match (r, slot.class) {
-                    (ResourceDesc::Texture { format, size }, c) if c.is_texture() => {
-                        if c.is_attachment() {
-                            attachments.push((b.resource.clone(), *size));
-                        }
-                        if !c.formats().contains(format) {
-                            self.errors.push(GraphError::FormatMismatch {
-                                at,
-                                pass: p.name.clone(),
-                                slot: slot.name.to_string(),
-                                resource: b.resource.clone(),
-                                found: format!("{format:?}"),
-                                accepted: fmt_formats(c.formats()),
-                            });
-                            false
-                        } else {
-                            true
-                        }
-                    }
-                    (ResourceDesc::Buffer { layout, .. }, c) if !c.is_texture() => {
-                        let want = c.layout().unwrap_or(*layout);
-                        if want != *layout {
-                            self.errors.push(GraphError::LayoutMismatch {
-                                at,
-                                pass: p.name.clone(),
-                                slot: slot.name.to_string(),
-                                resource: b.resource.clone(),
-                                found: format!("{layout:?}"),
-                                expected: format!("{want:?}"),
-                            });
-                            false
-                        } else {
-                            true
-                        }
-                    }
-                    (r, c) => {
-                        self.errors.push(GraphError::ClassMismatch {
-                            at,
-                            pass: p.name.clone(),
-                            slot: slot.name.to_string(),
-                            resource: b.resource.clone(),
-                            expected: c.describe(),
-                            found: match r {
-                                ResourceDesc::Texture { .. } => "texture",
-                                ResourceDesc::Buffer { .. } => "buffer",
-                            },
-                        });
-                        false
-                    }
-                };
-                if ok {
+                if self.fits_slot(p, slot, b, r, at, &mut attachments) {
                     out.push(RawBinding {
                         slot: *slot,
                         resource: ri,
@@ -149,26 +100,7 @@ impl Ctx<'_> {
                 }
             }
         }
-        for s in slots {
-            let bound = match s.access {
-                Access::Read => p.reads.0.iter().any(|b| b.slot == s.name),
-                Access::Write => p.writes.0.iter().any(|b| b.slot == s.name),
-            };
-            if !bound {
-                self.errors.push(GraphError::MissingSlot {
-                    at: self.at(self.loc.pass(&p.name)),
-                    pass: p.name.clone(),
-                    kind: kind.clone(),
-                    slot: s.name.to_string(),
-                    access: if s.access == Access::Read {
-                        "read"
-                    } else {
-                        "write"
-                    },
-                    class: s.class.describe(),
-                });
-            }
-        }
+        self.check_all_bound(p, &kind);
         if let Some((first, fs)) = attachments.first() {
             for (name, s) in &attachments[1..] {
                 if s != fs {
@@ -184,6 +116,93 @@ impl Ctx<'_> {
             }
         }
         out
+    }
+
+    /// Whether resource `r`, bound by `b`, fits `slot`'s class and format or layout
+    /// (recording why not); texture attachments are collected for the size check.
+    fn fits_slot(
+        &mut self,
+        p: &PassDesc,
+        slot: &SlotDesc,
+        b: &Binding,
+        r: &ResourceDesc,
+        at: Loc,
+        attachments: &mut Vec<(String, SizeDesc)>,
+    ) -> bool {
+        match (r, slot.class) {
+            (ResourceDesc::Texture { format, size }, c) if c.is_texture() => {
+                if c.is_attachment() {
+                    attachments.push((b.resource.clone(), *size));
+                }
+                if !c.formats().contains(format) {
+                    self.errors.push(GraphError::FormatMismatch {
+                        at,
+                        pass: p.name.clone(),
+                        slot: slot.name.to_string(),
+                        resource: b.resource.clone(),
+                        found: format!("{format:?}"),
+                        accepted: fmt_formats(c.formats()),
+                    });
+                    false
+                } else {
+                    true
+                }
+            }
+            (ResourceDesc::Buffer { layout, .. }, c) if !c.is_texture() => {
+                let want = c.layout().unwrap_or(*layout);
+                if want != *layout {
+                    self.errors.push(GraphError::LayoutMismatch {
+                        at,
+                        pass: p.name.clone(),
+                        slot: slot.name.to_string(),
+                        resource: b.resource.clone(),
+                        found: format!("{layout:?}"),
+                        expected: format!("{want:?}"),
+                    });
+                    false
+                } else {
+                    true
+                }
+            }
+            (r, c) => {
+                self.errors.push(GraphError::ClassMismatch {
+                    at,
+                    pass: p.name.clone(),
+                    slot: slot.name.to_string(),
+                    resource: b.resource.clone(),
+                    expected: c.describe(),
+                    found: match r {
+                        ResourceDesc::Texture { .. } => "texture",
+                        ResourceDesc::Buffer { .. } => "buffer",
+                    },
+                });
+                false
+            }
+        }
+    }
+
+    /// Records every slot of `p`'s kind that `p` does not bind.
+    fn check_all_bound(&mut self, p: &PassDesc, kind: &str) {
+        for s in p.kind.slots() {
+            let bound = match s.access {
+                Access::Read => p.reads.0.iter().any(|b| b.slot == s.name),
+                Access::Write => p.writes.0.iter().any(|b| b.slot == s.name),
+            };
+            if !bound {
+                self.errors.push(GraphError::MissingSlot {
+                    at: self.at(self.loc.pass(&p.name)),
+                    pass: p.name.clone(),
+                    kind: kind.to_string(),
+                    slot: s.name.to_string(),
+                    access: if s.access == Access::Read {
+                        "read"
+                    } else {
+                        "write"
+                    },
+                    class: s.class.describe(),
+                });
+            }
+        }
     }
 }
 

@@ -8,9 +8,10 @@ use std::collections::{BTreeSet, HashMap};
 use petgraph::graph::{DiGraph, NodeIndex};
 
 use super::bind::RawBinding;
-use super::{Ctx, Dependency};
+use super::ctx::Ctx;
+use super::resolved::Dependency;
 use crate::error::{GraphError, suggest};
-use crate::pass_kind::Access;
+use crate::kinds::Access;
 
 /// The DAG of every declared pass, with who writes what.
 pub(super) struct Dag {

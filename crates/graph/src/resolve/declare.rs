@@ -4,9 +4,11 @@
 
 use std::collections::HashMap;
 
-use super::{Ctx, MAX_BUFFER_ELEMENTS, MAX_TEXTURE_EDGE};
+use super::ctx::Ctx;
+use super::resolved::{MAX_BUFFER_ELEMENTS, MAX_TEXTURE_EDGE};
 use crate::error::GraphError;
-use crate::schema::{BufferLayout, CountDesc, ResourceDesc, SizeDesc};
+use crate::format::BufferLayout;
+use crate::schema::{CountDesc, ResourceDesc, SizeDesc};
 
 /// Declaration indices by name (the first declaration wins on duplicates).
 pub(super) struct Declared<'a> {

@@ -9,8 +9,9 @@ use std::collections::{BinaryHeap, HashMap};
 use petgraph::visit::EdgeRef;
 
 use super::bind::RawBinding;
+use super::ctx::Ctx;
 use super::dag::Dag;
-use super::{Ctx, Dependency};
+use super::resolved::Dependency;
 use crate::error::{GraphError, suggest};
 use crate::schema::ResourceDesc;
 

@@ -6,7 +6,7 @@ use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     let text = String::from_utf8_lossy(data);
-    match ssbvb_scene::parse(&text, "fuzz.ron") {
+    match ssbvb_scene_file::parse(&text, "fuzz.ron") {
         Ok(scene) => assert!(scene.problems().is_empty()),
         Err(e) => assert!(e.to_string().starts_with("fuzz.ron"), "{e}"),
     }

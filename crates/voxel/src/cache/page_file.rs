@@ -10,11 +10,11 @@ use std::sync::Mutex;
 
 use bytemuck::Zeroable;
 
-use super::pages::{PAGE_BITS, check_page, page_coords};
-use super::{
+use super::format::{
     CacheError, KIND_PAGE_INDEX, KIND_POINT_CLOUD, KIND_PROXY_POSITIONS, KIND_PROXY_TRIANGLES,
-    PageEntry, Source,
 };
+use super::pages::{PAGE_BITS, PageEntry, check_page, page_coords};
+use super::reader::Source;
 use crate::asset::PackedVoxel;
 
 /// One level of a [`PageFile`].

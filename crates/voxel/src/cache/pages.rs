@@ -7,10 +7,11 @@ use std::path::Path;
 use bytemuck::{Pod, Zeroable};
 use xxhash_rust::xxh3::xxh3_64;
 
-use super::{
+use super::format::{
     CacheError, KIND_PAGE_INDEX, KIND_POINT_CLOUD, KIND_PROXY_POSITIONS, KIND_PROXY_TRIANGLES,
-    Source, le_bytes,
+    checksums_checked, le_bytes,
 };
+use super::reader::Source;
 use crate::asset::{PAGE_SIZE, PackedVoxel};
 use crate::svo::morton_encode;
 
@@ -83,7 +84,7 @@ pub(super) fn check_index(
         let end = index
             .get(k + 1)
             .map_or(voxels.len(), |n| n.first_voxel as usize);
-        if super::checksums_checked()
+        if checksums_checked()
             && xxh3_64(&le_bytes(&voxels[e.first_voxel as usize..end])) != e.checksum
         {
             return Err(CacheError::Checksum {
@@ -160,7 +161,7 @@ pub(super) fn check_page(
     voxels: &mut [PackedVoxel],
 ) -> Result<(), CacheError> {
     let name = format!("page {:?} of level {lod}", page_coords(entry.page));
-    if super::checksums_checked() && xxh3_64(bytemuck::cast_slice(voxels)) != entry.checksum {
+    if checksums_checked() && xxh3_64(bytemuck::cast_slice(voxels)) != entry.checksum {
         return Err(CacheError::Checksum {
             path: path.to_path_buf(),
             section: name,

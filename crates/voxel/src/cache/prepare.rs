@@ -7,10 +7,8 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use super::deps::{self, Dependency};
-use super::{
-    CacheError, FORMAT_VERSION, cache_file_name, default_cache_dir, hash_source, read_cache,
-    write_cache,
-};
+use super::format::{CacheError, FORMAT_VERSION};
+use super::{cache_file_name, default_cache_dir, hash_source, read_cache, write_cache};
 use crate::asset::VoxelAsset;
 use crate::load::{LoadError, LoadOptions, load_model_with};
 use crate::model::Model;

@@ -14,10 +14,9 @@ use std::path::Path;
 
 use xxhash_rust::xxh3::Xxh3;
 
-use super::{
-    CacheError, KIND_PAGE_INDEX, KIND_POINT_CLOUD, PageEntry, header_bytes, le_bytes,
-    write_atomically, write_proxy, write_section, write_section_header,
-};
+use super::format::{CacheError, KIND_PAGE_INDEX, KIND_POINT_CLOUD, le_bytes};
+use super::pages::PageEntry;
+use super::{header_bytes, write_atomically, write_proxy, write_section, write_section_header};
 use crate::asset::{PAGE_SIZE, PackedVoxel};
 use crate::lookup::NodeCounter;
 use crate::model::ObjectSpace;

@@ -1,22 +1,12 @@
 //! Round trips and damaged files of the asset cache.
+use super::format::{SECTION_HEADER_BYTES, kind_name};
 use super::*;
-use crate::model::{Mesh, Model};
 use crate::prepare::prepare_asset;
+use crate::prepare::tests::tetra;
 use crate::progress::NoProgress;
-use glam::Vec3;
 
 fn asset() -> VoxelAsset {
-    let mesh = Mesh {
-        positions: vec![
-            Vec3::new(0.1, 0.2, 0.3),
-            Vec3::new(1.0, 0.0, 0.0),
-            Vec3::new(0.0, 1.3, 0.1),
-            Vec3::new(0.2, 0.1, 0.9),
-        ],
-        triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
-        ..Default::default()
-    };
-    let (mut asset, _) = prepare_asset(&Model::Mesh(mesh), 5, &NoProgress).unwrap();
+    let (mut asset, _) = prepare_asset(&tetra(), 5, &NoProgress).unwrap();
     // A proxy in every level, so the proxy sections are exercised too.
     for lod in &mut asset.lods {
         lod.proxy = ProxyMesh {
@@ -27,12 +17,31 @@ fn asset() -> VoxelAsset {
     asset
 }
 
+/// A temporary folder with [`asset`] written in it as the level-5 cache file `name` of
+/// source hash `source`: the folder (kept alive), the file's path and the asset.
+fn cached_asset(name: &str, source: u128) -> (tempfile::TempDir, PathBuf, VoxelAsset) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    let a = asset();
+    write_cache(&path, &a, source, 5).unwrap();
+    (dir, path, a)
+}
+
+/// A temporary folder with a small OBJ model `tri.obj` in it: the folder and the model's path.
+fn tri_model() -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("tri.obj");
+    std::fs::write(
+        &model,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0.5\nv 0.3 0.2 1\nf 1 2 3\nf 1 2 4\n",
+    )
+    .unwrap();
+    (dir, model)
+}
+
 #[test]
 fn round_trip_is_exact() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("sub/dir/a.ssbvbast");
-    let a = asset();
-    write_cache(&path, &a, 0xdead_beef_u128 << 64 | 42, 5).unwrap();
+    let (_dir, path, a) = cached_asset("sub/dir/a.ssbvbast", 0xdead_beef_u128 << 64 | 42);
     let b = read_cache(&path, 0xdead_beef_u128 << 64 | 42, 5).unwrap();
     assert_eq!(a, b);
     // Only the cache file is left in the folder (the temporary file was renamed).
@@ -57,9 +66,7 @@ fn round_trip_is_exact() {
 
 #[test]
 fn damaged_files_are_errors() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("a.ssbvbast");
-    write_cache(&path, &asset(), 99, 5).unwrap();
+    let (dir, path, _) = cached_asset("a.ssbvbast", 99);
     let good = std::fs::read(&path).unwrap();
     let bad = dir.path().join("bad.ssbvbast");
     // Truncation at many offsets, including inside every section.
@@ -125,13 +132,7 @@ fn damaged_files_are_errors() {
 
 #[test]
 fn load_or_prepare_reports_what_it_did() {
-    let dir = tempfile::tempdir().unwrap();
-    let model = dir.path().join("tri.obj");
-    std::fs::write(
-        &model,
-        "v 0 0 0\nv 1 0 0\nv 0 1 0.5\nv 0.3 0.2 1\nf 1 2 3\nf 1 2 4\n",
-    )
-    .unwrap();
+    let (dir, model) = tri_model();
     let cache = dir.path().join("cache");
     let (a, first) = load_or_prepare(&model, 4, Some(&cache), &NoProgress).unwrap();
     assert_eq!(
@@ -184,10 +185,7 @@ fn offset_of(file: &[u8], voxels: &[PackedVoxel]) -> usize {
 
 #[test]
 fn one_page_reads_alone_and_is_checked_alone() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("p.ssbvbast");
-    let a = asset();
-    write_cache(&path, &a, 5, 5).unwrap();
+    let (_dir, path, a) = cached_asset("p.ssbvbast", 5);
     let mut pages = 0;
     for lod in &a.lods {
         let index = page_index(&lod.point_cloud.voxels);
@@ -280,13 +278,7 @@ fn a_page_index_that_disagrees_with_its_point_cloud_is_refused() {
 
 #[test]
 fn preparing_into_the_cache_writes_what_load_or_prepare_reads() {
-    let dir = tempfile::tempdir().unwrap();
-    let model = dir.path().join("tri.obj");
-    std::fs::write(
-        &model,
-        "v 0 0 0\nv 1 0 0\nv 0 1 0.5\nv 0.3 0.2 1\nf 1 2 3\nf 1 2 4\n",
-    )
-    .unwrap();
+    let (dir, model) = tri_model();
     let cache = dir.path().join("cache");
     // A miss streams the mesh into the cache file: no asset, statistics of every level.
     let (none, first) = prepare_into_cache(&model, 6, Some(&cache), &NoProgress).unwrap();
@@ -329,10 +321,7 @@ fn preparing_into_the_cache_writes_what_load_or_prepare_reads() {
 
 #[test]
 fn a_page_file_reads_every_page_and_refuses_a_damaged_one_alone() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("p.ssbvbast");
-    let a = asset();
-    write_cache(&path, &a, 5, 5).unwrap();
+    let (_dir, path, a) = cached_asset("p.ssbvbast", 5);
     let file = PageFile::open(&path, 5, 5).unwrap();
     for lod in &a.lods {
         let index = page_index(&lod.point_cloud.voxels);
@@ -381,10 +370,7 @@ fn a_page_file_reads_every_page_and_refuses_a_damaged_one_alone() {
 fn a_page_index_wrong_under_a_valid_checksum_is_refused_by_the_single_page_read() {
     // The index of level 5 rewritten so that page 0 ends where it starts, and its
     // section's checksum recomputed: only `read_page`'s own entry check can see it.
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("p.ssbvbast");
-    let a = asset();
-    write_cache(&path, &a, 5, 5).unwrap();
+    let (_dir, path, a) = cached_asset("p.ssbvbast", 5);
     let mut index = page_index(&a.lods[5].point_cloud.voxels);
     assert!(index.len() >= 2 && index[1].first_voxel > 0);
     let good = std::fs::read(&path).unwrap();
@@ -410,10 +396,7 @@ fn a_page_index_wrong_under_a_valid_checksum_is_refused_by_the_single_page_read(
 
 #[test]
 fn a_page_file_cut_short_after_opening_reports_the_page_as_truncated() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("p.ssbvbast");
-    let a = asset();
-    write_cache(&path, &a, 5, 5).unwrap();
+    let (_dir, path, a) = cached_asset("p.ssbvbast", 5);
     let file = PageFile::open(&path, 5, 5).unwrap();
     let last = file.pages(5).len() - 1;
     let good = std::fs::read(&path).unwrap();
@@ -527,9 +510,7 @@ fn with_header_field(good: &[u8], offset: usize, value: u32) -> Vec<u8> {
 
 #[test]
 fn damaged_headers_and_sections_are_named() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("a.ssbvbast");
-    write_cache(&path, &asset(), 99, 5).unwrap();
+    let (dir, path, _) = cached_asset("a.ssbvbast", 99);
     let good = std::fs::read(&path).unwrap();
     let bad = dir.path().join("bad.ssbvbast");
     let read = |bytes: &[u8], level: u32| {

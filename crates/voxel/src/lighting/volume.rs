@@ -29,6 +29,7 @@ use glam::{DAffine3, DVec3};
 use crate::asset::VoxelAsset;
 use crate::camera::normalize_or;
 use crate::instance_bvh::Aabb;
+use crate::rgba_volume::{children, index};
 use crate::shading::Light;
 
 /// One placed voxel object for the volume.
@@ -67,10 +68,6 @@ pub const MAX_CELLS: u64 = 1 << 24;
 /// Dims of mip `k`.
 pub fn mip_dims(dims: [u32; 3], k: u32) -> [u32; 3] {
     dims.map(|d| (d >> k).max(1))
-}
-
-fn index(dims: [u32; 3], c: [u32; 3]) -> usize {
-    (c[0] as usize) + dims[0] as usize * (c[1] as usize + dims[1] as usize * c[2] as usize)
 }
 
 /// Per-cell sums of the finest level.
@@ -312,26 +309,18 @@ fn downsample(src: &[[f32; 4]], weight: &[f32], dims: [u32; 3]) -> (Vec<[f32; 4]
                 let mut color = [0f32; 3];
                 let mut w = 0f32;
                 let mut n = 0u32;
-                for dz in 0..2 {
-                    for dy in 0..2 {
-                        for dx in 0..2 {
-                            let c = [2 * x + dx, 2 * y + dy, 2 * z + dz];
-                            if c.iter().zip(dims).any(|(&c, d)| c >= d) {
-                                continue;
-                            }
-                            let i = index(dims, c);
-                            let t = src[i];
-                            alpha += t[3];
-                            if t[3] > 0.0 && weight[i] > 0.0 {
-                                // Unpremultiplied colour, weighted by surface coverage.
-                                for k in 0..3 {
-                                    color[k] += t[k] / t[3] * weight[i];
-                                }
-                                w += weight[i];
-                            }
-                            n += 1;
+                for c in children(dims, [x, y, z]) {
+                    let i = index(dims, c);
+                    let t = src[i];
+                    alpha += t[3];
+                    if t[3] > 0.0 && weight[i] > 0.0 {
+                        // Unpremultiplied colour, weighted by surface coverage.
+                        for k in 0..3 {
+                            color[k] += t[k] / t[3] * weight[i];
                         }
+                        w += weight[i];
                     }
+                    n += 1;
                 }
                 let n = n.max(1) as f32;
                 let a = alpha / n;

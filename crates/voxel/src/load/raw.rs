@@ -6,7 +6,8 @@ use std::fs::File;
 use std::io::{self, Read};
 use std::path::Path;
 
-use super::{LoadError, MAX_RAW_DIM, MAX_VOXELS, srgb_u8_table};
+use super::common::{MAX_RAW_DIM, MAX_VOXELS, srgb_u8_table};
+use super::error::LoadError;
 use crate::model::VoxelModel;
 
 /// The first bytes of every raw grid file.

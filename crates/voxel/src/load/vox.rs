@@ -24,7 +24,8 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use super::{LoadError, MAX_VOXELS, srgb_u8_table};
+use super::common::{MAX_VOXELS, srgb_u8_table};
+use super::error::LoadError;
 use crate::model::VoxelModel;
 
 /// Most voxels per axis of a model: `XYZI` coordinates are bytes.
@@ -424,6 +425,41 @@ fn read_chunks<'a>(
     path: &Path,
     warnings: &mut Vec<String>,
 ) -> Result<VoxFile<'a>, LoadError> {
+    let (mut at, end) = main_children(bytes, path, warnings)?;
+    let mut file = VoxFile {
+        models: Vec::new(),
+        rgba: None,
+        nodes: HashMap::new(),
+        hidden_layers: Vec::new(),
+    };
+    let mut pending_size: Option<[u32; 3]> = None;
+    while at < end {
+        let chunk = chunk_header(bytes, at, end, path)?;
+        let mut c = Cursor {
+            data: &bytes[chunk.content_start..chunk.content_end],
+            pos: 0,
+            base: chunk.content_start as u64,
+            path,
+        };
+        read_chunk(&mut file, &mut pending_size, &chunk.id, &mut c, at)?;
+        at = chunk.chunk_end;
+    }
+    if pending_size.is_some() {
+        warnings.push(format!(
+            "{}: a SIZE chunk has no XYZI chunk",
+            path.display()
+        ));
+    }
+    Ok(file)
+}
+
+/// Checks the file header (magic, version, `MAIN`) and returns the byte range
+/// `[start, end)` of `MAIN`'s child chunks.
+fn main_children(
+    bytes: &[u8],
+    path: &Path,
+    warnings: &mut Vec<String>,
+) -> Result<(usize, usize), LoadError> {
     if !bytes.starts_with(b"VOX ") {
         return Err(LoadError::at_offset(
             path,
@@ -458,7 +494,7 @@ fn read_chunks<'a>(
     let end = start
         .and_then(|s| s.checked_add(children as usize))
         .filter(|&e| e <= bytes.len());
-    let (Some(mut at), Some(end)) = (start, end) else {
+    let (Some(start), Some(end)) = (start, end) else {
         return Err(LoadError::at_offset(
             path,
             12,
@@ -468,160 +504,190 @@ fn read_chunks<'a>(
             ),
         ));
     };
-    let mut file = VoxFile {
-        models: Vec::new(),
-        rgba: None,
-        nodes: HashMap::new(),
-        hidden_layers: Vec::new(),
-    };
-    let mut pending_size: Option<[u32; 3]> = None;
-    while at < end {
-        let header = bytes.get(at..at + 12).filter(|_| at + 12 <= end);
-        let Some(header) = header else {
-            return Err(LoadError::at_offset(
-                path,
-                at as u64,
-                "truncated chunk header",
-            ));
-        };
-        let id = [header[0], header[1], header[2], header[3]];
-        let n = u32::from_le_bytes([header[4], header[5], header[6], header[7]]) as usize;
-        let m = u32::from_le_bytes([header[8], header[9], header[10], header[11]]) as usize;
-        let content_start = at + 12;
-        let content_end = content_start.checked_add(n).filter(|&e| e <= end);
-        let chunk_end = content_end
-            .and_then(|e| e.checked_add(m))
-            .filter(|&e| e <= end);
-        let (Some(content_end), Some(chunk_end)) = (content_end, chunk_end) else {
-            return Err(LoadError::at_offset(
-                path,
-                at as u64,
-                format!(
-                    "chunk {:?} of {n} + {m} bytes runs past the end of MAIN",
-                    String::from_utf8_lossy(&id)
-                ),
-            ));
-        };
-        let mut c = Cursor {
-            data: &bytes[content_start..content_end],
-            pos: 0,
-            base: content_start as u64,
+    Ok((start, end))
+}
+
+/// A child chunk's header: its id and the byte offsets of its content and end.
+struct ChunkHeader {
+    id: [u8; 4],
+    content_start: usize,
+    content_end: usize,
+    /// End of the chunk including its own children.
+    chunk_end: usize,
+}
+
+/// Reads the header of the chunk at `at`, which with its content must end by `end`.
+fn chunk_header(
+    bytes: &[u8],
+    at: usize,
+    end: usize,
+    path: &Path,
+) -> Result<ChunkHeader, LoadError> {
+    let header = bytes.get(at..at + 12).filter(|_| at + 12 <= end);
+    let Some(header) = header else {
+        return Err(LoadError::at_offset(
             path,
-        };
-        match &id {
-            b"SIZE" => {
-                let size = [c.i32("SIZE")?, c.i32("SIZE")?, c.i32("SIZE")?];
-                let mut dims = [0u32; 3];
-                for (d, s) in dims.iter_mut().zip(size) {
-                    *d = u32::try_from(s).map_err(|_| c.err(format!("negative model size {s}")))?;
-                    if *d > MAX_MODEL_SIZE {
-                        return Err(LoadError::too_large(
-                            path,
-                            "voxels along a model axis (SIZE)",
-                            u64::from(*d),
-                            u64::from(MAX_MODEL_SIZE),
-                        ));
-                    }
-                }
-                pending_size = Some(dims);
-            }
-            b"XYZI" => {
-                let size = pending_size
-                    .take()
-                    .ok_or_else(|| c.err("XYZI chunk without a preceding SIZE chunk"))?;
-                let count = c.count(4, "voxel count")?;
-                let voxels = c.bytes(count * 4, "voxels")?;
-                file.models.push(ModelData {
-                    size,
-                    voxels,
-                    count,
-                    offset: at as u64,
-                });
-            }
-            b"RGBA" => file.rgba = Some(c.bytes(256 * 4, "the palette")?),
-            b"nTRN" => {
-                let id = c.i32("node id")?;
-                let attrs = c.dict()?;
-                let child = c.i32("child id")?;
-                let _reserved = c.i32("reserved id")?;
-                let layer = c.i32("layer id")?;
-                let frames = c.count(4, "frame count")?;
-                let mut transform = Transform::identity();
-                for f in 0..frames {
-                    let dict = c.dict()?;
-                    let frame_index = lookup(&dict, "_f")
-                        .and_then(|s| s.trim().parse::<u32>().ok())
-                        .unwrap_or(0);
-                    // Frame 0 (the static pose): the first frame, or the one marked `_f 0`.
-                    if f > 0 && frame_index != 0 {
-                        continue;
-                    }
-                    transform = frame_transform(&dict)
-                        .ok_or_else(|| c.err("malformed _r or _t in a transform frame"))?;
-                    if frame_index == 0 {
-                        break;
-                    }
-                }
-                let hidden = lookup(&attrs, "_hidden") == Some("1");
-                insert_node(
-                    &mut file,
-                    id,
-                    Node::Transform {
-                        child,
-                        hidden,
-                        layer,
-                        transform,
-                    },
-                    at,
-                    path,
-                )?;
-            }
-            b"nGRP" => {
-                let id = c.i32("node id")?;
-                let _attrs = c.dict()?;
-                let n = c.count(4, "child count")?;
-                let mut children = Vec::with_capacity(n);
-                for _ in 0..n {
-                    children.push(c.i32("child id")?);
-                }
-                insert_node(&mut file, id, Node::Group { children }, at, path)?;
-            }
-            b"nSHP" => {
-                let id = c.i32("node id")?;
-                let _attrs = c.dict()?;
-                let n = c.count(8, "model count")?;
-                let mut chosen = None;
-                for k in 0..n {
-                    let model = c.i32("model id")?;
-                    let dict = c.dict()?;
-                    let frame = lookup(&dict, "_f")
-                        .and_then(|s| s.trim().parse::<u32>().ok())
-                        .unwrap_or(0);
-                    if k == 0 || frame == 0 && chosen.is_none_or(|(f, _)| f != 0) {
-                        chosen = Some((frame, model));
-                    }
-                }
-                let (_, model) = chosen.ok_or_else(|| c.err("shape node with no model"))?;
-                insert_node(&mut file, id, Node::Shape { model }, at, path)?;
-            }
-            b"LAYR" => {
-                let id = c.i32("layer id")?;
-                let attrs = c.dict()?;
-                if lookup(&attrs, "_hidden") == Some("1") {
-                    file.hidden_layers.push(id);
-                }
-            }
-            _ => {} // PACK, MATL, MATT, IMAP, rOBJ, rCAM, NOTE, ...: not needed
-        }
-        at = chunk_end;
-    }
-    if pending_size.is_some() {
-        warnings.push(format!(
-            "{}: a SIZE chunk has no XYZI chunk",
-            path.display()
+            at as u64,
+            "truncated chunk header",
         ));
+    };
+    let id = [header[0], header[1], header[2], header[3]];
+    let n = u32::from_le_bytes([header[4], header[5], header[6], header[7]]) as usize;
+    let m = u32::from_le_bytes([header[8], header[9], header[10], header[11]]) as usize;
+    let content_start = at + 12;
+    let content_end = content_start.checked_add(n).filter(|&e| e <= end);
+    let chunk_end = content_end
+        .and_then(|e| e.checked_add(m))
+        .filter(|&e| e <= end);
+    let (Some(content_end), Some(chunk_end)) = (content_end, chunk_end) else {
+        return Err(LoadError::at_offset(
+            path,
+            at as u64,
+            format!(
+                "chunk {:?} of {n} + {m} bytes runs past the end of MAIN",
+                String::from_utf8_lossy(&id)
+            ),
+        ));
+    };
+    Ok(ChunkHeader {
+        id,
+        content_start,
+        content_end,
+        chunk_end,
+    })
+}
+
+/// Reads the content of one chunk with id `id` at file offset `at` into `file`.
+fn read_chunk<'a>(
+    file: &mut VoxFile<'a>,
+    pending_size: &mut Option<[u32; 3]>,
+    id: &[u8; 4],
+    c: &mut Cursor<'a, '_>,
+    at: usize,
+) -> Result<(), LoadError> {
+    match id {
+        b"SIZE" => *pending_size = Some(read_size(c)?),
+        b"XYZI" => {
+            let size = pending_size
+                .take()
+                .ok_or_else(|| c.err("XYZI chunk without a preceding SIZE chunk"))?;
+            let count = c.count(4, "voxel count")?;
+            let voxels = c.bytes(count * 4, "voxels")?;
+            file.models.push(ModelData {
+                size,
+                voxels,
+                count,
+                offset: at as u64,
+            });
+        }
+        b"RGBA" => file.rgba = Some(c.bytes(256 * 4, "the palette")?),
+        b"nTRN" => read_transform_node(file, c, at)?,
+        b"nGRP" => {
+            let id = c.i32("node id")?;
+            let _attrs = c.dict()?;
+            let n = c.count(4, "child count")?;
+            let mut children = Vec::with_capacity(n);
+            for _ in 0..n {
+                children.push(c.i32("child id")?);
+            }
+            insert_node(file, id, Node::Group { children }, at, c.path)?;
+        }
+        b"nSHP" => read_shape_node(file, c, at)?,
+        b"LAYR" => {
+            let id = c.i32("layer id")?;
+            let attrs = c.dict()?;
+            if lookup(&attrs, "_hidden") == Some("1") {
+                file.hidden_layers.push(id);
+            }
+        }
+        _ => {} // PACK, MATL, MATT, IMAP, rOBJ, rCAM, NOTE, ...: not needed
     }
-    Ok(file)
+    Ok(())
+}
+
+/// Reads a `SIZE` chunk: a model's voxels per axis, each at most [`MAX_MODEL_SIZE`].
+fn read_size(c: &mut Cursor<'_, '_>) -> Result<[u32; 3], LoadError> {
+    let size = [c.i32("SIZE")?, c.i32("SIZE")?, c.i32("SIZE")?];
+    let mut dims = [0u32; 3];
+    for (d, s) in dims.iter_mut().zip(size) {
+        *d = u32::try_from(s).map_err(|_| c.err(format!("negative model size {s}")))?;
+        if *d > MAX_MODEL_SIZE {
+            return Err(LoadError::too_large(
+                c.path,
+                "voxels along a model axis (SIZE)",
+                u64::from(*d),
+                u64::from(MAX_MODEL_SIZE),
+            ));
+        }
+    }
+    Ok(dims)
+}
+
+/// Reads an `nTRN` chunk (at file offset `at`) into a transform node of frame 0.
+fn read_transform_node(
+    file: &mut VoxFile<'_>,
+    c: &mut Cursor<'_, '_>,
+    at: usize,
+) -> Result<(), LoadError> {
+    let id = c.i32("node id")?;
+    let attrs = c.dict()?;
+    let child = c.i32("child id")?;
+    let _reserved = c.i32("reserved id")?;
+    let layer = c.i32("layer id")?;
+    let frames = c.count(4, "frame count")?;
+    let mut transform = Transform::identity();
+    for f in 0..frames {
+        let dict = c.dict()?;
+        let frame_index = lookup(&dict, "_f")
+            .and_then(|s| s.trim().parse::<u32>().ok())
+            .unwrap_or(0);
+        // Frame 0 (the static pose): the first frame, or the one marked `_f 0`.
+        if f > 0 && frame_index != 0 {
+            continue;
+        }
+        transform = frame_transform(&dict)
+            .ok_or_else(|| c.err("malformed _r or _t in a transform frame"))?;
+        if frame_index == 0 {
+            break;
+        }
+    }
+    let hidden = lookup(&attrs, "_hidden") == Some("1");
+    insert_node(
+        file,
+        id,
+        Node::Transform {
+            child,
+            hidden,
+            layer,
+            transform,
+        },
+        at,
+        c.path,
+    )
+}
+
+/// Reads an `nSHP` chunk (at file offset `at`) into a shape node of its frame-0 model.
+fn read_shape_node(
+    file: &mut VoxFile<'_>,
+    c: &mut Cursor<'_, '_>,
+    at: usize,
+) -> Result<(), LoadError> {
+    let id = c.i32("node id")?;
+    let _attrs = c.dict()?;
+    let n = c.count(8, "model count")?;
+    let mut chosen = None;
+    for k in 0..n {
+        let model = c.i32("model id")?;
+        let dict = c.dict()?;
+        let frame = lookup(&dict, "_f")
+            .and_then(|s| s.trim().parse::<u32>().ok())
+            .unwrap_or(0);
+        if k == 0 || frame == 0 && chosen.is_none_or(|(f, _)| f != 0) {
+            chosen = Some((frame, model));
+        }
+    }
+    let (_, model) = chosen.ok_or_else(|| c.err("shape node with no model"))?;
+    insert_node(file, id, Node::Shape { model }, at, c.path)
 }
 
 fn insert_node(

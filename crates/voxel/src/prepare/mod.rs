@@ -27,7 +27,8 @@ use crate::voxelize::{VoxelFill, VoxelSet, VoxelizeError, VoxelizeReport, voxeli
 
 /// Highest level [`prepare_asset`] accepts unless [`PrepareOptions::max_level`] raises it.
 /// Meshes are prepared region by region, so memory is the asset's own (16 bytes per voxel
-/// on the CPU): level 13 of a scanned model is ~230 M voxels, ~5 GiB.
+/// on the CPU; level 13 of a scanned model: docs/benchmarks.md, "Preparation in bounded
+/// memory").
 pub const DEFAULT_MAX_LEVEL: u32 = 13;
 
 /// Knobs of [`prepare_asset_with`].
@@ -376,14 +377,16 @@ pub fn lookup_from_codes(level: u32, codes: &[u64]) -> SparseLookup {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::model::{Mesh, VoxelModel};
     use crate::progress::NoProgress;
     use crate::svo::{Svo, morton_encode};
     use glam::Vec3;
 
-    fn tetra() -> Model {
+    /// A small tetrahedron, off-centre and not axis-aligned: the model the preparation and
+    /// cache tests share.
+    pub(crate) fn tetra() -> Model {
         Model::Mesh(Mesh {
             positions: vec![
                 Vec3::new(0.1, 0.2, 0.3),

@@ -1,15 +1,16 @@
 //! Preparation of a mesh in bounded memory: voxelized region by region, every level
 //! streamed into its packed point cloud and its lookup as the regions arrive.
 //!
-//! The whole-grid path holds the finest level's float attributes (44 bytes per voxel)
-//! and every coarser level's at once: 5 GiB for the bunny at level 12. Here a region of
-//! `2^REGION_LOG` cells per axis is voxelized, packed (16 bytes per voxel) and coarsened
-//! `REGION_LOG` times inside itself — a region is a whole octree subtree, so its parents
-//! are complete — and only its root (one voxel of level `level - REGION_LOG`) is kept in
-//! floats; the levels above those roots are built at the end from them. Codes go to
-//! [`LookupBuilder`]s, which keep only the 4³ leaves. What stays is what the asset holds
-//! anyway (the point clouds) plus one region's floats. The result equals the whole-grid
-//! path's exactly (same per-brick voxels, same per-sibling-run averages; a test checks).
+//! The whole-grid path holds the finest level's float attributes (44 bytes per voxel) and
+//! every coarser level's at once (for the bunny at level 12: docs/benchmarks.md,
+//! "Preparation in bounded memory"). Here a region of `2^REGION_LOG` cells per axis is
+//! voxelized, packed (16 bytes per voxel) and coarsened `REGION_LOG` times inside itself —
+//! a region is a whole octree subtree, so its parents are complete — and only its root (one
+//! voxel of level `level - REGION_LOG`) is kept in floats; the levels above those roots are
+//! built at the end from them. Codes go to [`LookupBuilder`]s, which keep only the 4³
+//! leaves. What stays is what the asset holds anyway (the point clouds) plus one region's
+//! floats. The result equals the whole-grid path's exactly (same per-brick voxels, same
+//! per-sibling-run averages; a test checks).
 
 use std::time::Instant;
 

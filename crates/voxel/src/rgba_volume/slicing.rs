@@ -1,8 +1,8 @@
-//! View-aligned slicing of placed RGBA volumes (seed 004, the thesis's chapter 3): per
-//! volume a mip level by distance and a slice spacing in its texels, then the polygons
-//! where planes of constant view depth cut each volume's box, all volumes' slices sorted
-//! back to front. The thesis builds the polygons in a geometry shader on proxy prisms;
-//! wgpu has none, so they are built here and pulled by the vertex shader.
+//! View-aligned slicing of placed RGBA volumes (volumetric billboards): per volume a mip
+//! level by distance and a slice spacing in its texels, then the polygons where planes of
+//! constant view depth cut each volume's box, all volumes' slices sorted back to front.
+//! Volumetric billboards build the polygons in a geometry shader on proxy prisms; wgpu has
+//! none, so they are built here and pulled by the vertex shader.
 //!
 //! Slice planes sit at whole multiples of the spacing from the volume's centre in view
 //! depth (`z = z_centre + k Δ`), so moving the camera or the volume along the view axis
@@ -71,8 +71,8 @@ fn level_box(volume: &RgbaVolume, level: usize) -> DVec3 {
     DVec3::ONE + DVec3::from(dims.map(|d| 1.0 / f64::from(d)))
 }
 
-/// The level whose texel is about one pixel at the volume's nearest point (the thesis's
-/// LOD by distance), plus `mip_bias`, within the volume's levels.
+/// The level whose texel is about one pixel at the volume's nearest point (the LOD by
+/// distance of volumetric billboards), plus `mip_bias`, within the volume's levels.
 pub fn choose_level(
     volume: &RgbaVolume,
     object_to_world: &DAffine3,

@@ -10,6 +10,7 @@ use glam::{DVec3, Vec2, Vec3};
 use super::*;
 use crate::model::{Material, Mesh, ObjectSpace};
 use crate::progress::NoProgress;
+use crate::voxelize::test_support::expected_normal;
 
 /// Object space = model space: grid units are `(p + 1) · 2^level / 2`.
 const IDENTITY: ObjectSpace = ObjectSpace {
@@ -240,15 +241,7 @@ fn voxels_without_a_surface_take_the_occupancy_gradient_then_the_direction_from_
     assert!(cells.contains(&[1, 13, 13]) && cells.len() > 30);
     for i in 0..set.voxels.len() {
         let c = &set.voxels.cell(i).map(i64::from);
-        let mut g = DVec3::ZERO;
-        for d in (0..27).map(|k| [k % 3 - 1, k / 3 % 3 - 1, k / 9 - 1]) {
-            if d != [0; 3] && cells.contains(&[c[0] + d[0], c[1] + d[1], c[2] + d[2]]) {
-                let d = DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64);
-                g -= d / d.length();
-            }
-        }
-        let from_centre = DVec3::from(c.map(|x| x as f64 + 0.5 - n as f64 / 2.0));
-        let want = if g.length() > 1e-12 { g } else { from_centre }.normalize();
+        let (want, _) = expected_normal(|c| cells.contains(c), *c, n);
         let got = DVec3::from(set.voxels.normals[i].map(f64::from));
         assert!((got - want).length() < 1e-6, "{c:?}: {got} against {want}");
     }

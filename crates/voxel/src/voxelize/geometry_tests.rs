@@ -5,6 +5,7 @@
 use glam::DVec3;
 
 use super::*;
+use crate::voxelize::test_support::unit_randoms;
 
 fn close(a: DVec3, b: DVec3) -> bool {
     (a - b).abs().max_element() < 1e-12
@@ -145,13 +146,7 @@ fn zero_area_parts_take_the_vertex_mean() {
 
 /// Random triangles in grid units, from tiny to a few hundred cells, some degenerate.
 fn random_triangles(count: usize) -> Vec<[DVec3; 3]> {
-    let mut x = 0x2545_F491_4F6C_DD1Du64;
-    let mut next = move || {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        (x >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut next = unit_randoms();
     (0..count)
         .map(|i| {
             let size = [0.3, 3.0, 40.0][i % 3];

@@ -58,6 +58,8 @@ mod mesh;
 mod regions;
 mod resample;
 #[cfg(test)]
+mod test_support;
+#[cfg(test)]
 mod tests;
 
 use serde::Serialize;

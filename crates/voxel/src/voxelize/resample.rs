@@ -11,6 +11,16 @@ use crate::model::{Material, ObjectSpace, VoxelModel};
 use crate::progress::Progress;
 use crate::svo::{LevelVoxels, morton_decode, morton_encode, normalize_or};
 
+/// The offsets of a cell's six face neighbours.
+pub(super) const FACE_OFFSETS: [[i64; 3]; 6] = [
+    [-1, 0, 0],
+    [1, 0, 0],
+    [0, -1, 0],
+    [0, 1, 0],
+    [0, 0, -1],
+    [0, 0, 1],
+];
+
 /// Object space of a voxel model: the bounding box of the union of its unit cubes.
 pub fn voxel_model_object_space(model: &VoxelModel) -> Option<ObjectSpace> {
     let (min, max) = voxel_bounds(model)?;
@@ -185,9 +195,7 @@ pub fn voxelize_voxels_with(
     // The two candidate paths below differ in cost, not in result: upsampling looks at
     // the exposed layers of each block (see `refusal_estimate`) and finds colours per
     // cell, downsampling groups whole blocks.
-    let block = |v: &[i32; 3]| rs.block(v);
     let fine = rs.a >= rs.e2 / 2; // cells per source unit A/E >= 1
-    let exposed = |v: &[i32; 3], k: usize, dir: i64| index.exposed(v, k, dir);
     let estimate = refusal_estimate(model, &rs, &index, fill);
     if estimate > u128::from(MAX_VOXELS) {
         return Err(VoxelizeError::TooLarge {
@@ -197,191 +205,21 @@ pub fn voxelize_voxels_with(
         });
     }
 
-    // Candidate cells. Upsampling (`fine`): the shell layers or whole blocks as codes,
-    // colours looked up later (a cell overlaps at most 2 source voxels per axis).
-    // Downsampling: every block cell with the index of its source voxel, so that colours
-    // are averaged by grouping instead of scanning large source ranges per cell; the
-    // codes are then the complete occupancy, searched for neighbours.
     progress.begin("resampling voxels", model.voxels.len() as u64);
-    let default_color = Material::default().base_color;
-    // Calls `emit(code)` for each candidate cell of source voxel `id`.
-    let candidates_of = |id: u32, v: &[i32; 3], emit: &mut dyn FnMut(u64)| {
-        let b = block(v);
-        let mut cell = |p: [i64; 3]| emit(morton_encode(p.map(|x| x as u32)));
-        if fill == VoxelFill::Solid || !fine {
-            // A duplicated source position contributes once (the index's entry).
-            if !fine && index.get(v.map(i64::from)) != Some(id) {
-                return;
-            }
-            for z in b[2].0..=b[2].1 {
-                for y in b[1].0..=b[1].1 {
-                    for x in b[0].0..=b[0].1 {
-                        cell([x, y, z]);
-                    }
-                }
-            }
-            return;
-        }
-        for k in 0..3 {
-            for (dir, layer) in [(-1, b[k].0), (1, b[k].1)] {
-                if !exposed(v, k, dir) {
-                    continue;
-                }
-                let (a, c) = ((k + 1) % 3, (k + 2) % 3);
-                for i in b[a].0..=b[a].1 {
-                    for j in b[c].0..=b[c].1 {
-                        let mut p = [0i64; 3];
-                        p[k] = layer;
-                        p[a] = i;
-                        p[c] = j;
-                        cell(p);
-                    }
-                }
-            }
-        }
+    let resampler = Resampler {
+        model,
+        rs,
+        index,
+        fill,
+        fine,
+        n,
+        default_color: Material::default().base_color,
     };
-    let mut codes: Vec<u64>;
-    let mut grouped_colors: Vec<[f32; 4]> = Vec::new();
-    if fine {
-        codes = per_source(model, progress, |id, v, out| {
-            candidates_of(id, v, &mut |c| out.push(c));
-        });
-        codes.par_sort_unstable();
-        codes.dedup();
-    } else {
-        // Every occupied cell with the source voxel it came from: colours are averaged by
-        // grouping instead of scanning large source ranges per cell, and the codes are
-        // the complete occupancy, searched for neighbours below.
-        let mut pairs: Vec<(u64, u32)> = per_source(model, progress, |id, v, out| {
-            candidates_of(id, v, &mut |c| out.push((c, id)));
-        });
-        pairs.par_sort_unstable();
-        codes = Vec::with_capacity(pairs.len());
-        let mut start = 0;
-        for i in 1..=pairs.len() {
-            if i < pairs.len() && pairs[i].0 == pairs[start].0 {
-                continue;
-            }
-            codes.push(pairs[start].0);
-            let mut sum = [0.0f64; 4];
-            for &(_, id) in &pairs[start..i] {
-                let col = model.colors.get(id as usize).unwrap_or(&default_color);
-                for (s, c) in sum.iter_mut().zip(col) {
-                    *s += f64::from(*c);
-                }
-            }
-            let count = (i - start) as f64;
-            grouped_colors.push(sum.map(|s| (s / count).clamp(0.0, 1.0) as f32));
-            start = i;
-        }
-    }
+    let (codes, grouped_colors) = resampler.candidate_cells(progress);
     progress.end();
 
-    // Whether any source voxel lies in the box of source coordinates `r` (upsampling only:
-    // the box is at most 2×2×2).
-    let any_source = |r: [(i64, i64); 3]| -> bool {
-        for z in r[2].0..=r[2].1 {
-            for y in r[1].0..=r[1].1 {
-                for x in r[0].0..=r[0].1 {
-                    if index.get([x, y, z]).is_some() {
-                        return true;
-                    }
-                }
-            }
-        }
-        false
-    };
-    // Occupancy of the 3×3×3 neighbourhood of a cell (index `dx+1 + 3(dy+1) + 9(dz+1)`).
-    let neighbourhood = |c: [i64; 3]| -> [bool; 27] {
-        let mut occ = [false; 27];
-        if fine {
-            // The source ranges of the three slabs per axis, computed once.
-            let ranges: [[Option<(i64, i64)>; 3]; 3] = [0, 1, 2].map(|k| {
-                [-1i64, 0, 1].map(|d| {
-                    (0..n)
-                        .contains(&(c[k] + d))
-                        .then(|| rs.sources_of(k, c[k] + d))
-                })
-            });
-            for (i, o) in occ.iter_mut().enumerate() {
-                if let (Some(x), Some(y), Some(z)) =
-                    (ranges[0][i % 3], ranges[1][(i / 3) % 3], ranges[2][i / 9])
-                {
-                    *o = any_source([x, y, z]);
-                }
-            }
-        } else {
-            for (i, o) in occ.iter_mut().enumerate() {
-                let q = [
-                    c[0] + (i % 3) as i64 - 1,
-                    c[1] + ((i / 3) % 3) as i64 - 1,
-                    c[2] + (i / 9) as i64 - 1,
-                ];
-                *o = q.iter().all(|x| (0..n).contains(x))
-                    && codes
-                        .binary_search(&morton_encode(q.map(|x| x as u32)))
-                        .is_ok();
-            }
-        }
-        occ
-    };
-
     progress.begin("voxel attributes", codes.len() as u64);
-    type Attr = (u64, [f32; 3], [f32; 4]);
-    let attrs = |ci: usize| -> Option<Attr> {
-        let code = codes[ci];
-        let c = morton_decode(code).map(i64::from);
-        let occ = neighbourhood(c);
-        let at = |d: [i64; 3]| occ[(d[0] + 1 + 3 * (d[1] + 1) + 9 * (d[2] + 1)) as usize];
-        if fill == VoxelFill::Shell {
-            let faces = [
-                [-1, 0, 0],
-                [1, 0, 0],
-                [0, -1, 0],
-                [0, 1, 0],
-                [0, 0, -1],
-                [0, 0, 1],
-            ];
-            if faces.iter().all(|&d| at(d)) {
-                return None;
-            }
-        }
-        let g = gradient_26(at);
-        let from_center = c.map(|x| x as f64 + 0.5 - n as f64 * 0.5);
-        let normal = normalize_or(g, || from_center);
-        let color = if fine {
-            let r = [0, 1, 2].map(|k| rs.sources_of(k, c[k]));
-            let mut sum = [0.0f64; 4];
-            let mut count = 0u64;
-            for z in r[2].0..=r[2].1 {
-                for y in r[1].0..=r[1].1 {
-                    for x in r[0].0..=r[0].1 {
-                        if let Some(i) = index.get([x, y, z]) {
-                            let col = model.colors.get(i as usize).unwrap_or(&default_color);
-                            for (s, c) in sum.iter_mut().zip(col) {
-                                *s += f64::from(*c);
-                            }
-                            count += 1;
-                        }
-                    }
-                }
-            }
-            sum.map(|s| (s / count.max(1) as f64).clamp(0.0, 1.0) as f32)
-        } else {
-            grouped_colors[ci]
-        };
-        Some((code, normal, color))
-    };
-    const CHUNK: usize = 4096;
-    let kept: Vec<Option<Attr>> = codes
-        .par_chunks(CHUNK)
-        .enumerate()
-        .flat_map_iter(|(chunk, cs)| {
-            let out: Vec<Option<Attr>> = (0..cs.len()).map(|j| attrs(chunk * CHUNK + j)).collect();
-            progress.advance(cs.len() as u64);
-            out
-        })
-        .collect();
+    let kept = resampler.cell_attributes(&codes, &grouped_colors, progress);
     progress.end();
     drop((codes, grouped_colors));
 
@@ -398,6 +236,239 @@ pub fn voxelize_voxels_with(
         voxels,
         report,
     })
+}
+
+/// A kept target cell: its Morton code, normal and colour.
+type Attr = (u64, [f32; 3], [f32; 4]);
+
+/// Everything resampling one voxel model onto one level reads.
+struct Resampler<'a> {
+    model: &'a VoxelModel,
+    rs: Resample,
+    index: SourceIndex,
+    fill: VoxelFill,
+    /// Upsampling: at least one target cell per source unit (A/E >= 1).
+    fine: bool,
+    /// Cells per axis of the level's grid.
+    n: i64,
+    /// Colour of a source voxel without one.
+    default_color: [f32; 4],
+}
+
+impl Resampler<'_> {
+    /// Candidate cells, sorted and unique, and for downsampling their averaged colours
+    /// (empty when upsampling).
+    ///
+    /// Upsampling (`fine`): the shell layers or whole blocks as codes, colours looked up
+    /// later (a cell overlaps at most 2 source voxels per axis). Downsampling: every block
+    /// cell with the index of its source voxel, so that colours are averaged by grouping
+    /// instead of scanning large source ranges per cell; the codes are then the complete
+    /// occupancy, searched for neighbours.
+    fn candidate_cells(&self, progress: &dyn Progress) -> (Vec<u64>, Vec<[f32; 4]>) {
+        if self.fine {
+            let mut codes = per_source(self.model, progress, |id, v, out| {
+                self.candidates_of(id, v, &mut |c| out.push(c));
+            });
+            codes.par_sort_unstable();
+            codes.dedup();
+            (codes, Vec::new())
+        } else {
+            // Every occupied cell with the source voxel it came from: colours are averaged
+            // by grouping instead of scanning large source ranges per cell, and the codes
+            // are the complete occupancy, searched for neighbours later.
+            let mut pairs: Vec<(u64, u32)> = per_source(self.model, progress, |id, v, out| {
+                self.candidates_of(id, v, &mut |c| out.push((c, id)));
+            });
+            pairs.par_sort_unstable();
+            self.group_colors(&pairs)
+        }
+    }
+
+    /// Calls `emit(code)` for each candidate cell of source voxel `id` at `v`.
+    fn candidates_of(&self, id: u32, v: &[i32; 3], emit: &mut dyn FnMut(u64)) {
+        let b = self.rs.block(v);
+        let mut cell = |p: [i64; 3]| emit(morton_encode(p.map(|x| x as u32)));
+        if self.fill == VoxelFill::Solid || !self.fine {
+            // A duplicated source position contributes once (the index's entry).
+            if !self.fine && self.index.get(v.map(i64::from)) != Some(id) {
+                return;
+            }
+            for z in b[2].0..=b[2].1 {
+                for y in b[1].0..=b[1].1 {
+                    for x in b[0].0..=b[0].1 {
+                        cell([x, y, z]);
+                    }
+                }
+            }
+            return;
+        }
+        for k in 0..3 {
+            for (dir, layer) in [(-1, b[k].0), (1, b[k].1)] {
+                if !self.index.exposed(v, k, dir) {
+                    continue;
+                }
+                let (a, c) = ((k + 1) % 3, (k + 2) % 3);
+                for i in b[a].0..=b[a].1 {
+                    for j in b[c].0..=b[c].1 {
+                        let mut p = [0i64; 3];
+                        p[k] = layer;
+                        p[a] = i;
+                        p[c] = j;
+                        cell(p);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Collapses sorted `(code, source index)` pairs into unique codes and the mean colour
+    /// of each code's sources.
+    fn group_colors(&self, pairs: &[(u64, u32)]) -> (Vec<u64>, Vec<[f32; 4]>) {
+        let mut codes = Vec::with_capacity(pairs.len());
+        let mut grouped_colors: Vec<[f32; 4]> = Vec::new();
+        let mut start = 0;
+        for i in 1..=pairs.len() {
+            if i < pairs.len() && pairs[i].0 == pairs[start].0 {
+                continue;
+            }
+            codes.push(pairs[start].0);
+            let mut sum = [0.0f64; 4];
+            for &(_, id) in &pairs[start..i] {
+                let col = self.source_color(id);
+                for (s, c) in sum.iter_mut().zip(col) {
+                    *s += f64::from(*c);
+                }
+            }
+            let count = (i - start) as f64;
+            grouped_colors.push(sum.map(|s| (s / count).clamp(0.0, 1.0) as f32));
+            start = i;
+        }
+        (codes, grouped_colors)
+    }
+
+    /// Colour of source voxel `id`, the default grey when it has none.
+    fn source_color(&self, id: u32) -> &[f32; 4] {
+        self.model
+            .colors
+            .get(id as usize)
+            .unwrap_or(&self.default_color)
+    }
+
+    /// Attributes of every candidate cell in parallel chunks, in code order; `None` for a
+    /// cell the fill drops.
+    fn cell_attributes(
+        &self,
+        codes: &[u64],
+        grouped_colors: &[[f32; 4]],
+        progress: &dyn Progress,
+    ) -> Vec<Option<Attr>> {
+        const CHUNK: usize = 4096;
+        codes
+            .par_chunks(CHUNK)
+            .enumerate()
+            .flat_map_iter(|(chunk, cs)| {
+                let out: Vec<Option<Attr>> = (0..cs.len())
+                    .map(|j| self.attributes_of(codes, grouped_colors, chunk * CHUNK + j))
+                    .collect();
+                progress.advance(cs.len() as u64);
+                out
+            })
+            .collect()
+    }
+
+    /// Attributes of candidate cell `ci`, or `None` when [`VoxelFill::Shell`] drops it as
+    /// interior.
+    fn attributes_of(&self, codes: &[u64], grouped_colors: &[[f32; 4]], ci: usize) -> Option<Attr> {
+        let code = codes[ci];
+        let c = morton_decode(code).map(i64::from);
+        let occ = self.neighbourhood(c, codes);
+        let at = |d: [i64; 3]| occ[(d[0] + 1 + 3 * (d[1] + 1) + 9 * (d[2] + 1)) as usize];
+        if self.fill == VoxelFill::Shell && FACE_OFFSETS.iter().all(|&d| at(d)) {
+            return None;
+        }
+        let g = gradient_26(at);
+        let from_center = c.map(|x| x as f64 + 0.5 - self.n as f64 * 0.5);
+        let normal = normalize_or(g, || from_center);
+        let color = if self.fine {
+            self.overlapped_color(c)
+        } else {
+            grouped_colors[ci]
+        };
+        Some((code, normal, color))
+    }
+
+    /// Mean colour of the source voxels target cell `c` overlaps (upsampling only).
+    fn overlapped_color(&self, c: [i64; 3]) -> [f32; 4] {
+        let r = [0, 1, 2].map(|k| self.rs.sources_of(k, c[k]));
+        let mut sum = [0.0f64; 4];
+        let mut count = 0u64;
+        for z in r[2].0..=r[2].1 {
+            for y in r[1].0..=r[1].1 {
+                for x in r[0].0..=r[0].1 {
+                    if let Some(i) = self.index.get([x, y, z]) {
+                        let col = self.source_color(i);
+                        for (s, c) in sum.iter_mut().zip(col) {
+                            *s += f64::from(*c);
+                        }
+                        count += 1;
+                    }
+                }
+            }
+        }
+        sum.map(|s| (s / count.max(1) as f64).clamp(0.0, 1.0) as f32)
+    }
+
+    /// Occupancy of the 3×3×3 neighbourhood of cell `c` (index `dx+1 + 3(dy+1) + 9(dz+1)`):
+    /// from the source when upsampling, else from the sorted candidate `codes`.
+    fn neighbourhood(&self, c: [i64; 3], codes: &[u64]) -> [bool; 27] {
+        let n = self.n;
+        let mut occ = [false; 27];
+        if self.fine {
+            // The source ranges of the three slabs per axis, computed once.
+            let ranges: [[Option<(i64, i64)>; 3]; 3] = [0, 1, 2].map(|k| {
+                [-1i64, 0, 1].map(|d| {
+                    (0..n)
+                        .contains(&(c[k] + d))
+                        .then(|| self.rs.sources_of(k, c[k] + d))
+                })
+            });
+            for (i, o) in occ.iter_mut().enumerate() {
+                if let (Some(x), Some(y), Some(z)) =
+                    (ranges[0][i % 3], ranges[1][(i / 3) % 3], ranges[2][i / 9])
+                {
+                    *o = self.any_source([x, y, z]);
+                }
+            }
+        } else {
+            for (i, o) in occ.iter_mut().enumerate() {
+                let q = [
+                    c[0] + (i % 3) as i64 - 1,
+                    c[1] + ((i / 3) % 3) as i64 - 1,
+                    c[2] + (i / 9) as i64 - 1,
+                ];
+                *o = q.iter().all(|x| (0..n).contains(x))
+                    && codes
+                        .binary_search(&morton_encode(q.map(|x| x as u32)))
+                        .is_ok();
+            }
+        }
+        occ
+    }
+
+    /// Whether any source voxel lies in the box of source coordinates `r` (upsampling
+    /// only: the box is at most 2×2×2).
+    fn any_source(&self, r: [(i64, i64); 3]) -> bool {
+        for z in r[2].0..=r[2].1 {
+            for y in r[1].0..=r[1].1 {
+                for x in r[0].0..=r[0].1 {
+                    if self.index.get([x, y, z]).is_some() {
+                        return true;
+                    }
+                }
+            }
+        }
+        false
+    }
 }
 
 /// Calls `each(index, voxel, out)` for every source voxel, in parallel chunks, and

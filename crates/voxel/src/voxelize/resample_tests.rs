@@ -10,6 +10,7 @@ use glam::DVec3;
 use super::*;
 use crate::model::{VoxelModel, cell_size};
 use crate::progress::NoProgress;
+use crate::voxelize::test_support::expected_normal;
 
 /// A 12³ block with a hole pattern (over 1024 voxels, so the resampler's chunks matter),
 /// one isolated voxel, and two positions listed twice (the later entry wins). Every entry
@@ -102,18 +103,10 @@ fn resampled_voxels_take_the_mean_colour_of_their_sources_and_the_occupancy_grad
                         "level {level} {fill:?} {c:?}: colour {got:?} against {sum:?} / {count}"
                     );
                 }
-                let mut g = DVec3::ZERO;
-                for d in (0..27).map(|k| [k % 3 - 1, k / 3 % 3 - 1, k / 9 - 1]) {
-                    if d != [0; 3] && want.contains_key(&[c[0] + d[0], c[1] + d[1], c[2] + d[2]]) {
-                        let d = DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64);
-                        g -= d / d.length();
-                    }
-                }
-                let from_centre = DVec3::from(c.map(|x| x as f64 + 0.5 - n as f64 / 2.0));
-                if g.length() <= 1e-12 {
+                let (want_n, fallback) = expected_normal(|c| want.contains_key(c), c, n);
+                if fallback {
                     fallbacks += 1;
                 }
-                let want_n = if g.length() > 1e-12 { g } else { from_centre }.normalize();
                 let got_n = DVec3::from(set.voxels.normals[i].map(f64::from));
                 assert!(
                     (got_n - want_n).length() < 1e-6,

@@ -5,6 +5,7 @@
 use glam::{DVec3, Vec2};
 
 use super::*;
+use crate::voxelize::test_support::unit_randoms;
 
 fn close(a: [f64; 3], b: [f64; 3]) -> bool {
     (0..3).all(|k| (a[k] - b[k]).abs() < 1e-9)
@@ -12,13 +13,7 @@ fn close(a: [f64; 3], b: [f64; 3]) -> bool {
 
 #[test]
 fn barycentric_weights_recover_the_point_project_and_clamp() {
-    let mut x = 0x2545_F491_4F6C_DD1Du64;
-    let mut next = move || {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        (x >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut next = unit_randoms();
     let mut v3 = || DVec3::new(next(), next(), next()) * 20.0 - 10.0;
     for _ in 0..200 {
         let t = [v3(), v3(), v3()];

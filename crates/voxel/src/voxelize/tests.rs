@@ -7,6 +7,7 @@ use glam::{DVec3, Vec3};
 use super::*;
 use crate::model::{Material, Mesh, Texture, VoxelModel, cell_size};
 use crate::progress::NoProgress;
+use crate::voxelize::resample::FACE_OFFSETS;
 
 fn mesh(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Mesh {
     Mesh {
@@ -518,15 +519,9 @@ fn voxel_oracle(model: &VoxelModel, level: u32, fill: VoxelFill) -> BTreeSet<[u3
                 if !occ([x, y, z]) {
                     continue;
                 }
-                let faces = [
-                    [-1, 0, 0],
-                    [1, 0, 0],
-                    [0, -1, 0],
-                    [0, 1, 0],
-                    [0, 0, -1],
-                    [0, 0, 1],
-                ];
-                let boundary = faces.iter().any(|d| !occ([x + d[0], y + d[1], z + d[2]]));
+                let boundary = FACE_OFFSETS
+                    .iter()
+                    .any(|d| !occ([x + d[0], y + d[1], z + d[2]]));
                 if fill == VoxelFill::Solid || boundary {
                     out.insert([x as u32, y as u32, z as u32]);
                 }

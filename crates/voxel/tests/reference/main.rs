@@ -14,6 +14,9 @@ mod rules;
 mod surface;
 mod traversal;
 
+#[path = "../support/rng.rs"]
+mod rng;
+
 use glam::{DAffine3, DVec2, DVec3};
 use ssbvb_voxel::asset::{LodLevel, PackedVoxel, PointCloud, ProxyMesh, SparseLookup};
 use ssbvb_voxel::camera::Camera;
@@ -21,6 +24,8 @@ use ssbvb_voxel::model::cell_size;
 use ssbvb_voxel::reference::{Instance, ReferenceImage, render};
 use ssbvb_voxel::shading::Light;
 use ssbvb_voxel::svo::morton_encode;
+
+use rng::Rng;
 
 // ---------------------------------------------------------------------------------------
 // Helpers
@@ -73,27 +78,6 @@ fn ball_cells(level: u32, r: f64) -> Vec<[u32; 3]> {
         }
     }
     cells
-}
-
-/// SplitMix64: a tiny deterministic generator (no dependency).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: u64) -> u64 {
-        self.next() % n
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
 }
 
 /// Slab test of a world-space ray against an axis-aligned box: `(t_enter, entry axis)`.

@@ -6,23 +6,8 @@ use gltf::json::accessor::{ComponentType, Type};
 use gltf::json::validation::Checked;
 
 use super::Builder;
-use crate::load::LoadError;
-
-/// Accessor values widened to `f64` (which holds every glTF component type exactly).
-pub(super) struct Values {
-    pub(super) data: Vec<f64>,
-    pub(super) components: usize,
-    pub(super) count: usize,
-}
-
-impl Values {
-    pub(super) fn get(&self, i: usize, c: usize) -> f64 {
-        self.data
-            .get(i * self.components + c)
-            .copied()
-            .unwrap_or(0.0)
-    }
-}
+use super::values::Values;
+use crate::load::error::LoadError;
 
 impl Builder<'_> {
     /// The bytes of a buffer view, range-checked.

@@ -4,7 +4,8 @@ use std::path::{Path, PathBuf};
 
 use gltf::json;
 
-use crate::load::{LoadError, read_file};
+use crate::load::common::read_file;
+use crate::load::error::LoadError;
 
 /// Loads every buffer: the GLB BIN chunk, a base64 data URI, or a file beside the model.
 pub(super) fn load_buffers(

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use gltf::json;
 
-use crate::load::LoadError;
+use crate::load::error::LoadError;
 
 pub(super) const GLB_MAGIC: &[u8; 4] = b"glTF";
 const CHUNK_JSON: u32 = 0x4E4F_534A;

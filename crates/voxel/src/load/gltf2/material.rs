@@ -2,7 +2,8 @@
 
 use super::Builder;
 use super::buffers::{UriError, read_uri};
-use crate::load::{LoadError, decode_texture};
+use crate::load::common::decode_texture;
+use crate::load::error::LoadError;
 use crate::model::{Material, Texture};
 
 impl Builder<'_> {

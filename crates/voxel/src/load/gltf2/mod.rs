@@ -17,14 +17,15 @@
 //! pose is loaded).
 //!
 //! Layout: the GLB container and the JSON document (`document`), buffers and URIs
-//! (`buffers`), accessors (`accessor`), the scene walk and primitives (`scene`), materials
-//! and textures (`material`).
+//! (`buffers`), accessors (`accessor`, decoded into `values`), the scene walk and
+//! primitives (`scene`), materials and textures (`material`).
 
 mod accessor;
 mod buffers;
 mod document;
 mod material;
 mod scene;
+mod values;
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -32,11 +33,11 @@ use std::rc::Rc;
 
 use gltf::json;
 
-use super::LoadError;
+use super::error::LoadError;
 use crate::model::{Mesh, Texture};
-use accessor::Values;
 use buffers::load_buffers;
 use document::{GLB_MAGIC, parse_document, split_glb};
+use values::Values;
 
 /// Parses a glTF or GLB file held in memory.
 pub(super) fn parse(

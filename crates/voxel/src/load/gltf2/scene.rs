@@ -9,7 +9,9 @@ use gltf::json::mesh::{Mode, Semantic};
 use gltf::json::validation::Checked;
 
 use super::Builder;
-use crate::load::{LoadError, MAX_TRIANGLES, MAX_VERTICES};
+use super::values::Values;
+use crate::load::common::{MAX_TRIANGLES, MAX_VERTICES};
+use crate::load::error::LoadError;
 use crate::model::Mesh;
 
 impl Builder<'_> {
@@ -101,6 +103,7 @@ impl Builder<'_> {
         Ok(())
     }
 
+    /// Appends one primitive's vertices, attributes and triangles, placed by `world`.
     fn add_primitive(
         &mut self,
         prim: &json::mesh::Primitive,
@@ -141,6 +144,31 @@ impl Builder<'_> {
                 MAX_VERTICES as u64,
             ));
         }
+        let triangles = self.primitive_triangles(prim, mode, n, world)?;
+
+        self.push_positions(&positions, world)?;
+        self.push_normals(normal, n, base, world)?;
+        self.push_uvs(uv, n, base)?;
+        self.push_colors(color, n, base)?;
+
+        let material = self.material(prim.material.map(|m| m.value()))?;
+        let offset = base as u32;
+        for t in triangles {
+            self.mesh.triangles.push(t.map(|i| i + offset));
+            self.mesh.triangle_materials.push(material);
+        }
+        Ok(())
+    }
+
+    /// The triangles of a primitive of `n` vertices in `mode`, as indices into its own
+    /// vertices, wound for the placement `world`.
+    fn primitive_triangles(
+        &mut self,
+        prim: &json::mesh::Primitive,
+        mode: Mode,
+        n: usize,
+        world: Mat4,
+    ) -> Result<Vec<[u32; 3]>, LoadError> {
         let indices: Vec<u32> = match prim.indices {
             Some(a) => {
                 let v = self.accessor(a.value(), "indices", &[Type::Scalar])?;
@@ -170,8 +198,12 @@ impl Builder<'_> {
                 t.swap(1, 2);
             }
         }
+        Ok(triangles)
+    }
 
-        for i in 0..n {
+    /// Appends the `POSITION` values placed by `world`; refuses a non-finite one.
+    fn push_positions(&mut self, positions: &Values, world: Mat4) -> Result<(), LoadError> {
+        for i in 0..positions.count {
             let p = world.transform_point3(Vec3::new(
                 positions.get(i, 0) as f32,
                 positions.get(i, 1) as f32,
@@ -182,6 +214,18 @@ impl Builder<'_> {
             }
             self.mesh.positions.push(p);
         }
+        Ok(())
+    }
+
+    /// Appends the `NORMAL` values (accessor `normal`) of `n` vertices turned by `world`,
+    /// or zeros (and notes the gap) without them; `base`: the primitive's first vertex.
+    fn push_normals(
+        &mut self,
+        normal: Option<usize>,
+        n: usize,
+        base: usize,
+        world: Mat4,
+    ) -> Result<(), LoadError> {
         match normal {
             Some(a) => {
                 let normals = self.accessor(a, "NORMAL", &[Type::Vec3])?;
@@ -209,6 +253,12 @@ impl Builder<'_> {
                 self.mesh.normals.resize(base + n, Vec3::ZERO);
             }
         }
+        Ok(())
+    }
+
+    /// Appends the `TEXCOORD_0` values (accessor `uv`) of `n` vertices, or zeros without
+    /// them; `base`: the primitive's first vertex.
+    fn push_uvs(&mut self, uv: Option<usize>, n: usize, base: usize) -> Result<(), LoadError> {
         match uv {
             Some(a) => {
                 let uvs = self.accessor(a, "TEXCOORD_0", &[Type::Vec2])?;
@@ -228,6 +278,17 @@ impl Builder<'_> {
             }
             None => self.mesh.uvs.resize(base + n, Vec2::ZERO),
         }
+        Ok(())
+    }
+
+    /// Appends the `COLOR_0` values (accessor `color`) of `n` vertices, or white without
+    /// them; `base`: the primitive's first vertex.
+    fn push_colors(
+        &mut self,
+        color: Option<usize>,
+        n: usize,
+        base: usize,
+    ) -> Result<(), LoadError> {
         match color {
             Some(a) => {
                 let colors = self.accessor(a, "COLOR_0", &[Type::Vec3, Type::Vec4])?;
@@ -246,13 +307,6 @@ impl Builder<'_> {
             }
             // White is the identity of the colour product (see the module docs of `load`).
             None => self.mesh.colors.resize(base + n, [1.0; 4]),
-        }
-
-        let material = self.material(prim.material.map(|m| m.value()))?;
-        let offset = base as u32;
-        for t in triangles {
-            self.mesh.triangles.push(t.map(|i| i + offset));
-            self.mesh.triangle_materials.push(material);
         }
         Ok(())
     }

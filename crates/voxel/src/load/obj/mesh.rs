@@ -8,7 +8,8 @@ use glam::{Vec2, Vec3};
 use super::mtl::{TextureCache, load_libraries};
 use super::text::{numbers, tokens};
 use super::{MISSING, State};
-use crate::load::{LoadError, MAX_TRIANGLES, MAX_VERTICES, srgb_to_linear};
+use crate::load::common::{MAX_TRIANGLES, MAX_VERTICES, srgb_to_linear};
+use crate::load::error::LoadError;
 use crate::model::{Material, Mesh};
 
 impl State {
@@ -18,23 +19,10 @@ impl State {
         path: &Path,
         line: usize,
     ) -> Result<(), LoadError> {
-        let mut vals = [0f32; 7];
-        let n = numbers(rest, &mut vals, path, line)?;
-        if n < 3 {
-            return Err(LoadError::at_line(
-                path,
-                line,
-                format!("`v` needs 3 coordinates, found {n}"),
-            ));
-        }
-        if self.positions.len() >= MAX_VERTICES {
-            return Err(LoadError::too_large(
-                path,
-                "vertices",
-                self.positions.len() as u64 + 1,
-                MAX_VERTICES as u64,
-            ));
-        }
+        let (vals, n) = statement_numbers::<7>(rest, path, line, 3, |n| {
+            format!("`v` needs 3 coordinates, found {n}")
+        })?;
+        check_room(self.positions.len(), "vertices", path)?;
         self.positions.push(Vec3::new(vals[0], vals[1], vals[2]));
         // 4 or 5 numbers: x y z w (rational weight, meaningless for us). 6+: x y z r g b [a].
         if n >= 6 {
@@ -61,23 +49,10 @@ impl State {
         path: &Path,
         line: usize,
     ) -> Result<(), LoadError> {
-        let mut vals = [0f32; 3];
-        let n = numbers(rest, &mut vals, path, line)?;
-        if n < 1 {
-            return Err(LoadError::at_line(
-                path,
-                line,
-                "`vt` needs at least 1 coordinate",
-            ));
-        }
-        if self.texcoords.len() >= MAX_VERTICES {
-            return Err(LoadError::too_large(
-                path,
-                "texture coordinates",
-                self.texcoords.len() as u64 + 1,
-                MAX_VERTICES as u64,
-            ));
-        }
+        let (vals, _) = statement_numbers::<3>(rest, path, line, 1, |_| {
+            "`vt` needs at least 1 coordinate".to_string()
+        })?;
+        check_room(self.texcoords.len(), "texture coordinates", path)?;
         self.texcoords.push(Vec2::new(vals[0], vals[1]));
         Ok(())
     }
@@ -88,23 +63,10 @@ impl State {
         path: &Path,
         line: usize,
     ) -> Result<(), LoadError> {
-        let mut vals = [0f32; 3];
-        let n = numbers(rest, &mut vals, path, line)?;
-        if n < 3 {
-            return Err(LoadError::at_line(
-                path,
-                line,
-                format!("`vn` needs 3 components, found {n}"),
-            ));
-        }
-        if self.normals.len() >= MAX_VERTICES {
-            return Err(LoadError::too_large(
-                path,
-                "normals",
-                self.normals.len() as u64 + 1,
-                MAX_VERTICES as u64,
-            ));
-        }
+        let (vals, _) = statement_numbers::<3>(rest, path, line, 3, |n| {
+            format!("`vn` needs 3 components, found {n}")
+        })?;
+        check_room(self.normals.len(), "normals", path)?;
         self.normals.push(Vec3::new(vals[0], vals[1], vals[2]));
         Ok(())
     }
@@ -218,14 +180,7 @@ impl State {
             return Ok(i);
         }
         let index = self.out_positions.len();
-        if index >= MAX_VERTICES {
-            return Err(LoadError::too_large(
-                path,
-                "vertices",
-                index as u64 + 1,
-                MAX_VERTICES as u64,
-            ));
-        }
+        check_room(index, "vertices", path)?;
         // All three lookups were validated by `corner`; `get` keeps this panic-free anyway.
         let position = self
             .positions
@@ -324,6 +279,36 @@ impl State {
         }
         Ok(mesh)
     }
+}
+
+/// The numbers of a `v`, `vt` or `vn` statement and how many were given; fewer than `min`
+/// is an error with the message `too_few(count)`.
+fn statement_numbers<const N: usize>(
+    rest: &[u8],
+    path: &Path,
+    line: usize,
+    min: usize,
+    too_few: impl FnOnce(usize) -> String,
+) -> Result<([f32; N], usize), LoadError> {
+    let mut vals = [0f32; N];
+    let n = numbers(rest, &mut vals, path, line)?;
+    if n < min {
+        return Err(LoadError::at_line(path, line, too_few(n)));
+    }
+    Ok((vals, n))
+}
+
+/// Fails when `len` elements of `what` (a vertex-sized kind) already fill `MAX_VERTICES`.
+fn check_room(len: usize, what: &str, path: &Path) -> Result<(), LoadError> {
+    if len >= MAX_VERTICES {
+        return Err(LoadError::too_large(
+            path,
+            what,
+            len as u64 + 1,
+            MAX_VERTICES as u64,
+        ));
+    }
+    Ok(())
 }
 
 /// Resolves a 1-based (or negative, relative) OBJ index against `count` defined elements.

@@ -25,7 +25,7 @@ use std::path::Path;
 
 use glam::{Vec2, Vec3};
 
-use super::LoadError;
+use super::error::LoadError;
 use crate::model::Mesh;
 use text::{Lines, split_keyword, tokens, trim};
 

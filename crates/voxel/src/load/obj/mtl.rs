@@ -4,7 +4,8 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use super::text::{Lines, numbers, parse_f32, split_keyword, tokens, trim};
-use crate::load::{LoadError, decode_texture, read_file, record_source};
+use crate::load::common::{decode_texture, read_file, record_source};
+use crate::load::error::LoadError;
 use crate::model::{Material, Texture};
 
 /// One `newmtl` of an MTL library (only what the voxelizer uses).

@@ -3,7 +3,7 @@
 use std::borrow::Cow;
 use std::path::Path;
 
-use crate::load::LoadError;
+use crate::load::error::LoadError;
 
 /// Parses up to `out.len()` whitespace-separated finite numbers (stopping at a `#`
 /// comment) and returns how many there were. Extra numbers are an error.

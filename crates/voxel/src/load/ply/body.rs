@@ -6,7 +6,8 @@ use glam::{Vec2, Vec3};
 
 use super::header::{Element, Header, Kind, Property, Scalar};
 use super::reader::Reader;
-use crate::load::{LoadError, MAX_TRIANGLES, srgb_to_linear, srgb_u8_table};
+use crate::load::common::{MAX_TRIANGLES, srgb_to_linear, srgb_u8_table};
+use crate::load::error::LoadError;
 use crate::model::Mesh;
 
 /// Where the vertex attributes sit among the vertex element's properties.

@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use crate::load::{LoadError, MAX_TRIANGLES, MAX_VERTICES};
+use crate::load::common::{MAX_TRIANGLES, MAX_VERTICES};
+use crate::load::error::LoadError;
 
 /// A header longer than this is not a PLY header.
 const MAX_HEADER_BYTES: usize = 1 << 20;

@@ -21,7 +21,7 @@ mod reader;
 
 use std::path::Path;
 
-use super::LoadError;
+use super::error::LoadError;
 use crate::model::Mesh;
 use body::read_body;
 use header::{Encoding, check_counts, parse_header};

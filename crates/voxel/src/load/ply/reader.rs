@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use super::header::Scalar;
-use crate::load::LoadError;
+use crate::load::error::LoadError;
 
 /// Reads values from the body, in either encoding.
 pub(super) trait Reader {

@@ -1,0 +1,178 @@
+//! Measuring one configuration: its frames timed, one profiled frame, and the G-buffer
+//! (and optionally the shaded composite) compared with the CPU reference.
+
+use std::sync::Arc;
+
+use anyhow::{Result, bail};
+use glam::DAffine3;
+use ssbvb_gpu::GpuContext;
+use ssbvb_gpu::scene::{GpuScene, LodPolicy, StreamingOptions};
+use ssbvb_graph::ResolvedPipeline;
+use ssbvb_passes::{Profiling, Renderer};
+use ssbvb_voxel::accuracy::GpuHit;
+use ssbvb_voxel::asset::VoxelAsset;
+use ssbvb_voxel::camera::Camera;
+use ssbvb_voxel::reference::ReferenceImage;
+
+use super::frames::{profiling, timed_frames};
+use super::models::one_object;
+
+/// What one measured configuration gave.
+pub(crate) struct Measured {
+    /// Wall ms of each timed frame, in order.
+    pub times: Vec<f64>,
+    pub passes: Vec<ssbvb_passes::PassTiming>,
+    pub fill: Option<u32>,
+    pub acc: ssbvb_voxel::accuracy::AccuracyReport,
+    pub gpu_memory: u64,
+    /// PSNR (dB) of the composite output against the reference colours over the pixels
+    /// either covers, and that pixel count; only when asked for.
+    pub psnr: Option<(f64, usize)>,
+    /// Mean SSIM (8×8 windows, RGB, `image-compare`) of the composite against the
+    /// reference over the whole image, with pixels neither covers set to black in both
+    /// (their backgrounds differ by design); only when asked for.
+    pub ssim: Option<f64>,
+    /// Hardware-independent counts of the profiled frame (steps per ray, ...).
+    pub counters: ssbvb_passes::FrameCounters,
+}
+
+/// Everything [`measure`] needs besides the pipeline.
+pub(crate) struct Setup<'a> {
+    pub ctx: &'a GpuContext,
+    pub asset: &'a Arc<VoxelAsset>,
+    pub lod: LodPolicy,
+    /// The level the reference was rendered at (the one the renderer picks).
+    pub level: u32,
+    pub size: (u32, u32),
+    pub camera: &'a Camera,
+    pub reference: &'a ReferenceImage,
+    pub warmup: usize,
+    pub frames: usize,
+    /// Upload under a GPU budget (pages from memory), converged before the warm-up.
+    pub streaming: Option<&'a StreamingOptions>,
+}
+
+/// The CPU reference image of `asset` at `level`, seen from `camera` at `size`.
+pub(crate) fn reference_at(
+    asset: &VoxelAsset,
+    level: u32,
+    camera: &Camera,
+    size: (u32, u32),
+) -> ReferenceImage {
+    let inst = [ssbvb_voxel::reference::Instance {
+        lod: &asset.lods[level as usize],
+        object_to_world: DAffine3::IDENTITY,
+        faces: None,
+    }];
+    ssbvb_voxel::reference::render(&inst, camera, size.0, size.1, &Default::default())
+}
+
+/// Renders `warmup` + `frames` frames (median over the timed ones is the caller's), one
+/// profiled frame, and compares the G-buffer (and with `with_psnr` the composite) with the
+/// reference.
+pub(crate) fn measure(s: &Setup, pipeline: ResolvedPipeline, with_psnr: bool) -> Result<Measured> {
+    let ctx = s.ctx;
+    let scene = one_object(s.asset, s.lod);
+    let mut gpu_scene = match &s.streaming {
+        Some(o) => GpuScene::streamed(ctx, scene, o)?,
+        None => GpuScene::new(ctx, scene)?,
+    };
+    let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, s.size)?;
+    crate::budget::converge(ctx, &mut renderer, &mut gpu_scene, s.camera, 64)?;
+    for _ in 0..s.warmup {
+        renderer.render(ctx, &mut gpu_scene, s.camera, Profiling::Off)?;
+    }
+    ctx.wait_idle()?;
+    let times = timed_frames(ctx, &mut renderer, &mut gpu_scene, s.camera, s.frames)?;
+    let stats = renderer.render(ctx, &mut gpu_scene, s.camera, profiling(ctx))?;
+    let fill = renderer.fill_count(ctx)?;
+    let counters = renderer.counters(ctx)?;
+    let hits = ssbvb_passes::measure::gbuffer_hits(ctx, &renderer)?;
+    let acc = ssbvb_voxel::accuracy::compare(s.reference, &hits, &[2.0 / (1u64 << s.level) as f64])
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let (psnr, ssim) = if with_psnr {
+        composite_error(s, &renderer, &hits)?
+    } else {
+        (None, None)
+    };
+    Ok(Measured {
+        times,
+        passes: stats.passes,
+        fill,
+        acc,
+        gpu_memory: gpu_scene.total_memory(),
+        psnr,
+        ssim,
+        counters,
+    })
+}
+
+/// The RGBA8 bytes of `gpu` and `reference` at the pixels either image covers (`hits`,
+/// `reference_hits`): a hole or an extra pixel is an error (object colour against
+/// background); pixels neither covers are skipped, as the backgrounds differ by design.
+pub(crate) fn covered_rgba<H, R>(
+    hits: &[Option<H>],
+    reference_hits: &[Option<R>],
+    gpu: &[u8],
+    reference: &[u8],
+) -> (Vec<u8>, Vec<u8>) {
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    for (i, (h, r)) in hits.iter().zip(reference_hits).enumerate() {
+        if h.is_some() || r.is_some() {
+            a.extend_from_slice(&gpu[i * 4..i * 4 + 4]);
+            b.extend_from_slice(&reference[i * 4..i * 4 + 4]);
+        }
+    }
+    (a, b)
+}
+
+/// PSNR (dB) and its pixel count, and SSIM, of the composite against the reference (see
+/// [`Measured`]).
+type CompositeError = (Option<(f64, usize)>, Option<f64>);
+
+/// The [`CompositeError`] of the frame `renderer` drew (G-buffer `hits`).
+fn composite_error(
+    s: &Setup,
+    renderer: &Renderer,
+    hits: &[Option<GpuHit>],
+) -> Result<CompositeError> {
+    let out = s.ctx.read_texture(
+        &renderer.output().texture,
+        ssbvb_gpu::wgpu::TextureAspect::All,
+    )?;
+    let gpu = crate::render_cmd::to_rgba8(&out)?;
+    let reference = s.reference.to_rgba8();
+    if gpu.len() != reference.len() || hits.len() * 4 != gpu.len() {
+        bail!(
+            "output {} bytes, reference {} bytes, {} pixels",
+            gpu.len(),
+            reference.len(),
+            hits.len()
+        );
+    }
+    let (a, b) = covered_rgba(hits, &s.reference.hits, &gpu, &reference);
+    let n = a.len() / 4;
+    let rgb = |img: &[u8], covered_only: bool| {
+        let mut px = Vec::with_capacity(hits.len() * 3);
+        for (i, (h, r)) in hits.iter().zip(&s.reference.hits).enumerate() {
+            if covered_only && h.is_none() && r.is_none() {
+                px.extend_from_slice(&[0, 0, 0]);
+            } else {
+                px.extend_from_slice(&img[i * 4..i * 4 + 3]);
+            }
+        }
+        image::RgbImage::from_raw(s.size.0, s.size.1, px)
+    };
+    let ssim = match (rgb(&gpu, true), rgb(&reference, true)) {
+        (Some(x), Some(y)) => {
+            image_compare::rgb_similarity_structure(&image_compare::Algorithm::MSSIMSimple, &x, &y)
+                .ok()
+                .map(|sim| sim.score)
+        }
+        _ => None,
+    };
+    Ok((
+        ssbvb_voxel::accuracy::psnr_rgba8(&a, &b).map(|p| (p, n)),
+        ssim,
+    ))
+}

@@ -1,0 +1,86 @@
+//! Timing frames: wall time of each frame's submit and wait, the median over the timed
+//! ones, and one profiled frame for per-pass times.
+
+use std::time::Instant;
+
+use anyhow::Result;
+use ssbvb_gpu::GpuContext;
+use ssbvb_gpu::scene::GpuScene;
+use ssbvb_passes::{FrameStats, Profiling, Renderer};
+use ssbvb_voxel::camera::Camera;
+
+/// The median of `v` (sorts it; the upper one of an even count).
+pub(crate) fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Renders `frames` frames (at least one), each waited for, and returns their wall times
+/// (ms) in order.
+pub(crate) fn timed_frames(
+    ctx: &GpuContext,
+    renderer: &mut Renderer,
+    gpu_scene: &mut GpuScene,
+    camera: &Camera,
+    frames: usize,
+) -> Result<Vec<f64>> {
+    let mut times = Vec::new();
+    for _ in 0..frames.max(1) {
+        let t0 = Instant::now();
+        renderer.render(ctx, gpu_scene, camera, Profiling::Off)?;
+        ctx.wait_idle()?;
+        times.push(t0.elapsed().as_secs_f64() * 1e3);
+    }
+    Ok(times)
+}
+
+/// The profiling of a measured frame: per-pass wall times on a software adapter, whose
+/// timestamps are unreliable; GPU timestamps elsewhere.
+pub(crate) fn profiling(ctx: &GpuContext) -> Profiling {
+    if ctx.report().is_software {
+        Profiling::TimestampsAndWall
+    } else {
+        Profiling::Timestamps
+    }
+}
+
+/// Frames of one renderer: its median frame time over `frames` timed frames after one
+/// warm-up, then one profiled frame (see [`profiling`]).
+pub(crate) struct TimedFrames {
+    /// Median wall time of the timed frames (ms).
+    pub(crate) frame_ms: f64,
+    /// The profiled frame.
+    pub(crate) stats: FrameStats,
+    software: bool,
+}
+
+impl TimedFrames {
+    /// Renders and times (see the type).
+    pub(crate) fn run(
+        ctx: &GpuContext,
+        renderer: &mut Renderer,
+        gpu_scene: &mut GpuScene,
+        camera: &Camera,
+        frames: usize,
+    ) -> Result<Self> {
+        renderer.render(ctx, gpu_scene, camera, Profiling::Off)?;
+        ctx.wait_idle()?;
+        let mut times = timed_frames(ctx, renderer, gpu_scene, camera, frames)?;
+        let stats = renderer.render(ctx, gpu_scene, camera, profiling(ctx))?;
+        Ok(Self {
+            frame_ms: median(&mut times),
+            stats,
+            software: ctx.report().is_software,
+        })
+    }
+
+    /// The time of pass `name` in the profiled frame (ms).
+    pub(crate) fn pass_ms(&self, name: &str) -> Option<f64> {
+        let p = self.stats.passes.iter().find(|p| p.name == name)?;
+        if self.software {
+            p.wall_ms
+        } else {
+            p.gpu_ms.or(p.wall_ms)
+        }
+    }
+}

@@ -1,0 +1,133 @@
+//! The techniques `ssbvb bench` compares: each a bundled pipeline file, optionally with
+//! one pass parameter changed, and the finest level it supports. Adding a technique is one
+//! entry in [`TECHNIQUES`].
+
+use anyhow::{Context, Result};
+use ssbvb_graph::{BillboardMode, PassKind};
+
+use crate::bench::args::{BenchArgs, Preset};
+
+/// One benchmarked technique.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Technique {
+    /// Name in reports and in `--techniques`.
+    pub(crate) name: &'static str,
+    /// Bundled pipeline file.
+    pub(crate) pipeline: &'static str,
+    /// A parameter changed from the file's (returns whether it changed the kind).
+    pub(crate) edit: Option<fn(&mut PassKind) -> bool>,
+    /// Highest level the technique supports.
+    pub(crate) max_level: u32,
+}
+
+/// Every technique, in report order.
+pub(crate) const TECHNIQUES: &[Technique] = &[
+    // The paper's frame: one billboard per covered pixel.
+    Technique {
+        name: "ssbvb-flat",
+        pipeline: "ssbvb_flat.ron",
+        edit: None,
+        max_level: 16,
+    },
+    Technique {
+        name: "ssbvb-raybox",
+        pipeline: "ssbvb_flat.ron",
+        edit: Some(|k| match k {
+            PassKind::Billboards(b) => {
+                b.mode = BillboardMode::RayBox;
+                true
+            }
+            _ => false,
+        }),
+        max_level: 16,
+    },
+    // The default pipeline: each visible voxel appended once.
+    Technique {
+        name: "ssbvb-unique",
+        pipeline: "ssbvb.ron",
+        edit: None,
+        max_level: 16,
+    },
+    // The default pipeline with the billboards splatted in compute.
+    Technique {
+        name: "ssbvb-splat",
+        pipeline: "ssbvb_splat.ron",
+        edit: None,
+        max_level: 16,
+    },
+    Technique {
+        name: "dense-dda",
+        pipeline: "dense_dda.ron",
+        edit: None,
+        max_level: 8,
+    },
+    Technique {
+        name: "octree",
+        pipeline: "octree_ray_cast.ron",
+        edit: None,
+        max_level: 16,
+    },
+    Technique {
+        name: "cube-raster",
+        pipeline: "cube_raster.ron",
+        edit: None,
+        max_level: 16,
+    },
+    Technique {
+        name: "cube-raster-array",
+        pipeline: "cube_raster.ron",
+        edit: Some(|k| match k {
+            PassKind::CubeRaster(c) => {
+                c.merge_full_nodes = false;
+                true
+            }
+            _ => false,
+        }),
+        max_level: 16,
+    },
+    // RastaVox at pixel error 0 (every chunk at its finest level: comparable with the
+    // exact techniques); `--preset rastavox` sweeps the pixel error.
+    Technique {
+        name: "rastavox",
+        pipeline: "rastavox.ron",
+        edit: Some(|k| match k {
+            PassKind::RastaVox(r) => {
+                r.pixel_error = 0.0;
+                true
+            }
+            _ => false,
+        }),
+        max_level: 16,
+    },
+];
+
+/// Technique names, for `--techniques`.
+fn technique_names() -> Vec<&'static str> {
+    TECHNIQUES.iter().map(|t| t.name).collect()
+}
+
+/// The techniques a run measures: those named with `--techniques` (an error names the
+/// known ones), else all, or for the study all but the per-pixel SSBVB variants.
+pub(crate) fn select(args: &BenchArgs) -> Result<Vec<&'static Technique>> {
+    Ok(match &args.techniques {
+        // The study's coarse models make cells span dozens of pixels: the per-pixel SSBVB
+        // then draws each voxel once per pixel it covers, so the study runs the
+        // unique-voxel SSBVB; name the others with --techniques to include them.
+        None if matches!(args.preset, Preset::Study) => TECHNIQUES
+            .iter()
+            .filter(|t| !matches!(t.name, "ssbvb-flat" | "ssbvb-raybox"))
+            .collect(),
+        None => TECHNIQUES.iter().collect(),
+        Some(names) => names
+            .iter()
+            .map(|n| {
+                TECHNIQUES.iter().find(|t| t.name == n).with_context(|| {
+                    format!(
+                        "unknown technique `{n}`; known: {}",
+                        technique_names().join(", ")
+                    )
+                })
+            })
+            .collect::<Result<_>>()?,
+    })
+}

@@ -1,0 +1,522 @@
+//! The device: adapter choice checked against a pipeline's requirements, the device and
+//! queue, validation errors as Rust errors (see the crate docs).
+
+use std::sync::{Arc, Mutex};
+
+use crate::requirements::{Requirements, Verdict};
+
+/// Errors of the GPU layer.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No adapter could be found or created.
+    #[error("no GPU adapter found ({tried}); {hint}")]
+    NoAdapter {
+        /// What was tried.
+        tried: String,
+        /// What to install or set.
+        hint: String,
+    },
+    /// The adapter refused to create a device.
+    #[error("cannot create a device on {adapter}: {message}")]
+    RequestDevice {
+        /// Adapter name.
+        adapter: String,
+        /// wgpu's message.
+        message: String,
+    },
+    /// wgpu reported a validation, out-of-memory or internal error.
+    #[error("wgpu {kind} error in {label}: {message}")]
+    Wgpu {
+        /// What was being done.
+        label: String,
+        /// "validation", "out-of-memory" or "internal".
+        kind: &'static str,
+        /// wgpu's message.
+        message: String,
+    },
+    /// Adapters exist, but none has what the pipeline needs.
+    #[error("no adapter can run this pipeline ({details}); {hint}")]
+    NoSuitableAdapter {
+        /// Each adapter seen (name, backend) with what it lacks.
+        details: String,
+        /// What to install or set.
+        hint: String,
+    },
+    /// Waiting for the device or mapping a buffer failed.
+    #[error("GPU readback of {label} failed: {message}")]
+    Readback {
+        /// What was being read.
+        label: String,
+        /// Why.
+        message: String,
+    },
+    /// Writing an image failed.
+    #[error("cannot write {path}: {message}")]
+    Write {
+        /// The file.
+        path: String,
+        /// Why.
+        message: String,
+    },
+}
+
+/// What adapter a context runs on, for reports and benchmark output.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct AdapterReport {
+    /// Adapter name (e.g. `llvmpipe (LLVM 15.0.6, 256 bits)`).
+    pub name: String,
+    /// Backend (Vulkan, Gl, …).
+    pub backend: String,
+    /// Device type (DiscreteGpu, Cpu, …).
+    pub device_type: String,
+    /// Driver and driver info.
+    pub driver: String,
+    /// Whether it is a software rasterizer (absolute timings mean little there).
+    pub is_software: bool,
+    /// Whether GPU timestamp queries are enabled (inside passes as well).
+    pub timestamps: bool,
+    /// Format substitutions taken because the adapter lacks the pipeline's format:
+    /// `wanted -> used (who)`.
+    pub fallbacks: Vec<String>,
+}
+
+impl AdapterReport {
+    /// The report of an adapter whose device has `features`, with the format `fallbacks`
+    /// taken.
+    fn new(info: &wgpu::AdapterInfo, features: wgpu::Features, fallbacks: Vec<String>) -> Self {
+        AdapterReport {
+            name: info.name.clone(),
+            backend: format!("{:?}", info.backend),
+            device_type: format!("{:?}", info.device_type),
+            driver: format!("{} {}", info.driver, info.driver_info)
+                .trim()
+                .to_string(),
+            is_software: is_software(info),
+            timestamps: features.contains(
+                wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
+            ),
+            fallbacks,
+        }
+    }
+}
+
+impl std::fmt::Display for AdapterReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} ({}, {}{}{})",
+            self.name,
+            self.backend,
+            self.device_type,
+            if self.driver.is_empty() {
+                String::new()
+            } else {
+                format!(", {}", self.driver)
+            },
+            if self.is_software {
+                ", software: timings are not representative"
+            } else {
+                ""
+            }
+        )
+    }
+}
+
+/// Options for creating a context.
+#[derive(Debug, Clone, Default)]
+pub struct ContextOptions {
+    /// Adapter preference; `None` reads `SSBVB_ADAPTER` from the environment.
+    pub adapter: Option<AdapterChoice>,
+    /// What the pipeline needs; adapters lacking any of it are skipped. `None`: any adapter.
+    pub requirements: Option<Requirements>,
+}
+
+/// One adapter and whether it can run a pipeline (`ssbvb adapter` lists these).
+#[derive(Debug, Clone)]
+pub struct AdapterVerdict {
+    /// Name.
+    pub name: String,
+    /// Backend.
+    pub backend: String,
+    /// Device type.
+    pub device_type: String,
+    /// Whether the adapter choice (`SSBVB_ADAPTER`) allows it.
+    pub allowed: bool,
+    /// What it lacks and which fallbacks it would take.
+    pub verdict: Verdict,
+}
+
+/// Which adapter to prefer.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum AdapterChoice {
+    /// The best hardware adapter, else software (the default).
+    Auto,
+    /// Only a real GPU.
+    Hardware,
+    /// Only a software adapter (lavapipe, then llvmpipe).
+    Software,
+    /// The first adapter whose name contains this (case-insensitive).
+    Named(String),
+}
+
+impl AdapterChoice {
+    /// Whether this choice allows the adapter.
+    pub fn allows(&self, info: &wgpu::AdapterInfo) -> bool {
+        match self {
+            AdapterChoice::Auto => true,
+            AdapterChoice::Hardware => !is_software(info),
+            AdapterChoice::Software => is_software(info),
+            AdapterChoice::Named(n) => info
+                .name
+                .to_ascii_lowercase()
+                .contains(&n.to_ascii_lowercase()),
+        }
+    }
+
+    /// Parses `SSBVB_ADAPTER`-style text: `auto`, `hardware`, `software`, or a name.
+    pub fn parse(s: &str) -> Self {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "" | "auto" => AdapterChoice::Auto,
+            "hardware" | "gpu" => AdapterChoice::Hardware,
+            "software" | "cpu" => AdapterChoice::Software,
+            _ => AdapterChoice::Named(s.trim().to_string()),
+        }
+    }
+}
+
+/// Device memory and object counts ([`GpuContext::memory_counters`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct MemoryCounters {
+    /// Bytes of device memory allocated for buffers.
+    pub buffer_bytes: u64,
+    /// Bytes of device memory allocated for textures.
+    pub texture_bytes: u64,
+    /// Live buffers.
+    pub buffers: u64,
+    /// Live textures.
+    pub textures: u64,
+    /// Live bind groups.
+    pub bind_groups: u64,
+}
+
+/// A device with its queue and what it can do.
+pub struct GpuContext {
+    /// The wgpu instance (kept for surfaces).
+    pub instance: wgpu::Instance,
+    /// The chosen adapter.
+    pub adapter: wgpu::Adapter,
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    report: AdapterReport,
+    uncaptured: Arc<Mutex<Vec<String>>>,
+}
+
+impl std::fmt::Debug for GpuContext {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GpuContext")
+            .field("adapter", &self.report)
+            .finish()
+    }
+}
+
+/// Hint printed when no adapter exists or none fits.
+pub const NO_ADAPTER_HINT: &str = "install a Vulkan driver (on Debian/Ubuntu without a GPU: \
+     `sudo apt-get install -y mesa-vulkan-drivers libvulkan1` for Mesa's lavapipe), or run \
+     `cargo xtask test`, which installs it when it can";
+
+/// The instance headless commands use: every native backend (narrowed by
+/// `WGPU_BACKEND`), validation on (off with `WGPU_VALIDATION=0`), and no window-system
+/// display, so commands that open no window do not probe X11 or Wayland.
+fn headless_instance() -> (wgpu::Instance, wgpu::Backends) {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends =
+        wgpu::Backends::VULKAN | wgpu::Backends::GL | wgpu::Backends::METAL | wgpu::Backends::DX12;
+    desc.flags = wgpu::InstanceFlags::VALIDATION | wgpu::InstanceFlags::DEBUG;
+    let all = desc.backends;
+    let mut desc = desc.with_env();
+    // `WGPU_BACKEND=` (set but empty) means no preference, not no backend.
+    if desc.backends.is_empty() {
+        desc.backends = all;
+    }
+    let backends = desc.backends;
+    (wgpu::Instance::new(desc), backends)
+}
+
+/// The first of `adapters` (best first) that has what `req` asks, with its verdict; else
+/// one line per adapter saying what it lacks. Skipped adapters are logged at info level.
+pub fn first_fitting(
+    adapters: Vec<wgpu::Adapter>,
+    req: &Requirements,
+) -> Result<(wgpu::Adapter, Verdict), Vec<String>> {
+    let mut refused = Vec::new();
+    for adapter in adapters {
+        let verdict = req.check(&adapter);
+        if verdict.fits() {
+            return Ok((adapter, verdict));
+        }
+        let info = adapter.get_info();
+        let line = format!(
+            "{} [{:?}] lacks: {}",
+            info.name,
+            info.backend,
+            verdict.missing.join("; ")
+        );
+        log::info!("adapter skipped: {line}");
+        refused.push(line);
+    }
+    Err(refused)
+}
+
+/// Rank of an adapter for `Auto`: lower is better. Public for the viewer, which ranks the
+/// adapters that can present to its window the same way.
+pub fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
+    let ty = match info.device_type {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
+    };
+    // Among equals, Vulkan first (lavapipe before GL llvmpipe), GL last.
+    let backend = match info.backend {
+        wgpu::Backend::Vulkan => 0,
+        wgpu::Backend::Metal | wgpu::Backend::Dx12 => 1,
+        wgpu::Backend::Gl => 3,
+        _ => 2,
+    };
+    (ty, backend)
+}
+
+fn is_software(info: &wgpu::AdapterInfo) -> bool {
+    info.device_type == wgpu::DeviceType::Cpu
+        || ["llvmpipe", "lavapipe", "swiftshader", "warp", "software"]
+            .iter()
+            .any(|s| info.name.to_ascii_lowercase().contains(s))
+}
+
+impl GpuContext {
+    /// Creates a headless context on the preferred adapter that has what
+    /// `options.requirements` asks (see the crate docs).
+    pub fn new_headless(options: &ContextOptions) -> Result<Self, GpuError> {
+        let choice = options.adapter.clone().unwrap_or_else(|| {
+            AdapterChoice::parse(&std::env::var("SSBVB_ADAPTER").unwrap_or_default())
+        });
+        let (instance, backends) = headless_instance();
+        let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
+        let seen: Vec<String> = adapters
+            .iter()
+            .map(|a| format!("{} [{:?}]", a.get_info().name, a.get_info().backend))
+            .collect();
+        adapters.retain(|a| choice.allows(&a.get_info()));
+        adapters.sort_by_key(|a| rank(&a.get_info()));
+        if adapters.is_empty() {
+            return Err(GpuError::NoAdapter {
+                tried: format!(
+                    "backends {backends:?}, choice {choice:?}, adapters seen: {}",
+                    if seen.is_empty() {
+                        "none".to_string()
+                    } else {
+                        seen.join(", ")
+                    }
+                ),
+                hint: NO_ADAPTER_HINT.to_string(),
+            });
+        }
+        let Some(req) = &options.requirements else {
+            return Self::from_adapter(instance, adapters.swap_remove(0), Vec::new());
+        };
+        match first_fitting(adapters, req) {
+            Ok((adapter, verdict)) => {
+                Self::from_adapter(instance, adapter, verdict.fallback_notes())
+            }
+            Err(refused) => Err(GpuError::NoSuitableAdapter {
+                details: refused.join(" | "),
+                hint: NO_ADAPTER_HINT.to_string(),
+            }),
+        }
+    }
+
+    /// Every adapter the headless instance sees, best first, each with its verdict on
+    /// `requirements` and whether `SSBVB_ADAPTER` allows it.
+    pub fn list_adapters(requirements: &Requirements) -> Vec<AdapterVerdict> {
+        let choice = AdapterChoice::parse(&std::env::var("SSBVB_ADAPTER").unwrap_or_default());
+        let (instance, backends) = headless_instance();
+        let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
+        adapters.sort_by_key(|a| rank(&a.get_info()));
+        adapters
+            .iter()
+            .map(|a| {
+                let info = a.get_info();
+                AdapterVerdict {
+                    name: info.name.clone(),
+                    backend: format!("{:?}", info.backend),
+                    device_type: format!("{:?}", info.device_type),
+                    allowed: choice.allows(&info),
+                    verdict: requirements.check(a),
+                }
+            })
+            .collect()
+    }
+
+    /// Creates the device on a chosen adapter with the features ssbvb uses when present.
+    /// `fallbacks` lists the format substitutions the requirements check chose.
+    pub fn from_adapter(
+        instance: wgpu::Instance,
+        adapter: wgpu::Adapter,
+        fallbacks: Vec<String>,
+    ) -> Result<Self, GpuError> {
+        let info = adapter.get_info();
+        let wanted = wgpu::Features::TIMESTAMP_QUERY
+            | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
+            | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES
+            | wgpu::Features::DEPTH32FLOAT_STENCIL8
+            | wgpu::Features::INDIRECT_FIRST_INSTANCE
+            | wgpu::Features::FLOAT32_FILTERABLE
+            // Counters (fragments shaded per pass) where the adapter has them.
+            | wgpu::Features::PIPELINE_STATISTICS_QUERY
+            // The exact GPU voxelization (f64 separating-axis test) where present.
+            | wgpu::Features::SHADER_F64;
+        let features = adapter.features() & wanted;
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("ssbvb"),
+            required_features: features,
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::RequestDevice {
+            adapter: info.name.clone(),
+            message: e.to_string(),
+        })?;
+        let uncaptured = Arc::new(Mutex::new(Vec::new()));
+        let sink = uncaptured.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            log::error!("uncaptured wgpu error: {e}");
+            if let Ok(mut v) = sink.lock() {
+                v.push(e.to_string());
+            }
+        }));
+        let report = AdapterReport::new(&info, features, fallbacks);
+        Ok(Self {
+            instance,
+            adapter,
+            device,
+            queue,
+            report,
+            uncaptured,
+        })
+    }
+
+    /// Wraps a device the caller already has (embedding ssbvb in an existing wgpu
+    /// renderer). The device keeps the caller's features and limits; errors outside error
+    /// scopes go to the caller's own handler, not to [`GpuContext::take_uncaptured_errors`].
+    pub fn from_parts(
+        instance: wgpu::Instance,
+        adapter: wgpu::Adapter,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+    ) -> Self {
+        let report = AdapterReport::new(&adapter.get_info(), device.features(), Vec::new());
+        Self {
+            instance,
+            adapter,
+            device,
+            queue,
+            report,
+            uncaptured: Arc::new(Mutex::new(Vec::new())),
+        }
+    }
+
+    /// The adapter this context runs on.
+    pub fn report(&self) -> &AdapterReport {
+        &self.report
+    }
+
+    /// Whether the device has `feature`.
+    pub fn has(&self, feature: wgpu::Features) -> bool {
+        self.device.features().contains(feature)
+    }
+
+    /// The best depth-stencil format: `Depth32FloatStencil8` when available (32-bit depth
+    /// for precision at 4096³), else `Depth24PlusStencil8` (always available).
+    pub fn depth_stencil_format(&self) -> wgpu::TextureFormat {
+        if self.has(wgpu::Features::DEPTH32FLOAT_STENCIL8) {
+            wgpu::TextureFormat::Depth32FloatStencil8
+        } else {
+            wgpu::TextureFormat::Depth24PlusStencil8
+        }
+    }
+
+    /// Runs `f` inside validation, out-of-memory and internal error scopes and turns the
+    /// first error into [`GpuError::Wgpu`] naming `label`.
+    pub fn validated<T>(
+        &self,
+        label: &str,
+        f: impl FnOnce(&wgpu::Device) -> T,
+    ) -> Result<T, GpuError> {
+        let internal = self.device.push_error_scope(wgpu::ErrorFilter::Internal);
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let out = f(&self.device);
+        let errors = [
+            ("validation", pollster::block_on(validation.pop())),
+            ("out-of-memory", pollster::block_on(oom.pop())),
+            ("internal", pollster::block_on(internal.pop())),
+        ];
+        for (kind, e) in errors {
+            if let Some(e) = e {
+                return Err(GpuError::Wgpu {
+                    label: label.to_string(),
+                    kind,
+                    message: e.to_string(),
+                });
+            }
+        }
+        Ok(out)
+    }
+
+    /// What the device holds now, from wgpu's internal counters (the `counters` feature;
+    /// backends that do not count report zeros): the soak's leak check.
+    pub fn memory_counters(&self) -> MemoryCounters {
+        let hal = self.device.get_internal_counters().hal;
+        let n = |v: isize| v.max(0) as u64;
+        MemoryCounters {
+            buffer_bytes: n(hal.buffer_memory.read()),
+            texture_bytes: n(hal.texture_memory.read()),
+            buffers: n(hal.buffers.read()),
+            textures: n(hal.textures.read()),
+            bind_groups: n(hal.bind_groups.read()),
+        }
+    }
+
+    /// Errors wgpu reported outside any error scope since the last call (empty is good).
+    pub fn take_uncaptured_errors(&self) -> Vec<String> {
+        self.uncaptured
+            .lock()
+            .map(|mut v| std::mem::take(&mut *v))
+            .unwrap_or_default()
+    }
+
+    /// Blocks until all submitted work is done.
+    pub fn wait_idle(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Readback {
+                label: "device poll".into(),
+                message: e.to_string(),
+            })
+    }
+
+    /// Creates a shader module from WGSL, failing with the compiler's message (file, line)
+    /// instead of a panic or a deferred error.
+    pub fn shader(&self, label: &str, wgsl: &str) -> Result<wgpu::ShaderModule, GpuError> {
+        self.validated(label, |d| {
+            d.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(label),
+                source: wgpu::ShaderSource::Wgsl(wgsl.into()),
+            })
+        })
+    }
+}

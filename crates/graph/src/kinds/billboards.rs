@@ -1,0 +1,73 @@
+//! `Billboards`: one rasterized quad per SSBVB entry, and the parameters `SplatBillboards`
+//! shares.
+
+use serde::{Deserialize, Serialize};
+
+use super::formats::GBUFFER_WRITES;
+use super::shared::one;
+use super::spec::{KindSpec, PassStage, SlotClass, SlotDesc};
+use crate::format::BufferLayout;
+
+/// How billboards are shaded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
+pub enum BillboardMode {
+    /// A flat quad at the voxel centre's depth (the paper).
+    #[default]
+    Flat,
+    /// Per fragment, the exact ray–voxel-box intersection (depth and face normal).
+    RayBox,
+}
+
+/// Parameters of `Billboards`, and of `SplatBillboards` through
+/// [`SplatBillboardsParams`](crate::SplatBillboardsParams).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BillboardsParams {
+    /// Flat camera-facing quads (the paper) or quads whose fragments intersect the voxel
+    /// box exactly (ray–box splatting).
+    #[serde(default)]
+    pub mode: BillboardMode,
+    /// Scale of the quad relative to the voxel's projected footprint.
+    #[serde(default = "one")]
+    pub size_scale: f32,
+}
+
+impl Default for BillboardsParams {
+    fn default() -> Self {
+        Self {
+            mode: BillboardMode::Flat,
+            size_scale: one(),
+        }
+    }
+}
+
+/// The slots of `Billboards` and `SplatBillboards`: the SSBVB, the billboard draw list read
+/// as `draw` (an indirect draw, or a storage buffer), and the G-buffer written.
+pub(crate) const fn billboard_slots(draw: SlotClass) -> [SlotDesc; 7] {
+    [
+        SlotDesc::read("ssbvb", SlotClass::StorageBuffer(BufferLayout::VoxelSlot)),
+        SlotDesc::read("billboard_draw", draw),
+        GBUFFER_WRITES[0],
+        GBUFFER_WRITES[1],
+        GBUFFER_WRITES[2],
+        GBUFFER_WRITES[3],
+        GBUFFER_WRITES[4],
+    ]
+}
+
+impl KindSpec for BillboardsParams {
+    const NAME: &'static str = "Billboards";
+    const STAGE: PassStage = PassStage::Render;
+    const SLOTS: &'static [SlotDesc] =
+        &billboard_slots(SlotClass::IndirectBuffer(BufferLayout::DrawIndirect));
+    fn problems(&self) -> Vec<String> {
+        if self.size_scale.is_finite() && self.size_scale > 0.0 {
+            Vec::new()
+        } else {
+            vec![format!(
+                "size_scale must be a positive number, got {}",
+                self.size_scale
+            )]
+        }
+    }
+}

@@ -1,0 +1,33 @@
+//! `OctreeRayCast`: the baseline ray cast through the sparse voxel octree.
+
+use serde::{Deserialize, Serialize};
+
+use super::formats::GBUFFER_WRITES;
+use super::shared::{default_ray_cast_steps, steps_problems};
+use super::spec::{KindSpec, PassStage, SlotDesc};
+
+/// Parameters of `OctreeRayCast`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct OctreeRayCastParams {
+    /// Most traversal steps (child visits, descents and pops) per ray and instance.
+    #[serde(default = "default_ray_cast_steps")]
+    pub max_steps: u32,
+}
+
+impl Default for OctreeRayCastParams {
+    fn default() -> Self {
+        Self {
+            max_steps: default_ray_cast_steps(),
+        }
+    }
+}
+
+impl KindSpec for OctreeRayCastParams {
+    const NAME: &'static str = "OctreeRayCast";
+    const STAGE: PassStage = PassStage::Render;
+    const SLOTS: &'static [SlotDesc] = GBUFFER_WRITES;
+    fn problems(&self) -> Vec<String> {
+        steps_problems(self.max_steps)
+    }
+}

@@ -1,0 +1,54 @@
+//! `RayMarchFilter`: the compute pass that fills the SSBVB with the first voxel per pixel.
+
+use serde::{Deserialize, Serialize};
+
+use super::formats::ENTRY;
+use super::shared::steps_problems;
+use super::spec::{KindSpec, PassStage, SlotClass, SlotDesc};
+use crate::format::BufferLayout;
+
+/// Parameters of `RayMarchFilter`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RayMarchFilterParams {
+    /// Most DDA steps per ray (cells, pages and empty blocks each count one).
+    #[serde(default = "default_max_steps")]
+    pub max_steps: u32,
+    /// Append each hit voxel once per frame (the first pixel to reach it claims it)
+    /// instead of once per covered pixel. Same image; far fewer billboards when voxels
+    /// span many pixels (a level finer than the screen needs is then not required).
+    /// Off by default: the paper's SSBVB holds one entry per covered pixel.
+    #[serde(default)]
+    pub unique_voxels: bool,
+}
+
+fn default_max_steps() -> u32 {
+    1024
+}
+
+impl Default for RayMarchFilterParams {
+    fn default() -> Self {
+        Self {
+            max_steps: default_max_steps(),
+            unique_voxels: false,
+        }
+    }
+}
+
+impl KindSpec for RayMarchFilterParams {
+    const NAME: &'static str = "RayMarchFilter";
+    const STAGE: PassStage = PassStage::Compute;
+    const SLOTS: &'static [SlotDesc] = &[
+        SlotDesc::read("entry", SlotClass::SampledTexture(ENTRY)),
+        SlotDesc::write("ssbvb", SlotClass::StorageBuffer(BufferLayout::VoxelSlot)),
+        SlotDesc::write(
+            "billboard_draw",
+            SlotClass::StorageBuffer(BufferLayout::DrawIndirect),
+        ),
+    ];
+    /// `clear_draw` resets the indirect draw before `main` appends the hits to it.
+    const ENTRY_POINTS: &'static [&'static str] = &["clear_draw", "main"];
+    fn problems(&self) -> Vec<String> {
+        steps_problems(self.max_steps)
+    }
+}

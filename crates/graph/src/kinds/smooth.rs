@@ -1,0 +1,58 @@
+//! `Smooth`: the distance-dependent Gaussian over the voxel pixels' normals.
+
+use serde::{Deserialize, Serialize};
+
+use super::formats::{DEPTH_STENCIL, NORMAL};
+use super::shared::one;
+use super::spec::{KindSpec, PassStage, SlotClass, SlotDesc};
+
+/// Parameters of `Smooth`.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SmoothParams {
+    /// MaxI: the largest sample offset in pixels.
+    #[serde(default = "one")]
+    pub max_i: f32,
+    /// MinDist: the distance (world units) at and below which the offset is MaxI.
+    #[serde(default = "default_min_dist")]
+    pub min_dist: f32,
+}
+
+fn default_min_dist() -> f32 {
+    0.5
+}
+
+impl Default for SmoothParams {
+    fn default() -> Self {
+        Self {
+            max_i: one(),
+            min_dist: default_min_dist(),
+        }
+    }
+}
+
+impl KindSpec for SmoothParams {
+    const NAME: &'static str = "Smooth";
+    const STAGE: PassStage = PassStage::Render;
+    const SLOTS: &'static [SlotDesc] = &[
+        SlotDesc::read("gbuffer_normal", SlotClass::SampledTexture(NORMAL)),
+        SlotDesc::read(
+            "depth_stencil",
+            SlotClass::DepthStencilAttachment(DEPTH_STENCIL),
+        ),
+        SlotDesc::write("smoothed_normal", SlotClass::ColorAttachment(NORMAL)),
+    ];
+    fn problems(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if !(self.max_i.is_finite() && self.max_i >= 0.0) {
+            out.push(format!("max_i must be a number >= 0, got {}", self.max_i));
+        }
+        if !(self.min_dist.is_finite() && self.min_dist >= 0.0) {
+            out.push(format!(
+                "min_dist must be a number >= 0, got {}",
+                self.min_dist
+            ));
+        }
+        out
+    }
+}

@@ -1,0 +1,177 @@
+//! `empty_space`: the empty-space prepass (`EmptySpacePrepass`; `shaders/empty_space.wgsl`).
+//!
+//! Rasterizes the proxy mesh of every visible instance and keeps, per pixel, the nearest
+//! proxy surface under reversed Z:
+//!
+//! - `entry` (Rgba32Float): xyz = the object-space point where the pixel-centre ray enters
+//!   that proxy, w = instance index + 1 (index into the frame's visible instances; 0 = no
+//!   proxy under the pixel);
+//! - `prepass_depth` (Depth32Float): its depth (cleared to 0, test `Greater`).
+//!
+//! Three pipelines share one render pass:
+//!
+//! 1. front faces (cull back faces; proxy triangles are counter-clockwise seen from outside,
+//!    and the projection keeps that orientation in NDC) write the interpolated object-space
+//!    position;
+//! 2. back faces (cull front faces) write the camera's object-space position: a back face is
+//!    the nearest surface only where the ray starts inside a proxy or where the front face
+//!    was clipped by the near plane, and there the ray starts at the camera (`t = 0`);
+//! 3. for instances whose proxy holds the camera, a full-screen triangle at the far end of
+//!    the depth range (`GreaterEqual`, no depth write) writes the camera too: it fills the
+//!    pixels where that proxy's back faces were clipped by the near or far plane, so a
+//!    camera inside an object never loses the voxels around it.
+//!
+//! The ray-march filter only uses the entry to choose where to start; it never trusts it
+//! for the hit itself (see `ray_march_filter`).
+
+use ssbvb_gpu::wgpu;
+use ssbvb_graph::EmptySpacePrepassKind;
+
+use crate::runtime::recorder::{Recorder, slot_format};
+use crate::runtime::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
+use crate::runtime::registry::{PassImpl, PassInit};
+use crate::error::PassError;
+use crate::runtime::node::PassNode;
+use ssbvb_gpu::shaders;
+
+/// The compiled prepass.
+pub struct EmptySpace {
+    front: wgpu::RenderPipeline,
+    back: wgpu::RenderPipeline,
+    fill: wgpu::RenderPipeline,
+}
+
+impl PassImpl for EmptySpace {
+    type Params = EmptySpacePrepassKind;
+    const SHADER: &'static str = "empty_space.wgsl";
+
+    /// Compiles the three pipelines for `pass` (formats from the graph's resources).
+    fn new(init: &PassInit<'_>, _params: &EmptySpacePrepassKind) -> Result<Self, PassError> {
+        let (ctx, scene, pipeline, pass) = init.parts();
+        let module = ctx.shader("empty_space.wgsl", &shaders::source("empty_space.wgsl")?)?;
+        let entry_format = slot_format(ctx, pipeline, pass, "entry");
+        let depth_format = slot_format(ctx, pipeline, pass, "prepass_depth");
+        let label = format!("pass `{}`: empty_space pipelines", pass.name);
+        let (front, back, fill) = ctx.validated(&label, |d| {
+            let layout = pipeline_layout(d, "empty_space", scene, None);
+            let targets = [Some(entry_format.into())];
+            let proxy_vertex = [Some(wgpu::VertexBufferLayout {
+                array_stride: 16,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x4],
+            })];
+            let make = |label: &str,
+                        vs: &str,
+                        fs: &str,
+                        buffers: &[Option<wgpu::VertexBufferLayout>],
+                        cull: Option<wgpu::Face>,
+                        compare: wgpu::CompareFunction,
+                        write: bool| {
+                render_pipeline(
+                    d,
+                    &RenderSpec {
+                        vs_entry: vs,
+                        fs_entry: fs,
+                        buffers,
+                        cull_mode: cull,
+                        depth_stencil: Some(wgpu::DepthStencilState {
+                            format: depth_format,
+                            depth_write_enabled: Some(write),
+                            depth_compare: Some(compare),
+                            stencil: Default::default(),
+                            bias: Default::default(),
+                        }),
+                        ..RenderSpec::new(label, &module, &layout, &targets)
+                    },
+                )
+            };
+            use wgpu::CompareFunction::{Greater, GreaterEqual};
+            (
+                make(
+                    "empty_space front faces",
+                    "vs_main",
+                    "fs_main",
+                    &proxy_vertex,
+                    Some(wgpu::Face::Back),
+                    Greater,
+                    true,
+                ),
+                make(
+                    "empty_space back faces",
+                    "vs_main",
+                    "fs_back",
+                    &proxy_vertex,
+                    Some(wgpu::Face::Front),
+                    Greater,
+                    true,
+                ),
+                make(
+                    "empty_space camera inside",
+                    "vs_fill",
+                    "fs_back",
+                    &[],
+                    None,
+                    GreaterEqual,
+                    false,
+                ),
+            )
+        })?;
+        Ok(Self { front, back, fill })
+    }
+}
+
+impl PassNode for EmptySpace {
+    fn record(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder<'_>,
+    ) -> Result<(), PassError> {
+        let scene = rec.scene;
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(&rec.pass.name),
+            // Cleared to w = 0: no instance.
+            color_attachments: &[rec.color_attachment("entry")],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &rec.texture("prepass_depth").view,
+                depth_ops: Some(wgpu::Operations {
+                    // Reversed Z: 0 is the far end.
+                    load: rec.load_op("prepass_depth", 0.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: rec.render_timestamps(),
+            ..Default::default()
+        });
+        if scene.visible.is_empty() {
+            return Ok(());
+        }
+        pass.set_bind_group(0, &scene.bind_group, &[]);
+        pass.set_vertex_buffer(0, scene.proxy_vertices.slice(..));
+        pass.set_index_buffer(scene.proxy_indices.slice(..), wgpu::IndexFormat::Uint32);
+        for pipeline in [&self.front, &self.back] {
+            pass.set_pipeline(pipeline);
+            for (i, v) in scene.visible.iter().enumerate() {
+                let p = v.proxy;
+                if p.index_count == 0 {
+                    continue;
+                }
+                // instance_index = i: the instance's entry in `instances`.
+                let i = i as u32;
+                pass.draw_indexed(
+                    p.first_index..p.first_index + p.index_count,
+                    p.base_vertex,
+                    i..i + 1,
+                );
+            }
+        }
+        pass.set_pipeline(&self.fill);
+        for (i, v) in scene.visible.iter().enumerate() {
+            if v.camera_inside {
+                let i = i as u32;
+                pass.draw(0..3, i..i + 1);
+            }
+        }
+        Ok(())
+    }
+}

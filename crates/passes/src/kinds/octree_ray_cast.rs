@@ -1,0 +1,319 @@
+//! `octree_ray_cast`: the sparse-voxel-octree baseline (`OctreeRayCast`;
+//! `shaders/octree_ray_cast.wgsl`).
+//!
+//! A render pass drawing one fullscreen triangle into the G-buffer (the same attachments,
+//! formats, clear/load rules, `Greater` depth test and stencil = voxel as the billboards;
+//! see [`crate::kinds::triangles`]): per pixel the fragment shader casts the pixel's ray
+//! through every visible instance with a stack-based, front-to-back descent of the object's
+//! [`Svo`] (the pointer octree of `ssbvb_voxel::svo`, laid out level by level like an ESVO
+//! without contours) down to the instance's LOD level, and writes the nearest hit with its
+//! exact depth (`frag_depth`), the voxel's stored normal and the entered face's
+//! (`crate::kinds::gbuffer`). The shared smoothing and composite run after it unchanged.
+//!
+//! The octrees of every object are built with [`Svo::from_asset`] the first frame,
+//! concatenated (`svo_nodes_*`: `SvoNode`s of every level but each object's finest, which no
+//! traversal reads, child indices shifted by where the object starts; `svo_level_offsets`:
+//! per object [`SVO_STRIDE`] entries, the first node of each level and then the end) and
+//! bound for every later frame; an instance finds its object's octree through its LOD's
+//! `LodInfo::object`. Node `i` of level `l` is voxel `i` of LOD `l`, so the hit node's
+//! colour is read from the shared point cloud of the instance's LOD.
+//!
+//! # Limits
+//!
+//! - Levels above [`MAX_OCTREE_LEVEL`] (16, the shader's stack depth) and octrees larger
+//!   than [`NODE_CHUNKS`] bindings of the scene's chunk size are refused with
+//!   [`PassError::TooLarge`]; below that the nodes are split over the bindings, so no
+//!   binding exceeds the device's limit.
+//! - Cost per pixel: the instances whose boxes its ray enters before its best hit (the
+//!   instance hierarchy) × the nodes visited along the ray, bounded by `max_steps`.
+
+use ssbvb_gpu::wgpu::util::DeviceExt;
+use ssbvb_gpu::{GpuContext, wgpu};
+use ssbvb_graph::OctreeRayCastParams;
+use ssbvb_voxel::asset::VoxelAsset;
+use ssbvb_voxel::svo::{Svo, SvoNode};
+
+use crate::runtime::registry::{OwnBinding, OwnKind};
+use crate::runtime::counters::FrameCounters;
+use crate::kinds::ray_cast_counters::RayCastCounters;
+use crate::runtime::recorder::Recorder;
+use crate::kinds::gbuffer::PulledPipeline;
+use ssbvb_gpu::scene::GpuScene;
+use crate::runtime::registry::{KindNeeds, PassImpl, PassInit};
+use crate::error::PassError;
+use crate::runtime::node::{CounterSource, PassNode};
+
+/// The finest level the traversal supports (the WGSL stack depth).
+pub const MAX_OCTREE_LEVEL: u32 = 16;
+
+/// Entries of `svo_level_offsets` per object: levels 0..=16 and the end (`SVO_STRIDE` in
+/// the WGSL).
+pub const SVO_STRIDE: usize = MAX_OCTREE_LEVEL as usize + 2;
+
+/// Bindings the octree nodes are split over (`svo_nodes_0` … `svo_nodes_7`): with 128 MiB
+/// bindings, 2^27 nodes (bunny level 12 has 77 M).
+pub const NODE_CHUNKS: usize = 8;
+
+/// The compiled octree pass and the uploaded octrees of the scene.
+pub struct OctreeRayCast {
+    /// Reads nodes through the chunk switch.
+    pipeline: PulledPipeline,
+    /// The same shader specialized for octrees that fit one binding (`NODE_CHUNKS_USED =
+    /// 1`: no switch per node read, which is costly on the software adapter;
+    /// docs/benchmarks.md).
+    single: PulledPipeline,
+    /// The octrees fit one binding: `single` draws.
+    one_chunk: bool,
+    /// log2 of the nodes per binding (`NODE_CHUNK_BITS` in the WGSL).
+    chunk_bits: u32,
+    /// The bind group of every object's octree (which keeps its buffers alive), made the
+    /// first frame.
+    octrees: Option<wgpu::BindGroup>,
+    counters: RayCastCounters,
+}
+
+/// What the octree pass binds itself: the uploaded octree of the visible object.
+pub const OWN: &[OwnBinding] = &[
+    OwnBinding {
+        name: "svo_nodes_0",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "svo_nodes_1",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "svo_nodes_2",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "svo_nodes_3",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "svo_nodes_4",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "svo_nodes_5",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "svo_nodes_6",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "svo_nodes_7",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "svo_level_offsets",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "ray_counters",
+        kind: OwnKind::StorageReadWrite,
+    },
+];
+
+impl OctreeRayCast {
+    /// Refuses visible instances finer than the traversal's stack.
+    fn check_levels(scene: &GpuScene) -> Result<(), PassError> {
+        if let Some(v) = scene.visible.iter().find(|v| v.level > MAX_OCTREE_LEVEL) {
+            return Err(PassError::TooLarge(format!(
+                "OctreeRayCast: object {} at level {}; the octree traversal supports levels \
+                 up to {MAX_OCTREE_LEVEL}",
+                v.object, v.level
+            )));
+        }
+        Ok(())
+    }
+
+    /// Builds every object's octree and uploads them together.
+    fn upload(
+        &mut self,
+        ctx: &GpuContext,
+        assets: &[&VoxelAsset],
+    ) -> Result<wgpu::BindGroup, PassError> {
+        let (nodes, offsets) = concatenated_octrees(assets)?;
+        let chunk = 1usize << self.chunk_bits;
+        self.one_chunk = nodes.len() <= chunk;
+        let node_bytes = std::mem::size_of::<SvoNode>();
+        if nodes.len() > NODE_CHUNKS * chunk {
+            return Err(PassError::TooLarge(format!(
+                "OctreeRayCast: the octrees take {} MiB; the pass binds at most {NODE_CHUNKS} \
+                 × {} MiB of them",
+                (nodes.len() * node_bytes) >> 20,
+                (chunk * node_bytes) >> 20
+            )));
+        }
+        let label = "octree_ray_cast octree";
+        let bind_group = ctx.validated(label, |d| {
+            let node_buffers: Vec<wgpu::Buffer> = (0..NODE_CHUNKS)
+                .map(|i| {
+                    let part = nodes.get(i * chunk..).unwrap_or(&[]);
+                    let part = &part[..part.len().min(chunk)];
+                    // Empty bindings are invalid: an unused chunk gets one node.
+                    let zero = [SvoNode::default()];
+                    d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("octree_ray_cast svo_nodes"),
+                        contents: bytemuck::cast_slice(if part.is_empty() { &zero } else { part }),
+                        usage: wgpu::BufferUsages::STORAGE,
+                    })
+                })
+                .collect();
+            let offset_buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("octree_ray_cast svo_level_offsets"),
+                contents: bytemuck::cast_slice(&offsets),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+            let pipeline = if self.one_chunk {
+                &self.single
+            } else {
+                &self.pipeline
+            };
+            pipeline.bindings.own_bind_group(
+                d,
+                "octree_ray_cast",
+                &[
+                    ("svo_nodes_0", node_buffers[0].as_entire_binding()),
+                    ("svo_nodes_1", node_buffers[1].as_entire_binding()),
+                    ("svo_nodes_2", node_buffers[2].as_entire_binding()),
+                    ("svo_nodes_3", node_buffers[3].as_entire_binding()),
+                    ("svo_nodes_4", node_buffers[4].as_entire_binding()),
+                    ("svo_nodes_5", node_buffers[5].as_entire_binding()),
+                    ("svo_nodes_6", node_buffers[6].as_entire_binding()),
+                    ("svo_nodes_7", node_buffers[7].as_entire_binding()),
+                    ("svo_level_offsets", offset_buffer.as_entire_binding()),
+                    ("ray_counters", self.counters.binding()),
+                ],
+            )
+        })??;
+        Ok(bind_group)
+    }
+}
+
+/// Every asset's octree in one node array (child indices shifted by where each starts)
+/// and the level offsets, [`SVO_STRIDE`] per asset (levels past an asset's last repeat
+/// its end). At least one node.
+pub fn concatenated_octrees(assets: &[&VoxelAsset]) -> Result<(Vec<SvoNode>, Vec<u32>), PassError> {
+    let mut nodes: Vec<SvoNode> = Vec::new();
+    let mut offsets = Vec::with_capacity(assets.len() * SVO_STRIDE);
+    for asset in assets {
+        let svo = Svo::from_asset(asset)
+            .map_err(|e| PassError::BadScene(format!("OctreeRayCast: {e}")))?;
+        if svo.level_offsets.len() > SVO_STRIDE {
+            return Err(PassError::TooLarge(format!(
+                "OctreeRayCast: an octree of {} levels; the traversal supports levels up to \
+                 {MAX_OCTREE_LEVEL}",
+                svo.level_offsets.len() - 1
+            )));
+        }
+        let base = u32::try_from(nodes.len())
+            .map_err(|_| PassError::TooLarge("OctreeRayCast: over 2^32 octree nodes".into()))?;
+        // The finest level's nodes are never read (a hit is found in its parent's mask, and
+        // level 0 is a hit without a read): they are left out, ~3/4 of a surface's nodes.
+        // Their indices remain (virtual, past this object's nodes): ids are `node -
+        // offset[level]`.
+        let levels = svo.level_offsets.len() - 1;
+        let kept = svo.level_offsets[(levels - 1).max(1).min(levels)] as usize;
+        nodes.extend(svo.nodes[..kept.min(svo.nodes.len())].iter().map(|n| SvoNode {
+            child_mask: n.child_mask,
+            first_child: if n.child_mask == 0 { 0 } else { n.first_child + base },
+        }));
+        let end = base + svo.level_offsets.last().copied().unwrap_or(0);
+        let mut own: Vec<u32> = svo.level_offsets.iter().map(|o| o + base).collect();
+        own.resize(SVO_STRIDE, end);
+        offsets.extend(own);
+    }
+    if nodes.is_empty() {
+        nodes.push(SvoNode::default());
+    }
+    if offsets.is_empty() {
+        offsets.resize(SVO_STRIDE, 0);
+    }
+    Ok((nodes, offsets))
+}
+
+impl PassImpl for OctreeRayCast {
+    type Params = OctreeRayCastParams;
+    const SHADER: &'static str = "octree_ray_cast.wgsl";
+    const OWN: &'static [OwnBinding] = OWN;
+    // The counters are written in the fragment shader.
+    const NEEDS: KindNeeds = KindNeeds::new(
+        wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE,
+        NODE_CHUNKS as u64 + 2,
+    );
+
+    /// Compiles the pipeline for the formats bound to `pass`; `max_steps` becomes the WGSL
+    /// override `MAX_STEPS`.
+    const WHOLE_LEVELS: bool = true;
+
+    fn new(init: &PassInit<'_>, params: &OctreeRayCastParams) -> Result<Self, PassError> {
+        let max_steps = params.max_steps;
+        let chunk_bits = init.scene.chunks.octree_bits;
+        let pipeline = |chunks: usize| {
+            PulledPipeline::new::<Self>(
+                init,
+                &[
+                    ("MAX_STEPS", f64::from(max_steps)),
+                    ("NODE_CHUNK_BITS", f64::from(chunk_bits)),
+                    ("NODE_CHUNKS_USED", chunks as f64),
+                ],
+            )
+        };
+        Ok(Self {
+            pipeline: pipeline(NODE_CHUNKS)?,
+            single: pipeline(1)?,
+            one_chunk: true,
+            chunk_bits,
+            octrees: None,
+            counters: RayCastCounters::new(init.ctx),
+        })
+    }
+}
+
+impl PassNode for OctreeRayCast {
+    fn record(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder<'_>,
+    ) -> Result<(), PassError> {
+        Self::check_levels(rec.scene)?;
+        if self.octrees.is_none() && !rec.scene.visible.is_empty() {
+            let assets: Vec<&VoxelAsset> =
+                rec.scene.scene.objects.iter().map(|o| &*o.asset).collect();
+            self.octrees = Some(self.upload(rec.gpu, &assets)?);
+        }
+        let bind_group = self.octrees.as_ref().filter(|_| !rec.scene.visible.is_empty());
+        self.counters.clear(encoder);
+        let pipeline = if self.one_chunk {
+            &self.single
+        } else {
+            &self.pipeline
+        };
+        pipeline.record_fullscreen(encoder, rec, bind_group);
+        Ok(())
+    }
+
+    fn counters(&self, frame: &CounterSource<'_>, out: &mut FrameCounters) -> Result<(), PassError> {
+        let (rays, nodes) = self.counters.read(frame.gpu)?;
+        out.ray_cast_rays = Some(rays);
+        out.octree_nodes_per_ray = nodes;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn shader_declares_the_octree_and_max_steps() {
+        // Bindings and the SvoNode layout are checked by `cargo xtask validate-shaders`.
+        let src = ssbvb_gpu::shaders::source("octree_ray_cast.wgsl").unwrap();
+        assert!(src.contains("override MAX_STEPS: u32"));
+        assert!(src.contains("const STACK_DEPTH: u32 = 16u;"));
+        assert!(src.contains("const SVO_STRIDE: u32 = 18u;"));
+        assert_eq!(super::MAX_OCTREE_LEVEL, 16);
+        assert_eq!(super::SVO_STRIDE, 18);
+    }
+}

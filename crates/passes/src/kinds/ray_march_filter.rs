@@ -1,0 +1,391 @@
+//! `ray_march_filter`: the voxel filter (`RayMarchFilter`; `shaders/ray_march_filter.wgsl`).
+//!
+//! A compute pass, one thread per pixel: from the empty-space prepass's entry point it
+//! marches the sparse lookup of the pixel's instance with a hierarchical voxel DDA (empty
+//! coarse blocks and non-resident 16³ pages are crossed in one step) to the first voxel, and
+//! appends it to the SSBVB (`ssbvb`) with an atomic counter that is also the instance count
+//! of the billboard pass's indirect draw (`billboard_draw`): slots `0..count` are valid.
+//! The march follows the CPU reference's rules (`ssbvb_voxel::reference::dda`) in f32 (the
+//! WGSL header says how it stays robust). With several visible instances a pixel walks the
+//! hierarchy over their boxes (group 0 `instance_bvh`) and marches those it enters before
+//! its best hit: its cost follows the instances its ray meets, and overlaps stay exact.
+//!
+//! With `unique_voxels` each (visible instance, voxel) is appended once, by the first pixel
+//! to claim `claim_offsets[instance] + voxel id` in an open-addressing hash set of at least
+//! twice the filter's pixels: its memory follows the screen, and a voxel spanning n pixels
+//! is drawn once, not n times, which bounds the overdraw of a camera close to a surface (an
+//! instance whose keys would pass 2³² − 1 is not deduplicated).
+//!
+//! [`RayMarchFilter`]'s [`PassNode::counters`] are a few global atomics per ray with no
+//! workgroup reduction, whose barriers cost the software adapter more (docs/benchmarks.md).
+//! `clear_draw` resets the draw, then `main` runs workgroups of 16 × 16 (cheaper than 8 × 8
+//! there; 256 invocations is every adapter's minimum). A prepass and filter at a fraction of
+//! the screen (`ScreenScaled`) cast one ray per texel centre.
+
+use bytemuck::{Pod, Zeroable};
+use ssbvb_gpu::requirements::max_compute_invocations_per_workgroup;
+use ssbvb_gpu::{GpuContext, wgpu};
+use ssbvb_graph::RayMarchFilterParams;
+use ssbvb_voxel::asset::PackedVoxel;
+
+use crate::runtime::bindings::PassBindings;
+use crate::runtime::registry::{OwnBinding, OwnKind};
+use crate::runtime::counters::{FrameCounters, histogram_quantile};
+use crate::runtime::recorder::Recorder;
+use crate::runtime::pipelines::pipeline_layout;
+use crate::runtime::registry::{KindNeeds, PassImpl, PassInit};
+use crate::error::PassError;
+use crate::runtime::node::{CounterSource, PassNode};
+use ssbvb_gpu::shaders;
+
+/// Workgroup edge of `main` (`@workgroup_size(16, 16)`).
+pub const WORKGROUP: u32 = 16;
+
+/// Mirror of WGSL `VoxelSlot` (32 bytes): one SSBVB entry.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct VoxelSlot {
+    /// The hit voxel: its cell, normal and colour as in its LOD's point cloud, and in
+    /// place of texture coordinates (`uv`) the grid level of that LOD (the instance's, or
+    /// under a GPU budget a coarser one where a page was not resident). The billboard
+    /// passes size the voxel by it.
+    pub voxel: PackedVoxel,
+    /// Index of the instance in the frame's visible instances.
+    pub instance: u32,
+    /// `y * width + x` of the pixel whose ray found it.
+    pub pixel: u32,
+    /// World distance from the eye along the pixel's normalized ray to the entered face.
+    pub t: f32,
+    /// Entered face: 0..=2 the -X/-Y/-Z side (normal towards -axis), 3..=5 the +X/+Y/+Z
+    /// side.
+    pub face: u32,
+}
+
+impl VoxelSlot {
+    /// The object-space unit normal of the entered face.
+    pub fn face_normal(&self) -> [f32; 3] {
+        let mut n = [0.0; 3];
+        n[(self.face % 3) as usize] = if self.face >= 3 { 1.0 } else { -1.0 };
+        n
+    }
+}
+
+/// Mirror of the indirect draw arguments in `billboard_draw`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
+pub struct DrawArgs {
+    /// Vertices per billboard (6).
+    pub vertex_count: u32,
+    /// Filled SSBVB slots.
+    pub instance_count: u32,
+    /// Always 0.
+    pub first_vertex: u32,
+    /// Always 0.
+    pub first_instance: u32,
+}
+
+/// The compiled filter.
+pub struct RayMarchFilter {
+    clear: wgpu::ComputePipeline,
+    main: wgpu::ComputePipeline,
+    bindings: PassBindings,
+    unique_voxels: bool,
+    /// `unique_voxels`: the claim table and the per-instance key offsets (the table
+    /// follows the filter's size, the offsets grow with the visible instances).
+    claims: Option<Claims>,
+    /// The frame's counters (`CounterWords` words).
+    counters: wgpu::Buffer,
+}
+
+/// Words of the counter buffer: rays, (low, high) sums of steps, boxes and marches, a
+/// spare word, then the steps-per-ray histogram (constants `C_*` in the WGSL).
+const COUNTER_WORDS: usize = 8 + crate::runtime::counters::STEP_BINS;
+
+/// What the filter binds itself: the claim table and the first key of each visible
+/// instance (`unique_voxels`), and the frame's counters.
+pub const OWN: &[OwnBinding] = &[
+    OwnBinding {
+        name: "voxel_claims",
+        kind: OwnKind::StorageReadWrite,
+    },
+    OwnBinding {
+        name: "claim_offsets",
+        kind: OwnKind::StorageRead,
+    },
+    OwnBinding {
+        name: "filter_counters",
+        kind: OwnKind::StorageReadWrite,
+    },
+];
+
+struct Claims {
+    table: wgpu::Buffer,
+    offsets: wgpu::Buffer,
+}
+
+/// Marks an instance whose keys do not fit 32 bits (`NO_DEDUP` in the WGSL).
+const NO_DEDUP: u32 = u32::MAX;
+
+impl Claims {
+    /// `table_words` must be a power of two (the shader masks the hash with it).
+    fn new(ctx: &GpuContext, table_words: u64, instances: u64) -> Self {
+        debug_assert!(table_words.is_power_of_two());
+        let buffer = |label, size: u64| {
+            ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(16),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        Self {
+            table: buffer("voxel claims", table_words * 4),
+            offsets: buffer("claim offsets", instances * 4),
+        }
+    }
+}
+
+/// Words of the claim table for a filter of `pixels` texels: the next power of two of
+/// twice that, so the table is at most half full (every pixel claims at most one key).
+pub fn claim_table_words(pixels: u64) -> u64 {
+    (2 * pixels).max(16).next_power_of_two()
+}
+
+/// The first key of each visible instance whose levels hold `voxels` voxels: running sums,
+/// and `u32::MAX` (no deduplication) for an instance whose keys would not all be below
+/// `u32::MAX`.
+pub fn claim_offsets(voxels: impl IntoIterator<Item = u64>) -> Vec<u32> {
+    let mut next = 0u64;
+    voxels
+        .into_iter()
+        .map(|n| {
+            // Keys first..first + n - 1 must stay below u32::MAX (stored as key + 1).
+            if n == 0 {
+                0
+            } else if next + n <= u32::MAX as u64 {
+                let first = next as u32;
+                next += n;
+                first
+            } else {
+                NO_DEDUP
+            }
+        })
+        .collect()
+}
+
+impl PassImpl for RayMarchFilter {
+    type Params = RayMarchFilterParams;
+    const SHADER: &'static str = "ray_march_filter.wgsl";
+    const OWN: &'static [OwnBinding] = OWN;
+    // Its output is the billboards' indirect draw; 16×16 threads per workgroup.
+    const NEEDS: KindNeeds = KindNeeds {
+        limit: Some(max_compute_invocations_per_workgroup(256)),
+        ..KindNeeds::new(wgpu::DownlevelFlags::INDIRECT_EXECUTION, 5)
+    };
+
+    /// Compiles both entry points; `max_steps` becomes the WGSL override `MAX_STEPS`.
+    fn new(init: &PassInit<'_>, params: &RayMarchFilterParams) -> Result<Self, PassError> {
+        let (ctx, scene, pipeline, pass) = init.parts();
+        let RayMarchFilterParams {
+            max_steps,
+            unique_voxels,
+        } = *params;
+        let module = ctx.shader(
+            "ray_march_filter.wgsl",
+            &shaders::source("ray_march_filter.wgsl")?,
+        )?;
+        let label = format!("pass `{}`: ray_march_filter pipelines", pass.name);
+        let built = ctx.validated(&label, |d| {
+            let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
+            let pl = pipeline_layout(d, "ray_march_filter", scene, Some(&bindings));
+            let constants = [
+                ("MAX_STEPS", f64::from(max_steps)),
+                ("UNIQUE_VOXELS", if unique_voxels { 1.0 } else { 0.0 }),
+            ];
+            let make = |entry: &str| {
+                d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(entry),
+                    layout: Some(&pl),
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &constants,
+                        ..Default::default()
+                    },
+                    cache: None,
+                })
+            };
+            (make("clear_draw"), make("main"), bindings)
+        })?;
+        let (clear, main, bindings) = built;
+        // Without unique_voxels the shader never touches the claims: bind minimal buffers.
+        let claims = Some(Claims::new(ctx, 16, 4));
+        let counters = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("filter counters"),
+            size: (COUNTER_WORDS * 4) as u64,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        Ok(Self {
+            clear,
+            main,
+            bindings,
+            unique_voxels,
+            claims,
+            counters,
+        })
+    }
+}
+
+impl PassNode for RayMarchFilter {
+    fn record(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder<'_>,
+    ) -> Result<(), PassError> {
+        if self.unique_voxels {
+            self.prepare_claims(rec, encoder)?;
+        }
+        let claims = self.claims.as_ref().expect("claims exist");
+        let bind_group = self.bindings.bind_group(
+            rec,
+            &[
+                ("voxel_claims", claims.table.as_entire_binding()),
+                ("claim_offsets", claims.offsets.as_entire_binding()),
+                ("filter_counters", self.counters.as_entire_binding()),
+            ],
+        )?;
+        encoder.clear_buffer(&self.counters, 0, None);
+        let entry = &rec.texture("entry").texture;
+        let (w, h) = (entry.width(), entry.height());
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(&rec.pass.name),
+            timestamp_writes: rec.compute_timestamps(),
+        });
+        pass.set_bind_group(0, &rec.scene.bind_group, &[]);
+        pass.set_bind_group(1, &bind_group, &[]);
+        pass.set_pipeline(&self.clear);
+        pass.dispatch_workgroups(1, 1, 1);
+        // wgpu orders the two dispatches (the draw arguments are written, then counted).
+        pass.set_pipeline(&self.main);
+        pass.dispatch_workgroups(w.div_ceil(WORKGROUP), h.div_ceil(WORKGROUP), 1);
+        Ok(())
+    }
+
+    fn fill_count(&self, frame: &CounterSource<'_>) -> Result<Option<u32>, PassError> {
+        let Some(draw) = frame.buffer("billboard_draw") else {
+            return Ok(None);
+        };
+        let args = parse_draw_args(&frame.gpu.read_buffer(draw)?)?;
+        Ok(Some(args.instance_count))
+    }
+
+    fn counters(&self, frame: &CounterSource<'_>, out: &mut FrameCounters) -> Result<(), PassError> {
+        out.billboards_drawn = self.fill_count(frame)?.map(u64::from);
+        let words: Vec<u32> =
+            bytemuck::pod_collect_to_vec(&frame.gpu.read_buffer(&self.counters)?);
+        if words.len() < COUNTER_WORDS {
+            return Err(PassError::BadScene("filter counters readback is short".into()));
+        }
+        let wide = |i: usize| words[i] as u64 | (words[i + 1] as u64) << 32;
+        let rays = words[0] as u64;
+        let per_ray = |sum: u64| (rays > 0).then(|| sum as f64 / rays as f64);
+        out.filter_rays = Some(rays);
+        out.march_steps_mean = per_ray(wide(1));
+        out.instance_boxes_per_ray = per_ray(wide(3));
+        out.instances_marched_per_ray = per_ray(wide(5));
+        out.march_steps_p99 = histogram_quantile(&words[8..COUNTER_WORDS], 0.99);
+        Ok(())
+    }
+}
+
+impl RayMarchFilter {
+    /// Lays out the keys of the visible instances, sizes the claim table for the filter's
+    /// texels (reallocated when that changes; the offsets grow by half again when the
+    /// visible instances outgrow them), uploads the offsets and records the table's clear.
+    fn prepare_claims(
+        &mut self,
+        rec: &Recorder<'_>,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), PassError> {
+        let scene = rec.scene;
+        let offsets = claim_offsets(
+            scene
+                .visible
+                .iter()
+                .map(|v| scene.voxel_key_range(v.object, v.level)),
+        );
+        let entry = &rec.texture("entry").texture;
+        let words = claim_table_words(entry.width() as u64 * entry.height() as u64);
+        let max = rec.gpu.device.limits().max_storage_buffer_binding_size;
+        if words * 4 > max {
+            return Err(PassError::TooLarge(format!(
+                "unique_voxels needs a {}-byte claim table for {}x{} pixels; the device binds \
+                 at most {max}: use a smaller screen or turn unique_voxels off",
+                words * 4,
+                entry.width(),
+                entry.height()
+            )));
+        }
+        let instances = offsets.len().max(1) as u64;
+        let (table_fits, offsets_fit) = self.claims.as_ref().map_or((false, false), |c| {
+            (c.table.size() == words * 4, c.offsets.size() >= instances * 4)
+        });
+        if !table_fits || !offsets_fit {
+            let cap = if offsets_fit {
+                self.claims.as_ref().map_or(instances, |c| c.offsets.size() / 4)
+            } else {
+                instances + instances / 2
+            };
+            self.claims = Some(Claims::new(rec.gpu, words, cap));
+        }
+        let claims = self.claims.as_ref().expect("claims exist");
+        if !offsets.is_empty() {
+            rec.gpu
+                .queue
+                .write_buffer(&claims.offsets, 0, bytemuck::cast_slice(&offsets));
+        }
+        encoder.clear_buffer(&claims.table, 0, None);
+        Ok(())
+    }
+}
+
+/// The indirect draw the filter wrote into `billboard_draw` (its first 16 bytes, read
+/// back); the SSBVB fill count is its `instance_count`.
+pub fn parse_draw_args(bytes: &[u8]) -> Result<DrawArgs, PassError> {
+    let args: &[DrawArgs] = bytemuck::try_cast_slice(&bytes[..16.min(bytes.len())])
+        .map_err(|e| PassError::BadScene(format!("billboard_draw readback: {e}")))?;
+    args.first()
+        .copied()
+        .ok_or_else(|| PassError::BadScene("billboard_draw readback is empty".into()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn claim_table_is_a_power_of_two_at_least_twice_the_pixels() {
+        for pixels in [0u64, 1, 7, 4800, 640 * 480, 1280 * 720, 3840 * 2160] {
+            let w = claim_table_words(pixels);
+            assert!(w.is_power_of_two() && w >= 2 * pixels && w >= 16, "{pixels}: {w}");
+            assert!(w < 4 * pixels.max(8), "{pixels}: {w} is more than needed");
+        }
+    }
+
+    #[test]
+    fn claim_offsets_are_running_sums_until_keys_pass_32_bits() {
+        // An instance without voxels claims nothing (its offset does not matter).
+        assert_eq!(claim_offsets([10, 0, 5, 7]), vec![0, 0, 10, 15]);
+        let big = u32::MAX as u64 / 2;
+        // The third instance's keys would reach u32::MAX: it is not deduplicated, and a
+        // later small one that still fits keeps its range.
+        assert_eq!(
+            claim_offsets([big, big, 10, 1]),
+            vec![0, big as u32, NO_DEDUP, 2 * big as u32]
+        );
+        assert!(claim_offsets([]).is_empty());
+    }
+}

@@ -1,0 +1,146 @@
+//! Hardware-independent counts of what a frame did (`render --json` key `counters`, and
+//! the bench): on a software adapter they say more than wall time, and on any adapter
+//! they explain it. Each pass fills what it knows ([`super::node::PassNode::counters`]); a
+//! count no pass of the pipeline measures stays `None` and is left out of the JSON.
+
+/// The counts of one frame.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct FrameCounters {
+    /// Rays the ray-march filter cast (pixels whose prepass entry named an instance).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub filter_rays: Option<u64>,
+    /// Mean march loop iterations per filter ray (cells, pages and coarse blocks alike,
+    /// over every instance the ray marched).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub march_steps_mean: Option<f64>,
+    /// 99th percentile of march steps per filter ray, an upper bound with 1/8 resolution
+    /// above 32 steps (from a histogram).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub march_steps_p99: Option<u64>,
+    /// Mean instance-hierarchy boxes tested per filter ray (0 with one visible instance).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub instance_boxes_per_ray: Option<f64>,
+    /// Mean instances marched per filter ray (at least the prepass's own).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub instances_marched_per_ray: Option<f64>,
+    /// Billboards the billboard pass drew (the SSBVB fill count).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub billboards_drawn: Option<u64>,
+    /// Fragment-shader invocations of the billboard passes (a pipeline-statistics query;
+    /// `None` where the adapter lacks `PIPELINE_STATISTICS_QUERY`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub billboard_fragments: Option<u64>,
+    /// `billboard_fragments` per pixel showing a voxel: the billboards' overdraw.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fragments_per_covered_pixel: Option<f64>,
+    /// Pixels whose ray a ray-casting baseline traced into at least one instance.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ray_cast_rays: Option<u64>,
+    /// Dense DDA: mean cells stepped per traced ray (over every instance it traced).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dda_steps_per_ray: Option<f64>,
+    /// Octree ray casting: mean nodes visited per traced ray.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub octree_nodes_per_ray: Option<f64>,
+    /// Pixels whose stencil says voxel at the end of the frame (the denominator of
+    /// `fragments_per_covered_pixel`; not reported on its own).
+    #[serde(skip)]
+    pub voxel_pixels: Option<u64>,
+}
+
+impl FrameCounters {
+    /// Fills the measures that combine several passes' counts: the billboard fragments per
+    /// pixel showing a voxel.
+    pub fn derive(&mut self) {
+        if let (Some(f), Some(covered)) = (self.billboard_fragments, self.voxel_pixels) {
+            self.fragments_per_covered_pixel = (covered > 0).then(|| f as f64 / covered as f64);
+        }
+    }
+}
+
+/// Bins of the steps-per-ray histogram (`steps_bin` in `ray_march_filter.wgsl`).
+pub const STEP_BINS: usize = 256;
+
+/// The histogram bin of a step count: exact below 32, then 8 bins per power of two. The
+/// Rust twin of WGSL `steps_bin` (a GPU test checks that they agree).
+pub fn steps_bin(s: u32) -> usize {
+    if s < 32 {
+        return s as usize;
+    }
+    let e = 31 - s.leading_zeros();
+    (32 + (e - 5) * 8 + ((s >> (e - 3)) & 7)) as usize
+}
+
+/// The largest step count in bin `b` (inverse of [`steps_bin`]).
+pub fn steps_bin_max(b: usize) -> u64 {
+    if b < 32 {
+        return b as u64;
+    }
+    let e = (b - 32) / 8 + 5;
+    let frac = ((b - 32) % 8) as u64;
+    ((8 + frac + 1) << (e - 3)) - 1
+}
+
+/// The `q` quantile (0..=1) of a histogram, as the largest count of its bin.
+pub fn histogram_quantile(bins: &[u32], q: f64) -> Option<u64> {
+    let total: u64 = bins.iter().map(|&c| c as u64).sum();
+    if total == 0 {
+        return None;
+    }
+    let want = ((total as f64 * q).ceil() as u64).clamp(1, total);
+    let mut seen = 0;
+    for (b, &c) in bins.iter().enumerate() {
+        seen += c as u64;
+        if seen >= want {
+            return Some(steps_bin_max(b));
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bins_are_monotone_and_cover_each_count_once() {
+        let mut last = 0;
+        for s in (0..5000u32).chain([u32::MAX / 2, u32::MAX]) {
+            let b = steps_bin(s);
+            assert!(b >= last && b < STEP_BINS, "{s}: bin {b}");
+            last = b;
+            assert!(s as u64 <= steps_bin_max(b), "{s} above its bin's max");
+            if b > 0 {
+                assert!(s as u64 > steps_bin_max(b - 1), "{s} inside bin {}", b - 1);
+            }
+        }
+        assert_eq!(steps_bin(31), 31);
+        assert_eq!(steps_bin(32), 32);
+        assert_eq!(steps_bin_max(32), 35);
+        assert_eq!(steps_bin(36), 33);
+        // Relative resolution 1/8 above 32.
+        for b in 33..200 {
+            let (lo, hi) = (steps_bin_max(b - 1) + 1, steps_bin_max(b));
+            assert!((hi - lo + 1) as f64 <= lo as f64 / 8.0 + 1e-9, "bin {b}");
+        }
+    }
+
+    #[test]
+    fn quantile_of_a_histogram() {
+        let mut bins = vec![0u32; STEP_BINS];
+        bins[3] = 98;
+        bins[steps_bin(100)] = 1;
+        bins[steps_bin(1000)] = 1;
+        assert_eq!(histogram_quantile(&bins, 0.5), Some(3));
+        assert_eq!(histogram_quantile(&bins, 0.98), Some(3));
+        assert_eq!(
+            histogram_quantile(&bins, 0.99),
+            Some(steps_bin_max(steps_bin(100)))
+        );
+        assert_eq!(
+            histogram_quantile(&bins, 1.0),
+            Some(steps_bin_max(steps_bin(1000)))
+        );
+        assert_eq!(histogram_quantile(&[0; 4], 0.99), None);
+    }
+}

@@ -1,0 +1,294 @@
+//! Executing a resolved pipeline: physical resources for a screen size, one pass object
+//! per scheduled pass, per-pass GPU timestamps (and wall time per pass on request).
+
+use std::time::Instant;
+
+use ssbvb_gpu::scene::GpuScene;
+use ssbvb_gpu::{GpuContext, wgpu};
+use ssbvb_graph::{Access, ResolvedPipeline};
+use ssbvb_voxel::camera::Camera;
+
+use super::counters::FrameCounters;
+use super::node::{CounterSource, PassNode};
+use super::recorder::Recorder;
+use super::resources::{FrameResources, FrameTexture};
+use crate::error::PassError;
+use crate::kinds::create_pass;
+
+/// How much timing to collect.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Profiling {
+    /// None: one submission per frame.
+    #[default]
+    Off,
+    /// GPU timestamps per pass (when the device has them), one submission.
+    Timestamps,
+    /// Timestamps plus each pass submitted and waited for alone: per-pass wall time (what
+    /// to trust on software adapters, whose timestamps are unreliable).
+    TimestampsAndWall,
+}
+
+/// Timing of one pass.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PassTiming {
+    /// Pass name.
+    pub name: String,
+    /// GPU time from timestamp queries, in ms.
+    pub gpu_ms: Option<f64>,
+    /// Wall time of its own submit + wait, in ms.
+    pub wall_ms: Option<f64>,
+}
+
+/// What one frame did.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct FrameStats {
+    /// Per-pass timings (empty with profiling off).
+    pub passes: Vec<PassTiming>,
+    /// Wall time from the first record to the end of the wait, in ms.
+    pub frame_wall_ms: f64,
+    /// Instances drawn after culling.
+    pub visible_instances: usize,
+}
+
+/// A pipeline ready to draw a scene: resources, passes, profiler.
+pub struct Renderer {
+    /// The resolved pipeline.
+    pub pipeline: ResolvedPipeline,
+    /// Screen size.
+    pub screen: (u32, u32),
+    /// The frame's resources.
+    pub resources: FrameResources,
+    passes: Vec<Box<dyn PassNode>>,
+    first_writes: Vec<Vec<&'static str>>,
+    queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
+}
+
+impl Renderer {
+    /// Creates resources and pass objects (pipelines are compiled here, not per frame).
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        pipeline: ResolvedPipeline,
+        screen: (u32, u32),
+    ) -> Result<Self, PassError> {
+        Self::with_imports(ctx, scene, pipeline, screen, &[])
+    }
+
+    /// Like [`Renderer::new`], drawing into the caller's textures for the named resources
+    /// (see [`FrameResources::with_imports`]). Imported resources keep their contents: no
+    /// pass clears them, so the frame composes onto what the caller drew.
+    pub fn with_imports(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        pipeline: ResolvedPipeline,
+        screen: (u32, u32),
+        imports: &[(&str, wgpu::Texture)],
+    ) -> Result<Self, PassError> {
+        let resources = FrameResources::with_imports(ctx, &pipeline, screen, imports)?;
+        let mut passes = Vec::new();
+        for p in &pipeline.passes {
+            let node = ctx
+                .validated(&format!("creating pass `{}`", p.name), |_| {
+                    create_pass(ctx, scene, &pipeline, p)
+                })
+                .map_err(PassError::Gpu)??;
+            passes.push(node);
+        }
+        // Physical resources already written earlier in the frame (aliases included: a
+        // reused physical resource starts over for its new alias).
+        let mut written: Vec<Option<usize>> = vec![None; pipeline.physical.len()];
+        let mut first_writes = Vec::new();
+        for p in &pipeline.passes {
+            let mut firsts = Vec::new();
+            for b in p.bindings.iter().filter(|b| b.slot.access == Access::Write) {
+                let phys = pipeline.resources[b.resource].physical;
+                let imported = imports
+                    .iter()
+                    .any(|(n, _)| *n == pipeline.resources[b.resource].name);
+                if written[phys] != Some(b.resource) && !imported {
+                    firsts.push(b.slot.name);
+                    written[phys] = Some(b.resource);
+                }
+            }
+            first_writes.push(firsts);
+        }
+        let n = (pipeline.passes.len() * 2) as u32;
+        let queries = ctx.report().timestamps.then(|| {
+            let set = ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("pass timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: n,
+            });
+            let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps"),
+                size: n as u64 * 8,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            (set, buf)
+        });
+        Ok(Self {
+            pipeline,
+            screen,
+            resources,
+            passes,
+            first_writes,
+            queries,
+        })
+    }
+
+    /// Index of a live resource by name.
+    pub fn resource(&self, name: &str) -> Option<usize> {
+        self.pipeline.resource(name)
+    }
+
+    /// The SSBVB fill count of the last frame: the billboards the pass that fills the SSBVB
+    /// appended ([`PassNode::fill_count`]). `None` when no pass of the pipeline fills one.
+    pub fn fill_count(&self, ctx: &GpuContext) -> Result<Option<u32>, PassError> {
+        for (node, pass) in self.passes.iter().zip(&self.pipeline.passes) {
+            if let Some(n) = node.fill_count(&self.counter_source(ctx, pass))? {
+                return Ok(Some(n));
+            }
+        }
+        Ok(None)
+    }
+
+    /// What the passes counted in the last frame (reads back from the GPU), with the
+    /// measures derived from several passes' counts ([`FrameCounters::derive`]).
+    pub fn counters(&self, ctx: &GpuContext) -> Result<FrameCounters, PassError> {
+        let mut out = FrameCounters::default();
+        for (node, pass) in self.passes.iter().zip(&self.pipeline.passes) {
+            node.counters(&self.counter_source(ctx, pass), &mut out)?;
+        }
+        out.derive();
+        Ok(out)
+    }
+
+    fn counter_source<'a>(
+        &'a self,
+        ctx: &'a GpuContext,
+        pass: &'a ssbvb_graph::ScheduledPass,
+    ) -> CounterSource<'a> {
+        CounterSource {
+            gpu: ctx,
+            resources: &self.resources,
+            pass,
+        }
+    }
+
+    /// The output texture.
+    pub fn output(&self) -> &FrameTexture {
+        self.resources.texture(self.pipeline.output)
+    }
+
+    /// Draws one frame of `scene` seen by `camera`; waits for the GPU when profiling.
+    pub fn render(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &mut GpuScene,
+        camera: &Camera,
+        profiling: Profiling,
+    ) -> Result<FrameStats, PassError> {
+        if profiling != Profiling::Off {
+            // Earlier unwaited frames must not be billed to this one.
+            ctx.wait_idle().map_err(PassError::Gpu)?;
+        }
+        let start = Instant::now();
+        scene.stream_pages(ctx)?;
+        scene.update(ctx, camera, self.screen);
+        let use_ts = profiling != Profiling::Off && self.queries.is_some();
+        let mut walls = vec![None; self.passes.len()];
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("frame"),
+            });
+        scene.begin_frame(&mut encoder);
+        let scene_ref: &GpuScene = scene;
+        let visible_instances = scene_ref.visible.len();
+        for (i, (node, pass)) in self
+            .passes
+            .iter_mut()
+            .zip(&self.pipeline.passes)
+            .enumerate()
+        {
+            let t0 = Instant::now();
+            let mut rec = Recorder {
+                gpu: ctx,
+                scene: scene_ref,
+                resources: &self.resources,
+                pass,
+                screen: self.screen,
+                timestamps: if use_ts {
+                    self.queries.as_ref().map(|(q, _)| (q, 2 * i as u32))
+                } else {
+                    None
+                },
+                first_writes: &self.first_writes[i],
+            };
+            ctx.validated(&format!("pass `{}`", pass.name), |_| {
+                node.record(&mut encoder, &mut rec)
+            })
+            .map_err(PassError::Gpu)??;
+            if profiling == Profiling::TimestampsAndWall {
+                let done = std::mem::replace(
+                    &mut encoder,
+                    ctx.device
+                        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                            label: Some("frame"),
+                        }),
+                );
+                ctx.queue.submit([done.finish()]);
+                ctx.wait_idle().map_err(PassError::Gpu)?;
+                walls[i] = Some(t0.elapsed().as_secs_f64() * 1e3);
+            }
+        }
+        if use_ts {
+            let (set, buf) = self.queries.as_ref().expect("queries exist");
+            encoder.resolve_query_set(set, 0..(self.passes.len() * 2) as u32, buf, 0);
+        }
+        scene.end_frame(&mut encoder);
+        ctx.queue.submit([encoder.finish()]);
+        scene.after_submit();
+        let mut gpu_ms = vec![None; self.passes.len()];
+        if use_ts {
+            let (_, buf) = self.queries.as_ref().expect("queries exist");
+            let raw: Vec<u64> =
+                bytemuck::pod_collect_to_vec(&ctx.read_buffer(buf).map_err(PassError::Gpu)?);
+            let period = ctx.queue.get_timestamp_period() as f64;
+            for (i, ms) in gpu_ms.iter_mut().enumerate() {
+                let (a, b) = (raw[2 * i], raw[2 * i + 1]);
+                *ms = (b >= a).then(|| (b - a) as f64 * period / 1e6);
+            }
+        } else if profiling != Profiling::Off {
+            ctx.wait_idle().map_err(PassError::Gpu)?;
+        }
+        let errors = ctx.take_uncaptured_errors();
+        if !errors.is_empty() {
+            return Err(PassError::Gpu(ssbvb_gpu::GpuError::Wgpu {
+                label: "frame".into(),
+                kind: "uncaptured",
+                message: errors.join("; "),
+            }));
+        }
+        let passes = if profiling == Profiling::Off {
+            Vec::new()
+        } else {
+            self.pipeline
+                .passes
+                .iter()
+                .enumerate()
+                .map(|(i, p)| PassTiming {
+                    name: p.name.clone(),
+                    gpu_ms: gpu_ms[i],
+                    wall_ms: walls[i],
+                })
+                .collect()
+        };
+        Ok(FrameStats {
+            passes,
+            frame_wall_ms: start.elapsed().as_secs_f64() * 1e3,
+            visible_instances,
+        })
+    }
+}
