@@ -2,6 +2,10 @@
 //! serde value (per-pass timings, counters, a flattened struct): [`Json::of`] captures what
 //! a value serializes as, keys in their order and floats at their own width, so that
 //! serializing the tree writes exactly what serializing the value itself would have.
+//! `serde_json::Value` cannot stand in: without its `preserve_order` feature it sorts keys,
+//! and it widens `f32` to `f64` (0.1f32 would print as 0.10000000149011612), both of which
+//! would change the bench's files. The tests hold the capture to `serde_json` writing the
+//! value itself.
 
 use std::fmt;
 
