@@ -2,8 +2,8 @@
 //! instances its ray meets rather than to how many the scene holds.
 //!
 //! Both the CPU reference ([`crate::reference`]) and the GPU ray-march filter traverse the
-//! same hierarchy (the GPU one is built from this one every frame, `ssbvb-passes`
-//! `visibility.rs`), so their candidate sets agree by construction; the exact per-instance
+//! same hierarchy (the GPU one is built from this one every frame, `ssbvb-gpu`
+//! `scene/visibility.rs`), so their candidate sets agree by construction; the exact per-instance
 //! slab test and march still decide every hit.
 //!
 //! **Build:** a binary tree with one instance per leaf, split at the median of the box

@@ -17,7 +17,7 @@
 //! chunk-major, then Morton order: RastaVox's radix sort on positions with the low bit
 //! dropped is then a no-op on every level after the first, because a run of children is
 //! contiguous in Morton order and the merged output comes out in order (the GPU build in
-//! `ssbvb-passes` sorts only the extraction's output, whose order atomics scramble).
+//! `ssbvb-gpu-build` sorts only the extraction's output, whose order atomics scramble).
 //!
 //! The merged model is *not* the asset's coarser LOD: an OR-merged voxel draws every face
 //! any child had, also faces that now lie between two coarse voxels. [`SurfaceModel::face_lod`]
