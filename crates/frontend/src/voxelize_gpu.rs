@@ -1,6 +1,6 @@
 //! `ssbvb voxelize MODEL --level N --gpu [--gpu-method exact|raster]`: the mesh voxelized
 //! on the GPU ([`GpuVoxelizer`]: by default the exact f64 test where the adapter has f64
-//! shaders, else the seed's conservative rasterization), the rest of the preparation
+//! shaders, else conservative rasterization), the rest of the preparation
 //! as usual, and the same report as the CPU path plus `differs_from_cpu` (per level, the
 //! GPU's voxels against the exact CPU voxelization's, both carried down the LOD chain by
 //! OR-ing children) and `gpu` (adapter, fragments, raster passes, time against the CPU's).

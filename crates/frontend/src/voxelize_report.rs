@@ -25,13 +25,13 @@ pub struct VoxelizeArgs {
     /// Neither read nor write the asset cache; always prepare from the model.
     #[arg(long)]
     pub no_cache: bool,
-    /// Voxelize a mesh on the GPU (the seed's conservative rasterization along each
+    /// Voxelize a mesh on the GPU (conservative rasterization along each
     /// triangle's dominant axis) and report how its voxels differ from the exact CPU
     /// voxelization per level (`differs_from_cpu`); never uses the cache.
     #[arg(long)]
     pub gpu: bool,
     /// With `--gpu`: `exact` (the CPU's triangle–box test in f64, its very voxel set; the
-    /// default where the adapter has f64 shaders) or `raster` (the seed's conservative
+    /// default where the adapter has f64 shaders) or `raster` (conservative
     /// rasterization, a near superset).
     #[arg(long, value_enum, requires = "gpu")]
     pub gpu_method: Option<GpuMethodArg>,
@@ -42,7 +42,7 @@ pub struct VoxelizeArgs {
 pub enum GpuMethodArg {
     /// The CPU's test in f64 per cell (needs f64 shaders).
     Exact,
-    /// The seed's conservative rasterization.
+    /// Conservative rasterization.
     Raster,
 }
 

@@ -48,7 +48,7 @@ fn voxelize_gpu_reports_the_cpu_keys_and_the_difference() {
     }
     assert!(gpu["gpu"]["fragments"].as_u64().unwrap() >= cpu_voxels);
     assert!(gpu["gpu"]["cpu_seconds"].as_f64().unwrap() > 0.0);
-    // The seed's raster path: a near superset (measured: 464 extra, 0 missing of 14 027).
+    // The raster path: a near superset (measured: 464 extra, 0 missing of 14 027).
     let out = succeeded(ssbvb().arg("voxelize").arg(models.join("bunny.obj")).args([
         "--level",
         "6",
