@@ -18,6 +18,8 @@ var<private> cast_steps: u32;
 // Counters (ray_cast_counters.rs): per lane (pixel x + y mod 64, spreading the atomics)
 // the pixels that cast a ray and the steps they took (low and high words).
 const COUNTER_LANES: u32 = 64u;
+// Count into `ray_counters` (off: the pipeline of frames that no report reads).
+override COUNT_WORK: bool = true;
 
 struct Hit {
     hit: bool,
@@ -75,7 +77,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     cast_steps = 0u;
     bvh_walk(dir, BIG, u32(frame.misc.w));
     let lane = (u32(frag.x) + u32(frag.y)) % COUNTER_LANES;
-    if cast_steps > 0u {
+    if COUNT_WORK && cast_steps > 0u {
         atomicAdd(&ray_counters[3u * lane], 1u);
         // Steps as a (low, high) pair: a lane of a 4K frame may pass 2^32.
         let old = atomicAdd(&ray_counters[3u * lane + 1u], cast_steps);

@@ -38,6 +38,9 @@ struct DrawArgs {
 override MAX_STEPS: u32 = 1024u;
 // `RayMarchFilter(unique_voxels: true)`: each voxel is appended once per frame.
 override UNIQUE_VOXELS: bool = false;
+// Count the frame's work into `filter_counters` (off: the pipeline of frames that no report
+// reads; the march is the same).
+override COUNT_WORK: bool = true;
 
 // Output of the prepass: object-space entry point (xyz), instance index + 1 (w).
 @group(1) @binding(0) var entry: texture_2d<f32>;
@@ -287,7 +290,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     march_steps = 0u;
     boxes_tested = 0u;
     marches = 0u;
-    if filter_pixel(vec2<i32>(gid.xy)) {
+    if filter_pixel(vec2<i32>(gid.xy)) && COUNT_WORK {
         atomicAdd(&filter_counters[C_RAYS], 1u);
         add_wide(C_STEPS, march_steps);
         add_wide(C_BOXES, boxes_tested);

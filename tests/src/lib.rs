@@ -94,6 +94,9 @@ pub fn render_with_chunks(
     let mut gpu_scene = GpuScene::with_chunks(c, scene, chunks).unwrap_or_else(|e| panic!("{e}"));
     let mut renderer =
         Renderer::new(c, &gpu_scene, resolved, size).unwrap_or_else(|e| panic!("{e}"));
+    // Tests read the counters; `ray_march_filter::uncounted_frames_draw_the_same` holds the
+    // uncounted variant to the same output.
+    renderer.set_counting(true);
     renderer
         .render(c, &mut gpu_scene, camera, Profiling::Off)
         .unwrap_or_else(|e| panic!("{e}"));

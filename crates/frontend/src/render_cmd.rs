@@ -432,6 +432,8 @@ fn render_gpu(
         )?)
     };
     let mut renderer = Renderer::new(&ctx, &gpu_scene, pipeline, args.size)?;
+    // The report prints the frame's counters.
+    renderer.set_counting(true);
     let profiling = if ctx.report().is_software {
         Profiling::TimestampsAndWall
     } else {

@@ -319,6 +319,7 @@ pub(crate) fn draw(
             screen: size,
             timestamps: None,
             first_writes: firsts,
+            counting: false,
         };
         c.validated("record", |_| node.record(&mut encoder, &mut rec))
             .unwrap()

@@ -210,6 +210,29 @@ fn ray_casters_and_cubes_draw_several_objects() {
             }
             _ => assert!(c.ray_cast_rays.is_none(), "{c:?}"),
         }
+        // A frame that counts nothing (the pipeline compiled with `COUNT_WORK` off) draws
+        // the same G-buffer, bit for bit (a ray caster's pixels are independent), and
+        // reports no ray counts.
+        let mut f = f;
+        let gbuffer = ["gbuffer_position", "gbuffer_normal", "gbuffer_albedo"];
+        let counted: Vec<Vec<u8>> = gbuffer.iter().map(|n| f.read(n)).collect();
+        f.renderer.set_counting(false);
+        f.renderer
+            .render(
+                ssbvb_tests::ctx(),
+                &mut f.scene,
+                &cam,
+                ssbvb_passes::Profiling::Off,
+            )
+            .unwrap();
+        for (n, bytes) in gbuffer.iter().zip(&counted) {
+            assert!(
+                f.read(n) == *bytes,
+                "{technique}: {n} differs without counting"
+            );
+        }
+        let c = f.renderer.counters(ssbvb_tests::ctx()).unwrap();
+        assert!(c.ray_cast_rays.is_none(), "{technique}: {c:?}");
     }
     // Both objects cover a good part of the reference image (so an IoU of 0.99 needs both).
     for (lo, hi) in [(0, 2), (2, 4)] {

@@ -655,3 +655,83 @@ fn unique_voxels_draw_the_same_gbuffer_with_fewer_billboards() {
         .unwrap();
     assert_eq!(b.renderer.fill_count(c).unwrap().unwrap(), fill_b);
 }
+
+/// Frames that no report reads run the filter without its counters (`COUNT_WORK` off):
+/// the same voxels in the SSBVB, the same fill count and G-buffer as a counted frame, on one
+/// instance and on several (the hierarchy walk); the uncounted frame reports no filter
+/// counts, and counting again reports the same ones. With `unique_voxels` the pixel that
+/// claims a voxel first, and so the billboards' order, may change from frame to frame: slots
+/// compare as (instance, voxel) sets, and a depth tie between two billboards may resolve
+/// either way in a few pixels (as in `unique_voxels_draw_the_same_gbuffer_...`).
+#[test]
+fn uncounted_frames_draw_the_same_and_report_no_filter_counts() {
+    let pipeline = include_str!("../../../assets/pipelines/ssbvb.ron").replace(
+        r#"output: "color","#,
+        r#"output: "color", keep: ["billboard_draw", "ssbvb", "gbuffer_position", "gbuffer_normal", "gbuffer_albedo"],"#,
+    );
+    let c = ctx();
+    let mut several = bunny(5);
+    several.objects[0].instances = vec![
+        DAffine3::IDENTITY,
+        DAffine3::from_translation(DVec3::new(0.5, 0.1, -0.4)),
+        DAffine3::from_translation(DVec3::new(-0.6, 0.0, -1.2)),
+    ];
+    let camera = Camera::new(DVec3::new(0.3, 0.5, 2.8), DVec3::new(0.0, 0.0, -0.3));
+    let voxels = |f: &ssbvb_tests::Frame| {
+        let mut v: Vec<(u32, [u32; 3])> = read_slots(c, &f.renderer)
+            .unwrap()
+            .iter()
+            .map(|s| (s.instance, s.voxel.cell()))
+            .collect();
+        v.sort_unstable();
+        v
+    };
+    let names = [
+        "gbuffer_position",
+        "gbuffer_normal",
+        "gbuffer_albedo",
+        "color",
+    ];
+    for scene in [bunny(5), several] {
+        let mut f = render(&pipeline, scene, &camera, SIZE);
+        let counted_voxels = voxels(&f);
+        let counted: Vec<Vec<u8>> = names.iter().map(|n| f.read(n)).collect();
+        let before = f.renderer.counters(c).unwrap();
+        assert!(before.filter_rays.unwrap() > 100, "{before:?}");
+        assert!(before.march_steps_mean.is_some(), "{before:?}");
+
+        f.renderer.set_counting(false);
+        f.renderer
+            .render(c, &mut f.scene, &camera, ssbvb_passes::Profiling::Off)
+            .unwrap();
+        assert_eq!(voxels(&f), counted_voxels);
+        for (n, x) in names.iter().zip(&counted) {
+            let y = f.read(n);
+            let bpp = x.len() / (SIZE.0 * SIZE.1) as usize;
+            let differing = x
+                .chunks(bpp)
+                .zip(y.chunks(bpp))
+                .filter(|(p, q)| p != q)
+                .count();
+            assert!(
+                differing <= 3,
+                "{n}: {differing} pixels differ without counting"
+            );
+        }
+        let after = f.renderer.counters(c).unwrap();
+        assert_eq!(after.billboards_drawn, before.billboards_drawn);
+        assert_eq!(after.filter_rays, None, "{after:?}");
+        assert_eq!(after.march_steps_mean, None, "{after:?}");
+        assert_eq!(after.instance_boxes_per_ray, None, "{after:?}");
+
+        f.renderer.set_counting(true);
+        f.renderer
+            .render(c, &mut f.scene, &camera, ssbvb_passes::Profiling::Off)
+            .unwrap();
+        let again = f.renderer.counters(c).unwrap();
+        assert_eq!(again.filter_rays, before.filter_rays);
+        assert_eq!(again.march_steps_mean, before.march_steps_mean);
+        assert_eq!(again.march_steps_p99, before.march_steps_p99);
+        assert_eq!(again.instance_boxes_per_ray, before.instance_boxes_per_ray);
+    }
+}

@@ -239,7 +239,7 @@ impl PassImpl for DenseDda {
     fn new(init: &PassInit<'_>, params: &DenseDdaParams) -> Result<Self, PassError> {
         let max_steps = params.max_steps;
         Ok(Self {
-            pipeline: PulledPipeline::new::<Self>(init, &[("MAX_STEPS", f64::from(max_steps))])?,
+            pipeline: PulledPipeline::counting::<Self>(init, &[("MAX_STEPS", f64::from(max_steps))])?,
             atlas: None,
             counters: RayCastCounters::new(init.ctx),
         })
@@ -276,15 +276,16 @@ impl PassNode for DenseDda {
             .as_ref()
             .filter(|_| !needed.is_empty())
             .map(|a| &a.bind_group);
-        self.counters.clear(encoder);
+        self.counters.begin_frame(encoder, rec.counting);
         self.pipeline.record_fullscreen(encoder, rec, bind_group);
         Ok(())
     }
 
     fn counters(&self, frame: &CounterSource<'_>, out: &mut FrameCounters) -> Result<(), PassError> {
-        let (rays, steps) = self.counters.read(frame.gpu)?;
-        out.ray_cast_rays = Some(rays);
-        out.dda_steps_per_ray = steps;
+        if let Some((rays, steps)) = self.counters.read(frame.gpu)? {
+            out.ray_cast_rays = Some(rays);
+            out.dda_steps_per_ray = steps;
+        }
         Ok(())
     }
 }

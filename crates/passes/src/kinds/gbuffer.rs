@@ -121,6 +121,9 @@ pub(crate) fn begin_gbuffer_pass<'e>(
 pub(crate) struct PulledPipeline {
     /// The render pipeline.
     pub pipeline: wgpu::RenderPipeline,
+    /// The same with the WGSL override `COUNT_WORK` off, for frames that count nothing
+    /// (ray casters: [`PulledPipeline::counting`]).
+    pub uncounted: Option<wgpu::RenderPipeline>,
     /// Its group-1 layout (own bindings).
     pub bindings: PassBindings,
 }
@@ -132,6 +135,24 @@ impl PulledPipeline {
         init: &PassInit<'_>,
         constants: &[(&str, f64)],
     ) -> Result<Self, PassError> {
+        Self::build::<P>(init, constants, false)
+    }
+
+    /// [`PulledPipeline::new`] for a shader that counts its work under the WGSL override
+    /// `COUNT_WORK`: also compiled with it off, the variant frames that count nothing draw
+    /// with (`Recorder::counting`).
+    pub fn counting<P: PassImpl>(
+        init: &PassInit<'_>,
+        constants: &[(&str, f64)],
+    ) -> Result<Self, PassError> {
+        Self::build::<P>(init, constants, true)
+    }
+
+    fn build<P: PassImpl>(
+        init: &PassInit<'_>,
+        constants: &[(&str, f64)],
+        with_uncounted: bool,
+    ) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
         let (shader, own) = (P::SHADER, P::OWN);
         let module = ctx.shader(shader, &shaders::source(shader)?)?;
@@ -141,15 +162,27 @@ impl PulledPipeline {
         Ok(ctx.validated(&label, |d| {
             let bindings = PassBindings::new(ctx, pipeline, pass, own);
             let layout = pipeline_layout(d, &label, scene, Some(&bindings));
-            let pipeline = render_pipeline(
-                d,
-                &RenderSpec {
-                    constants,
-                    depth_stencil: Some(depth_stencil),
-                    ..RenderSpec::new(&label, &module, &layout, &targets)
-                },
-            );
-            Self { pipeline, bindings }
+            let make = |constants: &[(&str, f64)]| {
+                render_pipeline(
+                    d,
+                    &RenderSpec {
+                        constants,
+                        depth_stencil: Some(depth_stencil.clone()),
+                        ..RenderSpec::new(&label, &module, &layout, &targets)
+                    },
+                )
+            };
+            let pipeline = make(constants);
+            let uncounted = with_uncounted.then(|| {
+                let mut off = constants.to_vec();
+                off.push(("COUNT_WORK", 0.0));
+                make(&off)
+            });
+            Self {
+                pipeline,
+                uncounted,
+                bindings,
+            }
         })?)
     }
 
@@ -164,7 +197,11 @@ impl PulledPipeline {
     ) {
         let mut pass = begin_gbuffer_pass(encoder, rec, STENCIL_VOXEL);
         if let Some(bg) = bind_group {
-            pass.set_pipeline(&self.pipeline);
+            let pipeline = match &self.uncounted {
+                Some(uncounted) if !rec.counting => uncounted,
+                _ => &self.pipeline,
+            };
+            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &rec.scene.bind_group, &[]);
             pass.set_bind_group(1, bg, &[]);
             pass.draw(0..3, 0..1);

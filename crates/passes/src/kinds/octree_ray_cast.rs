@@ -253,7 +253,7 @@ impl PassImpl for OctreeRayCast {
         let max_steps = params.max_steps;
         let chunk_bits = init.scene.chunks.octree_bits;
         let pipeline = |chunks: usize| {
-            PulledPipeline::new::<Self>(
+            PulledPipeline::counting::<Self>(
                 init,
                 &[
                     ("MAX_STEPS", f64::from(max_steps)),
@@ -286,7 +286,7 @@ impl PassNode for OctreeRayCast {
             self.octrees = Some(self.upload(rec.gpu, &assets)?);
         }
         let bind_group = self.octrees.as_ref().filter(|_| !rec.scene.visible.is_empty());
-        self.counters.clear(encoder);
+        self.counters.begin_frame(encoder, rec.counting);
         let pipeline = if self.one_chunk {
             &self.single
         } else {
@@ -297,9 +297,10 @@ impl PassNode for OctreeRayCast {
     }
 
     fn counters(&self, frame: &CounterSource<'_>, out: &mut FrameCounters) -> Result<(), PassError> {
-        let (rays, nodes) = self.counters.read(frame.gpu)?;
-        out.ray_cast_rays = Some(rays);
-        out.octree_nodes_per_ray = nodes;
+        if let Some((rays, nodes)) = self.counters.read(frame.gpu)? {
+            out.ray_cast_rays = Some(rays);
+            out.octree_nodes_per_ray = nodes;
+        }
         Ok(())
     }
 }

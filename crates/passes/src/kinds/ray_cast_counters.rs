@@ -16,6 +16,8 @@ const LANE_WORDS: usize = 3;
 /// A pass's counter buffer: `LANES` × (rays, steps low, steps high) `u32`s.
 pub struct RayCastCounters {
     buffer: wgpu::Buffer,
+    /// Whether the last recorded frame counted (`Recorder::counting`).
+    counted: bool,
 }
 
 impl RayCastCounters {
@@ -30,6 +32,7 @@ impl RayCastCounters {
                     | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             }),
+            counted: false,
         }
     }
 
@@ -38,15 +41,22 @@ impl RayCastCounters {
         self.buffer.as_entire_binding()
     }
 
-    /// Records the per-frame clear.
-    pub fn clear(&self, encoder: &mut wgpu::CommandEncoder) {
-        encoder.clear_buffer(&self.buffer, 0, None);
+    /// Starts a frame: records the clear when the frame counts (`counting`).
+    pub fn begin_frame(&mut self, encoder: &mut wgpu::CommandEncoder, counting: bool) {
+        self.counted = counting;
+        if counting {
+            encoder.clear_buffer(&self.buffer, 0, None);
+        }
     }
 
-    /// The last frame's rays and their mean steps (`None` without rays).
-    pub fn read(&self, ctx: &GpuContext) -> Result<(u64, Option<f64>), PassError> {
+    /// The last frame's rays and their mean steps (`None` without rays), or `None` when
+    /// the last frame did not count.
+    pub fn read(&self, ctx: &GpuContext) -> Result<Option<(u64, Option<f64>)>, PassError> {
+        if !self.counted {
+            return Ok(None);
+        }
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&ctx.read_buffer(&self.buffer)?);
-        Ok(sum_lanes(&words))
+        Ok(Some(sum_lanes(&words)))
     }
 }
 

@@ -87,7 +87,12 @@ pub struct DrawArgs {
 /// The compiled filter.
 pub struct RayMarchFilter {
     clear: wgpu::ComputePipeline,
+    /// `main` counting its work (frames of a report: [`crate::Renderer::set_counting`]).
     main: wgpu::ComputePipeline,
+    /// `main` with the WGSL override `COUNT_WORK` off: no counter atomics.
+    main_uncounted: wgpu::ComputePipeline,
+    /// Whether the last recorded frame counted.
+    counted: bool,
     bindings: PassBindings,
     unique_voxels: bool,
     /// `unique_voxels`: the claim table and the per-instance key offsets (the table
@@ -215,9 +220,25 @@ impl PassImpl for RayMarchFilter {
                     cache: None,
                 })
             };
-            (make("clear_draw"), make("main"), bindings)
+            let uncounted = [
+                constants[0],
+                constants[1],
+                ("COUNT_WORK", 0.0),
+            ];
+            let main_uncounted = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("main (uncounted)"),
+                layout: Some(&pl),
+                module: &module,
+                entry_point: Some("main"),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &uncounted,
+                    ..Default::default()
+                },
+                cache: None,
+            });
+            (make("clear_draw"), make("main"), main_uncounted, bindings)
         })?;
-        let (clear, main, bindings) = built;
+        let (clear, main, main_uncounted, bindings) = built;
         // Without unique_voxels the shader never touches the claims: bind minimal buffers.
         let claims = Some(Claims::new(ctx, 16, 4));
         let counters = ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -231,6 +252,8 @@ impl PassImpl for RayMarchFilter {
         Ok(Self {
             clear,
             main,
+            main_uncounted,
+            counted: false,
             bindings,
             unique_voxels,
             claims,
@@ -257,7 +280,10 @@ impl PassNode for RayMarchFilter {
                 ("filter_counters", self.counters.as_entire_binding()),
             ],
         )?;
-        encoder.clear_buffer(&self.counters, 0, None);
+        self.counted = rec.counting;
+        if self.counted {
+            encoder.clear_buffer(&self.counters, 0, None);
+        }
         let entry = &rec.texture("entry").texture;
         let (w, h) = (entry.width(), entry.height());
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -269,7 +295,11 @@ impl PassNode for RayMarchFilter {
         pass.set_pipeline(&self.clear);
         pass.dispatch_workgroups(1, 1, 1);
         // wgpu orders the two dispatches (the draw arguments are written, then counted).
-        pass.set_pipeline(&self.main);
+        pass.set_pipeline(if self.counted {
+            &self.main
+        } else {
+            &self.main_uncounted
+        });
         pass.dispatch_workgroups(w.div_ceil(WORKGROUP), h.div_ceil(WORKGROUP), 1);
         Ok(())
     }
@@ -284,6 +314,9 @@ impl PassNode for RayMarchFilter {
 
     fn counters(&self, frame: &CounterSource<'_>, out: &mut FrameCounters) -> Result<(), PassError> {
         out.billboards_drawn = self.fill_count(frame)?.map(u64::from);
+        if !self.counted {
+            return Ok(());
+        }
         let words: Vec<u32> =
             bytemuck::pod_collect_to_vec(&frame.gpu.read_buffer(&self.counters)?);
         if words.len() < COUNTER_WORDS {

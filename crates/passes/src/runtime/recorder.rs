@@ -25,6 +25,9 @@ pub struct Recorder<'a> {
     pub timestamps: Option<(&'a wgpu::QuerySet, u32)>,
     /// Write slots whose resource no earlier pass of the frame wrote: clear them.
     pub first_writes: &'a [&'static str],
+    /// Whether the frame counts its work for [`crate::Renderer::counters`] (passes that
+    /// count run a variant without the counting otherwise).
+    pub counting: bool,
 }
 
 impl<'a> Recorder<'a> {

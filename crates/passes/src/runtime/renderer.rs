@@ -61,6 +61,7 @@ pub struct Renderer {
     passes: Vec<Box<dyn PassNode>>,
     first_writes: Vec<Vec<&'static str>>,
     queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
+    counting: bool,
 }
 
 impl Renderer {
@@ -134,12 +135,20 @@ impl Renderer {
             passes,
             first_writes,
             queries,
+            counting: false,
         })
     }
 
     /// Index of a live resource by name.
     pub fn resource(&self, name: &str) -> Option<usize> {
         self.pipeline.resource(name)
+    }
+
+    /// Whether the next frames count their work (march steps, rays, hierarchy boxes: what
+    /// [`Renderer::counters`] reports). Off by default: a pass that counts then runs a
+    /// variant without the counting, so frames pay for counters only when a report asks.
+    pub fn set_counting(&mut self, on: bool) {
+        self.counting = on;
     }
 
     /// The SSBVB fill count of the last frame: the billboards the pass that fills the SSBVB
@@ -225,6 +234,7 @@ impl Renderer {
                     None
                 },
                 first_writes: &self.first_writes[i],
+                counting: self.counting,
             };
             ctx.validated(&format!("pass `{}`", pass.name), |_| {
                 node.record(&mut encoder, &mut rec)

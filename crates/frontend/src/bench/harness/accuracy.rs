@@ -84,6 +84,8 @@ pub(crate) fn measure(s: &Setup, pipeline: ResolvedPipeline, with_psnr: bool) ->
     }
     ctx.wait_idle()?;
     let times = timed_frames(ctx, &mut renderer, &mut gpu_scene, s.camera, s.frames)?;
+    // Only the profiled frame counts its work (the timed ones pay for no counters).
+    renderer.set_counting(true);
     let stats = renderer.render(ctx, &mut gpu_scene, s.camera, profiling(ctx))?;
     let fill = renderer.fill_count(ctx)?;
     let counters = renderer.counters(ctx)?;
