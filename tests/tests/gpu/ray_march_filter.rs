@@ -640,13 +640,7 @@ fn unique_voxels_draw_the_same_gbuffer_with_fewer_billboards() {
     // Same G-buffer: equal fragments (a tie between two voxels at one depth may resolve
     // either way: allow a few pixels).
     for name in ["gbuffer_position", "gbuffer_normal", "gbuffer_albedo"] {
-        let (x, y) = (a.read(name), b.read(name));
-        let bpp = x.len() / (SIZE.0 * SIZE.1) as usize;
-        let differing = x
-            .chunks(bpp)
-            .zip(y.chunks(bpp))
-            .filter(|(p, q)| p != q)
-            .count();
+        let differing = differing_pixels(&a.read(name), &b.read(name));
         assert!(differing <= 3, "{name}: {differing} pixels differ");
     }
     // A second frame clears the claims: same count again.
@@ -654,6 +648,15 @@ fn unique_voxels_draw_the_same_gbuffer_with_fewer_billboards() {
         .render(c, &mut b.scene, &camera, ssbvb_passes::Profiling::Off)
         .unwrap();
     assert_eq!(b.renderer.fill_count(c).unwrap().unwrap(), fill_b);
+}
+
+/// Pixels that differ between two readbacks of a `SIZE` texture.
+fn differing_pixels(x: &[u8], y: &[u8]) -> usize {
+    let bpp = x.len() / (SIZE.0 * SIZE.1) as usize;
+    x.chunks(bpp)
+        .zip(y.chunks(bpp))
+        .filter(|(p, q)| p != q)
+        .count()
 }
 
 /// Frames that no report reads run the filter without its counters (`COUNT_WORK` off):
@@ -706,13 +709,7 @@ fn uncounted_frames_draw_the_same_and_report_no_filter_counts() {
             .unwrap();
         assert_eq!(voxels(&f), counted_voxels);
         for (n, x) in names.iter().zip(&counted) {
-            let y = f.read(n);
-            let bpp = x.len() / (SIZE.0 * SIZE.1) as usize;
-            let differing = x
-                .chunks(bpp)
-                .zip(y.chunks(bpp))
-                .filter(|(p, q)| p != q)
-                .count();
+            let differing = differing_pixels(x, &f.read(n));
             assert!(
                 differing <= 3,
                 "{n}: {differing} pixels differ without counting"
