@@ -9,7 +9,7 @@ use ssbvb_passes::kinds::billboards::{BillboardOptions, DEFAULT_CULL_COS, Footpr
 use ssbvb_tests::{model_asset, reference_of, render, single_object_scene};
 use ssbvb_voxel::camera::Camera;
 
-use crate::billboards::{BUNNY, GBuffer, LEVEL, SIZE, draw, pipeline_src};
+use crate::billboard_harness::{BUNNY, GBuffer, LEVEL, SIZE, draw, pipeline_src};
 
 const TRIANGLES_ONLY: &str = r#"Pipeline(
   resources: {
