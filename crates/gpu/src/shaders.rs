@@ -1,5 +1,9 @@
 //! The WGSL sources, every file under `shaders/` embedded at build time (`build.rs`), with
 //! includes expanded.
+//!
+//! For shader work, `SSBVB_SHADER_DIR=<folder>` makes [`source`] read the files from that
+//! folder instead (a file missing there falls back to the embedded one), so an edited
+//! shader runs without rebuilding the binary. Native builds only.
 
 use crate::shader_source::preprocess;
 
@@ -15,10 +19,24 @@ pub fn raw(name: &str) -> Option<&'static str> {
 
 /// The WGSL of `name` with includes expanded.
 pub fn source(name: &str) -> Result<String, ResourceError> {
-    let main = raw(name).ok_or_else(|| ResourceError::Shader(format!("{name} is not embedded")))?;
-    preprocess(name, main, &|n| raw(n).map(str::to_string))
+    let read = |n: &str| override_file(n).or_else(|| raw(n).map(str::to_string));
+    let main =
+        read(name).ok_or_else(|| ResourceError::Shader(format!("{name} is not embedded")))?;
+    preprocess(name, &main, &read)
         .map(|p| p.source)
         .map_err(ResourceError::Shader)
+}
+
+/// `name` from the folder `SSBVB_SHADER_DIR` names, when it is set and holds the file.
+#[cfg(not(target_arch = "wasm32"))]
+fn override_file(name: &str) -> Option<String> {
+    let dir = std::env::var_os("SSBVB_SHADER_DIR")?;
+    std::fs::read_to_string(std::path::Path::new(&dir).join(name)).ok()
+}
+
+#[cfg(target_arch = "wasm32")]
+fn override_file(_name: &str) -> Option<String> {
+    None
 }
 
 #[cfg(test)]
