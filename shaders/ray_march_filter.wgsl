@@ -36,8 +36,16 @@ struct DrawArgs {
 
 // Most DDA steps per ray and instance (the pass parameter `max_steps`).
 override MAX_STEPS: u32 = 1024u;
+// `RayMarchFilter(march: Fast)`: the fast march (sparse_march.inc.wgsl).
+override FAST_MARCH: bool = false;
 // `RayMarchFilter(unique_voxels: true)`: each voxel is appended once per frame.
 override UNIQUE_VOXELS: bool = false;
+// Chosen per frame (ray_march_filter.rs, `MainVariant`): some LOD has pages (a GPU budget),
+// and more than one instance is visible. Off, their code is left out of the pipeline,
+// which the software adapter runs markedly faster (docs/benchmarks.md); on, it is correct
+// for any scene.
+override PAGED: bool = true;
+override SEVERAL_INSTANCES: bool = true;
 // Count the frame's work into `filter_counters` (off: the pipeline of frames that no report
 // reads; the march is the same).
 override COUNT_WORK: bool = true;
@@ -230,7 +238,7 @@ fn filter_pixel(px: vec2<i32>) -> bool {
     best = march_prepass(k, e, px, size, dir);
     best_inst = k;
     prepass_inst = k;
-    if count > 1u {
+    if SEVERAL_INSTANCES && count > 1u {
         bvh_walk(dir, best.t, count);
     }
     if !best.found {

@@ -1,7 +1,8 @@
 // The sparse march: the first voxel along a ray through one LOD's sparse lookup (the
 // 64-ary occupancy tree `lookup_nodes_*`, common.inc.wgsl), the GPU side of the CPU reference's
 // hierarchical DDA. Included by ray_march_filter.wgsl; the includer declares
-// `override MAX_STEPS: u32`.
+// `override MAX_STEPS: u32`, `override FAST_MARCH: bool` and `override PAGED: bool` (false:
+// no LOD of the scene has pages, and the page code is left out).
 //
 // The rules (f32), following the CPU reference (ssbvb-voxel reference/dda.rs):
 //
@@ -38,6 +39,15 @@
 //   "touched" (for the page cache's LRU).
 // - Every loop iteration counts one step (cells and skipped regions alike); after
 //   MAX_STEPS the ray reports no hit.
+//
+// The fast march (FAST_MARCH, `RayMarchFilter(march: Fast)`) drops the rules that keep the
+// march bit-identical with the reference and costs a little accuracy
+// (docs/benchmarks.md): every plane time, the box's faces included, is a product with the
+// reciprocal direction (one rounding, the same for every plane, so times stay monotone and
+// consistent with the cells; accumulating them instead drifted by more than a grazing
+// ray's margin), a position estimate is corrected against the plane times by one plane at
+// most (no search; progress still holds: every step crosses at least one plane), and a ray
+// through an edge or corner tests only the cell it enters diagonally.
 
 // Direction components below this fraction of the largest one are treated as 0: over the
 // whole box the ray moves less than 4e-12 object units on that axis, far below a cell of
@@ -89,6 +99,8 @@ struct Ray {
     // The ray's interval inside the [-1, 1]^3 box (t_enter > t_exit: it misses).
     t_enter: f32,
     t_exit: f32,
+    // FAST_MARCH: 1 / d on moving axes (1 on static ones).
+    inv: vec3<f32>,
 }
 
 // The first voxel along a ray.
@@ -128,10 +140,16 @@ fn make_ray_od(o_obj: vec3<f32>, d_obj: vec3<f32>, level: u32) -> Ray {
     r.d = select(vec3(0.0), ad, r.moving);
     r.n = 1 << level;
     r.s = cell_size(level);
+    r.inv = 1.0 / select(vec3(1.0), r.d, r.moving);
     // Slab test; static axes divide by 1 and are then replaced (no 0 / 0).
+    // The fast march multiplies by the same reciprocals as its plane times, so the box's
+    // faces are crossed at the times of planes 0 and n (a box entry computed by division
+    // could fall a rounding before plane 0 and put the ray one cell in).
     let dd = select(vec3(1.0), r.d, r.moving);
-    let t0 = select(vec3(-BIG), (vec3(-1.0) - r.o) / dd, r.moving);
-    let t1 = select(vec3(BIG), (vec3(1.0) - r.o) / dd, r.moving);
+    let t0_div = (vec3(-1.0) - r.o) / dd;
+    let t1_div = (vec3(1.0) - r.o) / dd;
+    let t0 = select(vec3(-BIG), select(t0_div, (vec3(-1.0) - r.o) * r.inv, FAST_MARCH), r.moving);
+    let t1 = select(vec3(BIG), select(t1_div, (vec3(1.0) - r.o) * r.inv, FAST_MARCH), r.moving);
     r.t_enter = max(t0.x, max(t0.y, t0.z));
     r.t_exit = min(t1.x, min(t1.y, t1.z));
     let bad = !(m > 0.0 && m < BIG) || any(!(abs(o_obj) < vec3(MAX_ORIGIN)))
@@ -145,6 +163,9 @@ fn make_ray_od(o_obj: vec3<f32>, d_obj: vec3<f32>, level: u32) -> Ray {
 
 // Time at which the ray crosses plane `k` (at -1 + k * s) of moving axis `a`.
 fn plane_t(r: Ray, a: u32, k: i32) -> f32 {
+    if FAST_MARCH {
+        return ((f32(k) * r.s - 1.0) - r.o[a]) * r.inv[a];
+    }
     return ((f32(k) * r.s - 1.0) - r.o[a]) / r.d[a];
 }
 
@@ -175,6 +196,11 @@ fn first_plane(r: Ray, a: u32, t: f32, lo_in: i32, hi_in: i32, strict: bool) -> 
             return est + 1;
         }
         lo = est + 2;
+    }
+    if FAST_MARCH {
+        // Off by more than one plane (a far camera's coarse positions): the nearest
+        // candidate on the side the estimate erred; no search.
+        return select(lo, hi, hi < est);
     }
     loop {
         if lo >= hi {
@@ -313,7 +339,7 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
             }
             loop {
                 let n = lookup_node(lod, node);
-                if k + 2u == depth && lod.page_base != NO_PAGES && n.base == PAGE_MISSING {
+                if k + 2u == depth && PAGED && lod.page_base != NO_PAGES && n.base == PAGE_MISSING {
                     if !(missing_t >= 0.0) {
                         missing_t = cell_entry_t(r, c, t0);
                     }
@@ -348,7 +374,7 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
                 if k + 2u == depth {
                     parent = node;
                     parent_key = co >> vec3(4u);
-                    if lod.page_base != NO_PAGES {
+                    if PAGED && lod.page_base != NO_PAGES {
                         note_page(FB_TOUCHED, page_of(lod, node));
                     }
                 }
@@ -397,7 +423,7 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
                 t_next[a] = select(BIG, plane_t(r, a, c[a] + 1), c[a] + 1 <= r.n);
             }
         }
-        if u32(cross.x) + u32(cross.y) + u32(cross.z) > 1u {
+        if !FAST_MARCH && u32(cross.x) + u32(cross.y) + u32(cross.z) > 1u {
             // Through an edge or corner: the diagonal cell, then the cells touched only
             // along the edge, in the reference's rank order (differ on x, y, z, xy, xz, yz).
             // Masks 0, 1, 2, 4, 3, 5, 6: i with 3 and 4 swapped (no array: llvmpipe would

@@ -278,7 +278,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let kind = PassKind::RayMarchFilter(ssbvb_graph::RayMarchFilterParams {
             max_steps: 8,
-            unique_voxels: false,
+            ..Default::default()
         });
         // Missing file.
         let kinds = [(kind.clone(), "ray_march_filter.wgsl", &[][..])];

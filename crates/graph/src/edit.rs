@@ -96,7 +96,8 @@ mod tests {
             filter(&q),
             PassKind::RayMarchFilter(RayMarchFilterParams {
                 max_steps: 7,
-                unique_voxels: true
+                unique_voxels: true,
+                ..Default::default()
             })
         );
         // An invalid edit is refused with the pass named.
@@ -152,6 +153,7 @@ mod tests {
         let k = PassKind::RayMarchFilter(RayMarchFilterParams {
             max_steps: 9,
             unique_voxels: true,
+            ..Default::default()
         });
         let q = p.with_pass_kind("filter", &k).unwrap();
         assert_eq!(filter(&q), k);
@@ -160,6 +162,7 @@ mod tests {
         let bad = PassKind::RayMarchFilter(RayMarchFilterParams {
             max_steps: 0,
             unique_voxels: false,
+            ..Default::default()
         });
         assert!(p.with_pass_kind("filter", &bad).is_none());
     }

@@ -79,6 +79,7 @@ mod tests {
             ssbvb_graph::RayMarchFilterParams {
                 max_steps: 1024,
                 unique_voxels: false,
+                ..Default::default()
             },
         ));
         f.insert("max_steps".into(), Value::from(64));
@@ -88,6 +89,7 @@ mod tests {
                 ssbvb_graph::RayMarchFilterParams {
                     max_steps: 64,
                     unique_voxels: false,
+                    ..Default::default()
                 }
             ))
         );

@@ -212,8 +212,8 @@ fn render_json_and_bench_quick() {
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     let rows: Vec<&str> = csv.lines().skip(1).collect();
-    // 9 techniques x 2 levels.
-    assert_eq!(rows.len(), 18, "{csv}");
+    // 11 techniques x 2 levels.
+    assert_eq!(rows.len(), 22, "{csv}");
     for r in rows {
         let r: Vec<&str> = r.split(',').collect();
         let num = |name: &str| -> Option<f64> { r[col(name)].parse().ok() };
@@ -231,7 +231,7 @@ fn render_json_and_bench_quick() {
         // 0.957+.
         if matches!(
             r[col("technique")],
-            "ssbvb-flat" | "ssbvb-unique" | "ssbvb-splat"
+            "ssbvb-flat" | "ssbvb-unique" | "ssbvb-fast" | "ssbvb-splat"
         ) {
             assert!(iou >= 0.995, "{r:?}");
             assert!((0.45..=0.55).contains(&depth), "{r:?}");
@@ -245,8 +245,12 @@ fn render_json_and_bench_quick() {
         // Voxel ids per pixel come from the filter's per-pixel slots: the per-pixel SSBVB
         // rows have them (measured 1.0), the others leave the column empty.
         match (r[col("technique")], num("same_voxel_rate")) {
-            ("ssbvb-flat" | "ssbvb-raybox", Some(same)) => assert!(same >= 0.999, "{r:?}"),
-            ("ssbvb-flat" | "ssbvb-raybox", None) => panic!("no same-voxel rate: {r:?}"),
+            ("ssbvb-flat" | "ssbvb-raybox" | "ssbvb-raybox-fast", Some(same)) => {
+                assert!(same >= 0.999, "{r:?}")
+            }
+            ("ssbvb-flat" | "ssbvb-raybox" | "ssbvb-raybox-fast", None) => {
+                panic!("no same-voxel rate: {r:?}")
+            }
             (_, same) => assert_eq!(same, None, "{r:?}"),
         }
         // The SSBVB draws one billboard per covered pixel (up to silhouette rays), or with
@@ -255,7 +259,7 @@ fn render_json_and_bench_quick() {
         if technique.starts_with("ssbvb") {
             let fill: f64 = r[col("fill_count")].parse().unwrap();
             let covered: f64 = r[col("covered_pixels")].parse().unwrap();
-            if technique == "ssbvb-unique" || technique == "ssbvb-splat" {
+            if matches!(technique, "ssbvb-unique" | "ssbvb-fast" | "ssbvb-splat") {
                 assert!(fill < covered * 0.9 && fill > 0.0, "{r:?}");
             } else {
                 assert!((fill / covered - 1.0).abs() < 0.01, "{r:?}");

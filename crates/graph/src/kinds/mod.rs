@@ -33,7 +33,7 @@ pub use empty_space_prepass::EmptySpacePrepassKind;
 pub use formats::LIGHT;
 pub use octree_ray_cast::OctreeRayCastParams;
 pub use rastavox::{MAX_PIXEL_ERROR, RastaVoxParams};
-pub use ray_march_filter::RayMarchFilterParams;
+pub use ray_march_filter::{MarchMode, RayMarchFilterParams};
 pub use smooth::SmoothParams;
 pub use spec::{Access, KindSpec, PassStage, SlotClass, SlotDesc};
 pub use splat_billboards::SplatBillboardsParams;
@@ -136,6 +136,7 @@ mod tests {
         let k = PassKind::RayMarchFilter(RayMarchFilterParams {
             max_steps: 0,
             unique_voxels: true,
+            ..Default::default()
         });
         assert_eq!(RayMarchFilterParams::of_kind(&k).unwrap().max_steps, 0);
         assert!(DenseDdaParams::of_kind(&k).is_none());

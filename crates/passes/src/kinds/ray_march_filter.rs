@@ -25,7 +25,7 @@
 use bytemuck::{Pod, Zeroable};
 use ssbvb_gpu::requirements::max_compute_invocations_per_workgroup;
 use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_graph::RayMarchFilterParams;
+use ssbvb_graph::{MarchMode, RayMarchFilterParams};
 use ssbvb_voxel::asset::PackedVoxel;
 
 use crate::runtime::bindings::PassBindings;
@@ -87,10 +87,8 @@ pub struct DrawArgs {
 /// The compiled filter.
 pub struct RayMarchFilter {
     clear: wgpu::ComputePipeline,
-    /// `main` counting its work (frames of a report: [`crate::Renderer::set_counting`]).
-    main: wgpu::ComputePipeline,
-    /// `main` with the WGSL override `COUNT_WORK` off: no counter atomics.
-    main_uncounted: wgpu::ComputePipeline,
+    /// `main`, one pipeline per variant a frame has needed.
+    mains: MainPipelines,
     /// Whether the last recorded frame counted.
     counted: bool,
     bindings: PassBindings,
@@ -178,6 +176,88 @@ pub fn claim_offsets(voxels: impl IntoIterator<Item = u64>) -> Vec<u32> {
         .collect()
 }
 
+/// What a frame needs of `main`, as WGSL overrides: code a frame does not need is left out
+/// of its pipeline (the software adapter runs the filter markedly faster without the
+/// instance-hierarchy walk; docs/benchmarks.md). Each is on whenever the frame might need
+/// it, so a variant is never chosen that draws a frame wrongly.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MainVariant {
+    /// Count the frame's work (`COUNT_WORK`: a report reads it,
+    /// [`crate::Renderer::set_counting`]).
+    pub count_work: bool,
+    /// More than one instance is visible (`SEVERAL_INSTANCES`: the hierarchy walk).
+    pub several_instances: bool,
+    /// The scene is uploaded under a GPU budget (`PAGED`: pages and their feedback).
+    pub paged: bool,
+}
+
+impl MainVariant {
+    /// The WGSL overrides of this variant.
+    pub fn constants(self) -> [(&'static str, f64); 3] {
+        [
+            ("COUNT_WORK", flag(self.count_work)),
+            ("SEVERAL_INSTANCES", flag(self.several_instances)),
+            ("PAGED", flag(self.paged)),
+        ]
+    }
+}
+
+fn flag(on: bool) -> f64 {
+    if on { 1.0 } else { 0.0 }
+}
+
+/// `main`'s pipelines, compiled when a frame first needs each variant.
+struct MainPipelines {
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
+    /// The pass's own overrides (from its parameters).
+    constants: [(&'static str, f64); 3],
+    label: String,
+    built: Vec<(MainVariant, wgpu::ComputePipeline)>,
+}
+
+impl MainPipelines {
+    fn get(
+        &mut self,
+        ctx: &GpuContext,
+        variant: MainVariant,
+    ) -> Result<&wgpu::ComputePipeline, PassError> {
+        let i = match self.built.iter().position(|(v, _)| *v == variant) {
+            Some(i) => i,
+            None => {
+                let mut constants = self.constants.to_vec();
+                constants.extend(variant.constants());
+                let pipeline = ctx.validated(&format!("{} ({variant:?})", self.label), |d| {
+                    compute_pipeline(d, &self.layout, &self.module, "main", &constants)
+                })?;
+                self.built.push((variant, pipeline));
+                self.built.len() - 1
+            }
+        };
+        Ok(&self.built[i].1)
+    }
+}
+
+fn compute_pipeline(
+    d: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    constants: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
+    d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: Some(layout),
+        module,
+        entry_point: Some(entry),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants,
+            ..Default::default()
+        },
+        cache: None,
+    })
+}
+
 impl PassImpl for RayMarchFilter {
     type Params = RayMarchFilterParams;
     const SHADER: &'static str = "ray_march_filter.wgsl";
@@ -188,57 +268,39 @@ impl PassImpl for RayMarchFilter {
         ..KindNeeds::new(wgpu::DownlevelFlags::INDIRECT_EXECUTION, 5)
     };
 
-    /// Compiles both entry points; `max_steps` becomes the WGSL override `MAX_STEPS`.
+    /// Compiles `clear_draw`; `main` is compiled per [`MainVariant`] when a frame first
+    /// needs it. `max_steps` becomes the WGSL override `MAX_STEPS`, `march: Fast` the
+    /// override `FAST_MARCH`.
     fn new(init: &PassInit<'_>, params: &RayMarchFilterParams) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
         let RayMarchFilterParams {
             max_steps,
             unique_voxels,
+            march,
         } = *params;
         let module = ctx.shader(
             "ray_march_filter.wgsl",
             &shaders::source("ray_march_filter.wgsl")?,
         )?;
         let label = format!("pass `{}`: ray_march_filter pipelines", pass.name);
-        let built = ctx.validated(&label, |d| {
+        let constants = [
+            ("MAX_STEPS", f64::from(max_steps)),
+            ("UNIQUE_VOXELS", flag(unique_voxels)),
+            ("FAST_MARCH", flag(march == MarchMode::Fast)),
+        ];
+        let (clear, layout, bindings) = ctx.validated(&label, |d| {
             let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
-            let pl = pipeline_layout(d, "ray_march_filter", scene, Some(&bindings));
-            let constants = [
-                ("MAX_STEPS", f64::from(max_steps)),
-                ("UNIQUE_VOXELS", if unique_voxels { 1.0 } else { 0.0 }),
-            ];
-            let make = |entry: &str| {
-                d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(entry),
-                    layout: Some(&pl),
-                    module: &module,
-                    entry_point: Some(entry),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &constants,
-                        ..Default::default()
-                    },
-                    cache: None,
-                })
-            };
-            let uncounted = [
-                constants[0],
-                constants[1],
-                ("COUNT_WORK", 0.0),
-            ];
-            let main_uncounted = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("main (uncounted)"),
-                layout: Some(&pl),
-                module: &module,
-                entry_point: Some("main"),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &uncounted,
-                    ..Default::default()
-                },
-                cache: None,
-            });
-            (make("clear_draw"), make("main"), main_uncounted, bindings)
+            let layout = pipeline_layout(d, "ray_march_filter", scene, Some(&bindings));
+            let clear = compute_pipeline(d, &layout, &module, "clear_draw", &constants);
+            (clear, layout, bindings)
         })?;
-        let (clear, main, main_uncounted, bindings) = built;
+        let mains = MainPipelines {
+            module,
+            layout,
+            constants,
+            label,
+            built: Vec::new(),
+        };
         // Without unique_voxels the shader never touches the claims: bind minimal buffers.
         let claims = Some(Claims::new(ctx, 16, 4));
         let counters = ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -251,8 +313,7 @@ impl PassImpl for RayMarchFilter {
         });
         Ok(Self {
             clear,
-            main,
-            main_uncounted,
+            mains,
             counted: false,
             bindings,
             unique_voxels,
@@ -281,6 +342,12 @@ impl PassNode for RayMarchFilter {
             ],
         )?;
         self.counted = rec.counting;
+        let variant = MainVariant {
+            count_work: self.counted,
+            several_instances: rec.scene.visible.len() > 1,
+            paged: rec.scene.streaming.is_some(),
+        };
+        let main = self.mains.get(rec.gpu, variant)?;
         if self.counted {
             encoder.clear_buffer(&self.counters, 0, None);
         }
@@ -295,11 +362,7 @@ impl PassNode for RayMarchFilter {
         pass.set_pipeline(&self.clear);
         pass.dispatch_workgroups(1, 1, 1);
         // wgpu orders the two dispatches (the draw arguments are written, then counted).
-        pass.set_pipeline(if self.counted {
-            &self.main
-        } else {
-            &self.main_uncounted
-        });
+        pass.set_pipeline(main);
         pass.dispatch_workgroups(w.div_ceil(WORKGROUP), h.div_ceil(WORKGROUP), 1);
         Ok(())
     }

@@ -3,7 +3,7 @@
 //! entry in [`TECHNIQUES`].
 
 use anyhow::{Context, Result};
-use ssbvb_graph::{BillboardMode, PassKind};
+use ssbvb_graph::{BillboardMode, MarchMode, PassKind};
 
 use crate::bench::args::{BenchArgs, Preset};
 
@@ -41,11 +41,42 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         }),
         max_level: 16,
     },
+    // Per-pixel slots with exact billboards and the fast march: the march's accuracy
+    // (same voxel, depth, coverage) against `ssbvb-raybox`'s.
+    Technique {
+        name: "ssbvb-raybox-fast",
+        pipeline: "ssbvb_flat.ron",
+        edit: Some(|k| match k {
+            PassKind::Billboards(b) => {
+                b.mode = BillboardMode::RayBox;
+                true
+            }
+            PassKind::RayMarchFilter(f) => {
+                f.march = MarchMode::Fast;
+                true
+            }
+            _ => false,
+        }),
+        max_level: 16,
+    },
     // The default pipeline: each visible voxel appended once.
     Technique {
         name: "ssbvb-unique",
         pipeline: "ssbvb.ron",
         edit: None,
+        max_level: 16,
+    },
+    // The default pipeline with the fast march (reciprocal, accumulated plane times).
+    Technique {
+        name: "ssbvb-fast",
+        pipeline: "ssbvb.ron",
+        edit: Some(|k| match k {
+            PassKind::RayMarchFilter(f) => {
+                f.march = MarchMode::Fast;
+                true
+            }
+            _ => false,
+        }),
         max_level: 16,
     },
     // The default pipeline with the billboards splatted in compute.

@@ -375,7 +375,7 @@ fn run_one(ctx: &GpuContext, t: &Technique, c: &Cell) -> Result<Row> {
         // Voxel ids per pixel come from the slot each pixel's ray filled: not available
         // with unique_voxels (one slot per voxel, not per pixel).
         same_voxel_rate: fill
-            .filter(|_| !matches!(t.name, "ssbvb-unique" | "ssbvb-splat"))
+            .filter(|_| !matches!(t.name, "ssbvb-unique" | "ssbvb-fast" | "ssbvb-splat"))
             .map(|_| acc.same_voxel_rate),
         depth_error_voxels_median: acc.depth_error_voxels.median,
         normal_error_deg_median: acc.normal_error_deg.median,
