@@ -3,7 +3,7 @@
 //!
 //! The same pass as [`OctreeRayCast`](super::octree_ray_cast::OctreeRayCast) — one
 //! fullscreen triangle into the G-buffer, the same octrees uploaded and bound the same way
-//! ([`OctreeCaster`]: `svo_nodes_*`, `svo_level_offsets`, the ray counters), the same
+//! (`OctreeCaster`: `svo_nodes_*`, `svo_level_offsets`, the ray counters), the same
 //! outputs and counters — with ESVO's traversal in the fragment shader: coordinates in
 //! [1, 2]³, the ray mirrored so its direction is negative on every axis, plane times as
 //! `x · tx_coef − tx_bias`, a parent stack indexed by scale, and POP by the highest

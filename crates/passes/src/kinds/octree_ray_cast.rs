@@ -18,6 +18,10 @@
 //! `LodInfo::object`. Node `i` of level `l` is voxel `i` of LOD `l`, so the hit node's
 //! colour is read from the shared point cloud of the instance's LOD.
 //!
+//! The upload, the bindings (`shaders/svo_nodes.inc.wgsl`), the recording and the counters
+//! are `OctreeCaster`'s, which `EsvoRayCast` (`super::esvo_ray_cast`) shares: the two
+//! kinds differ only in their traversal shader.
+//!
 //! # Limits
 //!
 //! - Levels above [`MAX_OCTREE_LEVEL`] (16, the shader's stack depth) and octrees larger
