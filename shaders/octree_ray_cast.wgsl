@@ -4,12 +4,7 @@
 // visible instance by a stack-based, front-to-back descent of the object's octree
 // (`svo_nodes_*`, group 1) down to the instance's LOD level, and keeps the nearest hit.
 //
-// Octree layout (ssbvb_voxel::svo::Svo): nodes level by level, node i of level l being
-// entry i of LOD l's point cloud; `child_mask` bit c = x | y << 1 | z << 2 set when child c
-// exists, existing children stored from `first_child` in increasing c. Every object's
-// octree is in the `svo_nodes_*` chunks (its child indices shifted by where it starts);
-// `svo_level_offsets[object * SVO_STRIDE + l]` is the first node of its level l (then one
-// past its last level), so a node's voxel id is `node - offset[level]`.
+// Octree layout and bindings: svo_nodes.inc.wgsl.
 //
 // As in dense_dda.wgsl and the CPU reference (ssbvb_voxel::reference::dda) the ray is moved
 // into object space with `world_to_object` without renormalizing (t stays the world
@@ -34,47 +29,10 @@
 override MAX_STEPS: u32 = 4096u;
 
 const STACK_DEPTH: u32 = 16u;
-// Level offsets per object: levels 0..=16 and the end (octree_ray_cast.rs SVO_STRIDE).
-const SVO_STRIDE: u32 = 18u;
-
-struct SvoNode {
-    child_mask: u32,
-    first_child: u32,
-}
-
-// The nodes, split over bindings of 2^NODE_CHUNK_BITS nodes (octree_ray_cast.rs); a
-// pipeline for octrees within one binding has NODE_CHUNKS_USED = 1 and reads it directly.
-override NODE_CHUNK_BITS: u32 = 24u;
-override NODE_CHUNKS_USED: u32 = 8u;
-@group(1) @binding(0) var<storage, read> svo_nodes_0: array<SvoNode>;
-@group(1) @binding(1) var<storage, read> svo_nodes_1: array<SvoNode>;
-@group(1) @binding(2) var<storage, read> svo_nodes_2: array<SvoNode>;
-@group(1) @binding(3) var<storage, read> svo_nodes_3: array<SvoNode>;
-@group(1) @binding(4) var<storage, read> svo_nodes_4: array<SvoNode>;
-@group(1) @binding(5) var<storage, read> svo_nodes_5: array<SvoNode>;
-@group(1) @binding(6) var<storage, read> svo_nodes_6: array<SvoNode>;
-@group(1) @binding(7) var<storage, read> svo_nodes_7: array<SvoNode>;
-@group(1) @binding(8) var<storage, read> svo_level_offsets: array<u32>;
+//#include "svo_nodes.inc.wgsl"
 
 // Pass-private: the frame's ray counters (ray_cast.inc.wgsl).
 @group(1) @binding(9) var<storage, read_write> ray_counters: array<atomic<u32>>;
-
-fn svo_node(n: u32) -> SvoNode {
-    if NODE_CHUNKS_USED == 1u {
-        return svo_nodes_0[n];
-    }
-    let i = n & ((1u << NODE_CHUNK_BITS) - 1u);
-    switch n >> NODE_CHUNK_BITS {
-        case 0u: { return svo_nodes_0[i]; }
-        case 1u: { return svo_nodes_1[i]; }
-        case 2u: { return svo_nodes_2[i]; }
-        case 3u: { return svo_nodes_3[i]; }
-        case 4u: { return svo_nodes_4[i]; }
-        case 5u: { return svo_nodes_5[i]; }
-        case 6u: { return svo_nodes_6[i]; }
-        default: { return svo_nodes_7[i]; }
-    }
-}
 
 //#include "ray_cast.inc.wgsl"
 

@@ -55,6 +55,10 @@ const FILES: &[(&str, &[u8])] = &[
         include_bytes!("../../../assets/pipelines/octree_ray_cast.ron"),
     ),
     (
+        "pipelines/esvo.ron",
+        include_bytes!("../../../assets/pipelines/esvo.ron"),
+    ),
+    (
         "pipelines/cube_raster.ron",
         include_bytes!("../../../assets/pipelines/cube_raster.ron"),
     ),

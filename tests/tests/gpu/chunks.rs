@@ -23,7 +23,7 @@ fn every_chunk_of_every_stream_is_read_like_a_single_binding() {
     // both of theirs.
     let word_bits = voxels.div_ceil(4).next_power_of_two().trailing_zeros();
     let node_bits = nodes.div_ceil(2).next_power_of_two().trailing_zeros();
-    // The octree baseline uploads every level but the finest (the nodes it reads): over
+    // The octree baselines upload every level but the finest (the nodes it reads): over
     // 5 of its 8 bindings here (power-of-two chunks of this model give 5 or 10).
     let finest = asset.lods.last().unwrap().point_cloud.voxels.len();
     let octree_nodes = voxels - finest;
@@ -56,6 +56,7 @@ fn every_chunk_of_every_stream_is_read_like_a_single_binding() {
             "octree",
             include_str!("../../../assets/pipelines/octree_ray_cast.ron"),
         ),
+        ("esvo", include_str!("../../../assets/pipelines/esvo.ron")),
         (
             "cube raster",
             include_str!("../../../assets/pipelines/cube_raster.ron"),

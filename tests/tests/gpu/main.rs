@@ -11,6 +11,7 @@ mod dense_dda;
 mod dynamic;
 mod embed;
 mod empty_space;
+mod esvo_ray_cast;
 mod gpu_sort;
 mod gpu_voxelize;
 mod local_edit;

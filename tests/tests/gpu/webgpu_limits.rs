@@ -13,13 +13,14 @@ use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_passes::{Profiling, Renderer};
 use ssbvb_voxel::camera::Camera;
 
-const PIPELINES: [&str; 8] = [
+const PIPELINES: [&str; 9] = [
     "ssbvb",
     "ssbvb_flat",
     "ssbvb_splat",
     "ssbvb_embedded",
     "dense_dda",
     "octree_ray_cast",
+    "esvo",
     "cube_raster",
     "rastavox",
 ];

@@ -12,6 +12,7 @@ mod cone_trace;
 mod cube_raster;
 mod dense_dda;
 mod empty_space_prepass;
+mod esvo_ray_cast;
 mod formats;
 mod octree_ray_cast;
 mod rastavox;
@@ -30,6 +31,7 @@ pub use cone_trace::{ConeTraceParams, MAX_CONES, MAX_VOLUME_RESOLUTION};
 pub use cube_raster::CubeRasterParams;
 pub use dense_dda::DenseDdaParams;
 pub use empty_space_prepass::EmptySpacePrepassKind;
+pub use esvo_ray_cast::EsvoRayCastParams;
 pub use formats::LIGHT;
 pub use octree_ray_cast::OctreeRayCastParams;
 pub use rastavox::{MAX_PIXEL_ERROR, RastaVoxParams};
@@ -69,6 +71,11 @@ pass_kinds! {
     /// of the paper, cf. Laine & Karras' ESVO), writing the same G-buffer as the billboards
     /// (stencil = voxel).
     OctreeRayCast(OctreeRayCastParams);
+    /// Baseline: per pixel, Laine & Karras' ESVO traversal (coordinates in [1, 2]³, a
+    /// parent stack indexed by scale, PUSH / ADVANCE / POP with the float-bit POP; no
+    /// contours) through the same octree as `OctreeRayCast`, down to each instance's LOD
+    /// level, writing the same G-buffer (stencil = voxel).
+    EsvoRayCast(EsvoRayCastParams);
     /// Baseline, cube rasterization: instanced rasterization of one cube per voxel of each
     /// visible instance's LOD — or, with `merge_full_nodes`, one cube per completely full
     /// octree node — writing the same G-buffer as the billboards (stencil = voxel).
@@ -111,6 +118,7 @@ mod tests {
             CompositeKind::NAME,
             DenseDdaParams::NAME,
             OctreeRayCastParams::NAME,
+            EsvoRayCastParams::NAME,
             CubeRasterParams::NAME,
             SplatBillboardsParams::NAME,
             RastaVoxParams::NAME,

@@ -6,7 +6,7 @@ pub(super) fn one() -> f32 {
 }
 
 /// The serde default of `max_steps` of the per-pixel ray casts (`DenseDda`,
-/// `OctreeRayCast`).
+/// `OctreeRayCast`, `EsvoRayCast`).
 pub(super) fn default_ray_cast_steps() -> u32 {
     4096
 }

@@ -24,6 +24,7 @@ pass_modules! {
     composite::Composite,
     dense_dda::DenseDda,
     octree_ray_cast::OctreeRayCast,
+    esvo_ray_cast::EsvoRayCast,
     cube_raster::CubeRaster,
     splat_billboards::SplatBillboards,
     rastavox::RastaVox,

@@ -18,6 +18,10 @@
 //! `LodInfo::object`. Node `i` of level `l` is voxel `i` of LOD `l`, so the hit node's
 //! colour is read from the shared point cloud of the instance's LOD.
 //!
+//! The upload, the bindings (`shaders/svo_nodes.inc.wgsl`), the recording and the counters
+//! are `OctreeCaster`'s, which `EsvoRayCast` (`super::esvo_ray_cast`) shares: the two
+//! kinds differ only in their traversal shader.
+//!
 //! # Limits
 //!
 //! - Levels above [`MAX_OCTREE_LEVEL`] (16, the shader's stack depth) and octrees larger
@@ -40,6 +44,7 @@ use crate::runtime::recorder::Recorder;
 use crate::kinds::gbuffer::PulledPipeline;
 use ssbvb_gpu::scene::GpuScene;
 use crate::runtime::registry::{KindNeeds, PassImpl, PassInit};
+use ssbvb_graph::KindSpec;
 use crate::error::PassError;
 use crate::runtime::node::{CounterSource, PassNode};
 
@@ -55,7 +60,14 @@ pub const SVO_STRIDE: usize = MAX_OCTREE_LEVEL as usize + 2;
 pub const NODE_CHUNKS: usize = 8;
 
 /// The compiled octree pass and the uploaded octrees of the scene.
-pub struct OctreeRayCast {
+pub struct OctreeRayCast(OctreeCaster);
+
+/// What a ray caster over the scene's octrees holds: its pipelines, the uploaded octrees
+/// and its counters. `OctreeRayCast` and `EsvoRayCast` (`super::esvo_ray_cast`) differ
+/// only in their shader, which reads the same bindings ([`OWN`], svo_nodes.inc.wgsl).
+pub(crate) struct OctreeCaster {
+    /// The kind's name, for errors.
+    kind: &'static str,
     /// Reads nodes through the chunk switch.
     pipeline: PulledPipeline,
     /// The same shader specialized for octrees that fit one binding (`NODE_CHUNKS_USED =
@@ -72,7 +84,7 @@ pub struct OctreeRayCast {
     counters: RayCastCounters,
 }
 
-/// What the octree pass binds itself: the uploaded octree of the visible object.
+/// What the octree ray casters bind themselves: every object's octree and the counters.
 pub const OWN: &[OwnBinding] = &[
     OwnBinding {
         name: "svo_nodes_0",
@@ -116,15 +128,77 @@ pub const OWN: &[OwnBinding] = &[
     },
 ];
 
-impl OctreeRayCast {
+impl OctreeCaster {
+    /// Compiles pass `P`'s shader for the formats bound to `init.pass`; `max_steps`
+    /// becomes the WGSL override `MAX_STEPS`.
+    pub(crate) fn new<P: PassImpl>(init: &PassInit<'_>, max_steps: u32) -> Result<Self, PassError> {
+        let chunk_bits = init.scene.chunks.octree_bits;
+        let pipeline = |chunks: usize| {
+            PulledPipeline::counting::<P>(
+                init,
+                &[
+                    ("MAX_STEPS", f64::from(max_steps)),
+                    ("NODE_CHUNK_BITS", f64::from(chunk_bits)),
+                    ("NODE_CHUNKS_USED", chunks as f64),
+                ],
+            )
+        };
+        Ok(Self {
+            kind: <P::Params as KindSpec>::NAME,
+            pipeline: pipeline(NODE_CHUNKS)?,
+            single: pipeline(1)?,
+            one_chunk: true,
+            chunk_bits,
+            octrees: None,
+            counters: RayCastCounters::new(init.ctx),
+        })
+    }
+
     /// Refuses visible instances finer than the traversal's stack.
-    fn check_levels(scene: &GpuScene) -> Result<(), PassError> {
+    fn check_levels(&self, scene: &GpuScene) -> Result<(), PassError> {
         if let Some(v) = scene.visible.iter().find(|v| v.level > MAX_OCTREE_LEVEL) {
             return Err(PassError::TooLarge(format!(
-                "OctreeRayCast: object {} at level {}; the octree traversal supports levels \
-                 up to {MAX_OCTREE_LEVEL}",
-                v.object, v.level
+                "{}: object {} at level {}; the octree traversal supports levels up to \
+                 {MAX_OCTREE_LEVEL}",
+                self.kind, v.object, v.level
             )));
+        }
+        Ok(())
+    }
+
+    /// Uploads the octrees the first frame that draws anything, then draws the fullscreen
+    /// triangle with the pipeline for their size.
+    pub(crate) fn record(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder<'_>,
+    ) -> Result<(), PassError> {
+        self.check_levels(rec.scene)?;
+        if self.octrees.is_none() && !rec.scene.visible.is_empty() {
+            let assets: Vec<&VoxelAsset> =
+                rec.scene.scene.objects.iter().map(|o| &*o.asset).collect();
+            self.octrees = Some(self.upload(rec.gpu, &assets)?);
+        }
+        let bind_group = self.octrees.as_ref().filter(|_| !rec.scene.visible.is_empty());
+        self.counters.begin_frame(encoder, rec.counting);
+        let pipeline = if self.one_chunk {
+            &self.single
+        } else {
+            &self.pipeline
+        };
+        pipeline.record_fullscreen(encoder, rec, bind_group);
+        Ok(())
+    }
+
+    /// The last counted frame's rays and loop iterations per ray (`octree_nodes_per_ray`).
+    pub(crate) fn counters(
+        &self,
+        frame: &CounterSource<'_>,
+        out: &mut FrameCounters,
+    ) -> Result<(), PassError> {
+        if let Some((rays, nodes)) = self.counters.read(frame.gpu)? {
+            out.ray_cast_rays = Some(rays);
+            out.octree_nodes_per_ray = nodes;
         }
         Ok(())
     }
@@ -135,20 +209,22 @@ impl OctreeRayCast {
         ctx: &GpuContext,
         assets: &[&VoxelAsset],
     ) -> Result<wgpu::BindGroup, PassError> {
-        let (nodes, offsets) = concatenated_octrees(assets)?;
+        let (nodes, offsets) =
+            concatenated_octrees(self.kind, assets)?;
         let chunk = 1usize << self.chunk_bits;
         self.one_chunk = nodes.len() <= chunk;
         let node_bytes = std::mem::size_of::<SvoNode>();
         if nodes.len() > NODE_CHUNKS * chunk {
             return Err(PassError::TooLarge(format!(
-                "OctreeRayCast: the octrees take {} MiB; the pass binds at most {NODE_CHUNKS} \
-                 × {} MiB of them",
+                "{}: the octrees take {} MiB; the pass binds at most {NODE_CHUNKS} × {} MiB \
+                 of them",
+                self.kind,
                 (nodes.len() * node_bytes) >> 20,
                 (chunk * node_bytes) >> 20
             )));
         }
-        let label = "octree_ray_cast octree";
-        let bind_group = ctx.validated(label, |d| {
+        let label = format!("{} octrees", self.kind);
+        let bind_group = ctx.validated(&label, |d| {
             let node_buffers: Vec<wgpu::Buffer> = (0..NODE_CHUNKS)
                 .map(|i| {
                     let part = nodes.get(i * chunk..).unwrap_or(&[]);
@@ -174,7 +250,7 @@ impl OctreeRayCast {
             };
             pipeline.bindings.own_bind_group(
                 d,
-                "octree_ray_cast",
+                self.kind,
                 &[
                     ("svo_nodes_0", node_buffers[0].as_entire_binding()),
                     ("svo_nodes_1", node_buffers[1].as_entire_binding()),
@@ -196,21 +272,24 @@ impl OctreeRayCast {
 /// Every asset's octree in one node array (child indices shifted by where each starts)
 /// and the level offsets, [`SVO_STRIDE`] per asset (levels past an asset's last repeat
 /// its end). At least one node.
-pub fn concatenated_octrees(assets: &[&VoxelAsset]) -> Result<(Vec<SvoNode>, Vec<u32>), PassError> {
+pub fn concatenated_octrees(
+    kind: &str,
+    assets: &[&VoxelAsset],
+) -> Result<(Vec<SvoNode>, Vec<u32>), PassError> {
     let mut nodes: Vec<SvoNode> = Vec::new();
     let mut offsets = Vec::with_capacity(assets.len() * SVO_STRIDE);
     for asset in assets {
         let svo = Svo::from_asset(asset)
-            .map_err(|e| PassError::BadScene(format!("OctreeRayCast: {e}")))?;
+            .map_err(|e| PassError::BadScene(format!("{kind}: {e}")))?;
         if svo.level_offsets.len() > SVO_STRIDE {
             return Err(PassError::TooLarge(format!(
-                "OctreeRayCast: an octree of {} levels; the traversal supports levels up to \
+                "{kind}: an octree of {} levels; the traversal supports levels up to \
                  {MAX_OCTREE_LEVEL}",
                 svo.level_offsets.len() - 1
             )));
         }
         let base = u32::try_from(nodes.len())
-            .map_err(|_| PassError::TooLarge("OctreeRayCast: over 2^32 octree nodes".into()))?;
+            .map_err(|_| PassError::TooLarge(format!("{kind}: over 2^32 octree nodes")))?;
         // The finest level's nodes are never read (a hit is found in its parent's mask, and
         // level 0 is a hit without a read): they are left out, ~3/4 of a surface's nodes.
         // Their indices remain (virtual, past this object's nodes): ids are `node -
@@ -235,41 +314,24 @@ pub fn concatenated_octrees(assets: &[&VoxelAsset]) -> Result<(Vec<SvoNode>, Vec
     Ok((nodes, offsets))
 }
 
+/// What the octree ray casters need from an adapter: the counters are written in the
+/// fragment shader; the nodes' bindings, the level offsets and the counters.
+pub(crate) const NEEDS: KindNeeds = KindNeeds::new(
+    wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE,
+    NODE_CHUNKS as u64 + 2,
+);
+
 impl PassImpl for OctreeRayCast {
     type Params = OctreeRayCastParams;
     const SHADER: &'static str = "octree_ray_cast.wgsl";
     const OWN: &'static [OwnBinding] = OWN;
-    // The counters are written in the fragment shader.
-    const NEEDS: KindNeeds = KindNeeds::new(
-        wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE,
-        NODE_CHUNKS as u64 + 2,
-    );
+    const NEEDS: KindNeeds = NEEDS;
+    const WHOLE_LEVELS: bool = true;
 
     /// Compiles the pipeline for the formats bound to `pass`; `max_steps` becomes the WGSL
     /// override `MAX_STEPS`.
-    const WHOLE_LEVELS: bool = true;
-
     fn new(init: &PassInit<'_>, params: &OctreeRayCastParams) -> Result<Self, PassError> {
-        let max_steps = params.max_steps;
-        let chunk_bits = init.scene.chunks.octree_bits;
-        let pipeline = |chunks: usize| {
-            PulledPipeline::counting::<Self>(
-                init,
-                &[
-                    ("MAX_STEPS", f64::from(max_steps)),
-                    ("NODE_CHUNK_BITS", f64::from(chunk_bits)),
-                    ("NODE_CHUNKS_USED", chunks as f64),
-                ],
-            )
-        };
-        Ok(Self {
-            pipeline: pipeline(NODE_CHUNKS)?,
-            single: pipeline(1)?,
-            one_chunk: true,
-            chunk_bits,
-            octrees: None,
-            counters: RayCastCounters::new(init.ctx),
-        })
+        Ok(Self(OctreeCaster::new::<Self>(init, params.max_steps)?))
     }
 }
 
@@ -279,29 +341,11 @@ impl PassNode for OctreeRayCast {
         encoder: &mut wgpu::CommandEncoder,
         rec: &mut Recorder<'_>,
     ) -> Result<(), PassError> {
-        Self::check_levels(rec.scene)?;
-        if self.octrees.is_none() && !rec.scene.visible.is_empty() {
-            let assets: Vec<&VoxelAsset> =
-                rec.scene.scene.objects.iter().map(|o| &*o.asset).collect();
-            self.octrees = Some(self.upload(rec.gpu, &assets)?);
-        }
-        let bind_group = self.octrees.as_ref().filter(|_| !rec.scene.visible.is_empty());
-        self.counters.begin_frame(encoder, rec.counting);
-        let pipeline = if self.one_chunk {
-            &self.single
-        } else {
-            &self.pipeline
-        };
-        pipeline.record_fullscreen(encoder, rec, bind_group);
-        Ok(())
+        self.0.record(encoder, rec)
     }
 
     fn counters(&self, frame: &CounterSource<'_>, out: &mut FrameCounters) -> Result<(), PassError> {
-        if let Some((rays, nodes)) = self.counters.read(frame.gpu)? {
-            out.ray_cast_rays = Some(rays);
-            out.octree_nodes_per_ray = nodes;
-        }
-        Ok(())
+        self.0.counters(frame, out)
     }
 }
 

@@ -98,6 +98,13 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         edit: None,
         max_level: 16,
     },
+    // The same octree traversed the ESVO way (Laine & Karras 2010, no contours).
+    Technique {
+        name: "esvo",
+        pipeline: "esvo.ron",
+        edit: None,
+        max_level: 16,
+    },
     Technique {
         name: "cube-raster",
         pipeline: "cube_raster.ron",

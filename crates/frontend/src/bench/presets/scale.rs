@@ -144,6 +144,7 @@ fn scale_techniques(args: &BenchArgs) -> Result<Vec<&'static Technique>> {
                         | "ssbvb-splat"
                         | "ssbvb-flat"
                         | "octree"
+                        | "esvo"
                         | "dense-dda"
                         | "cube-raster"
                 )
@@ -499,7 +500,7 @@ fn markdown(r: &ScaleReport) -> String {
     s.push_str(&r.rows.markdown());
     s.push_str(
         "\n¹ Filter: march steps per filter ray (p99); dense DDA: cells per traced ray; octree: \
-         nodes visited per traced ray.\n",
+         nodes visited per traced ray; ESVO: loop iterations per traced ray.\n",
     );
     for k in &r.skipped {
         s.push_str(&format!("\nSkipped: {k}\n"));

@@ -1,0 +1,35 @@
+//! `EsvoRayCast`: Laine & Karras' ESVO traversal through the same sparse voxel octree as
+//! `OctreeRayCast`.
+
+use serde::{Deserialize, Serialize};
+
+use super::formats::GBUFFER_WRITES;
+use super::shared::{default_ray_cast_steps, steps_problems};
+use super::spec::{KindSpec, PassStage, SlotDesc};
+
+/// Parameters of `EsvoRayCast`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct EsvoRayCastParams {
+    /// Most traversal steps (loop iterations: a PUSH, an ADVANCE, or an ADVANCE with its
+    /// POP) per ray and instance.
+    #[serde(default = "default_ray_cast_steps")]
+    pub max_steps: u32,
+}
+
+impl Default for EsvoRayCastParams {
+    fn default() -> Self {
+        Self {
+            max_steps: default_ray_cast_steps(),
+        }
+    }
+}
+
+impl KindSpec for EsvoRayCastParams {
+    const NAME: &'static str = "EsvoRayCast";
+    const STAGE: PassStage = PassStage::Render;
+    const SLOTS: &'static [SlotDesc] = GBUFFER_WRITES;
+    fn problems(&self) -> Vec<String> {
+        steps_problems(self.max_steps)
+    }
+}
