@@ -46,10 +46,15 @@ pub enum Preset {
     /// bunny meshes against their 128³ volumes by screen size; writes volumes.csv,
     /// volumes.json and volumes.md.
     Volumes,
+    /// The seed paper's comparison (Table 2 and Figure 9): every bundled model at level 9,
+    /// 1280x720, with SSBVB (exact and fast march), ESVO, the octree caster and dense DDA,
+    /// then the 4096-bunny grid; writes bench.*, scale.* and paper.{csv,json,md} (each
+    /// SSBVB frame over the ray casters' of the same run, beside the paper's 0.28).
+    Paper,
 }
 
 /// Arguments of `ssbvb bench`.
-#[derive(Args, Debug)]
+#[derive(Args, Debug, Clone)]
 pub struct BenchArgs {
     /// Which matrix to run.
     #[arg(long, value_enum, default_value = "quick")]

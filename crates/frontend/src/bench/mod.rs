@@ -9,7 +9,8 @@
 //! `table` writes a preset's rows as CSV, JSON and Markdown; `plot` draws PNG plots;
 //! `report` is the report of the main matrix; `presets` holds one file per preset:
 //! `matrix` (`quick`, `full`, `study`), `sweep` (their knob sweeps), `scale`, `memory`,
-//! `rastavox`, `dynamic`, `vct` and `volumes`. Presets import `args`, `harness`, `table`,
+//! `rastavox`, `dynamic`, `vct`, `volumes` and `paper` (which runs the matrix and the
+//! scale grid and compares them with the seed paper). Presets import `args`, `harness`, `table`,
 //! `plot` and `report`; nothing imports a preset but [`run()`].
 
 mod args;
@@ -30,8 +31,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         Preset::Quick | Preset::Full | Preset::Study => {
             let m = presets::matrix::run(args)?;
             let sweeps = presets::sweep::run(args, &m.ctx, &m.camera)?;
-            report::write(args, &m.ctx, m.camera, &m.results, &sweeps)
+            report::write(args, &m.ctx, m.camera, &m.results, &sweeps, true)
         }
+        Preset::Paper => presets::paper::run(args),
         Preset::Scale => presets::scale::run(args),
         Preset::Memory => presets::memory::run(args),
         Preset::Rastavox => presets::rastavox::run(args),
@@ -44,7 +46,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 /// Checks the counts the presets read: `--instances` for the presets that take it
 /// (scale, rastavox), `--gpu-budget` for the others.
 fn check(args: &BenchArgs) -> Result<()> {
-    if matches!(args.preset, Preset::Scale | Preset::Rastavox) {
+    if matches!(
+        args.preset,
+        Preset::Scale | Preset::Rastavox | Preset::Paper
+    ) {
         if let Some(n) = args
             .instances
             .iter()

@@ -269,6 +269,7 @@ pub(crate) fn write(
     camera: Camera,
     results: &Results,
     sweeps: &[SweepRow],
+    print_report: bool,
 ) -> Result<()> {
     let software = ctx.report().is_software;
     std::fs::create_dir_all(&args.out)
@@ -287,6 +288,9 @@ pub(crate) fn write(
         plots,
     };
     write_outputs(&args.out, &report)?;
+    if !print_report {
+        return Ok(());
+    }
     print(&report, &args.out, args.json)
 }
 

@@ -212,8 +212,8 @@ fn render_json_and_bench_quick() {
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     let rows: Vec<&str> = csv.lines().skip(1).collect();
-    // 11 techniques x 2 levels.
-    assert_eq!(rows.len(), 22, "{csv}");
+    // 12 techniques x 2 levels.
+    assert_eq!(rows.len(), 24, "{csv}");
     for r in rows {
         let r: Vec<&str> = r.split(',').collect();
         let num = |name: &str| -> Option<f64> { r[col(name)].parse().ok() };
@@ -550,6 +550,57 @@ fn bunny_grid_scene_reports_levels_and_counters() {
 
 /// `bench --preset scale` in small: a row per technique and view with the counters, the
 /// instance count and the IoU against the reference, and the three output files.
+/// `--preset paper` (CLI contract): every model of `assets/models/` in the matrix, then the
+/// 4096-bunny grid, compared in paper.csv with each SSBVB frame over each ray caster's.
+#[test]
+fn bench_paper_preset_compares_ssbvb_with_the_ray_casters() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = succeeded(
+        ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+            .args([
+                "bench", "--preset", "paper", "--levels", "4", "--sizes", "64x48",
+            ])
+            .args([
+                "--frames",
+                "1",
+                "--techniques",
+                "ssbvb-fast,esvo",
+                "--json",
+                "--out",
+            ])
+            .arg(dir.path().join("paper")),
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let rows = json["rows"].as_array().unwrap();
+    let models = std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/models"))
+        .unwrap()
+        .filter(|e| {
+            let n = e.as_ref().unwrap().file_name();
+            let n = n.to_string_lossy();
+            [".obj", ".ply", ".vox"].iter().any(|x| n.ends_with(x))
+        })
+        .count();
+    // One row per model, then the grid.
+    assert_eq!(rows.len(), models + 1, "{json}");
+    assert_eq!(rows[0]["scene"], "bunny.obj");
+    assert_eq!(rows[models]["scene"], "4096 bunnies (grid)");
+    for r in rows {
+        let fast = r["ssbvb_fast_ms"].as_f64().unwrap();
+        let esvo = r["esvo_ms"].as_f64().unwrap();
+        let ratio = r["ssbvb_fast_over_esvo"].as_f64().unwrap();
+        assert!((ratio - fast / esvo).abs() < 1e-3 * ratio, "{r}");
+        // Not measured: no number.
+        assert!(
+            r["octree_ms"].is_null() && r["ssbvb_unique_over_octree"].is_null(),
+            "{r}"
+        );
+    }
+    for f in ["paper.csv", "paper.md", "bench.csv", "scale.csv"] {
+        assert!(dir.path().join("paper").join(f).is_file(), "{f}");
+    }
+}
+
 #[test]
 fn bench_scale_preset_writes_rows_per_view() {
     let dir = tempfile::tempdir().unwrap();

@@ -139,6 +139,11 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
     },
 ];
 
+/// The techniques of `--preset paper`: SSBVB with the exact and the fast march, and every
+/// ray caster.
+pub(crate) const PAPER_TECHNIQUES: &[&str] =
+    &["ssbvb-unique", "ssbvb-fast", "esvo", "octree", "dense-dda"];
+
 /// Technique names, for `--techniques`.
 fn technique_names() -> Vec<&'static str> {
     TECHNIQUES.iter().map(|t| t.name).collect()
@@ -154,6 +159,11 @@ pub(crate) fn select(args: &BenchArgs) -> Result<Vec<&'static Technique>> {
         None if matches!(args.preset, Preset::Study) => TECHNIQUES
             .iter()
             .filter(|t| !matches!(t.name, "ssbvb-flat" | "ssbvb-raybox"))
+            .collect(),
+        // The paper compares SSBVB with ray casting.
+        None if matches!(args.preset, Preset::Paper) => TECHNIQUES
+            .iter()
+            .filter(|t| PAPER_TECHNIQUES.contains(&t.name))
             .collect(),
         None => TECHNIQUES.iter().collect(),
         Some(names) => names

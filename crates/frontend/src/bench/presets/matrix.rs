@@ -117,6 +117,18 @@ struct Matrix {
     camera: Camera,
 }
 
+/// The models of `--preset paper`: the bunny first (the paper's Table 2 row), then the
+/// other models of `assets/models/`.
+const PAPER_MODELS: &[&str] = &[
+    "bunny.obj",
+    "cow.obj",
+    "teapot.obj",
+    "igea.ply",
+    "T-Rex.vox",
+    "chr_knight.vox",
+    "monu1.vox",
+];
+
 /// The preset's matrix with the command line's overrides.
 fn matrix(args: &BenchArgs) -> Matrix {
     let bunny = BenchModel::File(assets_dir().join("models/bunny.obj"));
@@ -133,6 +145,22 @@ fn matrix(args: &BenchArgs) -> Matrix {
             sizes: vec![(160, 120)],
             warmup: 1,
             frames: 3,
+            camera: bench_camera(),
+        },
+        // Table 2 of the seed paper: its bunny row and every other bundled model, at level
+        // 9 and 720p.
+        Preset::Paper => Matrix {
+            models: PAPER_MODELS
+                .iter()
+                .map(|m| assets_dir().join("models").join(m))
+                // Only the bunny is embedded in the binary; the others come with a checkout.
+                .filter(|p| p.is_file())
+                .map(BenchModel::File)
+                .collect(),
+            levels: vec![9],
+            sizes: vec![(1280, 720)],
+            warmup: 2,
+            frames: 5,
             camera: bench_camera(),
         },
         Preset::Full => Matrix {

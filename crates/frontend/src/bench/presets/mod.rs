@@ -1,11 +1,13 @@
 //! One file per preset of `ssbvb bench`, each run by `bench::run` alone: `matrix` (the
 //! main matrix of `quick`, `full` and `study`) and `sweep` (its knob sweeps), which both
 //! feed the main report, and `scale`, `memory`, `rastavox`, `dynamic`, `vct` and
-//! `volumes`, each writing its own files.
+//! `volumes`, each writing its own files; `paper` runs `matrix` and `scale` and compares
+//! their rows with the seed paper's.
 
 pub(super) mod dynamic;
 pub(super) mod matrix;
 pub(super) mod memory;
+pub(super) mod paper;
 pub(super) mod rastavox;
 pub(super) mod scale;
 pub(super) mod sweep;

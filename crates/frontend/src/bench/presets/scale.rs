@@ -95,6 +95,20 @@ fn single_views() -> [(&'static str, Camera); 3] {
 
 /// Runs the scale preset and writes `scale.csv`, `scale.json`, `scale.md` to `--out`.
 pub(crate) fn run(args: &BenchArgs) -> Result<()> {
+    run_with(args, true).map(|_| ())
+}
+
+/// What another preset reads of a scale row.
+pub(crate) struct ScaleTime {
+    pub(crate) technique: &'static str,
+    /// `grid`, `near`, `mid` or `far`.
+    pub(crate) view: &'static str,
+    pub(crate) instances: usize,
+    pub(crate) frame_ms_median: f64,
+}
+
+/// [`run`], printing the report only when `print_report`; returns the rows' times.
+pub(crate) fn run_with(args: &BenchArgs, print_report: bool) -> Result<Vec<ScaleTime>> {
     let techniques = scale_techniques(args)?;
     let pipelines = techniques
         .iter()
@@ -121,13 +135,21 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         &report,
         markdown(&report),
     )?;
-    if args.json {
+    if print_report && args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
+    } else if print_report {
         println!("{}", markdown(&report));
         println!("wrote {}/scale.{{csv,json,md}}", args.out.display());
     }
-    Ok(())
+    Ok(rows
+        .iter()
+        .map(|r| ScaleTime {
+            technique: r.technique,
+            view: r.view,
+            instances: r.instances,
+            frame_ms_median: r.frame_ms_median,
+        })
+        .collect())
 }
 
 /// The techniques of `--techniques`, else the SSBVB variants and the baselines that draw

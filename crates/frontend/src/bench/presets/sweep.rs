@@ -60,7 +60,8 @@ fn sweep_config(preset: Preset) -> SweepConfig {
         | Preset::Rastavox
         | Preset::Dynamic
         | Preset::Vct
-        | Preset::Volumes => SweepConfig {
+        | Preset::Volumes
+        | Preset::Paper => SweepConfig {
             size: (160, 120),
             level: 6,
             warmup: 1,

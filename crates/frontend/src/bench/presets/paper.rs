@@ -1,0 +1,241 @@
+//! `ssbvb bench --preset paper`: the seed paper's comparison of SSBVB with SVO ray casting
+//! (Jabłoński & Martyn, Table 2: the bunny at level 9, 720p, 2.59 ms against 9.32 ms for
+//! ESVO; Figure 9: 4096 bunnies) reproduced on this renderer and adapter. It runs the main
+//! matrix over every model of `assets/models/` at level 9, 1280x720 (`bench.*`), then the
+//! scale grid at 4096 instances at the same size (`scale.*`), and writes `paper.*`: per
+//! scene each technique's median frame time and each SSBVB frame over each ray caster's
+//! of the same run, beside the paper's ratio where it has one. The paper's third scene
+//! (Figure 8: 21 objects at level 11 under a memory budget) is not part of it yet.
+
+use anyhow::Result;
+use serde::Serialize;
+
+use crate::bench::args::{BenchArgs, Preset};
+use crate::bench::harness::techniques::PAPER_TECHNIQUES;
+use crate::bench::presets::{matrix, scale};
+use crate::bench::report;
+use crate::bench::table::{Column, Fmt, Table, write_report};
+
+/// The paper's Table 2 bunny row at level 9, 720p: SSBVB render time over ESVO's
+/// (2.59 ms / 9.32 ms).
+const PAPER_BUNNY_L9_720P: f64 = 2.59 / 9.32;
+
+/// Instances of the paper's Figure 9 scene.
+const GRID_INSTANCES: usize = 4096;
+
+/// One scene of the comparison: each technique's median frame time.
+#[derive(Debug)]
+struct PaperRow {
+    scene: String,
+    /// The level drawn (the grid: Auto LOD up to this level).
+    level: u32,
+    width: u32,
+    height: u32,
+    /// Median frame ms per technique of [`PAPER_TECHNIQUES`] (`None`: not measured).
+    ms: Vec<Option<f64>>,
+    /// The paper's SSBVB / ESVO ratio for this scene, where it has one.
+    paper_ssbvb_over_esvo: Option<f64>,
+}
+
+impl PaperRow {
+    fn time(&self, technique: &str) -> Option<f64> {
+        let i = PAPER_TECHNIQUES.iter().position(|t| *t == technique)?;
+        self.ms[i]
+    }
+
+    fn ratio(&self, num: &str, den: &str) -> Option<f64> {
+        Some(self.time(num)? / self.time(den)?)
+    }
+}
+
+#[derive(Serialize)]
+struct PaperReport<'a> {
+    adapter: String,
+    adapter_is_software: bool,
+    rows: Table<'a, PaperRow>,
+    /// What was not measured, and why (from the matrix and the grid).
+    skipped: Vec<String>,
+}
+
+/// Runs the preset: the matrix, the grid, and the comparison.
+pub(crate) fn run(args: &BenchArgs) -> Result<()> {
+    let m = matrix::run(args)?;
+    report::write(args, &m.ctx, m.camera, &m.results, &[], false)?;
+    let (width, height) = args.first_size((1280, 720));
+    let grid_args = BenchArgs {
+        preset: Preset::Scale,
+        instances: Some(vec![GRID_INSTANCES]),
+        sizes: Some(vec![(width, height)]),
+        techniques: Some(
+            args.techniques
+                .clone()
+                .unwrap_or_else(|| PAPER_TECHNIQUES.iter().map(|t| t.to_string()).collect()),
+        ),
+        ..args.clone()
+    };
+    let grid = scale::run_with(&grid_args, false)?;
+    let mut rows: Vec<PaperRow> = Vec::new();
+    for r in &m.results.rows {
+        let i = match rows
+            .iter()
+            .position(|p| p.scene == r.model && p.level == r.level && p.width == r.width)
+        {
+            Some(i) => i,
+            None => {
+                let paper = (r.model == "bunny.obj" && r.level == 9 && r.height == 720)
+                    .then_some(PAPER_BUNNY_L9_720P);
+                rows.push(PaperRow {
+                    scene: r.model.clone(),
+                    level: r.level,
+                    width: r.width,
+                    height: r.height,
+                    ms: vec![None; PAPER_TECHNIQUES.len()],
+                    paper_ssbvb_over_esvo: paper,
+                });
+                rows.len() - 1
+            }
+        };
+        if let Some(k) = PAPER_TECHNIQUES.iter().position(|t| *t == r.technique) {
+            rows[i].ms[k] = Some(r.frame_ms_median);
+        }
+    }
+    let mut grid_row = PaperRow {
+        scene: format!("{GRID_INSTANCES} bunnies (grid)"),
+        level: 8,
+        width,
+        height,
+        ms: vec![None; PAPER_TECHNIQUES.len()],
+        paper_ssbvb_over_esvo: None,
+    };
+    for g in grid
+        .iter()
+        .filter(|g| g.view == "grid" && g.instances == GRID_INSTANCES)
+    {
+        if let Some(k) = PAPER_TECHNIQUES.iter().position(|t| *t == g.technique) {
+            grid_row.ms[k] = Some(g.frame_ms_median);
+        }
+    }
+    rows.push(grid_row);
+    let mut skipped = m.results.skipped.clone();
+    skipped.push(
+        "Figure 8 (21 objects at level 11 under a GPU budget): not part of the preset yet".into(),
+    );
+    let report = PaperReport {
+        adapter: m.ctx.report().to_string(),
+        adapter_is_software: m.ctx.report().is_software,
+        rows: table(&rows),
+        skipped,
+    };
+    let md = markdown(&report);
+    write_report(&args.out, "paper", report.rows.csv(), &report, md.clone())?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!("{md}");
+        println!(
+            "wrote {0}/paper.{{csv,json,md}}, {0}/bench.{{csv,json,md}}, {0}/scale.{{csv,json,md}}",
+            args.out.display()
+        );
+    }
+    Ok(())
+}
+
+/// JSON and CSV key of each technique's time, in [`PAPER_TECHNIQUES`] order.
+const MS_KEYS: [&str; 5] = [
+    "ssbvb_unique_ms",
+    "ssbvb_fast_ms",
+    "esvo_ms",
+    "octree_ms",
+    "dense_dda_ms",
+];
+
+/// The ratios reported: (key, SSBVB technique, ray caster).
+const RATIOS: [(&str, &str, &str); 4] = [
+    ("ssbvb_unique_over_esvo", "ssbvb-unique", "esvo"),
+    ("ssbvb_fast_over_esvo", "ssbvb-fast", "esvo"),
+    ("ssbvb_unique_over_octree", "ssbvb-unique", "octree"),
+    ("ssbvb_fast_over_octree", "ssbvb-fast", "octree"),
+];
+
+fn table(rows: &[PaperRow]) -> Table<'_, PaperRow> {
+    let mut columns = vec![
+        Column::new("scene", |r: &PaperRow| r.scene.clone())
+            .csv(Fmt::PLAIN)
+            .md("scene", Fmt::PLAIN),
+        Column::new("level", |r: &PaperRow| r.level)
+            .csv(Fmt::PLAIN)
+            .md("level", Fmt::PLAIN),
+        Column::new("width", |r: &PaperRow| r.width).csv(Fmt::PLAIN),
+        Column::new("height", |r: &PaperRow| r.height).csv(Fmt::PLAIN),
+    ];
+    for (k, (key, technique)) in MS_KEYS.iter().zip(PAPER_TECHNIQUES).enumerate() {
+        columns.push(
+            Column::new(key, move |r: &PaperRow| r.ms[k])
+                .csv(Fmt::fixed(3))
+                .md(format!("{technique} ms"), Fmt::fixed(1).or("-")),
+        );
+    }
+    for (key, num, den) in RATIOS {
+        columns.push(
+            Column::new(key, move |r: &PaperRow| r.ratio(num, den))
+                .csv(Fmt::fixed(4))
+                .md(format!("{num} / {den}"), Fmt::fixed(2).or("-")),
+        );
+    }
+    columns.push(
+        Column::new("paper_ssbvb_over_esvo", |r: &PaperRow| {
+            r.paper_ssbvb_over_esvo
+        })
+        .csv(Fmt::fixed(4))
+        .md("paper SSBVB / ESVO", Fmt::fixed(2).or("-")),
+    );
+    Table::new(rows, columns)
+}
+
+fn markdown(r: &PaperReport) -> String {
+    let mut s = format!(
+        "## The paper's comparison (Table 2, Figure 9), {}\n\n",
+        r.adapter
+    );
+    s.push_str(&r.rows.markdown());
+    s.push_str(
+        "\nMedian frame ms of each technique's whole frame in the same run; ratios are SSBVB \
+         frame over ray-caster frame (below 1: SSBVB faster). The paper's ratio is its render \
+         times (GTX 660).\n",
+    );
+    for k in &r.skipped {
+        s.push_str(&format!("\nSkipped: {k}\n"));
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keys_follow_the_techniques_and_ratios_divide_their_times() {
+        assert_eq!(MS_KEYS.len(), PAPER_TECHNIQUES.len());
+        for (key, t) in MS_KEYS.iter().zip(PAPER_TECHNIQUES) {
+            assert_eq!(*key, format!("{}_ms", t.replace('-', "_")));
+        }
+        let row = PaperRow {
+            scene: "bunny.obj".into(),
+            level: 9,
+            width: 1280,
+            height: 720,
+            ms: vec![Some(3.0), Some(2.0), Some(8.0), Some(4.0), None],
+            paper_ssbvb_over_esvo: Some(PAPER_BUNNY_L9_720P),
+        };
+        assert_eq!(row.ratio("ssbvb-fast", "esvo"), Some(0.25));
+        assert_eq!(row.ratio("ssbvb-unique", "octree"), Some(0.75));
+        assert_eq!(row.ratio("ssbvb-unique", "dense-dda"), None);
+        let csv = table(std::slice::from_ref(&row)).csv();
+        assert!(
+            csv.starts_with("scene,level,width,height,ssbvb_unique_ms"),
+            "{csv}"
+        );
+        assert!(csv.contains(",0.2500,"), "{csv}");
+        assert!((PAPER_BUNNY_L9_720P - 0.2779).abs() < 1e-4);
+    }
+}
