@@ -140,8 +140,9 @@ fn slot_voxel(lod: LodInfo, cell: vec3<u32>, id: u32) -> PackedVoxel {
 
 @compute @workgroup_size(1)
 fn clear_draw() {
-    // Six vertices per billboard quad; the filter counts the instances.
-    billboard_draw.vertex_count = 6u;
+    // A strip of four vertices per billboard (billboards.wgsl); the filter counts the
+    // instances.
+    billboard_draw.vertex_count = 4u;
     atomicStore(&billboard_draw.instance_count, 0u);
     billboard_draw.first_vertex = 0u;
     billboard_draw.first_instance = 0u;

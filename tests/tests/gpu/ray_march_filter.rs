@@ -81,7 +81,7 @@ fn run_filter_with(
     let args = draw_args(c, &frame.renderer).unwrap();
     assert_eq!(
         (args.vertex_count, args.first_vertex, args.first_instance),
-        (6, 0, 0)
+        (4, 0, 0)
     );
     let slots = read_slots(c, &frame.renderer).unwrap();
     let pixels = (grid.0 * grid.1) as usize;

@@ -130,10 +130,12 @@ impl Billboards {
         ];
         let targets = gbuffer_targets(ctx, pipeline, pass);
         // Quads face the camera; culling by the voxel normal happens in the vertex shader.
+        // Each billboard is a strip of 4 vertices (billboards.wgsl).
         let pipeline = render_pipeline(
             d,
             &RenderSpec {
                 fs_entry: options.fragment_entry(),
+                topology: wgpu::PrimitiveTopology::TriangleStrip,
                 constants: &constants,
                 depth_stencil: Some(gbuffer_depth_stencil(ctx, pipeline, pass)),
                 ..RenderSpec::new(&pass.name, &module, &layout, &targets)

@@ -74,7 +74,7 @@ impl VoxelSlot {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
 pub struct DrawArgs {
-    /// Vertices per billboard (6).
+    /// Vertices per billboard (4: a triangle strip).
     pub vertex_count: u32,
     /// Filled SSBVB slots.
     pub instance_count: u32,

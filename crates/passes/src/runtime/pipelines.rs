@@ -50,6 +50,8 @@ pub struct RenderSpec<'a> {
     pub depth_stencil: Option<wgpu::DepthStencilState>,
     /// Faces to cull.
     pub cull_mode: Option<wgpu::Face>,
+    /// How vertices form triangles (default: a list).
+    pub topology: wgpu::PrimitiveTopology,
 }
 
 impl<'a> RenderSpec<'a> {
@@ -72,6 +74,7 @@ impl<'a> RenderSpec<'a> {
             targets,
             depth_stencil: None,
             cull_mode: None,
+            topology: wgpu::PrimitiveTopology::TriangleList,
         }
     }
 }
@@ -99,6 +102,7 @@ pub fn render_pipeline(d: &wgpu::Device, spec: &RenderSpec<'_>) -> wgpu::RenderP
         }),
         primitive: wgpu::PrimitiveState {
             cull_mode: spec.cull_mode,
+            topology: spec.topology,
             ..Default::default()
         },
         depth_stencil: spec.depth_stencil.clone(),
