@@ -458,6 +458,12 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
 // frame shows coarser voxels where pages are streaming in, never a hole (a coarser level
 // covers every cell of a finer one). Only the first LOD's missing pages are requested.
 fn march_resident(o: vec3<f32>, d: vec3<f32>, first: u32, t_from: f32, t_limit: f32) -> Hit {
+    // No pages in the scene: one march, no fallback loop in the pipeline.
+    if !PAGED {
+        var h = march(make_ray_od(o, d, lods[first].level), lods[first], t_from, t_limit, true);
+        h.lod = first;
+        return h;
+    }
     var li = first;
     var t_start = t_from;
     var record = true;

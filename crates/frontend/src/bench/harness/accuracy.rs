@@ -34,6 +34,11 @@ pub(crate) struct Measured {
     pub ssim: Option<f64>,
     /// Hardware-independent counts of the profiled frame (steps per ray, ...).
     pub counters: ssbvb_passes::FrameCounters,
+    /// With a filter: the share of the pixels holding an SSBVB slot (its ray's first voxel)
+    /// whose voxel is the reference's at that pixel. With `unique_voxels` a voxel's slot
+    /// sits at the pixel that claimed it, so this measures the march where
+    /// `acc.same_voxel_rate` (every covered pixel) cannot.
+    pub slot_same_voxel_rate: Option<f64>,
 }
 
 /// Everything [`measure`] needs besides the pipeline.
@@ -97,16 +102,33 @@ pub(crate) fn measure(s: &Setup, pipeline: ResolvedPipeline, with_psnr: bool) ->
     } else {
         (None, None)
     };
+    let slot_same_voxel_rate = fill.and_then(|_| slot_same_voxel(s.reference, &hits));
     Ok(Measured {
         times,
         passes: stats.passes,
         fill,
         acc,
+        slot_same_voxel_rate,
         gpu_memory: gpu_scene.total_memory(),
         psnr,
         ssim,
         counters,
     })
+}
+
+/// The share of the pixels holding a slot (a voxel cell, not `u32::MAX`) and covered by the
+/// reference whose cell is the reference's (`None` when there are none).
+pub(crate) fn slot_same_voxel(reference: &ReferenceImage, hits: &[Option<GpuHit>]) -> Option<f64> {
+    let (mut slotted, mut same) = (0usize, 0usize);
+    for (r, g) in reference.hits.iter().zip(hits) {
+        if let (Some(r), Some(g)) = (r, g)
+            && g.cell != [u32::MAX; 3]
+        {
+            slotted += 1;
+            same += (r.cell == g.cell) as usize;
+        }
+    }
+    (slotted > 0).then(|| same as f64 / slotted as f64)
 }
 
 /// The RGBA8 bytes of `gpu` and `reference` at the pixels either image covers (`hits`,

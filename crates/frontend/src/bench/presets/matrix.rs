@@ -400,11 +400,13 @@ fn run_one(ctx: &GpuContext, t: &Technique, c: &Cell) -> Result<Row> {
         voxels: c.voxels,
         gpu_memory_bytes: m.gpu_memory + cube_bytes + surface_bytes,
         coverage_iou: acc.coverage_iou,
-        // Voxel ids per pixel come from the slot each pixel's ray filled: not available
-        // with unique_voxels (one slot per voxel, not per pixel).
-        same_voxel_rate: fill
-            .filter(|_| !matches!(t.name, "ssbvb-unique" | "ssbvb-fast" | "ssbvb-splat"))
-            .map(|_| acc.same_voxel_rate),
+        // Voxel ids per pixel come from the slot each pixel's ray filled; with unique_voxels
+        // (one slot per voxel, at the pixel that claimed it) over those pixels only.
+        same_voxel_rate: if matches!(t.name, "ssbvb-unique" | "ssbvb-fast" | "ssbvb-splat") {
+            m.slot_same_voxel_rate
+        } else {
+            fill.map(|_| acc.same_voxel_rate)
+        },
         depth_error_voxels_median: acc.depth_error_voxels.median,
         normal_error_deg_median: acc.normal_error_deg.median,
         psnr_db: m.psnr.map(|p| p.0).filter(|p| p.is_finite()),
