@@ -51,6 +51,11 @@ fn fragment_at(slot: VoxelSlot, q: Quad, px: vec2<f32>) -> Fragment {
     return flat_fragment(slot, q, px, world);
 }
 
+// Pixels of slack around a quad's pixel bounds: far more than the f32 rounding of the
+// slope-to-pixel mapping (about 1e-3 px at 4K), far less than the whole pixel it once was
+// (a quad a pixel wide then looped over 16 pixels for 1 to 4 centres; docs/benchmarks.md).
+const BOUNDS_SLACK: f32 = 1.0 / 64.0;
+
 // The pixel rectangle (min x, min y, max x, max y; inclusive) whose centres may lie in the
 // quad: the screen for a near-field quad or a ray-box fragment's quad... the quad's
 // corners otherwise.
@@ -76,13 +81,13 @@ fn pixel_bounds(q: Quad) -> vec4<i32> {
         return all_px;
     }
     // Clamped in f32 first: a quad far off screen (slopes of a very narrow lens) must not
-    // convert out of i32's range. Pixel x covers centre x + 0.5; one pixel of slack for
-    // rounding.
+    // convert out of i32's range. Pixel x covers centre x + 0.5: the centres in [lo, hi],
+    // with BOUNDS_SLACK for the rounding of this mapping (quad_covers decides exactly).
     let sz = frame.screen.xy;
     let lo_c = clamp(lo, vec2(-2.0), sz + 2.0);
     let hi_c = clamp(hi, vec2(-2.0), sz + 2.0);
-    let a = clamp(vec2<i32>(floor(lo_c - 0.5)) - 1, vec2(0), size - 1);
-    let b = clamp(vec2<i32>(ceil(hi_c - 0.5)) + 1, vec2(-1), size - 1);
+    let a = clamp(vec2<i32>(ceil(lo_c - 0.5 - BOUNDS_SLACK)), vec2(0), size - 1);
+    let b = clamp(vec2<i32>(floor(hi_c - 0.5 + BOUNDS_SLACK)), vec2(-1), size - 1);
     return vec4(a, b);
 }
 
