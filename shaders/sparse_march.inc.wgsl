@@ -45,9 +45,12 @@
 // (docs/benchmarks.md): every plane time, the box's faces included, is a product with the
 // reciprocal direction (one rounding, the same for every plane, so times stay monotone and
 // consistent with the cells; accumulating them instead drifted by more than a grazing
-// ray's margin), a position estimate is corrected against the plane times by one plane at
-// most (no search; progress still holds: every step crosses at least one plane), and a ray
-// through an edge or corner tests only the cell it enters diagonally.
+// ray's margin), the start cell's position estimate is corrected against the plane times
+// by one plane at most (uncorrected, a rounding put rays a cell inside the box: false
+// hits), the cells after an empty region are the position estimate (a rounding there
+// misplaces a ray by less than f32 resolves; progress still holds: every step crosses at
+// least one plane), and a ray through an edge or corner tests only the cell it enters
+// diagonally.
 
 // Direction components below this fraction of the largest one are treated as 0: over the
 // whole box the ray moves less than 4e-12 object units on that axis, far below a cell of
@@ -186,6 +189,10 @@ fn first_plane(r: Ray, a: u32, t: f32, lo_in: i32, hi_in: i32, strict: bool) -> 
     let x = (r.o[a] + t * r.d[a] + 1.0) / r.s;
     let xs = select(f32(lo), x, x == x);
     let est = i32(clamp(ceil(xs), f32(lo), f32(hi - 1)));
+    if FAST_MARCH && !strict {
+        // After an empty region: the estimate (its error is a rounding of the position).
+        return est;
+    }
     if plane_ok(r, a, est, t, strict) {
         if est == lo || !plane_ok(r, a, est - 1, t, strict) {
             return est;
