@@ -106,6 +106,7 @@ fn trace(inst: Instance, o: vec3<f32>, d: vec3<f32>, t_best: f32) -> Hit {
         }
         let orig = select(cell, vec3(n - 1) - cell, mirrored);
         let v = textureLoad(dense, vec3<u32>(orig) + vec3(0u, 0u, z0), 0).x;
+        cast_words += 1u;
         if v != 0u {
             out.hit = true;
             out.t = t;

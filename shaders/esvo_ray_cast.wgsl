@@ -153,6 +153,7 @@ fn trace(inst: Instance, o: vec3<f32>, d: vec3<f32>, t_best: f32) -> Hit {
         }
         if !have_desc {
             desc = svo_node(parent);
+            cast_words += 2u;
             have_desc = true;
         }
         // The cube's exit: the earliest of its lower corner's planes.

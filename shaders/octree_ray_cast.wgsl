@@ -128,6 +128,7 @@ fn trace(inst: Instance, o: vec3<f32>, d: vec3<f32>, t_best: f32) -> Hit {
         let s_child = cell_size(depth + 1u);
         if check {
             let nd = svo_node(node);
+            cast_words += 2u;
             let orig = child ^ mirror_bits;
             if (nd.child_mask & (1u << orig)) != 0u {
                 let child_node = nd.first_child + countOneBits(nd.child_mask & ((1u << orig) - 1u));

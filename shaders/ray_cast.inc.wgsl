@@ -14,10 +14,15 @@
 // Loop iterations of `trace` for this pixel (the includer's `trace` adds them: DDA cells,
 // or octree nodes visited), for the counters.
 var<private> cast_steps: u32;
+// Words of the acceleration structure `trace` read for this pixel (the includer adds them:
+// 2 per octree node fetched, 1 per dense-grid texel), for the counters.
+var<private> cast_words: u32;
 
 // Counters (ray_cast_counters.rs): per lane (pixel x + y mod 64, spreading the atomics)
-// the pixels that cast a ray and the steps they took (low and high words).
+// the pixels that cast a ray, the steps they took and the words they read (each a low and
+// a high word).
 const COUNTER_LANES: u32 = 64u;
+const COUNTER_LANE_WORDS: u32 = 5u;
 // Count into `ray_counters` (off: the pipeline of frames that no report reads).
 override COUNT_WORK: bool = true;
 
@@ -68,6 +73,14 @@ fn bvh_visit(j: u32, dir: vec3<f32>) -> f32 {
     return best.t;
 }
 
+// Adds `v` to the (low, high) pair of words at `word`.
+fn add_lane_wide(word: u32, v: u32) {
+    let old = atomicAdd(&ray_counters[word], v);
+    if old + v < old {
+        atomicAdd(&ray_counters[word + 1u], 1u);
+    }
+}
+
 @fragment
 fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     let dir = pixel_ray(frag.xy);
@@ -75,15 +88,14 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     best = Hit(false, 1e30, 0u, 0u);
     best_inst = 0u;
     cast_steps = 0u;
+    cast_words = 0u;
     bvh_walk(dir, BIG, u32(frame.misc.w));
     let lane = (u32(frag.x) + u32(frag.y)) % COUNTER_LANES;
     if COUNT_WORK && cast_steps > 0u {
-        atomicAdd(&ray_counters[3u * lane], 1u);
-        // Steps as a (low, high) pair: a lane of a 4K frame may pass 2^32.
-        let old = atomicAdd(&ray_counters[3u * lane + 1u], cast_steps);
-        if old + cast_steps < old {
-            atomicAdd(&ray_counters[3u * lane + 2u], 1u);
-        }
+        atomicAdd(&ray_counters[COUNTER_LANE_WORDS * lane], 1u);
+        // Steps and words as (low, high) pairs: a lane of a 4K frame may pass 2^32.
+        add_lane_wide(COUNTER_LANE_WORDS * lane + 1u, cast_steps);
+        add_lane_wide(COUNTER_LANE_WORDS * lane + 3u, cast_words);
     }
     if !best.hit {
         discard;

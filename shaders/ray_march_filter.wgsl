@@ -23,8 +23,8 @@
 // # Counters
 //
 // Per frame, for `render --json` and the bench (RayMarchFilter::counters): rays cast,
-// march steps and hierarchy boxes tested (summed per workgroup, then once per workgroup
-// into 64-bit sums), instances marched, and a histogram of steps per ray for the p99.
+// march steps, hierarchy boxes tested, instances marched and lookup-node words read
+// (64-bit sums), and a histogram of steps per ray for the p99.
 
 // The indirect draw of the billboard pass (wgpu's DrawIndirectArgs).
 struct DrawArgs {
@@ -71,7 +71,8 @@ const C_RAYS: u32 = 0u;
 const C_STEPS: u32 = 1u;
 const C_BOXES: u32 = 3u;
 const C_MARCHES: u32 = 5u;
-const C_HISTOGRAM: u32 = 8u;
+const C_WORDS: u32 = 7u;
+const C_HISTOGRAM: u32 = 9u;
 
 var<private> marches: u32;
 
@@ -297,6 +298,7 @@ fn add_wide(word: u32, v: u32) {
 @compute @workgroup_size(16, 16)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     march_steps = 0u;
+    march_words = 0u;
     boxes_tested = 0u;
     marches = 0u;
     if filter_pixel(vec2<i32>(gid.xy)) && COUNT_WORK {
@@ -304,6 +306,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         add_wide(C_STEPS, march_steps);
         add_wide(C_BOXES, boxes_tested);
         add_wide(C_MARCHES, marches);
+        add_wide(C_WORDS, march_words);
         atomicAdd(&filter_counters[C_HISTOGRAM + steps_bin(march_steps)], 1u);
     }
 }

@@ -62,6 +62,9 @@ const MAX_ORIGIN: f32 = 1e12;
 
 // Loop iterations of every march since the includer last reset it (its counters).
 var<private> march_steps: u32;
+// Words of lookup nodes every march read since the includer last reset it (3 per node; a
+// tie cell's lookup from the root counts as the whole descent, an upper bound).
+var<private> march_words: u32;
 
 // Page feedback of the frame (streaming.rs): three sets of a bit per page of every paged
 // LOD: the pages a march needed and did not find (FB_MISSING), the pages it entered
@@ -271,6 +274,7 @@ fn cell_entry_t(r: Ray, c: vec3<i32>, t0: f32) -> f32 {
 // `lookup_cell` for the march: a cell in a page that is not resident is empty, and the
 // page is noted as missing when `record`.
 fn march_cell(lod: LodInfo, cell: vec3<u32>, record: bool) -> u32 {
+    march_words += 3u * lod.depth;
     let v = lookup_cell_paged(lod, cell);
     if record && v.y != PAGE_MISSING {
         note_page(FB_MISSING, page_of(lod, v.y));
@@ -346,6 +350,7 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
             }
             loop {
                 let n = lookup_node(lod, node);
+                march_words += 3u;
                 if k + 2u == depth && PAGED && lod.page_base != NO_PAGES && n.base == PAGE_MISSING {
                     if !(missing_t >= 0.0) {
                         missing_t = cell_entry_t(r, c, t0);

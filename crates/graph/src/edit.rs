@@ -97,7 +97,7 @@ mod tests {
             PassKind::RayMarchFilter(RayMarchFilterParams {
                 max_steps: 7,
                 unique_voxels: true,
-                ..Default::default()
+                march: crate::MarchMode::Fast,
             })
         );
         // An invalid edit is refused with the pass named.

@@ -566,8 +566,8 @@ fn bad_parameters_name_pass_kind_rule_and_line() {
         ),
         (
             SSBVB,
-            "RayMarchFilter(max_steps: 1024, unique_voxels: true)",
-            "RayMarchFilter(max_steps: 0, unique_voxels: true)",
+            "RayMarchFilter(max_steps: 1024, unique_voxels: true, march: Fast)",
+            "RayMarchFilter(max_steps: 0, unique_voxels: true, march: Fast)",
             "RayMarchFilter",
             "max_steps must be at least 1",
         ),

@@ -78,6 +78,11 @@ fn a_grid_of_64_bunnies_with_auto_lod_matches_the_reference() {
         mean >= 1.0 && (c.march_steps_p99.unwrap() as f64) >= mean,
         "{c:?}"
     );
+    // Lookup nodes (3 words) read per step: most steps stay in the leaf or its parent the
+    // march keeps in registers. Bounded by a descent from the root (depth 4 at level 8)
+    // per step.
+    let words = c.node_words_per_step.unwrap();
+    assert!(words > 0.0 && words < 12.0, "{c:?}");
 }
 
 /// One instance: no hierarchy walk, one march per ray; a step limit bounds the steps per

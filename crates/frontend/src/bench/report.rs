@@ -132,6 +132,11 @@ fn rows_table(rows: &[Row]) -> Table<'_, Row> {
             Column::text("steps_per_ray", Row::steps_per_ray)
                 .csv(Fmt::fixed(3))
                 .md("steps / ray", Fmt::fixed(1).or("-")),
+            Column::text("node_words_per_step", |r: &Row| {
+                r.counters.node_words_per_step
+            })
+            .csv(Fmt::fixed(3))
+            .md("node words / step", Fmt::fixed(2).or("-")),
         ],
     )
 }

@@ -282,9 +282,10 @@ impl PassNode for DenseDda {
     }
 
     fn counters(&self, frame: &CounterSource<'_>, out: &mut FrameCounters) -> Result<(), PassError> {
-        if let Some((rays, steps)) = self.counters.read(frame.gpu)? {
-            out.ray_cast_rays = Some(rays);
-            out.dda_steps_per_ray = steps;
+        if let Some(c) = self.counters.read(frame.gpu)? {
+            out.ray_cast_rays = Some(c.rays);
+            out.dda_steps_per_ray = c.steps_per_ray;
+            out.node_words_per_step = c.words_per_step;
         }
         Ok(())
     }

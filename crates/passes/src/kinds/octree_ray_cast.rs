@@ -196,9 +196,10 @@ impl OctreeCaster {
         frame: &CounterSource<'_>,
         out: &mut FrameCounters,
     ) -> Result<(), PassError> {
-        if let Some((rays, nodes)) = self.counters.read(frame.gpu)? {
-            out.ray_cast_rays = Some(rays);
-            out.octree_nodes_per_ray = nodes;
+        if let Some(c) = self.counters.read(frame.gpu)? {
+            out.ray_cast_rays = Some(c.rays);
+            out.octree_nodes_per_ray = c.steps_per_ray;
+            out.node_words_per_step = c.words_per_step;
         }
         Ok(())
     }

@@ -100,9 +100,12 @@ pub struct RayMarchFilter {
     counters: wgpu::Buffer,
 }
 
-/// Words of the counter buffer: rays, (low, high) sums of steps, boxes and marches, a
-/// spare word, then the steps-per-ray histogram (constants `C_*` in the WGSL).
-const COUNTER_WORDS: usize = 8 + crate::runtime::counters::STEP_BINS;
+/// Words of the counter buffer: rays, (low, high) sums of steps, boxes, marches and
+/// lookup-node words read, then the steps-per-ray histogram (constants `C_*` in the WGSL).
+const COUNTER_WORDS: usize = HISTOGRAM_WORD + crate::runtime::counters::STEP_BINS;
+
+/// The first word of the histogram (`C_HISTOGRAM`).
+const HISTOGRAM_WORD: usize = 9;
 
 /// What the filter binds itself: the claim table and the first key of each visible
 /// instance (`unique_voxels`), and the frame's counters.
@@ -392,7 +395,9 @@ impl PassNode for RayMarchFilter {
         out.march_steps_mean = per_ray(wide(1));
         out.instance_boxes_per_ray = per_ray(wide(3));
         out.instances_marched_per_ray = per_ray(wide(5));
-        out.march_steps_p99 = histogram_quantile(&words[8..COUNTER_WORDS], 0.99);
+        out.march_steps_p99 = histogram_quantile(&words[HISTOGRAM_WORD..COUNTER_WORDS], 0.99);
+        let steps = wide(1);
+        out.node_words_per_step = (steps > 0).then(|| wide(7) as f64 / steps as f64);
         Ok(())
     }
 }

@@ -42,6 +42,11 @@ pub struct FrameCounters {
     /// Octree ray casting: mean nodes visited per traced ray.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub octree_nodes_per_ray: Option<f64>,
+    /// Words of the acceleration structure read per traversal step: lookup nodes (3 words)
+    /// per march step of the filter, octree nodes (2 words) per step of the octree and
+    /// ESVO casters, dense-grid texels (1 word) per DDA cell.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub node_words_per_step: Option<f64>,
     /// Pixels whose stencil says voxel at the end of the frame (the denominator of
     /// `fragments_per_covered_pixel`; not reported on its own).
     #[serde(skip)]

@@ -402,7 +402,10 @@ fn run_one(ctx: &GpuContext, t: &Technique, c: &Cell) -> Result<Row> {
         coverage_iou: acc.coverage_iou,
         // Voxel ids per pixel come from the slot each pixel's ray filled; with unique_voxels
         // (one slot per voxel, at the pixel that claimed it) over those pixels only.
-        same_voxel_rate: if matches!(t.name, "ssbvb-unique" | "ssbvb-fast" | "ssbvb-splat") {
+        same_voxel_rate: if matches!(
+            t.name,
+            "ssbvb-unique" | "ssbvb-exact" | "ssbvb-fast" | "ssbvb-splat"
+        ) {
             m.slot_same_voxel_rate
         } else {
             fill.map(|_| acc.same_voxel_rate)
