@@ -102,6 +102,8 @@ struct Ray {
     // Cells per axis and cell size of the grid.
     n: i32,
     s: f32,
+    // 1 / s, exact (s is a power of two): a product instead of a division per step.
+    cells_per_unit: f32,
     // The ray's interval inside the [-1, 1]^3 box (t_enter > t_exit: it misses).
     t_enter: f32,
     t_exit: f32,
@@ -146,6 +148,7 @@ fn make_ray_od(o_obj: vec3<f32>, d_obj: vec3<f32>, level: u32) -> Ray {
     r.d = select(vec3(0.0), ad, r.moving);
     r.n = 1 << level;
     r.s = cell_size(level);
+    r.cells_per_unit = f32(1u << level) * 0.5;
     r.inv = 1.0 / select(vec3(1.0), r.d, r.moving);
     // Slab test; static axes divide by 1 and are then replaced (no 0 / 0).
     // The fast march multiplies by the same reciprocals as its plane times, so the box's
@@ -175,6 +178,12 @@ fn plane_t(r: Ray, a: u32, k: i32) -> f32 {
     return ((f32(k) * r.s - 1.0) - r.o[a]) / r.d[a];
 }
 
+// The fast march's `plane_t` of plane `k[a]` on every axis at once (meaningless on static
+// axes: the caller masks them).
+fn plane_t_all(r: Ray, k: vec3<i32>) -> vec3<f32> {
+    return ((vec3<f32>(k) * r.s - 1.0) - r.o) * r.inv;
+}
+
 fn plane_ok(r: Ray, a: u32, k: i32, t: f32, strict: bool) -> bool {
     let tk = plane_t(r, a, k);
     return select(tk >= t, tk > t, strict);
@@ -189,7 +198,7 @@ fn first_plane(r: Ray, a: u32, t: f32, lo_in: i32, hi_in: i32, strict: bool) -> 
     if lo >= hi {
         return lo;
     }
-    let x = (r.o[a] + t * r.d[a] + 1.0) / r.s;
+    let x = (r.o[a] + t * r.d[a] + 1.0) * r.cells_per_unit;
     let xs = select(f32(lo), x, x == x);
     let est = i32(clamp(ceil(xs), f32(lo), f32(hi - 1)));
     if FAST_MARCH && !strict {
@@ -333,6 +342,13 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
     var leaf: LookupNode;
     var parent_key = vec3(0xffffffffu);
     var parent = 0u;
+    // The same for the node of the 64^3 region above the parent, and the root's contents:
+    // a ray leaving a 16^3 region mostly stays in its 64^3 one, and every descent from the
+    // root would otherwise read the root again.
+    var grand_key = vec3(0xffffffffu);
+    var grand = 0u;
+    let root = lookup_node(lod, lod.node_offset);
+    march_words += 3u;
     for (var step = 0u; step < MAX_STEPS; step++) {
         march_steps += 1u;
         let co = orig_cell(r, c);
@@ -340,17 +356,24 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
         // twice as wide when its whole 2^3 octant of children is absent (the octant's eight
         // bits are one byte of the mask); an absent single cell is an ordinary DDA step; a
         // present cell is the hit.
-        var unit = 0;
+        // log2 of the width in cells of the empty region the ray is in (0: none).
+        var region_log = 0u;
         if any(co >> vec3(2u) != leaf_key) {
             var node = lod.node_offset;
             var k = 0u;
             if depth >= 2u && all(co >> vec3(4u) == parent_key) {
                 node = parent;
                 k = depth - 2u;
+            } else if depth >= 3u && all(co >> vec3(6u) == grand_key) {
+                node = grand;
+                k = depth - 3u;
             }
             loop {
-                let n = lookup_node(lod, node);
-                march_words += 3u;
+                var n = root;
+                if k != 0u {
+                    n = lookup_node(lod, node);
+                    march_words += 3u;
+                }
                 if k + 2u == depth && PAGED && lod.page_base != NO_PAGES && n.base == PAGE_MISSING {
                     if !(missing_t >= 0.0) {
                         missing_t = cell_entry_t(r, c, t0);
@@ -366,7 +389,7 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
                     if missing_pages >= MISSING_LOOKAHEAD {
                         return missing_hit(missing_t);
                     }
-                    unit = 16;
+                    region_log = 4u;
                     break;
                 }
                 if k + 1u == depth {
@@ -378,11 +401,15 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
                 let b = child_bit((co >> vec3(shift)) & vec3(3u));
                 if !node_has(n, b) {
                     let octant_empty = ((select(n.lo, n.hi, b >= 32u) >> (b & 24u)) & 0xffu) == 0u;
-                    unit = select(1 << shift, 2 << shift, octant_empty);
+                    region_log = select(shift, shift + 1u, octant_empty);
                     break;
                 }
                 node = lod.node_offset + node_child(n, b);
                 k += 1u;
+                if k + 3u == depth {
+                    grand = node;
+                    grand_key = co >> vec3(6u);
+                }
                 if k + 2u == depth {
                     parent = node;
                     parent_key = co >> vec3(4u);
@@ -392,23 +419,40 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
                 }
             }
         }
-        if unit == 0 {
+        if region_log == 0u {
             let b = child_bit(co & vec3(3u));
             if node_has(leaf, b) {
                 return found_or_missing(cell_hit(r, c, node_child(leaf, b)), missing_t);
             }
             let octant_empty = ((select(leaf.lo, leaf.hi, b >= 32u) >> (b & 24u)) & 0xffu) == 0u;
-            unit = select(0, 2, octant_empty);
+            region_log = select(0u, 1u, octant_empty);
         }
-        if unit != 0 {
+        if region_log != 0u && FAST_MARCH {
+            // The same on all three axes at once (no per-axis branches); the cell after
+            // the region is the position estimate (`first_plane`'s fast form).
+            let lg = vec3(region_log);
+            let u = vec3<i32>(co >> lg);
+            let far = select(min((u + 1) << lg, vec3(r.n)), vec3(r.n) - (u << lg), r.mirrored);
+            let t_far = select(vec3(BIG), plane_t_all(r, far), r.moving);
+            let t_out = min(t_far.x, min(t_far.y, t_far.z));
+            if t_out > t_end {
+                return found_or_missing(no_hit(), missing_t);
+            }
+            let x = (r.o + t_out * r.d + 1.0) * r.cells_per_unit;
+            let lo = c + 1;
+            let xs = select(vec3<f32>(lo), x, x == x);
+            let k = vec3<i32>(clamp(ceil(xs), vec3<f32>(lo), vec3<f32>(far)));
+            c = select(c, max(c, k - 1), r.moving);
+            t_next = select(t_next, plane_t_all(r, k), r.moving);
+        } else if region_log != 0u {
             // Empty region: its far plane per moving axis (mirrored frame), the first time
             // the ray reaches one of them, and the state just before that event.
             var far = vec3(0);
             var t_out = BIG;
             for (var a = 0u; a < 3u; a++) {
                 if r.moving[a] {
-                    let u = i32(co[a]) / unit;
-                    far[a] = select(min((u + 1) * unit, r.n), r.n - u * unit, r.mirrored[a]);
+                    let u = i32(co[a] >> region_log);
+                    far[a] = select(min((u + 1) << region_log, r.n), r.n - (u << region_log), r.mirrored[a]);
                     t_out = min(t_out, plane_t(r, a, far[a]));
                 }
             }
@@ -430,9 +474,14 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
         }
         let cross = r.moving & (t_next == vec3(tm));
         c += select(vec3(0), vec3(1), cross);
-        for (var a = 0u; a < 3u; a++) {
-            if cross[a] {
-                t_next[a] = select(BIG, plane_t(r, a, c[a] + 1), c[a] + 1 <= r.n);
+        if FAST_MARCH {
+            let t_after = select(vec3(BIG), plane_t_all(r, c + 1), c + 1 <= vec3(r.n));
+            t_next = select(t_next, t_after, cross);
+        } else {
+            for (var a = 0u; a < 3u; a++) {
+                if cross[a] {
+                    t_next[a] = select(BIG, plane_t(r, a, c[a] + 1), c[a] + 1 <= r.n);
+                }
             }
         }
         if !FAST_MARCH && u32(cross.x) + u32(cross.y) + u32(cross.z) > 1u {
