@@ -578,11 +578,41 @@ fn bench_paper_preset_compares_ssbvb_with_the_ray_casters() {
             [".obj", ".ply", ".vox"].iter().any(|x| n.ends_with(x))
         })
         .count();
-    // One row per model, then the grid.
-    assert_eq!(rows.len(), models + 1, "{json}");
+    // One row per model, then the grid, then Figure 8.
+    assert_eq!(rows.len(), models + 2, "{json}");
     assert_eq!(rows[0]["scene"], "bunny.obj");
     assert_eq!(rows[models]["scene"], "4096 bunnies (grid)");
-    for r in rows {
+    // Figure 8: three of each model under a budget; ESVO cannot stream, so it has no time
+    // and no ratio, and the skipped list says why.
+    let fig = &rows[models + 1];
+    assert_eq!(
+        fig["scene"],
+        format!("Figure 8: {} objects (512 MiB budget)", 3 * models),
+        "{fig}"
+    );
+    assert_eq!(fig["level"], 4, "{fig}");
+    assert!(fig["ssbvb_unique_ms"].as_f64().unwrap() > 0.0, "{fig}");
+    assert!(
+        fig["esvo_ms"].is_null() && fig["ssbvb_unique_over_esvo"].is_null(),
+        "{fig}"
+    );
+    let f8 = &json["figure8"];
+    assert_eq!(f8["objects"], 3 * models, "{f8}");
+    assert!(f8["voxels"].as_u64().unwrap() > 1000, "{f8}");
+    let t = &f8["techniques"][0];
+    assert_eq!(t["technique"], "ssbvb-unique", "{f8}");
+    assert_eq!(t["converged"], true, "{f8}");
+    // Every object at the drawn level, against the CPU reference of the 21 objects.
+    assert!(t["coverage_iou"].as_f64().unwrap() > 0.98, "{f8}");
+    assert!(
+        json["skipped"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|s| s.as_str().unwrap().starts_with("esvo Figure 8")),
+        "{json}"
+    );
+    for r in &rows[..=models] {
         let ssbvb = r["ssbvb_unique_ms"].as_f64().unwrap();
         let esvo = r["esvo_ms"].as_f64().unwrap();
         let ratio = r["ssbvb_unique_over_esvo"].as_f64().unwrap();

@@ -201,3 +201,15 @@ pub(crate) fn select(args: &BenchArgs) -> Result<Vec<&'static Technique>> {
             .collect::<Result<_>>()?,
     })
 }
+
+/// Whether `e` is a technique's refusal of the scene (too large, or a baseline's limits).
+pub(crate) fn refused(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<ssbvb_passes::PassError>()
+            .is_some_and(|e| e.is_too_large() || e.is_bad_scene())
+            || matches!(
+                c.downcast_ref::<ssbvb_gpu::ResourceError>(),
+                Some(ssbvb_gpu::ResourceError::TooLarge(_) | ssbvb_gpu::ResourceError::BadScene(_))
+            )
+    })
+}

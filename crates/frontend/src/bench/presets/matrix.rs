@@ -119,7 +119,7 @@ struct Matrix {
 
 /// The models of `--preset paper`: the bunny first (the paper's Table 2 row), then the
 /// other models of `assets/models/`.
-const PAPER_MODELS: &[&str] = &[
+pub(crate) const PAPER_MODELS: &[&str] = &[
     "bunny.obj",
     "cow.obj",
     "teapot.obj",

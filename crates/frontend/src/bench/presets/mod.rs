@@ -1,10 +1,11 @@
 //! One file per preset of `ssbvb bench`, each run by `bench::run` alone: `matrix` (the
 //! main matrix of `quick`, `full` and `study`) and `sweep` (its knob sweeps), which both
 //! feed the main report, and `scale`, `memory`, `rastavox`, `dynamic`, `vct` and
-//! `volumes`, each writing its own files; `paper` runs `matrix` and `scale` and compares
-//! their rows with the seed paper's.
+//! `volumes`, each writing its own files; `paper` runs `matrix`, `scale` and `figure8` (the
+//! paper's Figure 8 scene) and compares their rows with the seed paper's.
 
 pub(super) mod dynamic;
+pub(super) mod figure8;
 pub(super) mod matrix;
 pub(super) mod memory;
 pub(super) mod paper;

@@ -4,14 +4,16 @@
 //! matrix over every model of `assets/models/` at level 9, 1280x720 (`bench.*`), then the
 //! scale grid at 4096 instances at the same size (`scale.*`), and writes `paper.*`: per
 //! scene each technique's median frame time and each SSBVB frame over each ray caster's
-//! of the same run, beside the paper's ratio where it has one. The paper's third scene
-//! (Figure 8: 21 objects at level 11 under a memory budget) is not part of it yet.
+//! of the same run, beside the paper's ratio where it has one; then the paper's third
+//! scene (Figure 8: 21 objects at level 11 under a GPU budget, `figure8`) with every
+//! technique that can draw it.
 
 use anyhow::Result;
 use serde::Serialize;
 
 use crate::bench::args::{BenchArgs, Preset};
 use crate::bench::harness::techniques::PAPER_TECHNIQUES;
+use crate::bench::presets::figure8::{self, Figure8};
 use crate::bench::presets::{matrix, scale};
 use crate::bench::report;
 use crate::bench::table::{Column, Fmt, Table, write_report};
@@ -53,8 +55,51 @@ struct PaperReport<'a> {
     adapter: String,
     adapter_is_software: bool,
     rows: Table<'a, PaperRow>,
-    /// What was not measured, and why (from the matrix and the grid).
+    /// The Figure 8 scene: what it holds and each technique's convergence and accuracy.
+    figure8: Figure8Report,
+    /// What was not measured, and why (from the matrix, the grid and Figure 8).
     skipped: Vec<String>,
+}
+
+/// `paper.json`'s `figure8`.
+#[derive(Serialize)]
+struct Figure8Report {
+    objects: usize,
+    level: u32,
+    voxels: u64,
+    budget_mib: u64,
+    techniques: Vec<Figure8TechniqueReport>,
+}
+
+#[derive(Serialize)]
+struct Figure8TechniqueReport {
+    technique: &'static str,
+    frame_ms_median: f64,
+    frames_to_converge: usize,
+    converged: bool,
+    coverage_iou: f64,
+}
+
+impl Figure8Report {
+    fn of(f: &Figure8) -> Self {
+        Self {
+            objects: f.objects,
+            level: f.level,
+            voxels: f.voxels,
+            budget_mib: f.budget_mib,
+            techniques: f
+                .times
+                .iter()
+                .map(|t| Figure8TechniqueReport {
+                    technique: t.technique,
+                    frame_ms_median: t.frame_ms_median,
+                    frames_to_converge: t.frames_to_converge,
+                    converged: t.converged,
+                    coverage_iou: t.coverage_iou,
+                })
+                .collect(),
+        }
+    }
 }
 
 /// Runs the preset: the matrix, the grid, and the comparison.
@@ -116,15 +161,33 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         }
     }
     rows.push(grid_row);
+    let techniques = crate::bench::harness::techniques::select(args)?;
+    let fig = figure8::run(args, &m.ctx, matrix::PAPER_MODELS, &techniques)?;
+    let mut fig_row = PaperRow {
+        scene: format!(
+            "Figure 8: {} objects ({} MiB budget)",
+            fig.objects, fig.budget_mib
+        ),
+        level: fig.level,
+        width,
+        height,
+        ms: vec![None; PAPER_TECHNIQUES.len()],
+        paper_ssbvb_over_esvo: None,
+    };
+    for t in &fig.times {
+        if let Some(k) = PAPER_TECHNIQUES.iter().position(|p| *p == t.technique) {
+            fig_row.ms[k] = Some(t.frame_ms_median);
+        }
+    }
+    rows.push(fig_row);
     let mut skipped = m.results.skipped.clone();
     skipped.dedup();
-    skipped.push(
-        "Figure 8 (21 objects at level 11 under a GPU budget): not part of the preset yet".into(),
-    );
+    skipped.extend(fig.skipped.iter().cloned());
     let report = PaperReport {
         adapter: m.ctx.report().to_string(),
         adapter_is_software: m.ctx.report().is_software,
         rows: table(&rows),
+        figure8: Figure8Report::of(&fig),
         skipped,
     };
     let md = markdown(&report);
@@ -204,6 +267,25 @@ fn markdown(r: &PaperReport) -> String {
          frame over ray-caster frame (below 1: SSBVB faster). The paper's ratio is its render \
          times (GTX 660).\n",
     );
+    let f = &r.figure8;
+    s.push_str(&format!(
+        "\nFigure 8: {} objects, {:.1} M voxels at level {}, under {} MiB (the paper: 21 \
+         objects, 402 M voxels at level 11, 22 FPS at 720p on a GTX 980).\n",
+        f.objects,
+        f.voxels as f64 / 1e6,
+        f.level,
+        f.budget_mib
+    ));
+    for t in &f.techniques {
+        s.push_str(&format!(
+            "- {}: {:.1} ms, {} frames to converge{}, coverage IoU {:.4}\n",
+            t.technique,
+            t.frame_ms_median,
+            t.frames_to_converge,
+            if t.converged { "" } else { " (not converged)" },
+            t.coverage_iou
+        ));
+    }
     for k in &r.skipped {
         s.push_str(&format!("\nSkipped: {k}\n"));
     }

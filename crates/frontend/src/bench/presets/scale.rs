@@ -221,7 +221,7 @@ fn measure_views(
                 Ok(row) => row,
                 // What a technique cannot draw (a baseline's one-object limit, a device
                 // limit) is a result, not a failure of the run.
-                Err(e) if refused(&e) => {
+                Err(e) if techniques::refused(&e) => {
                     if !args.json {
                         eprintln!("skipped {what}: {e:#}");
                     }
@@ -290,18 +290,6 @@ fn plots(dir: &Path, rows: &[ScaleRow]) -> Result<Vec<PlotInfo>> {
         }
     }
     Ok(out)
-}
-
-/// Whether `e` is a technique's refusal of the scene (too large, or a baseline's limits).
-fn refused(e: &anyhow::Error) -> bool {
-    e.chain().any(|c| {
-        c.downcast_ref::<ssbvb_passes::PassError>()
-            .is_some_and(|e| e.is_too_large() || e.is_bad_scene())
-            || matches!(
-                c.downcast_ref::<ssbvb_gpu::ResourceError>(),
-                Some(ssbvb_gpu::ResourceError::TooLarge(_) | ssbvb_gpu::ResourceError::BadScene(_))
-            )
-    })
 }
 
 /// The reference at the levels the renderer picks, and each instance's world cell size.
