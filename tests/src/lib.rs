@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, OnceLock};
 
-use glam::DAffine3;
+use glam::{DAffine3, DMat3, DQuat, DVec3};
 use ssbvb_gpu::scene::{GpuScene, LodPolicy, Scene, StreamChunks};
 use ssbvb_gpu::{ContextOptions, GpuContext, wgpu};
 use ssbvb_passes::runtime::resources::FrameResource;
@@ -53,6 +53,23 @@ pub fn model_asset(file: &str, level: u32) -> Arc<VoxelAsset> {
         .unwrap()
         .insert((file.to_string(), level), asset.clone());
     asset
+}
+
+/// Three instances of one object that overlap on screen from
+/// `(0.5, 1.4, 4.2)` looking at `(0.1, 0, 0)`: the identity, one turned and scaled, and one
+/// mirrored (a negative scale on x).
+pub fn three_overlapping_instances() -> Vec<DAffine3> {
+    vec![
+        DAffine3::IDENTITY,
+        DAffine3::from_mat3_translation(
+            DMat3::from_quat(DQuat::from_rotation_y(1.1)) * 0.7,
+            DVec3::new(1.2, 0.2, -0.8),
+        ),
+        DAffine3::from_mat3_translation(
+            DMat3::from_diagonal(DVec3::new(-0.6, 0.6, 0.6)),
+            DVec3::new(-0.9, -0.3, 0.7),
+        ),
+    ]
 }
 
 /// A scene with one asset placed once with its object space as world space.

@@ -11,7 +11,7 @@
 //! broken traversal (a wrong child slot, a lost stack entry, a wrong t mapping) drops the
 //! same-voxel rate or the IoU far below them.
 
-use glam::{DAffine3, DMat3, DQuat, DVec3};
+use glam::{DAffine3, DVec3};
 use ssbvb_gpu::scene::Scene;
 use ssbvb_voxel::accuracy::{self, AccuracyReport};
 use ssbvb_voxel::camera::Camera;
@@ -159,17 +159,7 @@ fn esvo_matches_the_reference_with_instances_and_inside_views() {
         &EXACT,
     );
     // Rotated, scaled and mirrored instances overlapping on screen.
-    scene.objects[0].instances = vec![
-        DAffine3::IDENTITY,
-        DAffine3::from_mat3_translation(
-            DMat3::from_quat(DQuat::from_rotation_y(1.1)) * 0.7,
-            DVec3::new(1.2, 0.2, -0.8),
-        ),
-        DAffine3::from_mat3_translation(
-            DMat3::from_diagonal(DVec3::new(-0.6, 0.6, 0.6)),
-            DVec3::new(-0.9, -0.3, 0.7),
-        ),
-    ];
+    scene.objects[0].instances = ssbvb_tests::three_overlapping_instances();
     let cam = Camera::new(DVec3::new(0.5, 1.4, 4.2), DVec3::new(0.1, 0.0, 0.0));
     check("three instances", &scene, level, &cam, SIZE, 2000, &EXACT);
 

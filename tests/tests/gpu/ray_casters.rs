@@ -3,7 +3,7 @@
 //! camera inside the grid or inside a closed shell, grazing rays and extreme planes,
 //! against the CPU reference.
 
-use glam::{DAffine3, DMat3, DQuat, DVec3};
+use glam::{DAffine3, DMat3, DVec3};
 use ssbvb_voxel::accuracy;
 use ssbvb_voxel::camera::Camera;
 
@@ -86,18 +86,7 @@ fn check_at(
 fn several_instances_of_one_object_match_the_reference() {
     let mut scene =
         ssbvb_tests::single_object_scene(ssbvb_tests::model_asset("bunny.obj", LEVEL), LEVEL);
-    scene.objects[0].instances = vec![
-        DAffine3::IDENTITY,
-        DAffine3::from_mat3_translation(
-            DMat3::from_quat(DQuat::from_rotation_y(1.1)) * 0.7,
-            DVec3::new(1.2, 0.2, -0.8),
-        ),
-        // Mirrored and overlapping the first on screen.
-        DAffine3::from_mat3_translation(
-            DMat3::from_diagonal(DVec3::new(-0.6, 0.6, 0.6)),
-            DVec3::new(-0.9, -0.3, 0.7),
-        ),
-    ];
+    scene.objects[0].instances = ssbvb_tests::three_overlapping_instances();
     let cam = Camera::new(DVec3::new(0.5, 1.4, 4.2), DVec3::new(0.1, 0.0, 0.0));
     check("three instances", &scene, &cam, 2000);
 }

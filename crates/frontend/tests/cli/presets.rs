@@ -1,0 +1,156 @@
+//! The comparison presets from the command line: `bench --preset paper` (the seed paper's
+//! tables and its Figure 8 scene) and `bench --preset scale` (cost against scene size).
+
+use super::{ssbvb, succeeded};
+
+#[test]
+fn bench_paper_preset_compares_ssbvb_with_the_ray_casters() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = succeeded(
+        ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+            .args([
+                "bench", "--preset", "paper", "--levels", "4", "--sizes", "64x48",
+            ])
+            .args([
+                "--frames",
+                "1",
+                "--techniques",
+                "ssbvb-unique,esvo",
+                "--json",
+                "--out",
+            ])
+            .arg(dir.path().join("paper")),
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let rows = json["rows"].as_array().unwrap();
+    let models = std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/models"))
+        .unwrap()
+        .filter(|e| {
+            let n = e.as_ref().unwrap().file_name();
+            let n = n.to_string_lossy();
+            [".obj", ".ply", ".vox"].iter().any(|x| n.ends_with(x))
+        })
+        .count();
+    // One row per model, then the grid, then Figure 8.
+    assert_eq!(rows.len(), models + 2, "{json}");
+    assert_eq!(rows[0]["scene"], "bunny.obj");
+    assert_eq!(rows[models]["scene"], "4096 bunnies (grid)");
+    // Figure 8: three of each model under a budget; ESVO cannot stream, so it has no time
+    // and no ratio, and the skipped list says why.
+    let fig = &rows[models + 1];
+    assert_eq!(
+        fig["scene"],
+        format!("Figure 8: {} objects (512 MiB budget)", 3 * models),
+        "{fig}"
+    );
+    assert_eq!(fig["level"], 4, "{fig}");
+    assert!(fig["ssbvb_unique_ms"].as_f64().unwrap() > 0.0, "{fig}");
+    assert!(
+        fig["esvo_ms"].is_null() && fig["ssbvb_unique_over_esvo"].is_null(),
+        "{fig}"
+    );
+    let f8 = &json["figure8"];
+    assert_eq!(f8["objects"], 3 * models, "{f8}");
+    assert!(f8["voxels"].as_u64().unwrap() > 1000, "{f8}");
+    let t = &f8["techniques"][0];
+    assert_eq!(t["technique"], "ssbvb-unique", "{f8}");
+    assert_eq!(t["converged"], true, "{f8}");
+    // Every object at the drawn level, against the CPU reference of the 21 objects.
+    assert!(t["coverage_iou"].as_f64().unwrap() > 0.98, "{f8}");
+    assert!(
+        json["skipped"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|s| s.as_str().unwrap().starts_with("esvo Figure 8")),
+        "{json}"
+    );
+    for r in &rows[..=models] {
+        let ssbvb = r["ssbvb_unique_ms"].as_f64().unwrap();
+        let esvo = r["esvo_ms"].as_f64().unwrap();
+        let ratio = r["ssbvb_unique_over_esvo"].as_f64().unwrap();
+        assert!((ratio - ssbvb / esvo).abs() < 1e-3 * ratio, "{r}");
+        // Not measured: no number.
+        assert!(
+            r["octree_ms"].is_null() && r["ssbvb_unique_over_octree"].is_null(),
+            "{r}"
+        );
+    }
+    for f in ["paper.csv", "paper.md", "bench.csv", "scale.csv"] {
+        assert!(dir.path().join("paper").join(f).is_file(), "{f}");
+    }
+}
+
+#[test]
+fn bench_scale_preset_writes_rows_per_view() {
+    let dir = tempfile::tempdir().unwrap();
+    succeeded(
+        ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+            .args([
+                "bench",
+                "--preset",
+                "scale",
+                "--instances",
+                "1,4",
+                "--sizes",
+                "64x48",
+            ])
+            .args([
+                "--frames",
+                "1",
+                "--techniques",
+                "ssbvb-unique,octree",
+                "--out",
+            ])
+            .arg(dir.path().join("scale")),
+    );
+    let csv = std::fs::read_to_string(dir.path().join("scale/scale.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    // 2 techniques x (2 grid views + near, mid, far).
+    assert_eq!(rows.len(), 10, "{csv}");
+    for r in &rows {
+        let iou: f64 = r[col("coverage_iou")].parse().unwrap();
+        let view = r[col("view")];
+        // The far view is the known f32 limit of the filter (docs/benchmarks.md).
+        if view != "far" {
+            assert!(iou >= 0.99, "{r:?}");
+        }
+        if r[col("technique")] == "ssbvb-unique" {
+            let steps: f64 = r[col("march_steps_mean")].parse().unwrap();
+            assert!(steps >= 1.0, "{r:?}");
+            assert!(!r[col("filter_us_per_covered_px")].is_empty(), "{r:?}");
+        }
+    }
+    let four = rows
+        .iter()
+        .find(|r| r[col("view")] == "grid" && r[col("instances")] == "4")
+        .unwrap();
+    assert_eq!(four[col("visible_instances")], "4", "{csv}");
+    for f in ["scale.json", "scale.md"] {
+        assert!(dir.path().join("scale").join(f).is_file(), "{f}");
+    }
+    for png in ["scale_frame.png", "scale_filter.png"] {
+        let bytes = std::fs::read(dir.path().join("scale").join(png)).unwrap();
+        assert!(bytes.starts_with(b"\x89PNG"), "{png}");
+    }
+    // One series per technique in each plot's description.
+    let json: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("scale/scale.json")).unwrap(),
+    )
+    .unwrap();
+    let frame_plot = &json["plots"][0];
+    assert_eq!(frame_plot["file"], "scale_frame.png");
+    assert_eq!(
+        frame_plot["series"].as_array().unwrap().len(),
+        2,
+        "{frame_plot}"
+    );
+}
