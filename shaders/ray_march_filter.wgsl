@@ -2,8 +2,9 @@
 
 // ray_march_filter: the voxel filter (docs/architecture.md, "A frame", step 2).
 //
-// One thread per pixel. From the empty-space prepass's entry point it marches the sparse
-// lookup of the pixel's instance with a hierarchical voxel DDA to the first voxel, and
+// One thread per pixel. From the empty-space prepass's entry point on, it marches the
+// pixel's ray through the sparse lookup of the pixel's instance with a hierarchical voxel
+// DDA to the first voxel, and
 // appends that voxel to the SSBVB (`ssbvb`), counting hits into the indirect draw
 // (`billboard_draw`): hits are compacted, so exactly one billboard per covered pixel is
 // drawn and the count never exceeds the pixel count.
@@ -106,28 +107,26 @@ fn entry_margin(e: vec4<f32>, px: vec2<i32>, size: vec2<i32>, d: vec3<f32>, s: f
     return (s + 1e-4) * inverseSqrt(dd) + slope * 0.125;
 }
 
-// Marches the prepass instance `k` for a pixel with entry `e`. A proxy holding the camera
-// starts at the camera; otherwise the ray starts at the entry point moved back by
-// `entry_margin` (never behind the camera), in a frame whose origin is that point: plane
-// crossing times are then differences of small object-space numbers, so a camera 1e6
-// units away loses no precision (from the camera, f32 would lose several cells). The
-// hit's `t` is returned in the camera's frame.
+// Marches the prepass instance `k` for a pixel with entry `e`: the pixel's ray in the
+// instance's object space as every other instance gets it (`object_ray`: from the camera,
+// or for a far camera from a point near the instance, so that a camera 1e6 units away
+// loses no precision), from the entry point moved back by `entry_margin` (never behind
+// the camera; a proxy holding the camera: from the camera). The plane times are the ones
+// of a march from the camera, so ties are decided as in the reference, and two instances
+// hit at the same distance compute the same `t`.
 fn march_prepass(k: u32, e: vec4<f32>, px: vec2<i32>, size: vec2<i32>, dir: vec3<f32>) -> Hit {
     let inst = instances[k];
     let lod = lods[inst.lod];
-    if (inst.flags & 1u) != 0u {
-        return march_resident(inst.camera_object.xyz, (inst.world_to_object * vec4(dir, 0.0)).xyz,
-            inst.lod, 0.0, BIG);
+    let ray = object_ray(inst, pixel_centre, dir);
+    var t_from = 0.0;
+    if (inst.flags & 1u) == 0u {
+        // The entry's parameter on the ray (its f32 rounding only moves where the march
+        // starts, within the margin).
+        let tp = dot(e.xyz - ray.o, ray.d) / dot(ray.d, ray.d);
+        t_from = tp - min(entry_margin(e, px, size, ray.d, cell_size(lod.level)), max(tp, 0.0));
     }
-    let d = (inst.world_to_object * vec4(dir, 0.0)).xyz;
-    let dd = dot(d, d);
-    // The entry's distance from the camera (its f32 rounding only shifts the depth).
-    let tp = dot(e.xyz - inst.camera_object.xyz, d) / dd;
-    let back = min(entry_margin(e, px, size, d, cell_size(lod.level)), max(tp, 0.0));
-    var h = march_resident(e.xyz - d * back, d, inst.lod, 0.0, BIG);
-    if h.found {
-        h.t = max(tp - back, 0.0) + h.t;
-    }
+    var h = march_resident(ray.o, ray.d, inst.lod, t_from, BIG);
+    h.t += ray.t_base;
     return h;
 }
 
@@ -233,7 +232,10 @@ fn filter_pixel(px: vec2<i32>) -> bool {
     let k = u32(e.w) - 1u;
     // The filter may run at a fraction of the screen (`entry` declared ScreenScaled): the
     // prepass rasterized this texel's centre, which is this point of the full screen.
-    pixel_centre = (vec2<f32>(px) + vec2(0.5)) * frame.screen.xy / vec2<f32>(size);
+    // (At full resolution exactly the pixel's centre, as the reference's.)
+    let texel_centre = vec2<f32>(px) + vec2(0.5);
+    let full = all(vec2<f32>(size) == frame.screen.xy);
+    pixel_centre = select(texel_centre * frame.screen.xy / vec2<f32>(size), texel_centre, full);
     let dir = pixel_ray(pixel_centre);
 
     marches = 1u;

@@ -11,7 +11,9 @@
 //   is the world distance for every instance (no renormalization).
 // - Axes with `d < 0` are mirrored (`x -> -x`, cell `i -> n - 1 - i`; exact with dyadic
 //   cell boundaries), so the loop only steps forward. Axes with a negligible `d` component
-//   are static (the ray stays in one cell on them).
+//   are static (the ray stays in one cell on them). A ray exactly in an inner cell plane of
+//   a static axis touches the cells on both sides: `march_lod` marches each side (two or
+//   four marches, only for such rays) and keeps the reference's choice.
 // - Crossing times are computed per plane (`(b_k - o) / d`, never accumulated), exactly
 //   like the reference: times are monotone in `k` and two axes tie only when their
 //   computed times are equal. Cells are never derived from a rounded position alone: a
@@ -25,7 +27,9 @@
 //   that still contains the new cell (usually one: the 4^3 leaf).
 // - Ties (the ray crosses several planes at the same time, i.e. passes exactly through an
 //   edge or a corner): the cell entered diagonally is tested first, then the cells the ray
-//   only touches along the edge, in the reference's rank order.
+//   only touches along the edge, in the reference's rank order; the same where the march
+//   starts on inner planes (`start_tie`). tests/tests/gpu/ties.rs holds every rule per
+//   pixel on lattice rays.
 // - Hit: the voxel's touch time (the latest of its near-plane crossing times, at least 0)
 //   and the entered face (the axis crossed at that time; ties to the faster axis; a camera
 //   inside the voxel gets the dominant axis of the direction).
@@ -109,6 +113,9 @@ struct Ray {
     t_exit: f32,
     // FAST_MARCH: 1 / d on moving axes (1 on static ones).
     inv: vec3<f32>,
+    // Static axes whose origin lies exactly in an inner cell plane where the march takes
+    // the cell below that plane (else the one above).
+    lower: vec3<bool>,
 }
 
 // The first voxel along a ray.
@@ -126,10 +133,13 @@ struct Hit {
     lod: u32,
     // The march stopped at a page that is not resident (then `t` is where).
     missing: bool,
+    // The reference's ranks of the cell among those touched at `t` (bit a: rank 1 on axis
+    // a, the cell before the one entered, or the upper cell on a static axis in a plane).
+    rank: u32,
 }
 
 fn no_hit() -> Hit {
-    return Hit(false, 0u, BIG, 0u, vec3(0u), 0u, false);
+    return Hit(false, 0u, BIG, 0u, vec3(0u), 0u, false, 0u);
 }
 
 fn make_ray(inst: Instance, level: u32, dir: vec3<f32>) -> Ray {
@@ -150,6 +160,7 @@ fn make_ray_od(o_obj: vec3<f32>, d_obj: vec3<f32>, level: u32) -> Ray {
     r.s = cell_size(level);
     r.cells_per_unit = f32(1u << level) * 0.5;
     r.inv = 1.0 / select(vec3(1.0), r.d, r.moving);
+    r.lower = vec3(false);
     // Slab test; static axes divide by 1 and are then replaced (no 0 / 0).
     // The fast march multiplies by the same reciprocals as its plane times, so the box's
     // faces are crossed at the times of planes 0 and n (a box entry computed by division
@@ -266,7 +277,7 @@ fn cell_hit(r: Ray, c: vec3<i32>, id: u32) -> Hit {
     }
     // The entered face's normal points against the ray: -axis (0..2) when moving towards
     // +axis, +axis (3..5) on mirrored axes.
-    return Hit(true, id, t, axis + select(0u, 3u, r.mirrored[axis]), orig_cell(r, c), 0u, false);
+    return Hit(true, id, t, axis + select(0u, 3u, r.mirrored[axis]), orig_cell(r, c), 0u, false, 0u);
 }
 
 // The time the ray entered cell `c` (mirrored frame), at least `t0`.
@@ -327,7 +338,14 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
             c[a] = clamp(k - 1, 0, r.n - 1);
             t_next[a] = select(BIG, plane_t(r, a, k), k <= r.n);
         } else {
-            c[a] = clamp(i32(floor((r.o[a] + 1.0) / r.s)), 0, r.n - 1);
+            let k = static_plane(r, a);
+            c[a] = select(clamp(i32(floor((r.o[a] + 1.0) / r.s)), 0, r.n - 1), k - i32(r.lower[a]), k > 0);
+        }
+    }
+    if !FAST_MARCH {
+        let h = start_tie(r, lod, c, t0, record);
+        if h.found {
+            return h;
         }
     }
     // The leaf (4^3 cells) and its parent (16^3) that held the last cell visited, kept in
@@ -500,7 +518,9 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
                 if all(cand < vec3(r.n)) {
                     let v = march_cell(lod, orig_cell(r, cand), record);
                     if v != 0u {
-                        return found_or_missing(cell_hit(r, cand, v - 1u), missing_t);
+                        var h = cell_hit(r, cand, v - 1u);
+                        h.rank = mask;
+                        return found_or_missing(h, missing_t);
                     }
                 }
             }
@@ -512,6 +532,84 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
     return found_or_missing(no_hit(), missing_t);
 }
 
+// A march that starts exactly on inner planes of moving axes (the box entered through an
+// edge or corner, a camera in a cell plane) touches the cells before those planes at `t0`
+// too: the start cell `c`, then those, in the reference's rank order (as at a crossing in
+// `march`). No hit when no such plane, or none of them is occupied.
+fn start_tie(r: Ray, lod: LodInfo, c: vec3<i32>, t0: f32, record: bool) -> Hit {
+    var planes = 0u;
+    for (var a = 0u; a < 3u; a++) {
+        if r.moving[a] && c[a] > 0 && plane_t(r, a, c[a]) == t0 {
+            planes |= 1u << a;
+        }
+    }
+    if planes == 0u {
+        return no_hit();
+    }
+    for (var i = 0u; i < 8u; i++) {
+        let mask = select(i, 7u - i, i == 3u || i == 4u);
+        if (mask & planes) != mask {
+            continue;
+        }
+        let cand = c - vec3(i32(mask & 1u), i32((mask >> 1u) & 1u), i32((mask >> 2u) & 1u));
+        let v = march_cell(lod, orig_cell(r, cand), record);
+        if v != 0u {
+            var h = cell_hit(r, cand, v - 1u);
+            h.rank = mask;
+            return h;
+        }
+    }
+    return no_hit();
+}
+
+// The inner plane (0 < k < n) of static axis `a` that the ray's origin lies in exactly, or
+// -1.
+fn static_plane(r: Ray, a: u32) -> i32 {
+    let k = i32(round((r.o[a] + 1.0) * r.cells_per_unit));
+    if r.moving[a] || k <= 0 || k >= r.n || f32(k) * r.s - 1.0 != r.o[a] {
+        return -1;
+    }
+    return k;
+}
+
+// The reference's order of cells touched at one time: the smaller rank sum, then the
+// smaller z rank, y rank, x rank (`rank` bits: x 1, y 2, z 4).
+fn rank_key(rank: u32) -> u32 {
+    return countOneBits(rank) * 8u + rank;
+}
+
+// `march` of the ray `o + t * d` through `lod`. A ray in an inner cell plane of a static
+// axis touches the cells on both sides of it: each side is marched (both sides of two such
+// planes: four marches) and the first hit kept, on a tie the reference's rank order.
+fn march_lod(o: vec3<f32>, d: vec3<f32>, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
+    var r = make_ray_od(o, d, lod.level);
+    var planes = 0u;
+    for (var a = 0u; a < 3u; a++) {
+        if static_plane(r, a) > 0 {
+            planes |= 1u << a;
+        }
+    }
+    if planes == 0u {
+        return march(r, lod, t_from, t_limit, record);
+    }
+    var best = no_hit();
+    var best_key = 0xffffffffu;
+    for (var upper = 0u; upper < 8u; upper++) {
+        if (upper & planes) != upper {
+            continue;
+        }
+        r.lower = vec3(upper & 1u, upper & 2u, upper & 4u) == vec3(0u) & vec3(planes & 1u, planes & 2u, planes & 4u) != vec3(0u);
+        var h = march(r, lod, t_from, min(t_limit, best.t), record);
+        h.rank |= upper;
+        let key = rank_key(h.rank);
+        if (h.found || h.missing) && (h.t < best.t || (h.t == best.t && key < best_key)) {
+            best = h;
+            best_key = key;
+        }
+    }
+    return best;
+}
+
 // Marches the ray `o + t * d` (object space) through LOD `first` (a LOD-table index) from
 // `t_from` up to `t_limit`. Where a page of that LOD is not resident, the rest of the ray is
 // marched in the next coarser LOD of the object (`first - 1`: an object's LODs are
@@ -521,7 +619,7 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
 fn march_resident(o: vec3<f32>, d: vec3<f32>, first: u32, t_from: f32, t_limit: f32) -> Hit {
     // No pages in the scene: one march, no fallback loop in the pipeline.
     if !PAGED {
-        var h = march(make_ray_od(o, d, lods[first].level), lods[first], t_from, t_limit, true);
+        var h = march_lod(o, d, lods[first], t_from, t_limit, true);
         h.lod = first;
         return h;
     }
@@ -530,7 +628,7 @@ fn march_resident(o: vec3<f32>, d: vec3<f32>, first: u32, t_from: f32, t_limit: 
     var record = true;
     loop {
         let lod = lods[li];
-        var h = march(make_ray_od(o, d, lod.level), lod, t_start, t_limit, record);
+        var h = march_lod(o, d, lod, t_start, t_limit, record);
         if !h.missing || lod.level == 0u {
             h.lod = li;
             h.missing = false;

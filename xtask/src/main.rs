@@ -1,9 +1,11 @@
 //! Project tasks: `cargo xtask validate-shaders [--dir DIR]`, `cargo xtask test [ARGS]`,
-//! `cargo xtask imports`, `cargo xtask fuzz [TARGET ...] [--seconds N]`.
+//! `cargo xtask imports`, `cargo xtask fuzz [TARGET ...] [--seconds N]`,
+//! `cargo xtask mutate-shaders [FILE ...] [--tests FILTER] [--report FILE]`.
 
 mod fuzz;
 mod imports;
 mod layout_check;
+mod mutate;
 mod shaders;
 mod standalone;
 
@@ -24,7 +26,11 @@ const USAGE: &str = "usage:
                                              when crates/passes, crates/gpu or crates/gpu-build has one
   cargo xtask fuzz [TARGET ...] [--seconds N] [--runs N] [--artifacts DIR] [--report FILE]
                                              coverage-guided fuzzing of every parser on stable
-                                             (see `cargo xtask fuzz --help`)";
+                                             (see `cargo xtask fuzz --help`)
+  cargo xtask mutate-shaders [FILE ...] [--tests FILTER] [--report FILE] [--timeout S] [--lines A-B]
+                             [--every N] [--list] [--test-binary PATH]
+                                             mutation testing of the WGSL shaders against the GPU tests
+                                             that exercise them (see `cargo xtask mutate-shaders --help`)";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -33,6 +39,7 @@ fn main() -> ExitCode {
         Some("test") => test(&args[1..]),
         Some("fuzz") => fuzz::run(&workspace_root(), &args[1..]),
         Some("imports") => imports::run(&workspace_root(), &args[1..]),
+        Some("mutate-shaders") => mutate::run(&workspace_root(), &args[1..]),
         Some("-h" | "--help") | None => {
             println!("{USAGE}");
             Ok(true)
