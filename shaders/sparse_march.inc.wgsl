@@ -142,10 +142,6 @@ fn no_hit() -> Hit {
     return Hit(false, 0u, BIG, 0u, vec3(0u), 0u, false, 0u);
 }
 
-fn make_ray(inst: Instance, level: u32, dir: vec3<f32>) -> Ray {
-    return make_ray_od(inst.camera_object.xyz, (inst.world_to_object * vec4(dir, 0.0)).xyz, level);
-}
-
 // The ray `o_obj + t * d_obj` in object space (`d_obj` not normalized: `t` keeps the
 // world scale of the includer's direction).
 fn make_ray_od(o_obj: vec3<f32>, d_obj: vec3<f32>, level: u32) -> Ray {

@@ -340,3 +340,35 @@ fn smoothing_matches_a_cpu_filter() {
         }
     }
 }
+
+/// An 8-bit output without an sRGB format (a caller's `Rgba8Unorm` target, a `Bgra8Unorm`
+/// swapchain) gets the sRGB encoding in the composite shader (`ENCODE_SRGB`): the bytes
+/// must be the ones the hardware's `Rgba8UnormSrgb` encoding writes, to a rounding (1 of
+/// 255; measured 1), and no pixel may come out linear (dark mid-tones would differ by tens).
+#[test]
+fn a_linear_8_bit_output_is_srgb_encoded_by_the_composite() {
+    let format = r#""color":            Texture(format: Rgba8UnormSrgb, size: Screen),"#;
+    assert!(
+        SSBVB.contains(format),
+        "ssbvb.ron no longer declares {format}"
+    );
+    let linear = SSBVB.replace(
+        format,
+        r#""color":            Texture(format: Rgba8Unorm, size: Screen),"#,
+    );
+    let cam = camera();
+    let srgb = ssbvb_tests::render(SSBVB, scene(5), &cam, SIZE).read("color");
+    let shader = ssbvb_tests::render(&linear, scene(5), &cam, SIZE).read("color");
+    let covered = srgb.chunks(4).filter(|p| p[3] == 255).count();
+    assert!(covered > 2000, "only {covered} pixels drawn");
+    let worst = srgb
+        .iter()
+        .zip(&shader)
+        .map(|(a, b)| a.abs_diff(*b))
+        .max()
+        .unwrap();
+    assert!(
+        worst <= 1,
+        "shader sRGB differs from the hardware's by {worst}"
+    );
+}

@@ -57,6 +57,7 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
         &[
             "ties::exact",
             "ties::fast",
+            "streaming::",
             "ray_march_filter::",
             "empty_space::",
         ],
@@ -66,6 +67,7 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
         &[
             "ties::exact",
             "ties::fast",
+            "streaming::",
             "ray_march_filter::",
             "empty_space::",
         ],

@@ -262,7 +262,8 @@ pub(super) fn inside_scene_and_views() -> (Scene, Vec<View>) {
         }
     }
     let scene = scene_of(vec![(lattice_asset(&cells, 0), DAffine3::IDENTITY)]);
-    let c = -1.0 + 8.5 * cell_size(LEVEL);
+    let s = cell_size(LEVEL);
+    let c = -1.0 + 8.5 * s;
     let mut views = vec![
         view(
             "inside, cell centre",
@@ -276,6 +277,13 @@ pub(super) fn inside_scene_and_views() -> (Scene, Vec<View>) {
             [0.0, 0.0, -1.0],
             Lattice::Axis,
         ),
+        // Off the cell's centre: the dominant axis is not the axis of the nearest face.
+        view(
+            "inside, off centre",
+            [c + 0.3 * s, c - 0.2 * s, c + 0.1 * s],
+            [c + 0.3 * s, c - 0.2 * s, -1.0],
+            Lattice::Axis,
+        ),
         view(
             "inside, diagonal",
             [c, c, c],
@@ -283,7 +291,7 @@ pub(super) fn inside_scene_and_views() -> (Scene, Vec<View>) {
             Lattice::Centre,
         ),
     ];
-    for v in &mut views[..2] {
+    for v in &mut views[..3] {
         v.camera.fov_y_deg = 120.0;
     }
     (scene, views)
