@@ -579,6 +579,9 @@ fn rank_key(rank: u32) -> u32 {
 // planes: four marches) and the first hit kept, on a tie the reference's rank order.
 fn march_lod(o: vec3<f32>, d: vec3<f32>, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
     var r = make_ray_od(o, d, lod.level);
+    if all(r.moving) {
+        return march(r, lod, t_from, t_limit, record);
+    }
     var planes = 0u;
     for (var a = 0u; a < 3u; a++) {
         if static_plane(r, a) > 0 {

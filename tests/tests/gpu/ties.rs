@@ -164,6 +164,14 @@ fn read_hits(t: &Technique, f: &Frame, n: u32) -> Vec<Option<PixelHit>> {
                 let vis = f.scene.visible[s.instance as usize];
                 let h = &mut hits[s.pixel as usize];
                 assert!(h.is_none(), "{}: pixel {} filled twice", t.name, s.pixel);
+                // The slot's voxel is the one of its cell (its id picked the colour; one
+                // instance per object here, so the scene index is the object).
+                assert_eq!(
+                    s.voxel.color,
+                    color_word(vis.scene_index, s.voxel.cell()),
+                    "{}: slot {s:?}",
+                    t.name
+                );
                 *h = Some(PixelHit {
                     instance: vis.scene_index,
                     cell: s.voxel.cell(),
@@ -402,8 +410,10 @@ fn fast_march_differs_from_the_reference_only_at_edges_and_never_earlier() {
     eprintln!(
         "fast march: differs from the reference at {differing} lattice pixels ({decisive} decisive)"
     );
+    // Measured on lavapipe: 62 pixels; with the exact march's tie loop switched on in the
+    // fast march, 11. Half the measured count as the bound.
     assert!(
-        differing > 0,
-        "the fast march resolved every tie like the reference"
+        differing >= 31,
+        "the fast march resolved all but {differing} ties like the reference"
     );
 }

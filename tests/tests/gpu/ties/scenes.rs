@@ -169,13 +169,14 @@ pub(super) fn axis_views() -> Vec<View> {
     ]
 }
 
-/// Small views of many lattice cameras: along -z from every third cell line (the centre
-/// ray runs along a cell edge: in two cell planes at once) and along the space diagonal
-/// from lattice points (the centre ray passes through cell corners).
+/// Small views of many lattice cameras: along -z from cell lines, the first and last inner
+/// planes among them (the centre ray runs along a cell edge: in two cell planes at once),
+/// and along the space diagonal from lattice points (the centre ray passes through cell
+/// corners).
 pub(super) fn many_camera_views() -> Vec<View> {
     let s = cell_size(LEVEL);
     let mut views = Vec::new();
-    for i in [-6.0, -3.0, 0.0, 3.0, 6.0] {
+    for i in [-7.0, -3.0, 0.0, 3.0, 7.0] {
         for j in [-6.0, -2.0, 1.0, 5.0] {
             let (x, y) = (i * s, j * s);
             let mut v = view("edge line", [x, y, 3.0], [x, y, 0.0], Lattice::Axis);
@@ -249,7 +250,7 @@ pub(super) fn touching_scene() -> Scene {
     ])
 }
 
-/// A solid block around the grid's centre; cameras inside a voxel (at a cell centre and on
+/// A solid block around the grid's centre; a camera on the grid's face, cameras inside a voxel (at a cell centre and on
 /// a grid corner) with a wide lens, so that some pixels' rays have two equal dominant
 /// components.
 pub(super) fn inside_scene_and_views() -> (Scene, Vec<View>) {
@@ -261,10 +262,19 @@ pub(super) fn inside_scene_and_views() -> (Scene, Vec<View>) {
             }
         }
     }
+    // A patch of the top layer, for a camera on the grid's top face.
+    for y in 7..10 {
+        for x in 7..10 {
+            cells.push([x, y, 15]);
+        }
+    }
     let scene = scene_of(vec![(lattice_asset(&cells, 0), DAffine3::IDENTITY)]);
     let s = cell_size(LEVEL);
     let c = -1.0 + 8.5 * s;
     let mut views = vec![
+        // On the grid's top face above an occupied cell: its plane is crossed at t = 0,
+        // so the face is the entered one, not the inside rule's dominant axis.
+        view("on the box face", [c, c, 1.0], [c, c, 0.0], Lattice::Axis),
         view(
             "inside, cell centre",
             [c, c, c],
@@ -291,7 +301,7 @@ pub(super) fn inside_scene_and_views() -> (Scene, Vec<View>) {
             Lattice::Centre,
         ),
     ];
-    for v in &mut views[..3] {
+    for v in &mut views[..4] {
         v.camera.fov_y_deg = 120.0;
     }
     (scene, views)
