@@ -33,21 +33,27 @@ pub fn prefilter_pipeline(max_steps: u32) -> String {
 /// grid centre, colours from the position); coarser levels are their parents, as the octree
 /// would build them.
 pub fn synthetic_asset(level: u32, cells: &[[u32; 3]]) -> Arc<VoxelAsset> {
+    synthetic_asset_with(level, cells, |c, l| {
+        let n = (1u64 << l) as f32;
+        let p = c.map(|v| (v as f32 + 0.5) / n * 2.0 - 1.0);
+        let col = p.map(|v| v * 0.5 + 0.5);
+        PackedVoxel::new(c, p, [col[0], col[1], col[2], 1.0], [0.0; 2])
+    })
+}
+
+/// [`synthetic_asset`] with each voxel made by `voxel(cell, level)`.
+pub fn synthetic_asset_with(
+    level: u32,
+    cells: &[[u32; 3]],
+    voxel: impl Fn([u32; 3], u32) -> PackedVoxel,
+) -> Arc<VoxelAsset> {
     let mut lods = Vec::new();
     let mut current: Vec<[u32; 3]> = cells.to_vec();
     for l in (0..=level).rev() {
         // Morton order: the lookup implies voxel ids as Morton ranks.
         current.sort_by_key(|&c| ssbvb_voxel::svo::morton_encode(c));
         current.dedup();
-        let n = (1u64 << l) as f32;
-        let voxels: Vec<PackedVoxel> = current
-            .iter()
-            .map(|c| {
-                let p = c.map(|v| (v as f32 + 0.5) / n * 2.0 - 1.0);
-                let col = p.map(|v| v * 0.5 + 0.5);
-                PackedVoxel::new(*c, p, [col[0], col[1], col[2], 1.0], [0.0; 2])
-            })
-            .collect();
+        let voxels: Vec<PackedVoxel> = current.iter().map(|&c| voxel(c, l)).collect();
         let lookup = SparseLookup::from_cells(l, current.iter().copied());
         let proxy = ssbvb_voxel::proxy::build_proxy(&lookup);
         lods.push(LodLevel {

@@ -5,9 +5,9 @@ use std::sync::Arc;
 
 use glam::{DAffine3, DVec3};
 use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject};
-use ssbvb_voxel::asset::{LodLevel, PackedVoxel, PointCloud, SparseLookup, VoxelAsset};
+use ssbvb_voxel::asset::{PackedVoxel, VoxelAsset};
 use ssbvb_voxel::camera::Camera;
-use ssbvb_voxel::model::{ObjectSpace, cell_size};
+use ssbvb_voxel::model::cell_size;
 
 use super::{LEVEL, N, SMALL};
 
@@ -15,33 +15,10 @@ use super::{LEVEL, N, SMALL};
 /// (red: x + 16·object, green: y, blue: z), so a G-buffer's albedo tells which voxel of
 /// which object a pixel shows.
 pub(super) fn lattice_asset(cells: &[[u32; 3]], object: u32) -> Arc<VoxelAsset> {
-    let mut lods = Vec::new();
-    let mut current: Vec<[u32; 3]> = cells.to_vec();
-    for l in (0..=LEVEL).rev() {
-        current.sort_by_key(|&c| ssbvb_voxel::svo::morton_encode(c));
-        current.dedup();
-        let voxels = current
-            .iter()
-            .map(|&c| {
-                let mut v = PackedVoxel::new(c, [0.0, 0.0, 1.0], [0.0; 4], [0.0; 2]);
-                v.color = color_word(object, c);
-                v
-            })
-            .collect();
-        let lookup = SparseLookup::from_cells(l, current.iter().copied());
-        let proxy = ssbvb_voxel::proxy::build_proxy(&lookup);
-        lods.push(LodLevel {
-            level: l,
-            point_cloud: PointCloud { voxels },
-            lookup,
-            proxy,
-        });
-        current = current.iter().map(|c| c.map(|v| v / 2)).collect();
-    }
-    lods.reverse();
-    Arc::new(VoxelAsset {
-        object_space: ObjectSpace::from_bounds(DVec3::splat(-1.0), DVec3::ONE),
-        lods,
+    crate::empty_space::synthetic_asset_with(LEVEL, cells, |c, _| {
+        let mut v = PackedVoxel::new(c, [0.0, 0.0, 1.0], [0.0; 4], [0.0; 2]);
+        v.color = color_word(object, c);
+        v
     })
 }
 
