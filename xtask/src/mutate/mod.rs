@@ -22,7 +22,9 @@ pub const USAGE: &str =
     "usage: cargo xtask mutate-shaders [FILE ...] [--tests FILTER]... [--report FILE]
        [--timeout SECONDS] [--lines A-B] [--every N] [--list] [--test-binary PATH]
 
-  FILE            shader files under shaders/ (default: the core shaders, see CORE below)
+  FILE            shader files under shaders/ (default: the core shaders: the march, the filter,
+                  the instance hierarchy, billboards and splats, smoothing, composite, the shading
+                  in common.inc.wgsl, the dense DDA and the octree caster)
   --tests FILTER  run the GPU tests whose names contain FILTER (repeatable, or comma-separated)
                   instead of each file's entry in the test map
   --report FILE   Markdown report (default target/mutate-shaders.md), rewritten after each file
