@@ -77,7 +77,7 @@ fn trace(inst: Instance, o: vec3<f32>, d: vec3<f32>, t_best: f32) -> Hit {
     var cell = vec3(0);
     var t_next = vec3(1e30);
     for (var a = 0u; a < 3u; a++) {
-        // (A static axis stays at the origin: its `da` is a placeholder 1.)
+        // (On a static axis the ray stays at the origin, whatever `da` holds there.)
         let p = select(o[a], om[a] + t0 * da[a], moving[a]);
         var i = clamp(i32(floor((p + 1.0) / s)), 0, n - 1);
         if moving[a] {
