@@ -214,6 +214,14 @@ fn cell_size(level: u32) -> f32 {
     return 2.0 / f32(1u << level);
 }
 
+// The cell of an `n`-cell axis of cell size `s` (over [-1, 1]) holding coordinate `x`.
+// `x + 1` can round up onto the next plane (never down: every plane plus one is a float),
+// so the plane's exact value, `i * s - 1`, decides.
+fn axis_cell(x: f32, s: f32, n: i32) -> i32 {
+    let i = i32(floor((x + 1.0) / s));
+    return clamp(select(i, i - 1, f32(i) * s - 1.0 > x), 0, n - 1);
+}
+
 // Object-space box of a cell.
 fn cell_min(cell: vec3<u32>, level: u32) -> vec3<f32> {
     return vec3<f32>(cell) * cell_size(level) - 1.0;

@@ -77,10 +77,10 @@ fn trace(inst: Instance, o: vec3<f32>, d: vec3<f32>, t_best: f32) -> Hit {
     var cell = vec3(0);
     var t_next = vec3(1e30);
     for (var a = 0u; a < 3u; a++) {
-        // (On a static axis the ray stays at the origin, whatever `da` holds there.)
-        let p = select(o[a], om[a] + t0 * da[a], moving[a]);
-        var i = clamp(i32(floor((p + 1.0) / s)), 0, n - 1);
+        // A static axis keeps the origin's cell (the ray stays at the origin there).
+        var i = axis_cell(o[a], s, n);
         if moving[a] {
+            i = clamp(i32(floor((om[a] + t0 * da[a] + 1.0) / s)), 0, n - 1);
             // Settle on exact crossing times: the cell whose far plane is crossed after t0.
             for (var k = 0; k < 4; k++) {
                 if i < n - 1 && plane_t(i + 1, s, om[a], da[a]) <= t0 {

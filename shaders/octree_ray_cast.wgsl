@@ -65,7 +65,7 @@ fn trace(inst: Instance, o: vec3<f32>, d: vec3<f32>, t_best: f32) -> Hit {
             if o[a] < -1.0 || o[a] > 1.0 {
                 return out;
             }
-            fixed_cell[a] = clamp(i32(floor((o[a] + 1.0) / s_target)), 0, n - 1);
+            fixed_cell[a] = axis_cell(o[a], s_target, n);
         } else {
             moving[a] = true;
             if d[a] < 0.0 {

@@ -335,7 +335,7 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
             t_next[a] = select(BIG, plane_t(r, a, k), k <= r.n);
         } else {
             let k = static_plane(r, a);
-            c[a] = select(clamp(i32(floor((r.o[a] + 1.0) / r.s)), 0, r.n - 1), k - i32(r.lower[a]), k > 0);
+            c[a] = select(axis_cell(r.o[a], r.s, r.n), k - i32(r.lower[a]), k > 0);
         }
     }
     if !FAST_MARCH {

@@ -230,6 +230,9 @@ pub(super) fn touching_scene() -> Scene {
 /// A solid block around the grid's centre; a camera on the grid's face, cameras inside a voxel (at a cell centre and on
 /// a grid corner) with a wide lens, so that some pixels' rays have two equal dominant
 /// components.
+/// The float just below (more negative than) the cell plane x = -0.125 of a `LEVEL` grid.
+const BELOW_PLANE: f64 = -(0.125 + 1.0 / (1u64 << 26) as f64);
+
 pub(super) fn inside_scene_and_views() -> (Scene, Vec<View>) {
     let mut cells = Vec::new();
     for z in 5..11 {
@@ -271,6 +274,15 @@ pub(super) fn inside_scene_and_views() -> (Scene, Vec<View>) {
             [c + 0.3 * s, c - 0.2 * s, -1.0],
             Lattice::Axis,
         ),
+        // One float below the cell plane x = -0.125: `x + 1` rounds up onto the plane in
+        // f32, so a start cell taken from `floor((x + 1) / s)` is one too high (cell 7,
+        // not 6); the exact crossing times must settle it.
+        view(
+            "inside, one float below a cell plane",
+            [BELOW_PLANE, c, c],
+            [BELOW_PLANE, c, -1.0],
+            Lattice::Axis,
+        ),
         view(
             "inside, diagonal",
             [c, c, c],
@@ -278,7 +290,7 @@ pub(super) fn inside_scene_and_views() -> (Scene, Vec<View>) {
             Lattice::Centre,
         ),
     ];
-    for v in &mut views[..4] {
+    for v in &mut views[..5] {
         v.camera.fov_y_deg = 120.0;
     }
     (scene, views)
