@@ -17,6 +17,7 @@
 //! [`shading::shade`]: crate::shading::shade
 
 pub mod dda;
+mod supersample;
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -24,12 +25,12 @@ use std::path::Path;
 
 use glam::{DAffine3, DMat3, DVec3};
 use image::ImageEncoder;
-use rayon::prelude::*;
 
 pub use self::dda::{
     ObjectHit, TraceCount, Traversal, trace_object_ray, trace_object_ray_counted,
     trace_object_ray_faces,
 };
+pub use self::supersample::{MAX_SAMPLES, SampleCountError, SampleGrid, render_supersampled};
 use crate::asset::LodLevel;
 use crate::camera::{Camera, normalize_or};
 use crate::instance_bvh::{Aabb, InstanceBvh};
@@ -85,7 +86,9 @@ pub struct ReferenceImage {
     pub height: u32,
     /// The first voxel hit of each pixel's centre ray, or `None`.
     pub hits: Vec<Option<Hit>>,
-    /// Linear RGBA: shaded colour with alpha 1 on hits, (0, 0, 0, 0) elsewhere.
+    /// Linear RGBA, premultiplied by alpha: with one sample per pixel the shaded colour with
+    /// alpha 1 on hits, (0, 0, 0, 0) elsewhere; supersampled, the samples' mean (alpha is
+    /// the pixel's coverage).
     pub colors: Vec<[f32; 4]>,
 }
 
@@ -311,7 +314,8 @@ impl<'a> Tracer<'a> {
 }
 
 /// Renders the reference image: one ray per pixel centre, nearest hit over `instances`,
-/// shaded with `light`. Rows are traced in parallel (rayon).
+/// shaded with `light`. Rows are traced in parallel (rayon). With more samples per pixel:
+/// [`render_supersampled`].
 pub fn render(
     instances: &[Instance],
     camera: &Camera,
@@ -319,36 +323,7 @@ pub fn render(
     height: u32,
     light: &Light,
 ) -> ReferenceImage {
-    let scene = PreparedScene::new(instances);
-    let rays = camera.pixel_rays(width, height);
-    let w = width as usize;
-    let len = w * height as usize;
-    let mut hits = vec![None; len];
-    let mut colors = vec![[0.0f32; 4]; len];
-    if w > 0 {
-        hits.par_chunks_mut(w)
-            .zip(colors.par_chunks_mut(w))
-            .enumerate()
-            .for_each(|(y, (hit_row, color_row))| {
-                for x in 0..w {
-                    let (o, d) = rays.ray(x as u32, y as u32);
-                    let hit = trace_world(&scene, o, d, rays.forward());
-                    let placed = hit
-                        .as_ref()
-                        .map(|h| (h, &scene.instances[h.instance as usize]));
-                    if let Some((h, Some(p))) = placed {
-                        color_row[x] = shade_with(p.lod, p.normal_to_world, h, d, light);
-                    }
-                    hit_row[x] = hit;
-                }
-            });
-    }
-    ReferenceImage {
-        width,
-        height,
-        hits,
-        colors,
-    }
+    render_supersampled(instances, camera, width, height, light, SampleGrid::CENTRE)
 }
 
 impl ReferenceImage {
@@ -386,16 +361,20 @@ impl ReferenceImage {
             })
     }
 
-    /// The colours as 8-bit sRGB RGBA (alpha straight: 255 on hits, 0 elsewhere).
+    /// The colours as 8-bit sRGB RGBA with straight alpha (255 on hits, 0 elsewhere; a
+    /// supersampled pixel's coverage between).
     pub fn to_rgba8(&self) -> Vec<u8> {
         self.colors
             .iter()
             .flat_map(|c| {
-                let a = (c[3].clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+                let alpha = c[3].clamp(0.0, 1.0);
+                let a = (alpha * 255.0 + 0.5) as u8;
+                // Premultiplied → straight; alpha 1 (every one-sample hit) leaves the colour.
+                let straight = |v: f32| if alpha > 0.0 { v / alpha } else { 0.0 };
                 [
-                    linear_to_srgb8(c[0]),
-                    linear_to_srgb8(c[1]),
-                    linear_to_srgb8(c[2]),
+                    linear_to_srgb8(straight(c[0])),
+                    linear_to_srgb8(straight(c[1])),
+                    linear_to_srgb8(straight(c[2])),
                     a,
                 ]
             })

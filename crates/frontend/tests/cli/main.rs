@@ -5,6 +5,7 @@ mod animation;
 mod cone_trace;
 mod presets;
 mod rastavox;
+mod supersample;
 mod volumes;
 mod voxelize_gpu;
 

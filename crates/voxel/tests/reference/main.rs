@@ -11,6 +11,7 @@ mod instances;
 mod oracle;
 mod outputs;
 mod rules;
+mod supersample;
 mod surface;
 mod traversal;
 
