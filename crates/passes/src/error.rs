@@ -30,6 +30,10 @@ pub enum PassError {
     /// The scene is unusable for this pass.
     #[error("bad scene: {0}")]
     BadScene(String),
+    /// A frame's work counters contradict each other (a bug in the pass's shader: the
+    /// numbers are refused rather than reported).
+    #[error("the frame's work counters are inconsistent: {0}")]
+    InconsistentCounters(String),
     /// A pass reads whole levels and cannot run on paged ones.
     #[error(
         "pass `{pass}` (kind {kind}) reads every voxel of a level and cannot run under a GPU budget (--gpu-budget pages levels above {pinned}); only the SSBVB filter's pipelines stream"

@@ -62,6 +62,8 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
             "streaming::",
             "ray_march_filter::",
             "empty_space::",
+            "scale::counters",
+            "scale::a_grid",
         ],
     ),
     (
@@ -72,6 +74,8 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
             "streaming::",
             "ray_march_filter::",
             "empty_space::",
+            "scale::counters",
+            "scale::a_grid",
         ],
     ),
     (

@@ -30,7 +30,7 @@ use ssbvb_voxel::asset::PackedVoxel;
 
 use crate::runtime::bindings::PassBindings;
 use crate::runtime::registry::{OwnBinding, OwnKind};
-use crate::runtime::counters::{FrameCounters, histogram_quantile};
+use crate::runtime::counters::{FrameCounters, check_steps_histogram, histogram_quantile};
 use crate::runtime::recorder::Recorder;
 use crate::runtime::pipelines::pipeline_layout;
 use crate::runtime::registry::{KindNeeds, PassImpl, PassInit};
@@ -395,8 +395,17 @@ impl PassNode for RayMarchFilter {
         out.march_steps_mean = per_ray(wide(1));
         out.instance_boxes_per_ray = per_ray(wide(3));
         out.instances_marched_per_ray = per_ray(wide(5));
-        out.march_steps_p99 = histogram_quantile(&words[HISTOGRAM_WORD..COUNTER_WORDS], 0.99);
+        let histogram = &words[HISTOGRAM_WORD..COUNTER_WORDS];
         let steps = wide(1);
+        check_steps_histogram(rays, steps, histogram).map_err(PassError::InconsistentCounters)?;
+        // Every ray marches its prepass instance at least.
+        if wide(5) < rays {
+            return Err(PassError::InconsistentCounters(format!(
+                "{} instance marches counted for {rays} rays",
+                wide(5)
+            )));
+        }
+        out.march_steps_p99 = histogram_quantile(histogram, 0.99);
         out.node_words_per_step = (steps > 0).then(|| wide(7) as f64 / steps as f64);
         Ok(())
     }

@@ -103,9 +103,66 @@ pub fn histogram_quantile(bins: &[u32], q: f64) -> Option<u64> {
     None
 }
 
+/// Checks a frame's steps-per-ray histogram against the ray and step totals counted beside
+/// it: it holds every ray once, and the steps lie between the sums of its bins' smallest
+/// and largest counts (exact below 32 steps a ray).
+pub fn check_steps_histogram(rays: u64, steps: u64, bins: &[u32]) -> Result<(), String> {
+    let held: u64 = bins.iter().map(|&c| c as u64).sum();
+    if held != rays {
+        return Err(format!(
+            "the steps histogram holds {held} rays, {rays} were counted"
+        ));
+    }
+    let (mut lo, mut hi) = (0u64, 0u64);
+    for (b, &c) in bins.iter().enumerate() {
+        let smallest = if b == 0 { 0 } else { steps_bin_max(b - 1) + 1 };
+        lo = lo.saturating_add(smallest.saturating_mul(c as u64));
+        hi = hi.saturating_add(steps_bin_max(b).saturating_mul(c as u64));
+    }
+    if !(lo..=hi).contains(&steps) {
+        return Err(format!(
+            "{steps} march steps counted, the steps histogram allows {lo} to {hi}"
+        ));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_histogram_must_hold_every_ray_and_bound_the_steps() {
+        let mut bins = vec![0u32; STEP_BINS];
+        // Rays of 0, 3, 3 and 40 steps: 46 in all; 40 is in the bin of 40..=43.
+        for s in [0, 3, 3, 40] {
+            bins[steps_bin(s)] += 1;
+        }
+        assert_eq!(check_steps_histogram(4, 46, &bins), Ok(()));
+        assert_eq!(check_steps_histogram(4, 49, &bins), Ok(()));
+        let short = check_steps_histogram(4, 45, &bins).unwrap_err();
+        assert!(
+            short.contains("45") && short.contains("46 to 49"),
+            "{short}"
+        );
+        let over = check_steps_histogram(4, 50, &bins).unwrap_err();
+        assert!(over.contains("46 to 49"), "{over}");
+        let rays = check_steps_histogram(5, 46, &bins).unwrap_err();
+        assert!(rays.contains("holds 4 rays, 5"), "{rays}");
+        // Below 32 steps the bins are exact.
+        let mut exact = vec![0u32; STEP_BINS];
+        exact[7] = 2;
+        assert_eq!(check_steps_histogram(2, 14, &exact), Ok(()));
+        assert!(check_steps_histogram(2, 15, &exact).is_err());
+        assert!(check_steps_histogram(2, 13, &exact).is_err());
+        // Nothing counted is consistent; the top bin's sums do not overflow.
+        assert_eq!(check_steps_histogram(0, 0, &vec![0; STEP_BINS]), Ok(()));
+        let mut top = vec![0u32; STEP_BINS];
+        top[steps_bin(u32::MAX)] = u32::MAX;
+        let most = steps_bin_max(steps_bin(u32::MAX)) * u32::MAX as u64;
+        assert_eq!(check_steps_histogram(u32::MAX as u64, most, &top), Ok(()));
+        assert!(check_steps_histogram(u32::MAX as u64, u64::MAX, &top).is_err());
+    }
 
     #[test]
     fn bins_are_monotone_and_cover_each_count_once() {

@@ -212,6 +212,46 @@ pub(super) fn duplicates_scene() -> Scene {
     ])
 }
 
+/// Views of the duplicates: two along axes, and a near camera half a unit from the grid's
+/// face.
+pub(super) fn duplicates_views() -> Vec<View> {
+    let mut views: Vec<View> = axis_views().into_iter().take(2).collect();
+    views.push(view(
+        "near, along -z",
+        [0.0, 0.0, 1.5],
+        [0.0; 3],
+        Lattice::Axis,
+    ));
+    views
+}
+
+/// A small solid block inside a sparse object's box, just behind its front: the prepass
+/// names the sparse object (its proxy is nearer), and the block, hit first wherever the
+/// sparse object's voxels lie deeper, is found by the instance walk, within one unit of
+/// the camera of [`nested_view`].
+pub(super) fn nested_scene() -> Scene {
+    let n = 1u32 << LEVEL;
+    let block: Vec<[u32; 3]> = (0..n)
+        .flat_map(|z| (0..n).flat_map(move |y| (0..n).map(move |x| [x, y, z])))
+        .collect();
+    scene_of(vec![
+        (lattice_asset(&random_cells(7, 0.12), 0), DAffine3::IDENTITY),
+        (
+            lattice_asset(&block, 1),
+            DAffine3::from_scale_rotation_translation(
+                DVec3::splat(0.25),
+                glam::DQuat::IDENTITY,
+                DVec3::new(0.0, 0.0, 0.5),
+            ),
+        ),
+    ])
+}
+
+/// Along -z, half a unit from the sparse object's front face.
+pub(super) fn nested_view() -> View {
+    view("nested, near", [0.0, 0.0, 1.5], [0.0; 3], Lattice::Axis)
+}
+
 /// Two objects touching at the world plane x = 0, seen along it: the centre column's rays
 /// run inside that plane and touch both.
 pub(super) fn touching_scene() -> Scene {
@@ -227,12 +267,12 @@ pub(super) fn touching_scene() -> Scene {
     ])
 }
 
-/// A solid block around the grid's centre; a camera on the grid's face, cameras inside a voxel (at a cell centre and on
-/// a grid corner) with a wide lens, so that some pixels' rays have two equal dominant
-/// components.
 /// The float just below (more negative than) the cell plane x = -0.125 of a `LEVEL` grid.
 const BELOW_PLANE: f64 = -(0.125 + 1.0 / (1u64 << 26) as f64);
 
+/// A solid block around the grid's centre; a camera on the grid's face, cameras inside a voxel (at a cell centre and on
+/// a grid corner) with a wide lens, so that some pixels' rays have two equal dominant
+/// components.
 pub(super) fn inside_scene_and_views() -> (Scene, Vec<View>) {
     let mut cells = Vec::new();
     for z in 5..11 {
