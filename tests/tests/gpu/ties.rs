@@ -369,6 +369,7 @@ fn exact_filter_follows_every_tie_rule_on_lattice_rays() {
     results.extend(run(&t, &duplicates_scene(), &duplicates_views()));
     results.extend(run(&t, &touching_scene(), &touch_views));
     results.extend(run(&t, &nested_scene(), &[nested_view()]));
+    results.extend(run(&t, &level_zero_scene(), &axis_views()[..2]));
     let (scene, views) = inside_scene_and_views();
     results.extend(run(&t, &scene, &views));
     for (scene, views) in corner_choice_scenes() {
@@ -400,6 +401,10 @@ fn ray_casters_follow_the_shared_tie_rules_on_lattice_rays() {
     // the paper's design. The other two start in the reference's cell.
     assert_eq!(t[2].name, "ESVO");
     results.extend(run(&t[..2], &scene, &below_plane));
+    results.extend(run(&t, &empty_first_scene(), &axis_views()[..2]));
+    // The dense DDA's CPU model walks `LEVEL` grids only.
+    assert_eq!(t[0].name, "dense DDA");
+    results.extend(run(&t[1..], &level_zero_scene(), &axis_views()[..2]));
     assert_no_mismatch(&results);
 }
 

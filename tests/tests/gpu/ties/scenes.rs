@@ -252,6 +252,26 @@ pub(super) fn nested_view() -> View {
     view("nested, near", [0.0, 0.0, 1.5], [0.0; 3], Lattice::Axis)
 }
 
+/// The random grid drawn at its coarsest level (one voxel, the whole box): the casters'
+/// level-0 paths.
+pub(super) fn level_zero_scene() -> Scene {
+    let mut scene = random_scene();
+    scene.objects[0].lod = LodPolicy::Fixed(0);
+    scene
+}
+
+/// An object with no voxels first, overlapping the random grid, a quarter unit nearer the
+/// views along -z: it draws nothing (its octree has no root, its lookup no node).
+pub(super) fn empty_first_scene() -> Scene {
+    scene_of(vec![
+        (
+            lattice_asset(&[], 0),
+            DAffine3::from_translation(DVec3::new(0.0, 0.0, 0.25)),
+        ),
+        (lattice_asset(&random_cells(7, 0.12), 1), DAffine3::IDENTITY),
+    ])
+}
+
 /// Two objects touching at the world plane x = 0, seen along it: the centre column's rays
 /// run inside that plane and touch both.
 pub(super) fn touching_scene() -> Scene {
@@ -282,10 +302,12 @@ pub(super) fn inside_scene_and_views() -> (Scene, Vec<View>) {
             }
         }
     }
-    // A patch of the top layer, for a camera on the grid's top face.
+    // A patch of the top layer, for a camera on the grid's top face, and one of the -x
+    // face, for a camera inside a voxel there.
     for y in 7..10 {
         for x in 7..10 {
             cells.push([x, y, 15]);
+            cells.push([0, x, y]);
         }
     }
     let scene = scene_of(vec![(lattice_asset(&cells, 0), DAffine3::IDENTITY)]);
@@ -314,6 +336,14 @@ pub(super) fn inside_scene_and_views() -> (Scene, Vec<View>) {
             [c + 0.3 * s, c - 0.2 * s, -1.0],
             Lattice::Axis,
         ),
+        // Inside a voxel by the grid's -x face: where the ray moves toward +x, the face
+        // behind the camera is the latest entry plane, not the dominant axis's.
+        view(
+            "inside, by the grid's face",
+            [-1.0 + 0.5 * s, c, c],
+            [-1.0 + 0.5 * s, c, -1.0],
+            Lattice::Axis,
+        ),
         // One float below the cell plane x = -0.125: `x + 1` rounds up onto the plane in
         // f32, so a start cell taken from `floor((x + 1) / s)` is one too high (cell 7,
         // not 6); the exact crossing times must settle it.
@@ -330,7 +360,7 @@ pub(super) fn inside_scene_and_views() -> (Scene, Vec<View>) {
             Lattice::Centre,
         ),
     ];
-    for v in &mut views[..5] {
+    for v in &mut views[..6] {
         v.camera.fov_y_deg = 120.0;
     }
     (scene, views)
