@@ -5,6 +5,7 @@ mod animation;
 mod bench;
 mod budget;
 mod bundled;
+mod flip;
 mod pipeline_cmd;
 mod progress;
 mod render_cmd;

@@ -90,7 +90,7 @@ pub struct RenderArgs {
 }
 
 /// Parses a sample count of `--samples` (a square from 1 to 256).
-fn parse_samples(s: &str) -> Result<u32, String> {
+pub(crate) fn parse_samples(s: &str) -> Result<u32, String> {
     let n: u32 = s
         .trim()
         .parse()

@@ -91,9 +91,19 @@ pub struct BenchArgs {
     /// read whole levels are skipped).
     #[arg(long, value_delimiter = ',', value_name = "MIB")]
     pub gpu_budget: Option<Vec<u64>>,
+    /// Samples per pixel of the supersampled reference that `flip_mean` is measured
+    /// against (a square, 1 to 256).
+    #[arg(long, default_value_t = 16, value_parser = crate::render_cmd::parse_samples)]
+    pub flip_samples: u32,
 }
 
 impl BenchArgs {
+    /// `--flip-samples` as a sample grid (validated when parsed).
+    pub(crate) fn flip_samples_grid(&self) -> ssbvb_voxel::reference::SampleGrid {
+        ssbvb_voxel::reference::SampleGrid::from_count(self.flip_samples)
+            .unwrap_or(ssbvb_voxel::reference::SampleGrid::CENTRE)
+    }
+
     /// The first `--sizes`, else `default`: the one image size of the presets that
     /// measure at one size.
     pub(crate) fn first_size(&self, default: (u32, u32)) -> (u32, u32) {

@@ -45,6 +45,9 @@ pub(crate) struct Row {
     pub(crate) psnr_db: Option<f64>,
     /// Mean SSIM of the composite (see `harness::Measured::ssim`).
     pub(crate) ssim: Option<f64>,
+    /// Mean FLIP of the composite against the supersampled reference (see
+    /// `harness::Measured::flip_mean`).
+    pub(crate) flip_mean: Option<f64>,
     /// Hardware-independent counts of the profiled frame.
     pub(crate) counters: ssbvb_passes::FrameCounters,
 }
@@ -128,6 +131,9 @@ fn rows_table(rows: &[Row]) -> Table<'_, Row> {
             Column::new("ssim", |r: &Row| r.ssim)
                 .csv(Fmt::fixed(5))
                 .md("SSIM", Fmt::fixed(4).or("-")),
+            Column::new("flip_mean", |r: &Row| r.flip_mean)
+                .csv(Fmt::fixed(5))
+                .md("FLIP", Fmt::fixed(4).or("-")),
             Column::new("counters", |r: &Row| Value::json(&r.counters)),
             Column::text("steps_per_ray", Row::steps_per_ray)
                 .csv(Fmt::fixed(3))

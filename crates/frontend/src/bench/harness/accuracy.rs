@@ -12,7 +12,7 @@ use ssbvb_passes::{Profiling, Renderer};
 use ssbvb_voxel::accuracy::GpuHit;
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
-use ssbvb_voxel::reference::ReferenceImage;
+use ssbvb_voxel::reference::{ReferenceImage, SampleGrid};
 
 use super::frames::{profiling, timed_frames};
 use super::models::one_object;
@@ -32,6 +32,10 @@ pub(crate) struct Measured {
     /// reference over the whole image, with pixels neither covers set to black in both
     /// (their backgrounds differ by design); only when asked for.
     pub ssim: Option<f64>,
+    /// Mean FLIP of the composite against the supersampled reference, both over black
+    /// (a pixel the reference covers in part compared at its coverage); only when asked
+    /// for and a supersampled reference is given.
+    pub flip_mean: Option<f64>,
     /// Hardware-independent counts of the profiled frame (steps per ray, ...).
     pub counters: ssbvb_passes::FrameCounters,
     /// With a filter: the share of the pixels holding an SSBVB slot (its ray's first voxel)
@@ -51,6 +55,8 @@ pub(crate) struct Setup<'a> {
     pub size: (u32, u32),
     pub camera: &'a Camera,
     pub reference: &'a ReferenceImage,
+    /// The reference with several samples per pixel, for FLIP (`None`: no FLIP).
+    pub supersampled: Option<&'a ReferenceImage>,
     pub warmup: usize,
     pub frames: usize,
     /// Upload under a GPU budget (pages from memory), converged before the warm-up.
@@ -64,12 +70,24 @@ pub(crate) fn reference_at(
     camera: &Camera,
     size: (u32, u32),
 ) -> ReferenceImage {
+    supersampled_reference_at(asset, level, camera, size, SampleGrid::CENTRE)
+}
+
+/// [`reference_at`] with `grid` samples per pixel, box-filtered.
+pub(crate) fn supersampled_reference_at(
+    asset: &VoxelAsset,
+    level: u32,
+    camera: &Camera,
+    size: (u32, u32),
+    grid: SampleGrid,
+) -> ReferenceImage {
     let inst = [ssbvb_voxel::reference::Instance {
         lod: &asset.lods[level as usize],
         object_to_world: DAffine3::IDENTITY,
         faces: None,
     }];
-    ssbvb_voxel::reference::render(&inst, camera, size.0, size.1, &Default::default())
+    let light = Default::default();
+    ssbvb_voxel::reference::render_supersampled(&inst, camera, size.0, size.1, &light, grid)
 }
 
 /// Renders `warmup` + `frames` frames (median over the timed ones is the caller's), one
@@ -97,10 +115,10 @@ pub(crate) fn measure(s: &Setup, pipeline: ResolvedPipeline, with_psnr: bool) ->
     let hits = ssbvb_passes::measure::gbuffer_hits(ctx, &renderer)?;
     let acc = ssbvb_voxel::accuracy::compare(s.reference, &hits, &[2.0 / (1u64 << s.level) as f64])
         .map_err(|e| anyhow::anyhow!("{e}"))?;
-    let (psnr, ssim) = if with_psnr {
+    let (psnr, ssim, flip_mean) = if with_psnr {
         composite_error(s, &renderer, &hits)?
     } else {
-        (None, None)
+        (None, None, None)
     };
     let slot_same_voxel_rate = fill.and_then(|_| slot_same_voxel(s.reference, &hits));
     Ok(Measured {
@@ -112,6 +130,7 @@ pub(crate) fn measure(s: &Setup, pipeline: ResolvedPipeline, with_psnr: bool) ->
         gpu_memory: gpu_scene.total_memory(),
         psnr,
         ssim,
+        flip_mean,
         counters,
     })
 }
@@ -150,9 +169,9 @@ pub(crate) fn covered_rgba<H, R>(
     (a, b)
 }
 
-/// PSNR (dB) and its pixel count, and SSIM, of the composite against the reference (see
-/// [`Measured`]).
-type CompositeError = (Option<(f64, usize)>, Option<f64>);
+/// PSNR (dB) and its pixel count, SSIM, and FLIP of the composite against the reference
+/// (see [`Measured`]).
+type CompositeError = (Option<(f64, usize)>, Option<f64>, Option<f64>);
 
 /// The [`CompositeError`] of the frame `renderer` drew (G-buffer `hits`).
 fn composite_error(
@@ -195,8 +214,33 @@ fn composite_error(
         }
         _ => None,
     };
+    let flip_mean = match s.supersampled {
+        Some(sup) => Some(flip_over_black(s.size, hits, &gpu, sup)?),
+        None => None,
+    };
     Ok((
         ssbvb_voxel::accuracy::psnr_rgba8(&a, &b).map(|p| (p, n)),
         ssim,
+        flip_mean,
     ))
+}
+
+/// Mean FLIP of the GPU composite (its covered pixels, black elsewhere) against the
+/// supersampled reference composited over black.
+fn flip_over_black(
+    size: (u32, u32),
+    hits: &[Option<GpuHit>],
+    gpu: &[u8],
+    supersampled: &ReferenceImage,
+) -> Result<f64> {
+    let test: Vec<u8> = hits
+        .iter()
+        .zip(gpu.chunks_exact(4))
+        .flat_map(|(h, p)| match h {
+            Some(_) => [p[0], p[1], p[2]],
+            None => [0; 3],
+        })
+        .collect();
+    let reference = crate::flip::over_black(&supersampled.to_rgba8());
+    crate::flip::flip_rgb8(&reference, &test, size)
 }

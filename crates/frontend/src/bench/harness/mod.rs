@@ -10,7 +10,9 @@ mod models;
 mod pipelines;
 pub(crate) mod techniques;
 
-pub(crate) use accuracy::{Measured, Setup, covered_rgba, measure, reference_at};
+pub(crate) use accuracy::{
+    Measured, Setup, covered_rgba, measure, reference_at, supersampled_reference_at,
+};
 pub(crate) use frames::{TimedFrames, median, timed_frames};
 pub(crate) use models::{
     bench_camera, bundled_asset, bundled_bunny, grid, grid_camera, one_object,

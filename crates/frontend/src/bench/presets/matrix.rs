@@ -19,7 +19,8 @@ use ssbvb_voxel::camera::Camera;
 use crate::bench::args::{BenchArgs, Preset};
 use crate::bench::harness::techniques::{self, Technique};
 use crate::bench::harness::{
-    Setup, bench_camera, bundled_pipeline, measure, median, reference_at, technique_pipeline,
+    Setup, bench_camera, bundled_pipeline, measure, median, reference_at,
+    supersampled_reference_at, technique_pipeline,
 };
 use crate::bench::report::{Results, Row};
 use crate::bundled::assets_dir;
@@ -115,6 +116,8 @@ struct Matrix {
     frames: usize,
     /// The camera of every cell.
     camera: Camera,
+    /// Samples per pixel of the reference FLIP is measured against.
+    flip_samples: ssbvb_voxel::reference::SampleGrid,
 }
 
 /// The models of `--preset paper`: the bunny first (the paper's Table 2 row), then the
@@ -146,6 +149,8 @@ fn matrix(args: &BenchArgs) -> Matrix {
             warmup: 1,
             frames: 3,
             camera: bench_camera(),
+            // Set from the command line below.
+            flip_samples: ssbvb_voxel::reference::SampleGrid::CENTRE,
         },
         // Table 2 of the seed paper: its bunny row and every other bundled model, at level
         // 9 and 720p.
@@ -162,6 +167,8 @@ fn matrix(args: &BenchArgs) -> Matrix {
             warmup: 2,
             frames: 5,
             camera: bench_camera(),
+            // Set from the command line below.
+            flip_samples: ssbvb_voxel::reference::SampleGrid::CENTRE,
         },
         Preset::Full => Matrix {
             models: vec![bunny],
@@ -170,6 +177,8 @@ fn matrix(args: &BenchArgs) -> Matrix {
             warmup: 3,
             frames: 10,
             camera: bench_camera(),
+            // Set from the command line below.
+            flip_samples: ssbvb_voxel::reference::SampleGrid::CENTRE,
         },
         Preset::Study => Matrix {
             models: vec![
@@ -200,6 +209,8 @@ fn matrix(args: &BenchArgs) -> Matrix {
             frames: 5,
             // The grid's cube seen from above a corner, filling most of the view's height.
             camera: Camera::new(DVec3::new(2.2, 1.7, 2.9), DVec3::ZERO),
+            // Set from the command line below.
+            flip_samples: ssbvb_voxel::reference::SampleGrid::CENTRE,
         },
     };
     if let Some(l) = &args.levels {
@@ -211,6 +222,7 @@ fn matrix(args: &BenchArgs) -> Matrix {
     if let Some(f) = args.frames {
         m.frames = f.max(1);
     }
+    m.flip_samples = args.flip_samples_grid();
     m
 }
 
@@ -234,6 +246,8 @@ fn run_matrix(
             let voxels = asset.lods[level as usize].point_cloud.voxels.len();
             for &size in &m.sizes {
                 let reference = reference_at(&asset, level, &m.camera, size);
+                let supersampled =
+                    supersampled_reference_at(&asset, level, &m.camera, size, m.flip_samples);
                 let cell = Cell {
                     model: model.name(),
                     asset: &asset,
@@ -241,6 +255,7 @@ fn run_matrix(
                     size,
                     camera: &m.camera,
                     reference: &reference,
+                    supersampled: &supersampled,
                     warmup: m.warmup,
                     frames: m.frames,
                     voxels,
@@ -327,6 +342,8 @@ struct Cell<'a> {
     size: (u32, u32),
     camera: &'a Camera,
     reference: &'a ssbvb_voxel::reference::ReferenceImage,
+    /// The reference at `Matrix::flip_samples` per pixel (FLIP's).
+    supersampled: &'a ssbvb_voxel::reference::ReferenceImage,
     warmup: usize,
     frames: usize,
     voxels: usize,
@@ -348,6 +365,7 @@ fn run_one(ctx: &GpuContext, t: &Technique, c: &Cell) -> Result<Row> {
         size: c.size,
         camera: c.camera,
         reference: c.reference,
+        supersampled: Some(c.supersampled),
         warmup: c.warmup,
         frames: c.frames,
         streaming: streaming.as_ref(),
@@ -414,6 +432,7 @@ fn run_one(ctx: &GpuContext, t: &Technique, c: &Cell) -> Result<Row> {
         normal_error_deg_median: acc.normal_error_deg.median,
         psnr_db: m.psnr.map(|p| p.0).filter(|p| p.is_finite()),
         ssim: m.ssim,
+        flip_mean: m.flip_mean,
         counters: m.counters,
     })
 }

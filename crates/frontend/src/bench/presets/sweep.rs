@@ -198,6 +198,7 @@ fn run_sweeps(
         size,
         camera,
         reference: &fixed_ref,
+        supersampled: None,
         warmup: cfg.warmup,
         frames: cfg.frames,
         streaming: None,
