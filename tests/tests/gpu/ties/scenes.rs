@@ -126,6 +126,9 @@ pub(super) fn axis_views() -> Vec<View> {
         Lattice::Axis,
     );
     far.camera.fov_y_deg = 1.3;
+    // A lens wider than the grid: the outer rays pass beside the box.
+    let mut wide = view("along -z, wide", [0.0, 0.0, 3.0], [0.0; 3], Lattice::Axis);
+    wide.camera.fov_y_deg = 100.0;
     vec![
         view("along -z", [0.0, 0.0, 3.0], [0.0; 3], Lattice::Axis),
         view(
@@ -143,6 +146,7 @@ pub(super) fn axis_views() -> Vec<View> {
             [0.125, -0.25, 0.0],
             Lattice::Centre,
         ),
+        wide,
     ]
 }
 
