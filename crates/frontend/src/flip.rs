@@ -19,6 +19,26 @@ pub(crate) fn default_pixels_per_degree() -> f32 {
 
 /// The mean FLIP of `test` against `reference`, both RGB8 sRGB of `size`.
 pub(crate) fn flip_rgb8(reference: &[u8], test: &[u8], size: (u32, u32)) -> Result<f64> {
+    Ok(flip_map(reference, test, size)?.0)
+}
+
+/// [`flip_rgb8`], and the error map in NVIDIA's magma colours (RGB8), as FLIP's tools
+/// show it.
+pub(crate) fn flip_map_rgb8(
+    reference: &[u8],
+    test: &[u8],
+    size: (u32, u32),
+) -> Result<(f64, Vec<u8>)> {
+    let (mean, map) = flip_map(reference, test, size)?;
+    let magma = map.apply_color_lut(&nv_flip::magma_lut()).to_vec();
+    Ok((mean, magma))
+}
+
+fn flip_map(
+    reference: &[u8],
+    test: &[u8],
+    size: (u32, u32),
+) -> Result<(f64, nv_flip::FlipImageFloat)> {
     let pixels = size.0 as usize * size.1 as usize;
     if reference.len() != pixels * 3 || test.len() != pixels * 3 {
         bail!(
@@ -34,8 +54,9 @@ pub(crate) fn flip_rgb8(reference: &[u8], test: &[u8], size: (u32, u32)) -> Resu
     }
     let r = nv_flip::FlipImageRgb8::with_data(size.0, size.1, reference);
     let t = nv_flip::FlipImageRgb8::with_data(size.0, size.1, test);
-    let map = nv_flip::flip(r, t, default_pixels_per_degree()).to_vec();
-    Ok(map.iter().map(|&e| e as f64).sum::<f64>() / pixels as f64)
+    let map = nv_flip::flip(r, t, default_pixels_per_degree());
+    let mean = map.to_vec().iter().map(|&e| e as f64).sum::<f64>() / pixels as f64;
+    Ok((mean, map))
 }
 
 /// Straight-alpha RGBA8 (sRGB) composited over black, in linear light: RGB8 sRGB. Opaque
@@ -82,6 +103,8 @@ mod tests {
             "FLIP mean {mean} (NVIDIA's: 0.1147576)"
         );
         assert_eq!(flip_rgb8(&r, &r, size).unwrap(), 0.0);
+        let (same, magma) = flip_map_rgb8(&r, &t, size).unwrap();
+        assert_eq!((same, magma.len()), (mean, r.len()));
         assert!(flip_rgb8(&r, &t[3..], size).is_err());
         assert!(flip_rgb8(&[], &[], (0, 0)).is_err());
     }

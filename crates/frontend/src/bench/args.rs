@@ -51,6 +51,11 @@ pub enum Preset {
     /// then the 4096-bunny grid; writes bench.*, scale.* and paper.{csv,json,md} (each
     /// SSBVB frame over the ray casters' of the same run, beside the paper's 0.28).
     Paper,
+    /// Image quality still and in motion: an orbit and a dolly over the 64-bunny grid
+    /// drawn by each technique and by the reference at `--flip-samples` per pixel; per
+    /// technique FLIP of the still frame and over the path, and `flicker_ratio` (frame-to-
+    /// frame FLIP over the reference's); writes quality.{csv,json,md}, crops and FLIP maps.
+    Quality,
 }
 
 /// Arguments of `ssbvb bench`.

@@ -40,6 +40,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         Preset::Dynamic => presets::dynamic::run(args),
         Preset::Vct => presets::vct::run(args),
         Preset::Volumes => presets::volumes::run(args),
+        Preset::Quality => presets::quality::run(args),
     }
 }
 

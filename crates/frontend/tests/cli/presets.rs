@@ -1,5 +1,6 @@
 //! The comparison presets from the command line: `bench --preset paper` (the seed paper's
-//! tables and its Figure 8 scene) and `bench --preset scale` (cost against scene size).
+//! tables and its Figure 8 scene), `bench --preset scale` (cost against scene size) and
+//! `bench --preset quality` (FLIP still and in motion).
 
 use super::{ssbvb, succeeded};
 
@@ -153,4 +154,52 @@ fn bench_scale_preset_writes_rows_per_view() {
         2,
         "{frame_plot}"
     );
+}
+
+#[test]
+fn bench_quality_preset_measures_each_technique_against_the_supersampled_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("quality");
+    let out = succeeded(
+        ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+            .args(["bench", "--preset", "quality", "--sizes", "64x48"])
+            .args(["--frames", "3", "--techniques", "ssbvb-unique,octree"])
+            .args(["--flip-samples", "4", "--json", "--out"])
+            .arg(&out_dir),
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    assert_eq!(json["reference_samples"], 4, "{json}");
+    assert_eq!(json["instances"], 64, "{json}");
+    let rows = json["rows"].as_array().unwrap();
+    let names: Vec<&str> = rows
+        .iter()
+        .map(|r| r["technique"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        ["reference-1spp", "ssbvb-unique", "octree"],
+        "{json}"
+    );
+    for r in rows {
+        let flip = r["flip_mean"].as_f64().unwrap();
+        let still = r["flip_still"].as_f64().unwrap();
+        let ratio = r["flicker_ratio"].as_f64().unwrap();
+        // One sample per pixel against four: aliasing, never zero, far from total error;
+        // frame to frame about as (un)stable as the ground truth on this small path.
+        assert!(
+            flip > 0.005 && flip < 0.2 && still > 0.005 && still < 0.2,
+            "{r}"
+        );
+        assert!(ratio > 0.5 && ratio < 2.0, "{r}");
+        assert_eq!(r["frames"], 3, "{r}");
+    }
+    for name in names {
+        for what in ["crop", "flip"] {
+            let png = out_dir.join(format!("quality_{name}_{what}.png"));
+            let img = image::open(&png).unwrap_or_else(|e| panic!("{}: {e}", png.display()));
+            assert!(img.width() > 0, "{}", png.display());
+        }
+    }
+    assert!(out_dir.join("quality.csv").is_file() && out_dir.join("quality.md").is_file());
 }

@@ -142,7 +142,8 @@ fn matrix(args: &BenchArgs) -> Matrix {
         | Preset::Rastavox
         | Preset::Dynamic
         | Preset::Vct
-        | Preset::Volumes => Matrix {
+        | Preset::Volumes
+        | Preset::Quality => Matrix {
             models: vec![bunny],
             levels: vec![5, 6],
             sizes: vec![(160, 120)],

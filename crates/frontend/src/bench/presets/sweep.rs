@@ -61,7 +61,8 @@ fn sweep_config(preset: Preset) -> SweepConfig {
         | Preset::Dynamic
         | Preset::Vct
         | Preset::Volumes
-        | Preset::Paper => SweepConfig {
+        | Preset::Paper
+        | Preset::Quality => SweepConfig {
             size: (160, 120),
             level: 6,
             warmup: 1,
