@@ -169,8 +169,8 @@ const RASTER_MARGIN: f32 = 0.0625;
 // straight from its NDC position (not from a normalized direction, whose f32 components
 // cannot resolve the slopes of a 0.0002-degree lens).
 fn pixel_slope(px: vec2<f32>) -> vec2<f32> {
-    let ndc = vec2(px.x * frame.screen.z * 2.0 - 1.0, 1.0 - px.y * frame.screen.w * 2.0);
-    return ndc * vec2(length(frame.cam_right.xyz), length(frame.cam_up.xyz));
+    // (The frame's jitter included: the rasterizer drew the jittered projection.)
+    return pixel_ndc(px) * vec2(length(frame.cam_right.xyz), length(frame.cam_up.xyz));
 }
 
 // Whether pixel position `px` lies in the rectangle of a (not near-field) quad, in the

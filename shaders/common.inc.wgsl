@@ -30,6 +30,10 @@ struct Frame {
     light_color: vec4<f32>,
     // x: shininess, y: near, z: far (0 = infinite), w: number of visible instances.
     misc: vec4<f32>,
+    // xy: the frame's sub-pixel jitter in pixels (a temporal pass's; 0 otherwise): pixel
+    // `px` shows the unjittered camera's ray through `px + xy`, and `proj` is sheared to
+    // match. zw: 0.
+    jitter: vec4<f32>,
 }
 
 // One visible instance of a voxel asset (group 0, binding 1), rebuilt every frame.
@@ -289,13 +293,15 @@ fn lod_voxel_color(lod: LodInfo, id: u32) -> vec4<f32> {
 
 // Normalized world (camera-relative) direction of the ray through pixel position `px`
 // (in pixels, row 0 at the top; pixel centres at +0.5), exactly as the CPU reference.
-fn pixel_ray(px: vec2<f32>) -> vec3<f32> {
+fn pixel_ray(px_in: vec2<f32>) -> vec3<f32> {
+    let px = px_in + frame.jitter.xy;
     let ndc = vec2(px.x * frame.screen.z * 2.0 - 1.0, 1.0 - px.y * frame.screen.w * 2.0);
     return normalize(frame.cam_forward.xyz + ndc.x * frame.cam_right.xyz + ndc.y * frame.cam_up.xyz);
 }
 
 // NDC position of a pixel coordinate (pixel centres at + 0.5).
-fn pixel_ndc(px: vec2<f32>) -> vec2<f32> {
+fn pixel_ndc(px_in: vec2<f32>) -> vec2<f32> {
+    let px = px_in + frame.jitter.xy;
     return vec2(px.x * frame.screen.z * 2.0 - 1.0, 1.0 - px.y * frame.screen.w * 2.0);
 }
 

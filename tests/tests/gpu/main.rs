@@ -24,6 +24,7 @@ mod scale;
 mod smooth_composite;
 mod splat;
 mod streaming;
+mod temporal;
 mod ties;
 mod triangles;
 mod volumes;

@@ -164,7 +164,12 @@ fn bench_quality_preset_measures_each_technique_against_the_supersampled_path() 
         ssbvb()
             .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
             .args(["bench", "--preset", "quality", "--sizes", "64x48"])
-            .args(["--frames", "3", "--techniques", "ssbvb-unique,octree"])
+            .args([
+                "--frames",
+                "3",
+                "--techniques",
+                "ssbvb-unique,ssbvb-aa,octree",
+            ])
             .args(["--flip-samples", "4", "--json", "--out"])
             .arg(&out_dir),
     );
@@ -178,9 +183,12 @@ fn bench_quality_preset_measures_each_technique_against_the_supersampled_path() 
         .collect();
     assert_eq!(
         names,
-        ["reference-1spp", "ssbvb-unique", "octree"],
+        ["reference-1spp", "ssbvb-unique", "ssbvb-aa", "octree"],
         "{json}"
     );
+    // The still frame anti-aliased: nearer the ground truth than the frame it smooths.
+    let still = |i: usize| rows[i]["flip_still"].as_f64().unwrap();
+    assert!(still(2) < 0.8 * still(1), "{json}");
     for r in rows {
         let flip = r["flip_mean"].as_f64().unwrap();
         let still = r["flip_still"].as_f64().unwrap();

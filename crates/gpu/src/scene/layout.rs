@@ -33,6 +33,8 @@ pub struct FrameUniform {
     pub light_color: [f32; 4],
     /// shininess, near, far (0 = infinite), visible instance count.
     pub misc: [f32; 4],
+    /// Sub-pixel jitter in pixels (xy; `proj` sheared to match), zw 0.
+    pub jitter: [f32; 4],
 }
 
 /// Mirror of WGSL `Instance` (224 bytes).

@@ -25,12 +25,12 @@ pub use gpu_level::GpuLevel;
 pub use layout::*;
 pub use pools::{COLOR_CHUNKS, NODE_CHUNKS, NORMAL_CHUNKS, SCENE_STORAGE_BUFFERS, StreamChunks};
 pub use streaming::{StreamingOptions, StreamingStats};
-pub use visibility::choose_level;
+pub use visibility::{choose_level, frame_uniform};
 
 use pools::{chunked, plan_pools, storage};
 use streaming::{PINNED_LEVEL, StreamBuffers, Streaming};
 use upload::{SceneStreams, check_inputs, proxy_buffers, scene_layout, triangle_meshes};
-use visibility::{frame_uniform, instance_bvh, mat, visible_instances};
+use visibility::{instance_bvh, mat, visible_instances};
 
 /// The scene on the GPU.
 pub struct GpuScene {
@@ -84,6 +84,9 @@ pub struct GpuScene {
     voxel_slots: u64,
     /// The camera of the current frame.
     pub camera: Camera,
+    /// Sub-pixel jitter of the next frames, in pixels (a temporal pass's; set by the
+    /// renderer before [`GpuScene::update`]).
+    pub jitter: [f64; 2],
     /// Screen size of the current frame.
     pub screen: (u32, u32),
 }
@@ -321,6 +324,7 @@ impl GpuScene {
             _feedback_dummy: feedback_dummy,
             voxel_slots,
             camera: Camera::default(),
+            jitter: [0.0; 2],
             screen: (1, 1),
         })
     }
@@ -341,7 +345,8 @@ impl GpuScene {
         self.camera = *camera;
         self.screen = screen;
         let eye = camera.position;
-        let frame = frame_uniform(camera, screen, &self.scene.light);
+        let frame =
+            visibility::jittered_frame_uniform(camera, screen, &self.scene.light, self.jitter);
         // Under a budget too small for the view's pages: no instance finer than this.
         let cap = self
             .streaming

@@ -20,10 +20,31 @@ pub(crate) fn mat(m: DMat4) -> [[f32; 4]; 4] {
 /// The frame constants for `camera` on a `screen`-sized target, lit by `light` (the
 /// visible-instance count is filled in by the caller).
 pub fn frame_uniform(camera: &Camera, screen: (u32, u32), light: &Light) -> FrameUniform {
+    jittered_frame_uniform(camera, screen, light, [0.0; 2])
+}
+
+/// [`frame_uniform`] with the image shifted by `jitter` pixels: pixel `px` shows the
+/// camera's ray through `px + jitter` (a temporal anti-aliasing pass's sub-pixel offsets).
+pub fn jittered_frame_uniform(
+    camera: &Camera,
+    screen: (u32, u32),
+    light: &Light,
+    jitter: [f64; 2],
+) -> FrameUniform {
     let (w, h) = (screen.0.max(1) as f64, screen.1.max(1) as f64);
     let aspect = w / h;
     let rot = camera.view_rotation_matrix();
-    let proj = camera.projection(aspect);
+    // A point on the ray through `px + jitter` lands at `px`: NDC moves by -2 jx / w and
+    // +2 jy / h (clip x, y by that times w).
+    let (sx, sy) = (-2.0 * jitter[0] / w, 2.0 * jitter[1] / h);
+    // clip' = clip + (sx, sy) * clip.w: the w row of the input feeds x and y.
+    let shear = DMat4::from_cols_array(&[
+        1.0, 0.0, 0.0, 0.0, //
+        0.0, 1.0, 0.0, 0.0, //
+        0.0, 0.0, 1.0, 0.0, //
+        sx, sy, 0.0, 1.0,
+    ]);
+    let proj = shear * camera.projection(aspect);
     let view_proj = proj * rot;
     let (right, up, forward) = camera.basis();
     let tan_y = (camera.fov_y_deg.clamp(1e-9, 179.999).to_radians() * 0.5).tan();
@@ -55,6 +76,7 @@ pub fn frame_uniform(camera: &Camera, screen: (u32, u32), light: &Light) -> Fram
             },
             0.0,
         ],
+        jitter: [jitter[0] as f32, jitter[1] as f32, 0.0, 0.0],
     }
 }
 

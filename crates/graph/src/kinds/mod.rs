@@ -21,6 +21,7 @@ mod shared;
 mod smooth;
 mod spec;
 mod splat_billboards;
+mod temporal;
 mod triangles;
 mod volume_slices;
 
@@ -39,6 +40,7 @@ pub use ray_march_filter::{MarchMode, RayMarchFilterParams};
 pub use smooth::SmoothParams;
 pub use spec::{Access, KindSpec, PassStage, SlotClass, SlotDesc};
 pub use splat_billboards::SplatBillboardsParams;
+pub use temporal::TemporalParams;
 pub use triangles::TrianglesKind;
 pub use volume_slices::{MAX_MIP_BIAS, MAX_SLICE_SPACING, MIN_SLICE_SPACING, VolumeSlicesParams};
 
@@ -99,6 +101,10 @@ pass_kinds! {
     /// Volumetric billboards: view-aligned slices through every RGBA volume, back to
     /// front, blended "over" the output colour and depth-tested against the opaque depth.
     VolumeSlices(VolumeSlicesParams);
+    /// Temporal anti-aliasing: the history reprojected by the G-buffer's position, clamped
+    /// to the current colour's neighbourhood and blended with it (the renderer jitters the
+    /// projection of every frame while a pipeline has this pass).
+    Temporal(TemporalParams);
 }
 
 #[cfg(test)]
@@ -125,6 +131,7 @@ mod tests {
             ConeTraceParams::NAME,
             ConeCompositeKind::NAME,
             VolumeSlicesParams::NAME,
+            TemporalParams::NAME,
         ];
         assert_eq!(spec_names, KIND_NAMES);
     }

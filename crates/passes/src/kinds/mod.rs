@@ -31,6 +31,7 @@ pass_modules! {
     cone_trace::ConeTrace,
     cone_composite::ConeComposite,
     volume_slices::VolumeSlices,
+    temporal::Temporal,
 }
 
 /// The registration of `kind`.

@@ -59,7 +59,8 @@ pub fn shared_structs() -> Vec<StructLayout> {
                 screen,
                 light_dir,
                 light_color,
-                misc
+                misc,
+                jitter
             }
         ),
         layout!(

@@ -62,6 +62,9 @@ pub struct Renderer {
     first_writes: Vec<Vec<&'static str>>,
     queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
     counting: bool,
+    /// With a `Temporal` pass: the index of the next frame's jitter
+    /// ([`crate::kinds::temporal::jitter`]); `None`: frames are not jittered.
+    jitter_frame: Option<u64>,
 }
 
 impl Renderer {
@@ -86,6 +89,10 @@ impl Renderer {
         imports: &[(&str, wgpu::Texture)],
     ) -> Result<Self, PassError> {
         let resources = FrameResources::with_imports(ctx, &pipeline, screen, imports)?;
+        let temporal = pipeline
+            .passes
+            .iter()
+            .any(|p| matches!(p.kind, ssbvb_graph::PassKind::Temporal(_)));
         let mut passes = Vec::new();
         for p in &pipeline.passes {
             let node = ctx
@@ -136,6 +143,7 @@ impl Renderer {
             first_writes,
             queries,
             counting: false,
+            jitter_frame: temporal.then_some(0),
         })
     }
 
@@ -204,6 +212,13 @@ impl Renderer {
         }
         let start = Instant::now();
         scene.stream_pages(ctx)?;
+        scene.jitter = match &mut self.jitter_frame {
+            Some(i) => {
+                *i += 1;
+                crate::kinds::temporal::jitter(*i - 1)
+            }
+            None => [0.0; 2],
+        };
         scene.update(ctx, camera, self.screen);
         let use_ts = profiling != Profiling::Off && self.queries.is_some();
         let mut walls = vec![None; self.passes.len()];

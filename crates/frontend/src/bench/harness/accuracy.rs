@@ -102,7 +102,14 @@ pub(crate) fn measure(s: &Setup, pipeline: ResolvedPipeline, with_psnr: bool) ->
     };
     let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, s.size)?;
     crate::budget::converge(ctx, &mut renderer, &mut gpu_scene, s.camera, 64)?;
-    for _ in 0..s.warmup {
+    // A temporal pipeline's still frame is measured converged: a whole jitter sequence.
+    let warmup = if has_temporal_pass(&renderer.pipeline) {
+        s.warmup
+            .max(ssbvb_passes::kinds::temporal::JITTER_PERIOD as usize)
+    } else {
+        s.warmup
+    };
+    for _ in 0..warmup {
         renderer.render(ctx, &mut gpu_scene, s.camera, Profiling::Off)?;
     }
     ctx.wait_idle()?;
@@ -133,6 +140,14 @@ pub(crate) fn measure(s: &Setup, pipeline: ResolvedPipeline, with_psnr: bool) ->
         flip_mean,
         counters,
     })
+}
+
+/// Whether `pipeline` anti-aliases over frames (`Temporal`): its frames are jittered.
+pub(crate) fn has_temporal_pass(pipeline: &ResolvedPipeline) -> bool {
+    pipeline
+        .passes
+        .iter()
+        .any(|p| matches!(p.kind, ssbvb_graph::PassKind::Temporal(_)))
 }
 
 /// The share of the pixels holding a slot (a voxel cell, not `u32::MAX`) and covered by the

@@ -93,6 +93,14 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         }),
         max_level: 16,
     },
+    // The default pipeline with temporal anti-aliasing (jittered frames blended into the
+    // reprojected history): its FLIP against the supersampled reference is the point.
+    Technique {
+        name: "ssbvb-aa",
+        pipeline: "ssbvb_aa.ron",
+        edit: None,
+        max_level: 16,
+    },
     // The default pipeline with the billboards splatted in compute.
     Technique {
         name: "ssbvb-splat",

@@ -5,7 +5,8 @@
 //! technique and by the CPU reference at `--flip-samples` samples per pixel (the
 //! supersampled ground truth), all composited over black. Per technique:
 //!
-//! - `flip_still`: FLIP of the path's first frame against the reference's;
+//! - `flip_still`: FLIP of the still frame (the path's first camera, held for a temporal
+//!   pass's whole jitter sequence) against the reference's;
 //! - `flip_mean`: FLIP of each frame against the reference's, averaged over the path;
 //! - `flicker_ratio`: the mean FLIP between consecutive frames divided by the same for
 //!   the reference's path (1.0: as stable as ground truth; above: shimmering, popping).
@@ -119,26 +120,35 @@ fn reference_rgb(
     over_black(&img.to_rgba8())
 }
 
-/// Each frame of the path drawn by `pipeline`, over black (RGB8).
+/// Frames the camera holds still at the path's start before the still frame is taken (a
+/// temporal pass's whole jitter sequence).
+const STILL_FRAMES: usize = ssbvb_passes::kinds::temporal::JITTER_PERIOD as usize;
+
+/// What `pipeline` draws, over black (RGB8): the still frame (the path's first camera after
+/// [`STILL_FRAMES`] frames), then each frame of the path, which starts there.
 fn technique_frames(
     ctx: &GpuContext,
     scene: &Scene,
     pipeline: ResolvedPipeline,
     cameras: &[Camera],
     size: (u32, u32),
-) -> Result<Vec<Vec<u8>>> {
+) -> Result<(Vec<u8>, Vec<Vec<u8>>)> {
     let mut gpu_scene = GpuScene::new(ctx, scene.clone())?;
     let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, size)?;
-    let mut frames = Vec::new();
-    for camera in cameras {
+    let mut draw = |camera: &Camera| -> Result<Vec<u8>> {
         renderer.render(ctx, &mut gpu_scene, camera, Profiling::Off)?;
         let out = ctx.read_texture(
             &renderer.output().texture,
             ssbvb_gpu::wgpu::TextureAspect::All,
         )?;
-        frames.push(over_black(&crate::render_cmd::to_rgba8(&out)?));
+        Ok(over_black(&crate::render_cmd::to_rgba8(&out)?))
+    };
+    let mut still = Vec::new();
+    for _ in 0..STILL_FRAMES {
+        still = draw(&cameras[0])?;
     }
-    Ok(frames)
+    let frames = cameras.iter().map(&mut draw).collect::<Result<Vec<_>>>()?;
+    Ok((still, frames))
 }
 
 /// Mean FLIP between consecutive frames.
@@ -164,7 +174,7 @@ fn quality_techniques(args: &BenchArgs) -> Result<Vec<&'static Technique>> {
             .filter(|t| {
                 matches!(
                     t.name,
-                    "ssbvb-unique" | "ssbvb-flat" | "ssbvb-raybox" | "octree" | "esvo"
+                    "ssbvb-unique" | "ssbvb-aa" | "ssbvb-flat" | "ssbvb-raybox" | "octree" | "esvo"
                 )
             })
             .collect(),
@@ -207,17 +217,22 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         .iter()
         .map(|c| reference_rgb(&scene, &asset, c, size, SampleGrid::CENTRE))
         .collect();
-    let mut measured = vec![("reference-1spp".to_string(), one_sample)];
+    let mut measured = vec![(
+        "reference-1spp".to_string(),
+        one_sample[0].clone(),
+        one_sample,
+    )];
     for (t, p) in chosen.iter().zip(pipelines) {
         match technique_frames(&ctx, &scene, p, &cameras, size) {
-            Ok(frames) => measured.push((t.name.to_string(), frames)),
+            Ok((still, frames)) => measured.push((t.name.to_string(), still, frames)),
             Err(e) if techniques::refused(&e) => skipped.push(format!("{}: {e:#}", t.name)),
             Err(e) => return Err(e.context(t.name)),
         }
     }
-    for (name, frames) in &measured {
-        let row = quality_row(name, frames, &truth, truth_flicker, size)?;
-        images.extend(write_images(&args.out, name, &frames[0], &truth[0], size)?);
+    for (name, still, frames) in &measured {
+        let mut row = quality_row(name, frames, &truth, truth_flicker, size)?;
+        row.flip_still = flip_rgb8(&truth[0], still, size)?;
+        images.extend(write_images(&args.out, name, still, &truth[0], size)?);
         if !args.json {
             eprintln!(
                 "{name}: FLIP still {:.4}, path {:.4}, flicker ratio {:.2}",

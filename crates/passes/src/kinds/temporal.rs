@@ -1,0 +1,240 @@
+//! `temporal`: temporal anti-aliasing (see `shaders/temporal.wgsl`). The renderer jitters
+//! each frame of a pipeline with this pass by a sub-pixel offset ([`jitter`]); the pass
+//! keeps the previous output (premultiplied, `Rgba16Float`) in two textures it owns, read
+//! one and write the other, and the previous frame's camera to reproject it.
+
+use bytemuck::{Pod, Zeroable};
+use ssbvb_gpu::shaders;
+use ssbvb_gpu::wgpu;
+use ssbvb_graph::TemporalParams;
+use ssbvb_voxel::camera::Camera;
+
+use crate::error::PassError;
+use crate::runtime::bindings::PassBindings;
+use crate::runtime::node::PassNode;
+use crate::runtime::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
+use crate::runtime::recorder::{Recorder, slot_format};
+use crate::runtime::registry::{OwnBinding, OwnKind, PassImpl, PassInit};
+
+/// Frames of the jitter sequence before it repeats.
+pub const JITTER_PERIOD: u64 = 16;
+
+/// The sub-pixel offset of frame `i` (pixels, in (-0.5, 0.5)²): the Halton (2, 3) sequence.
+pub fn jitter(i: u64) -> [f64; 2] {
+    let k = i % JITTER_PERIOD + 1;
+    [halton(k, 2) - 0.5, halton(k, 3) - 0.5]
+}
+
+fn halton(mut k: u64, base: u64) -> f64 {
+    let (mut f, mut r) = (1.0, 0.0);
+    while k > 0 {
+        f /= base as f64;
+        r += f * (k % base) as f64;
+        k /= base;
+    }
+    r
+}
+
+/// What the pass binds itself: its constants and the history it reads.
+pub const OWN: &[OwnBinding] = &[
+    OwnBinding {
+        name: "taa",
+        kind: OwnKind::Uniform,
+    },
+    OwnBinding {
+        name: "history",
+        kind: OwnKind::Texture2dFloat,
+    },
+];
+
+/// `Taa` in `temporal.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct TaaUniform {
+    prev_view_proj: [[f32; 4]; 4],
+    /// xyz: this frame's camera minus the previous one's; w: the current frame's weight.
+    delta: [f32; 4],
+}
+
+const HISTORY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// The temporal pass.
+pub struct Temporal {
+    pipeline: wgpu::RenderPipeline,
+    bindings: PassBindings,
+    params: TemporalParams,
+    uniform: wgpu::Buffer,
+    /// The two history textures and their size; `read` is the one holding the last output.
+    history: Option<([wgpu::TextureView; 2], (u32, u32))>,
+    read: usize,
+    /// Frames blended since the last reset.
+    frames: u32,
+    previous: Option<Camera>,
+}
+
+impl PassImpl for Temporal {
+    type Params = TemporalParams;
+    const SHADER: &'static str = "temporal.wgsl";
+    const OWN: &'static [OwnBinding] = OWN;
+
+    fn new(init: &PassInit<'_>, params: &TemporalParams) -> Result<Self, PassError> {
+        let (ctx, scene, pipeline, pass) = init.parts();
+        let d = &ctx.device;
+        let module = ctx.shader(Self::SHADER, &shaders::source(Self::SHADER)?)?;
+        let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
+        let layout = pipeline_layout(d, Self::SHADER, scene, Some(&bindings));
+        let out = slot_format(ctx, pipeline, pass, "color");
+        // 8-bit targets without hardware sRGB hold encoded values.
+        let encoded = matches!(
+            out,
+            wgpu::TextureFormat::Rgba8Unorm | wgpu::TextureFormat::Bgra8Unorm
+        );
+        let constants = [("ENCODED", if encoded { 1.0 } else { 0.0 })];
+        let targets = [Some(out.into()), Some(HISTORY_FORMAT.into())];
+        let pipeline = render_pipeline(
+            d,
+            &RenderSpec {
+                constants: &constants,
+                ..RenderSpec::new(Self::SHADER, &module, &layout, &targets)
+            },
+        );
+        let uniform = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("temporal constants"),
+            size: std::mem::size_of::<TaaUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Ok(Self {
+            pipeline,
+            bindings,
+            params: *params,
+            uniform,
+            history: None,
+            read: 0,
+            frames: 0,
+            previous: None,
+        })
+    }
+}
+
+impl Temporal {
+    /// Whether the move from `prev` to `now` is a cut (the history is dropped).
+    fn is_cut(&self, prev: &Camera, now: &Camera) -> bool {
+        let reach = (now.position - now.look_at).length().max(1e-9);
+        prev.fov_y_deg != now.fov_y_deg
+            || (now.position - prev.position).length() > self.params.cut as f64 * reach
+    }
+
+    /// The history textures for `size`, made (and the history reset) when it changed.
+    fn history_for(&mut self, device: &wgpu::Device, size: (u32, u32)) {
+        if self.history.as_ref().is_some_and(|(_, s)| *s == size) {
+            return;
+        }
+        let make = || {
+            device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some("temporal history"),
+                    size: wgpu::Extent3d {
+                        width: size.0.max(1),
+                        height: size.1.max(1),
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: HISTORY_FORMAT,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                        | wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default())
+        };
+        self.history = Some(([make(), make()], size));
+        self.frames = 0;
+    }
+}
+
+impl PassNode for Temporal {
+    fn record(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder<'_>,
+    ) -> Result<(), PassError> {
+        let t = rec.texture("color").texture.size();
+        self.history_for(&rec.gpu.device, (t.width, t.height));
+        let now = rec.scene.camera;
+        let prev = match self.previous {
+            Some(p) if !self.is_cut(&p, &now) => p,
+            _ => {
+                self.frames = 0;
+                now
+            }
+        };
+        let weight = if self.frames == 0 {
+            1.0
+        } else {
+            (1.0 / (self.frames + 1) as f32).max(self.params.blend)
+        };
+        let screen = (t.width, t.height);
+        let prev_frame = ssbvb_gpu::scene::frame_uniform(&prev, screen, &Default::default());
+        let delta = now.position - prev.position;
+        let constants = TaaUniform {
+            prev_view_proj: prev_frame.view_proj,
+            delta: [delta.x as f32, delta.y as f32, delta.z as f32, weight],
+        };
+        rec.gpu
+            .queue
+            .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&constants));
+        let (views, _) = self.history.as_ref().expect("made above");
+        let (read, write) = (&views[self.read], &views[1 - self.read]);
+        let bg = self.bindings.bind_group(
+            rec,
+            &[
+                ("taa", self.uniform.as_entire_binding()),
+                ("history", wgpu::BindingResource::TextureView(read)),
+            ],
+        )?;
+        let history_out = wgpu::RenderPassColorAttachment {
+            view: write,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                store: wgpu::StoreOp::Store,
+            },
+        };
+        rec.draw_fullscreen(
+            encoder,
+            &[rec.color_attachment("color"), Some(history_out)],
+            &self.pipeline,
+            &bg,
+        );
+        self.read = 1 - self.read;
+        self.frames = self.frames.saturating_add(1);
+        self.previous = Some(now);
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_jitter_is_halton_2_3_centred_and_repeats() {
+        assert_eq!(jitter(0), [0.0, 1.0 / 3.0 - 0.5]);
+        assert_eq!(jitter(1), [-0.25, 2.0 / 3.0 - 0.5]);
+        assert_eq!(jitter(2), [0.25, 1.0 / 9.0 - 0.5]);
+        assert_eq!(jitter(JITTER_PERIOD), jitter(0));
+        // Each period covers the pixel evenly: its mean is near the centre.
+        let (mut x, mut y) = (0.0, 0.0);
+        for i in 0..JITTER_PERIOD {
+            let j = jitter(i);
+            assert!(j.iter().all(|v| v.abs() < 0.5), "{j:?}");
+            x += j[0];
+            y += j[1];
+        }
+        let n = JITTER_PERIOD as f64;
+        assert!((x / n).abs() < 0.05 && (y / n).abs() < 0.05, "{x} {y}");
+    }
+}

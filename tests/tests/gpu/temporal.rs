@@ -1,0 +1,121 @@
+//! Temporal anti-aliasing (`assets/pipelines/ssbvb_aa.ron`): a still camera converges
+//! toward the supersampled reference, a camera cut drops the history and a small move
+//! keeps it.
+
+use glam::{DAffine3, DVec3};
+use ssbvb_gpu::scene::{GpuScene, Scene};
+use ssbvb_passes::{Profiling, Renderer};
+use ssbvb_tests::ctx;
+use ssbvb_voxel::camera::Camera;
+use ssbvb_voxel::reference::{Instance, SampleGrid, render_supersampled};
+use ssbvb_voxel::shading::srgb_to_linear;
+
+const AA: &str = include_str!("../../../assets/pipelines/ssbvb_aa.ron");
+const PLAIN: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
+const SIZE: (u32, u32) = (96, 72);
+const LEVEL: u32 = 6;
+
+fn scene() -> Scene {
+    ssbvb_tests::single_object_scene(ssbvb_tests::model_asset("bunny.obj", LEVEL), LEVEL)
+}
+
+fn camera() -> Camera {
+    Camera::new(DVec3::new(1.6, 1.1, 2.4), DVec3::ZERO)
+}
+
+/// A renderer of `pipeline` and its scene.
+fn renderer(pipeline: &str, scene: Scene) -> (Renderer, GpuScene) {
+    let resolved = ssbvb_graph::resolve_str(pipeline, "test pipeline").unwrap();
+    let gpu = GpuScene::new(ctx(), scene).unwrap();
+    let r = Renderer::new(ctx(), &gpu, resolved, SIZE).unwrap();
+    (r, gpu)
+}
+
+/// Draws `frames` frames from `camera`; returns the output's RGBA8 (sRGB, straight alpha).
+fn draw(r: &mut Renderer, gpu: &mut GpuScene, camera: &Camera, frames: usize) -> Vec<u8> {
+    for _ in 0..frames {
+        r.render(ctx(), gpu, camera, Profiling::Off).unwrap();
+    }
+    ctx().wait_idle().unwrap();
+    assert!(ctx().take_uncaptured_errors().is_empty());
+    ctx()
+        .read_texture(&r.output().texture, ssbvb_gpu::wgpu::TextureAspect::All)
+        .unwrap()
+        .bytes
+}
+
+/// Linear RGB over black (premultiplied by coverage) of straight-alpha sRGB RGBA8.
+fn over_black(rgba: &[u8]) -> Vec<[f64; 3]> {
+    rgba.chunks_exact(4)
+        .map(|p| {
+            let a = p[3] as f64 / 255.0;
+            std::array::from_fn(|c| srgb_to_linear(p[c] as f32 / 255.0) as f64 * a)
+        })
+        .collect()
+}
+
+fn mean_abs_error(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    let sum: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (0..3).map(|c| (x[c] - y[c]).abs()).sum::<f64>())
+        .sum();
+    sum / (3 * a.len()) as f64
+}
+
+/// Pixels whose alpha is neither 0 nor 1: covered in part (blended across frames).
+fn partial(rgba: &[u8]) -> usize {
+    rgba.chunks_exact(4)
+        .filter(|p| p[3] != 0 && p[3] != 255)
+        .count()
+}
+
+#[test]
+fn a_still_camera_converges_toward_the_supersampled_reference() {
+    let s = scene();
+    let lod = &s.objects[0].asset.lods[LEVEL as usize];
+    let inst = [Instance {
+        lod,
+        object_to_world: DAffine3::IDENTITY,
+        faces: None,
+    }];
+    let grid = SampleGrid::from_count(16).unwrap();
+    let truth = render_supersampled(&inst, &camera(), SIZE.0, SIZE.1, &s.light, grid);
+    let truth: Vec<[f64; 3]> = truth
+        .colors
+        .iter()
+        .map(|c| std::array::from_fn(|k| c[k] as f64))
+        .collect();
+    let (mut plain, mut plain_scene) = renderer(PLAIN, s.clone());
+    let plain_out = draw(&mut plain, &mut plain_scene, &camera(), 1);
+    let (mut aa, mut aa_scene) = renderer(AA, s);
+    let first = draw(&mut aa, &mut aa_scene, &camera(), 1);
+    let converged = draw(&mut aa, &mut aa_scene, &camera(), 15);
+    let (e_plain, e_first, e_aa) = (
+        mean_abs_error(&over_black(&plain_out), &truth),
+        mean_abs_error(&over_black(&first), &truth),
+        mean_abs_error(&over_black(&converged), &truth),
+    );
+    eprintln!(
+        "error against 16 samples: plain {e_plain:.5}, first AA frame {e_first:.5}, 16 AA frames {e_aa:.5}"
+    );
+    // One jittered frame has no history: every pixel in or out. Sixteen cover the
+    // silhouette in part, and their error is well below the one-sample frame's.
+    assert_eq!(partial(&first), 0);
+    assert!(partial(&converged) > 50, "{}", partial(&converged));
+    assert!(e_aa < 0.7 * e_plain, "{e_aa} against {e_plain}");
+}
+
+#[test]
+fn a_camera_cut_drops_the_history_and_a_small_move_keeps_it() {
+    let (mut aa, mut gpu) = renderer(AA, scene());
+    let a = camera();
+    assert!(partial(&draw(&mut aa, &mut gpu, &a, 16)) > 50);
+    // Far beyond the pass's cut (a quarter of the distance to the look-at point).
+    let b = Camera::new(DVec3::new(-2.4, 0.6, -1.8), DVec3::ZERO);
+    let cut = draw(&mut aa, &mut gpu, &b, 1);
+    assert_eq!(partial(&cut), 0, "history survived a cut");
+    // A small step after it: blended with the history again.
+    let nudged = Camera::new(b.position * 1.01, DVec3::ZERO);
+    assert!(partial(&draw(&mut aa, &mut gpu, &nudged, 1)) > 20);
+}
