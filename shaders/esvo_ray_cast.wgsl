@@ -47,6 +47,7 @@ const STACK_BASE: i32 = 7;
 @group(1) @binding(9) var<storage, read_write> ray_counters: array<atomic<u32>>;
 
 //#include "ray_cast.inc.wgsl"
+//#include "ray_cast_compute.inc.wgsl"
 
 // `eps` with the sign of `x` (WGSL has no copysign; -0 keeps its sign bit).
 fn copysign_eps(x: f32, eps: f32) -> f32 {

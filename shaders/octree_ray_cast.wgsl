@@ -35,6 +35,7 @@ const STACK_DEPTH: u32 = 16u;
 @group(1) @binding(9) var<storage, read_write> ray_counters: array<atomic<u32>>;
 
 //#include "ray_cast.inc.wgsl"
+//#include "ray_cast_compute.inc.wgsl"
 
 // Octree descent of one instance; only hits nearer than `t_best` count.
 fn trace(inst: Instance, o: vec3<f32>, d: vec3<f32>, t_best: f32) -> Hit {

@@ -6,7 +6,8 @@
 // the object-space ray `o + t d` of common.inc.wgsl's `object_ray`; hits at or beyond
 // `t_best` do not count); `fs_main` below keeps the nearest hit over the
 // visible instances its ray meets (the instance hierarchy; exact ties to the lower index,
-// as the reference).
+// as the reference) through `cast_pixel`, which ray_cast_compute.inc.wgsl runs in a
+// compute shader instead.
 
 //#include "fullscreen.inc.wgsl"
 //#include "instance_bvh.inc.wgsl"
@@ -81,25 +82,28 @@ fn add_lane_wide(word: u32, v: u32) {
     }
 }
 
-@fragment
-fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
-    let dir = pixel_ray(frag.xy);
-    pixel_centre = frag.xy;
+// Casts the ray of the pixel at `px` (its centre) through the visible instances: the
+// nearest hit in `best` / `best_inst`, the work counted. Returns the ray's direction.
+fn cast_pixel(px: vec2<f32>) -> vec3<f32> {
+    let dir = pixel_ray(px);
+    pixel_centre = px;
     best = Hit(false, 1e30, 0u, 0u);
     best_inst = 0u;
     cast_steps = 0u;
     cast_words = 0u;
     bvh_walk(dir, BIG, u32(frame.misc.w));
-    let lane = (u32(frag.x) + u32(frag.y)) % COUNTER_LANES;
+    let lane = (u32(px.x) + u32(px.y)) % COUNTER_LANES;
     if COUNT_WORK && cast_steps > 0u {
         atomicAdd(&ray_counters[COUNTER_LANE_WORDS * lane], 1u);
         // Steps and words as (low, high) pairs: a lane of a 4K frame may pass 2^32.
         add_lane_wide(COUNTER_LANE_WORDS * lane + 1u, cast_steps);
         add_lane_wide(COUNTER_LANE_WORDS * lane + 3u, cast_words);
     }
-    if !best.hit {
-        discard;
-    }
+    return dir;
+}
+
+// The G-buffer of `best` (a hit) seen along `dir`.
+fn gbuffer_of_best(dir: vec3<f32>) -> GBufferDepth {
     let inst = instances[best_inst];
     let p = dir * best.t;
     var out: GBufferDepth;
@@ -110,4 +114,13 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     out.geometric_normal = oct_encode(face_normal_world(inst, best.face));
     out.depth = ndc_depth(p);
     return out;
+}
+
+@fragment
+fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
+    let dir = cast_pixel(frag.xy);
+    if !best.hit {
+        discard;
+    }
+    return gbuffer_of_best(dir);
 }

@@ -18,6 +18,7 @@ mod local_edit;
 mod octree_ray_cast;
 mod pipeline;
 mod rastavox;
+mod ray_cast_compute;
 mod ray_casters;
 mod ray_march_filter;
 mod scale;

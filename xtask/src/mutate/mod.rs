@@ -111,11 +111,16 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
     ),
     (
         "octree_ray_cast.wgsl",
-        &["ties::ray_casters", "octree_ray_cast::", "ray_casters::"],
+        &[
+            "ties::ray_casters",
+            "octree_ray_cast::",
+            "ray_casters::",
+            "ray_cast_compute::",
+        ],
     ),
     (
         "esvo_ray_cast.wgsl",
-        &["ties::ray_casters", "esvo_ray_cast::"],
+        &["ties::ray_casters", "esvo_ray_cast::", "ray_cast_compute::"],
     ),
     (
         "ray_cast.inc.wgsl",
@@ -125,8 +130,10 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
             "octree_ray_cast::",
             "esvo_ray_cast::",
             "ray_casters::",
+            "ray_cast_compute::",
         ],
     ),
+    ("ray_cast_compute.inc.wgsl", &["ray_cast_compute::"]),
 ];
 
 #[derive(Debug, Default)]

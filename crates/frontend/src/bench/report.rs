@@ -29,6 +29,8 @@ pub(crate) struct Row {
     pub(crate) frame_ms_median: f64,
     pub(crate) frame_ms_min: f64,
     pub(crate) frame_ms_max: f64,
+    /// Median GPU time of the frames timed by timestamps (`None` on software adapters).
+    pub(crate) frame_gpu_ms_median: Option<f64>,
     pub(crate) passes: Vec<ssbvb_passes::PassTiming>,
     pub(crate) fill_count: Option<u32>,
     /// Pixels the reference covers (what the fill count is compared with).
@@ -90,6 +92,9 @@ fn rows_table(rows: &[Row]) -> Table<'_, Row> {
             Column::new("frame_ms_median", |r: &Row| r.frame_ms_median).csv(Fmt::fixed(4)),
             Column::new("frame_ms_min", |r: &Row| r.frame_ms_min).csv(Fmt::fixed(4)),
             Column::new("frame_ms_max", |r: &Row| r.frame_ms_max).csv(Fmt::fixed(4)),
+            Column::new("frame_gpu_ms_median", |r: &Row| r.frame_gpu_ms_median)
+                .csv(Fmt::fixed(4))
+                .md("GPU ms (median)", Fmt::fixed(2).or("-")),
             Column::new("passes", |r: &Row| Value::json(&r.passes)),
             Column::new("fill_count", |r: &Row| r.fill_count).csv(Fmt::PLAIN),
             Column::md_only("fill / covered", |r: &Row| {

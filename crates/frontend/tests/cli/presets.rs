@@ -17,7 +17,7 @@ fn bench_paper_preset_compares_ssbvb_with_the_ray_casters() {
                 "--frames",
                 "1",
                 "--techniques",
-                "ssbvb-unique,esvo",
+                "ssbvb-unique,esvo,esvo-compute",
                 "--json",
                 "--out",
             ])
@@ -72,6 +72,13 @@ fn bench_paper_preset_compares_ssbvb_with_the_ray_casters() {
         let esvo = r["esvo_ms"].as_f64().unwrap();
         let ratio = r["ssbvb_unique_over_esvo"].as_f64().unwrap();
         assert!((ratio - ssbvb / esvo).abs() < 1e-3 * ratio, "{r}");
+        // Against the faster of ESVO's fragment and compute forms; a software adapter has
+        // no GPU times, so the ratios are of wall times.
+        let esvo_compute = r["esvo_compute_ms"].as_f64().unwrap();
+        let best = r["ssbvb_unique_over_best_esvo"].as_f64().unwrap();
+        let expected = ssbvb / esvo.min(esvo_compute);
+        assert!((best - expected).abs() < 1e-3 * best, "{r}");
+        assert!(r["esvo_gpu_ms"].is_null(), "{r}");
         // Not measured: no number.
         assert!(
             r["octree_ms"].is_null() && r["ssbvb_unique_over_octree"].is_null(),

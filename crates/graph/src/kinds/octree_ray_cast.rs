@@ -13,12 +13,19 @@ pub struct OctreeRayCastParams {
     /// Most traversal steps (child visits, descents and pops) per ray and instance.
     #[serde(default = "default_ray_cast_steps")]
     pub max_steps: u32,
+    /// Trace in a compute shader (one thread per pixel, the hits kept in a per-pixel
+    /// buffer) and write the G-buffer in a fullscreen resolve, instead of tracing in the
+    /// fragment shader: the same image, for GPUs whose fragment work is slow
+    /// (docs/benchmarks.md, the H200).
+    #[serde(default)]
+    pub compute: bool,
 }
 
 impl Default for OctreeRayCastParams {
     fn default() -> Self {
         Self {
             max_steps: default_ray_cast_steps(),
+            compute: false,
         }
     }
 }

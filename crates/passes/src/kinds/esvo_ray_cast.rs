@@ -41,7 +41,11 @@ impl PassImpl for EsvoRayCast {
     /// Compiles the pipeline for the formats bound to `pass`; `max_steps` becomes the WGSL
     /// override `MAX_STEPS`.
     fn new(init: &PassInit<'_>, params: &EsvoRayCastParams) -> Result<Self, PassError> {
-        Ok(Self(OctreeCaster::new::<Self>(init, params.max_steps)?))
+        Ok(Self(OctreeCaster::new::<Self>(
+            init,
+            params.max_steps,
+            params.compute,
+        )?))
     }
 }
 

@@ -93,6 +93,17 @@ pub(crate) fn begin_gbuffer_pass<'e>(
     rec: &Recorder<'_>,
     stencil: u32,
 ) -> wgpu::RenderPass<'e> {
+    begin_gbuffer_pass_timed(encoder, rec, stencil, rec.render_timestamps())
+}
+
+/// [`begin_gbuffer_pass`] with the given timestamp writes (a pass whose time began in an
+/// earlier compute pass ends it here: [`Recorder::span_end_timestamps`]).
+fn begin_gbuffer_pass_timed<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    rec: &Recorder<'_>,
+    stencil: u32,
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+) -> wgpu::RenderPass<'e> {
     let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some(&rec.pass.name),
         color_attachments: &GBUFFER_COLOR_SLOTS.map(|s| rec.color_attachment(s)),
@@ -107,7 +118,7 @@ pub(crate) fn begin_gbuffer_pass<'e>(
                 store: wgpu::StoreOp::Store,
             }),
         }),
-        timestamp_writes: rec.render_timestamps(),
+        timestamp_writes,
         occlusion_query_set: None,
         multiview_mask: None,
     });
@@ -135,7 +146,17 @@ impl PulledPipeline {
         init: &PassInit<'_>,
         constants: &[(&str, f64)],
     ) -> Result<Self, PassError> {
-        Self::build::<P>(init, constants, false)
+        Self::build::<P>(init, constants, false, "fs_main")
+    }
+
+    /// [`PulledPipeline::new`] with fragment entry point `fs_entry` (a resolve of work an
+    /// earlier compute pass did: [`PulledPipeline::record_resolve`]).
+    pub fn with_fragment<P: PassImpl>(
+        init: &PassInit<'_>,
+        constants: &[(&str, f64)],
+        fs_entry: &str,
+    ) -> Result<Self, PassError> {
+        Self::build::<P>(init, constants, false, fs_entry)
     }
 
     /// [`PulledPipeline::new`] for a shader that counts its work under the WGSL override
@@ -145,13 +166,14 @@ impl PulledPipeline {
         init: &PassInit<'_>,
         constants: &[(&str, f64)],
     ) -> Result<Self, PassError> {
-        Self::build::<P>(init, constants, true)
+        Self::build::<P>(init, constants, true, "fs_main")
     }
 
     fn build<P: PassImpl>(
         init: &PassInit<'_>,
         constants: &[(&str, f64)],
         with_uncounted: bool,
+        fs_entry: &str,
     ) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
         let (shader, own) = (P::SHADER, P::OWN);
@@ -168,6 +190,7 @@ impl PulledPipeline {
                     &RenderSpec {
                         constants,
                         depth_stencil: Some(depth_stencil.clone()),
+                        fs_entry,
                         ..RenderSpec::new(&label, &module, &layout, &targets)
                     },
                 )
@@ -195,7 +218,28 @@ impl PulledPipeline {
         rec: &Recorder<'_>,
         bind_group: Option<&wgpu::BindGroup>,
     ) {
-        let mut pass = begin_gbuffer_pass(encoder, rec, STENCIL_VOXEL);
+        self.draw_fullscreen(encoder, rec, bind_group, rec.render_timestamps());
+    }
+
+    /// [`PulledPipeline::record_fullscreen`] after the pass's compute work, whose compute
+    /// pass began the pass's time ([`Recorder::span_begin_timestamps`]): this ends it.
+    pub fn record_resolve(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &Recorder<'_>,
+        bind_group: Option<&wgpu::BindGroup>,
+    ) {
+        self.draw_fullscreen(encoder, rec, bind_group, rec.span_end_timestamps());
+    }
+
+    fn draw_fullscreen(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &Recorder<'_>,
+        bind_group: Option<&wgpu::BindGroup>,
+        timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        let mut pass = begin_gbuffer_pass_timed(encoder, rec, STENCIL_VOXEL, timestamps);
         if let Some(bg) = bind_group {
             let pipeline = match &self.uncounted {
                 Some(uncounted) if !rec.counting => uncounted,

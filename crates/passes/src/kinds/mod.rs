@@ -11,6 +11,7 @@ use crate::runtime::node::PassNode;
 use crate::runtime::registry::{PassInit, Registration, pass_modules};
 
 pub mod gbuffer;
+pub mod ray_cast_compute;
 pub mod ray_cast_counters;
 pub mod wgsl_layout;
 

@@ -42,6 +42,7 @@ use crate::runtime::counters::FrameCounters;
 use crate::kinds::ray_cast_counters::RayCastCounters;
 use crate::runtime::recorder::Recorder;
 use crate::kinds::gbuffer::PulledPipeline;
+use crate::kinds::ray_cast_compute::ComputeCast;
 use ssbvb_gpu::scene::GpuScene;
 use crate::runtime::registry::{KindNeeds, PassImpl, PassInit};
 use ssbvb_graph::KindSpec;
@@ -78,9 +79,15 @@ pub(crate) struct OctreeCaster {
     one_chunk: bool,
     /// log2 of the nodes per binding (`NODE_CHUNK_BITS` in the WGSL).
     chunk_bits: u32,
-    /// The bind group of every object's octree (which keeps its buffers alive), made the
-    /// first frame.
+    /// The bind group of every object's octree, made the first frame (and again when the
+    /// compute form's hit buffer is resized).
     octrees: Option<wgpu::BindGroup>,
+    /// The octrees' node buffers and level offsets, uploaded the first frame.
+    buffers: Option<(Vec<wgpu::Buffer>, wgpu::Buffer)>,
+    /// Traces in a compute shader and resolves (`compute: true`).
+    compute: Option<ComputeCast>,
+    /// What the fragment form binds as `cast_hits`, which it does not use.
+    no_hits: wgpu::Buffer,
     counters: RayCastCounters,
 }
 
@@ -126,30 +133,57 @@ pub const OWN: &[OwnBinding] = &[
         name: "ray_counters",
         kind: OwnKind::StorageReadWrite,
     },
+    // The compute form's per-pixel hits (`ray_cast_compute`; a placeholder otherwise).
+    OwnBinding {
+        name: "cast_hits",
+        kind: OwnKind::StorageReadWrite,
+    },
 ];
 
 impl OctreeCaster {
     /// Compiles pass `P`'s shader for the formats bound to `init.pass`; `max_steps`
-    /// becomes the WGSL override `MAX_STEPS`.
-    pub(crate) fn new<P: PassImpl>(init: &PassInit<'_>, max_steps: u32) -> Result<Self, PassError> {
+    /// becomes the WGSL override `MAX_STEPS`; `compute` traces in a compute shader
+    /// ([`ComputeCast`]) instead of the fragment shader.
+    pub(crate) fn new<P: PassImpl>(
+        init: &PassInit<'_>,
+        max_steps: u32,
+        compute: bool,
+    ) -> Result<Self, PassError> {
         let chunk_bits = init.scene.chunks.octree_bits;
-        let pipeline = |chunks: usize| {
-            PulledPipeline::counting::<P>(
+        let constants = |chunks: usize| {
+            vec![
+                ("MAX_STEPS", f64::from(max_steps)),
+                ("NODE_CHUNK_BITS", f64::from(chunk_bits)),
+                ("NODE_CHUNKS_USED", chunks as f64),
+            ]
+        };
+        let pipeline = |chunks: usize| PulledPipeline::counting::<P>(init, &constants(chunks));
+        let pipeline_all = pipeline(NODE_CHUNKS)?;
+        let compute = if compute {
+            Some(ComputeCast::new::<P>(
                 init,
-                &[
-                    ("MAX_STEPS", f64::from(max_steps)),
-                    ("NODE_CHUNK_BITS", f64::from(chunk_bits)),
-                    ("NODE_CHUNKS_USED", chunks as f64),
-                ],
-            )
+                &pipeline_all.bindings,
+                [NODE_CHUNKS, 1],
+                &constants,
+            )?)
+        } else {
+            None
         };
         Ok(Self {
             kind: <P::Params as KindSpec>::NAME,
-            pipeline: pipeline(NODE_CHUNKS)?,
+            pipeline: pipeline_all,
             single: pipeline(1)?,
             one_chunk: true,
             chunk_bits,
             octrees: None,
+            buffers: None,
+            compute,
+            no_hits: init.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("ray cast hits (unused)"),
+                size: 16,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            }),
             counters: RayCastCounters::new(init.ctx),
         })
     }
@@ -174,13 +208,26 @@ impl OctreeCaster {
         rec: &mut Recorder<'_>,
     ) -> Result<(), PassError> {
         self.check_levels(rec.scene)?;
-        if self.octrees.is_none() && !rec.scene.visible.is_empty() {
+        if self.buffers.is_none() && !rec.scene.visible.is_empty() {
             let assets: Vec<&VoxelAsset> =
                 rec.scene.scene.objects.iter().map(|o| &*o.asset).collect();
-            self.octrees = Some(self.upload(rec.gpu, &assets)?);
+            self.buffers = Some(self.upload(rec.gpu, &assets)?);
+        }
+        if let Some(c) = &mut self.compute {
+            let (w, h) = rec.screen;
+            if c.hits(rec.gpu, u64::from(w) * u64::from(h)).1 {
+                self.octrees = None;
+            }
+        }
+        if self.octrees.is_none() && self.buffers.is_some() {
+            self.octrees = Some(self.bind_octrees(rec.gpu)?);
         }
         let bind_group = self.octrees.as_ref().filter(|_| !rec.scene.visible.is_empty());
         self.counters.begin_frame(encoder, rec.counting);
+        if let Some(c) = &self.compute {
+            c.record(encoder, rec, bind_group, self.one_chunk);
+            return Ok(());
+        }
         let pipeline = if self.one_chunk {
             &self.single
         } else {
@@ -204,14 +251,14 @@ impl OctreeCaster {
         Ok(())
     }
 
-    /// Builds every object's octree and uploads them together.
+    /// Builds every object's octree and uploads them together: the node chunks and the
+    /// level offsets.
     fn upload(
         &mut self,
         ctx: &GpuContext,
         assets: &[&VoxelAsset],
-    ) -> Result<wgpu::BindGroup, PassError> {
-        let (nodes, offsets) =
-            concatenated_octrees(self.kind, assets)?;
+    ) -> Result<(Vec<wgpu::Buffer>, wgpu::Buffer), PassError> {
+        let (nodes, offsets) = concatenated_octrees(self.kind, assets)?;
         let chunk = 1usize << self.chunk_bits;
         self.one_chunk = nodes.len() <= chunk;
         let node_bytes = std::mem::size_of::<SvoNode>();
@@ -225,7 +272,7 @@ impl OctreeCaster {
             )));
         }
         let label = format!("{} octrees", self.kind);
-        let bind_group = ctx.validated(&label, |d| {
+        Ok(ctx.validated(&label, |d| {
             let node_buffers: Vec<wgpu::Buffer> = (0..NODE_CHUNKS)
                 .map(|i| {
                     let part = nodes.get(i * chunk..).unwrap_or(&[]);
@@ -244,29 +291,43 @@ impl OctreeCaster {
                 contents: bytemuck::cast_slice(&offsets),
                 usage: wgpu::BufferUsages::STORAGE,
             });
-            let pipeline = if self.one_chunk {
-                &self.single
-            } else {
-                &self.pipeline
-            };
+            (node_buffers, offset_buffer)
+        })?)
+    }
+
+    /// The bind group of the uploaded octrees, the counters and the hit buffer.
+    fn bind_octrees(&self, ctx: &GpuContext) -> Result<wgpu::BindGroup, PassError> {
+        let (nodes, offsets) = self.buffers.as_ref().expect("uploaded before binding");
+        let hits = self
+            .compute
+            .as_ref()
+            .and_then(ComputeCast::hit_buffer)
+            .unwrap_or(&self.no_hits);
+        let pipeline = if self.one_chunk {
+            &self.single
+        } else {
+            &self.pipeline
+        };
+        let label = format!("{} octrees", self.kind);
+        ctx.validated(&label, |d| {
             pipeline.bindings.own_bind_group(
                 d,
                 self.kind,
                 &[
-                    ("svo_nodes_0", node_buffers[0].as_entire_binding()),
-                    ("svo_nodes_1", node_buffers[1].as_entire_binding()),
-                    ("svo_nodes_2", node_buffers[2].as_entire_binding()),
-                    ("svo_nodes_3", node_buffers[3].as_entire_binding()),
-                    ("svo_nodes_4", node_buffers[4].as_entire_binding()),
-                    ("svo_nodes_5", node_buffers[5].as_entire_binding()),
-                    ("svo_nodes_6", node_buffers[6].as_entire_binding()),
-                    ("svo_nodes_7", node_buffers[7].as_entire_binding()),
-                    ("svo_level_offsets", offset_buffer.as_entire_binding()),
+                    ("svo_nodes_0", nodes[0].as_entire_binding()),
+                    ("svo_nodes_1", nodes[1].as_entire_binding()),
+                    ("svo_nodes_2", nodes[2].as_entire_binding()),
+                    ("svo_nodes_3", nodes[3].as_entire_binding()),
+                    ("svo_nodes_4", nodes[4].as_entire_binding()),
+                    ("svo_nodes_5", nodes[5].as_entire_binding()),
+                    ("svo_nodes_6", nodes[6].as_entire_binding()),
+                    ("svo_nodes_7", nodes[7].as_entire_binding()),
+                    ("svo_level_offsets", offsets.as_entire_binding()),
                     ("ray_counters", self.counters.binding()),
+                    ("cast_hits", hits.as_entire_binding()),
                 ],
             )
-        })??;
-        Ok(bind_group)
+        })?
     }
 }
 
@@ -318,8 +379,8 @@ pub fn concatenated_octrees(
 /// What the octree ray casters need from an adapter: the counters are written in the
 /// fragment shader; the nodes' bindings, the level offsets and the counters.
 pub(crate) const NEEDS: KindNeeds = KindNeeds::new(
-    wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE,
-    NODE_CHUNKS as u64 + 2,
+    wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE.union(wgpu::DownlevelFlags::COMPUTE_SHADERS),
+    NODE_CHUNKS as u64 + 3,
 );
 
 impl PassImpl for OctreeRayCast {
@@ -332,7 +393,11 @@ impl PassImpl for OctreeRayCast {
     /// Compiles the pipeline for the formats bound to `pass`; `max_steps` becomes the WGSL
     /// override `MAX_STEPS`.
     fn new(init: &PassInit<'_>, params: &OctreeRayCastParams) -> Result<Self, PassError> {
-        Ok(Self(OctreeCaster::new::<Self>(init, params.max_steps)?))
+        Ok(Self(OctreeCaster::new::<Self>(
+            init,
+            params.max_steps,
+            params.compute,
+        )?))
     }
 }
 

@@ -159,7 +159,8 @@ impl PassNode for SplatBillboards {
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some(&rec.pass.name),
-                timestamp_writes: None,
+                // The pass's time spans the splats and the resolve.
+                timestamp_writes: rec.span_begin_timestamps(),
             });
             pass.set_bind_group(0, &rec.scene.bind_group, &[]);
             pass.set_bind_group(1, &bind_group, &[]);
@@ -169,7 +170,7 @@ impl PassNode for SplatBillboards {
             pass.dispatch_workgroups(gx, gy, 1);
             pass.dispatch_workgroups(gx, gy, 2);
         }
-        self.resolve.record_fullscreen(encoder, rec, Some(&bind_group));
+        self.resolve.record_resolve(encoder, rec, Some(&bind_group));
         Ok(())
     }
 }

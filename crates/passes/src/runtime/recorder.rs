@@ -117,6 +117,25 @@ impl<'a> Recorder<'a> {
                 end_of_pass_write_index: Some(i + 1),
             })
     }
+
+    /// The beginning of a pass's time in its first (compute) pass, for a pass that records
+    /// a compute pass and then a render pass; [`Recorder::span_end_timestamps`] ends it.
+    pub fn span_begin_timestamps(&self) -> Option<wgpu::ComputePassTimestampWrites<'a>> {
+        self.compute_timestamps()
+            .map(|t| wgpu::ComputePassTimestampWrites {
+                end_of_pass_write_index: None,
+                ..t
+            })
+    }
+
+    /// The end of a pass's time in its last (render) pass.
+    pub fn span_end_timestamps(&self) -> Option<wgpu::RenderPassTimestampWrites<'a>> {
+        self.render_timestamps()
+            .map(|t| wgpu::RenderPassTimestampWrites {
+                beginning_of_pass_write_index: None,
+                ..t
+            })
+    }
 }
 
 /// The wgpu format a pass will see for the texture bound to `slot` (after fallbacks).

@@ -14,13 +14,15 @@ use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::reference::{ReferenceImage, SampleGrid};
 
-use super::frames::{profiling, timed_frames};
+use super::frames::{gpu_timed_frames, profiling, timed_frames};
 use super::models::one_object;
 
 /// What one measured configuration gave.
 pub(crate) struct Measured {
     /// Wall ms of each timed frame, in order.
     pub times: Vec<f64>,
+    /// GPU ms of each frame timed by timestamps (`None` on software adapters).
+    pub gpu_times: Option<Vec<f64>>,
     pub passes: Vec<ssbvb_passes::PassTiming>,
     pub fill: Option<u32>,
     pub acc: ssbvb_voxel::accuracy::AccuracyReport,
@@ -114,6 +116,7 @@ pub(crate) fn measure(s: &Setup, pipeline: ResolvedPipeline, with_psnr: bool) ->
     }
     ctx.wait_idle()?;
     let times = timed_frames(ctx, &mut renderer, &mut gpu_scene, s.camera, s.frames)?;
+    let gpu_times = gpu_timed_frames(ctx, &mut renderer, &mut gpu_scene, s.camera, s.frames)?;
     // Only the profiled frame counts its work (the timed ones pay for no counters).
     renderer.set_counting(true);
     let stats = renderer.render(ctx, &mut gpu_scene, s.camera, profiling(ctx))?;
@@ -130,6 +133,7 @@ pub(crate) fn measure(s: &Setup, pipeline: ResolvedPipeline, with_psnr: bool) ->
     let slot_same_voxel_rate = fill.and_then(|_| slot_same_voxel(s.reference, &hits));
     Ok(Measured {
         times,
+        gpu_times,
         passes: stats.passes,
         fill,
         acc,

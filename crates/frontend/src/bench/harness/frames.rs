@@ -34,6 +34,34 @@ pub(crate) fn timed_frames(
     Ok(times)
 }
 
+/// On a hardware adapter with timestamp queries, renders `frames` more frames (at least
+/// one) each profiled with GPU timestamps and returns each frame's GPU time (ms): the sum of
+/// its passes' times, without the host's submission, waiting and readback that the wall
+/// time of [`timed_frames`] includes. `None` on a software adapter (its timestamps are not
+/// GPU time) or without timestamps.
+pub(crate) fn gpu_timed_frames(
+    ctx: &GpuContext,
+    renderer: &mut Renderer,
+    gpu_scene: &mut GpuScene,
+    camera: &Camera,
+    frames: usize,
+) -> Result<Option<Vec<f64>>> {
+    if ctx.report().is_software || !ctx.report().timestamps {
+        return Ok(None);
+    }
+    let mut times = Vec::new();
+    for _ in 0..frames.max(1) {
+        let stats = renderer.render(ctx, gpu_scene, camera, Profiling::Timestamps)?;
+        let passes: Option<Vec<f64>> = stats.passes.iter().map(|p| p.gpu_ms).collect();
+        match passes {
+            Some(p) => times.push(p.iter().sum()),
+            // A pass without a timestamp pair: no GPU time for this technique.
+            None => return Ok(None),
+        }
+    }
+    Ok(Some(times))
+}
+
 /// The profiling of a measured frame: per-pass wall times on a software adapter, whose
 /// timestamps are unreliable; GPU timestamps elsewhere.
 pub(crate) fn profiling(ctx: &GpuContext) -> Profiling {

@@ -127,6 +127,32 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         edit: None,
         max_level: 16,
     },
+    // The two octree casters tracing in a compute shader (the same image): the stronger
+    // form of the baseline where fragment work is slow (docs/benchmarks.md, the H200).
+    Technique {
+        name: "octree-compute",
+        pipeline: "octree_ray_cast.ron",
+        edit: Some(|k| match k {
+            PassKind::OctreeRayCast(o) => {
+                o.compute = true;
+                true
+            }
+            _ => false,
+        }),
+        max_level: 16,
+    },
+    Technique {
+        name: "esvo-compute",
+        pipeline: "esvo.ron",
+        edit: Some(|k| match k {
+            PassKind::EsvoRayCast(e) => {
+                e.compute = true;
+                true
+            }
+            _ => false,
+        }),
+        max_level: 16,
+    },
     Technique {
         name: "cube-raster",
         pipeline: "cube_raster.ron",
@@ -162,12 +188,21 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
 ];
 
 /// The techniques of `--preset paper`: SSBVB (the default pipeline, fast march) and the same
-/// with the exact march, and every ray caster.
-pub(crate) const PAPER_TECHNIQUES: &[&str] =
-    &["ssbvb-unique", "ssbvb-exact", "esvo", "octree", "dense-dda"];
+/// with the exact march, and every ray caster (the octree casters in both forms).
+pub(crate) const PAPER_TECHNIQUES: &[&str] = &[
+    "ssbvb-unique",
+    "ssbvb-exact",
+    "esvo",
+    "octree",
+    "dense-dda",
+    "esvo-compute",
+    "octree-compute",
+];
 
-/// Techniques that measure what another already does (left out unless named).
-const ALIASES: &[&str] = &["ssbvb-fast"];
+/// Techniques that measure what another already does (left out unless named): the default
+/// pipeline by another name, and the compute forms of the octree casters (their fragment
+/// forms' images; the paper preset runs them).
+const ALIASES: &[&str] = &["ssbvb-fast", "octree-compute", "esvo-compute"];
 
 /// Technique names, for `--techniques`.
 fn technique_names() -> Vec<&'static str> {

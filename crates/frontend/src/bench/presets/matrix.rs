@@ -400,6 +400,7 @@ fn run_one(ctx: &GpuContext, t: &Technique, c: &Cell) -> Result<Row> {
     };
     let m = measure(&setup, pipeline, true)?;
     let (fill, acc, mut times) = (m.fill, m.acc, m.times);
+    let frame_gpu_ms_median = m.gpu_times.map(|mut g| median(&mut g));
     let (min, max) = times
         .iter()
         .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
@@ -413,6 +414,7 @@ fn run_one(ctx: &GpuContext, t: &Technique, c: &Cell) -> Result<Row> {
         frame_ms_median: median(&mut times),
         frame_ms_min: min,
         frame_ms_max: max,
+        frame_gpu_ms_median,
         passes: m.passes,
         fill_count: fill,
         covered_pixels: acc.covered_reference,

@@ -35,6 +35,9 @@ struct PaperRow {
     height: u32,
     /// Median frame ms per technique of [`PAPER_TECHNIQUES`] (`None`: not measured).
     ms: Vec<Option<f64>>,
+    /// Median GPU ms (timestamps) per technique (`None`: not measured, or a software
+    /// adapter, or a scene measured by wall time only).
+    gpu_ms: Vec<Option<f64>>,
     /// The paper's SSBVB / ESVO ratio for this scene, where it has one.
     paper_ssbvb_over_esvo: Option<f64>,
 }
@@ -45,8 +48,38 @@ impl PaperRow {
         self.ms[i]
     }
 
+    fn gpu_time(&self, technique: &str) -> Option<f64> {
+        let i = PAPER_TECHNIQUES.iter().position(|t| *t == technique)?;
+        self.gpu_ms[i]
+    }
+
+    /// The time ratios compare: GPU time where every technique of the row that has a wall
+    /// time has one, else wall time (one clock for the whole row).
+    fn compared_time(&self, technique: &str) -> Option<f64> {
+        let all_gpu = self
+            .ms
+            .iter()
+            .zip(&self.gpu_ms)
+            .all(|(w, g)| w.is_none() || g.is_some());
+        if all_gpu {
+            self.gpu_time(technique)
+        } else {
+            self.time(technique)
+        }
+    }
+
     fn ratio(&self, num: &str, den: &str) -> Option<f64> {
-        Some(self.time(num)? / self.time(den)?)
+        Some(self.compared_time(num)? / self.compared_time(den)?)
+    }
+
+    /// `num`'s time over the fastest of `dens` that was measured (the strongest form of a
+    /// baseline).
+    fn ratio_to_best(&self, num: &str, dens: &[&str]) -> Option<f64> {
+        let best = dens
+            .iter()
+            .filter_map(|d| self.compared_time(d))
+            .min_by(f64::total_cmp)?;
+        Some(self.compared_time(num)? / best)
     }
 }
 
@@ -135,6 +168,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
                     width: r.width,
                     height: r.height,
                     ms: vec![None; PAPER_TECHNIQUES.len()],
+                    gpu_ms: vec![None; PAPER_TECHNIQUES.len()],
                     paper_ssbvb_over_esvo: paper,
                 });
                 rows.len() - 1
@@ -142,6 +176,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         };
         if let Some(k) = PAPER_TECHNIQUES.iter().position(|t| *t == r.technique) {
             rows[i].ms[k] = Some(r.frame_ms_median);
+            rows[i].gpu_ms[k] = r.frame_gpu_ms_median;
         }
     }
     let mut grid_row = PaperRow {
@@ -150,6 +185,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         width,
         height,
         ms: vec![None; PAPER_TECHNIQUES.len()],
+        gpu_ms: vec![None; PAPER_TECHNIQUES.len()],
         paper_ssbvb_over_esvo: None,
     };
     for g in grid
@@ -172,6 +208,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         width,
         height,
         ms: vec![None; PAPER_TECHNIQUES.len()],
+        gpu_ms: vec![None; PAPER_TECHNIQUES.len()],
         paper_ssbvb_over_esvo: None,
     };
     for t in &fig.times {
@@ -190,7 +227,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         figure8: Figure8Report::of(&fig),
         skipped,
     };
-    let md = markdown(&report);
+    let md = markdown(&report, &rows);
     write_report(&args.out, "paper", report.rows.csv(), &report, md.clone())?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -205,13 +242,41 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
 }
 
 /// JSON and CSV key of each technique's time, in [`PAPER_TECHNIQUES`] order.
-const MS_KEYS: [&str; 5] = [
+const MS_KEYS: [&str; 7] = [
     "ssbvb_unique_ms",
     "ssbvb_exact_ms",
     "esvo_ms",
     "octree_ms",
     "dense_dda_ms",
+    "esvo_compute_ms",
+    "octree_compute_ms",
 ];
+
+/// JSON and CSV key of each technique's GPU time, in [`PAPER_TECHNIQUES`] order.
+const GPU_MS_KEYS: [&str; 7] = [
+    "ssbvb_unique_gpu_ms",
+    "ssbvb_exact_gpu_ms",
+    "esvo_gpu_ms",
+    "octree_gpu_ms",
+    "dense_dda_gpu_ms",
+    "esvo_compute_gpu_ms",
+    "octree_compute_gpu_ms",
+];
+
+/// The GPU-time table of `paper.md` (where the adapter has timestamps).
+fn gpu_table(rows: &[PaperRow]) -> Table<'_, PaperRow> {
+    let mut columns = vec![
+        Column::md_only("scene", |r: &PaperRow| r.scene.clone()),
+        Column::md_only("level", |r: &PaperRow| r.level),
+    ];
+    for (k, technique) in PAPER_TECHNIQUES.iter().enumerate() {
+        columns.push(Column::md_only(
+            format!("{technique} GPU ms"),
+            move |r: &PaperRow| r.gpu_ms[k].map_or("-".to_string(), |v| format!("{v:.2}")),
+        ));
+    }
+    Table::new(rows, columns)
+}
 
 /// The ratios reported: (key, SSBVB technique, ray caster).
 const RATIOS: [(&str, &str, &str); 4] = [
@@ -219,6 +284,23 @@ const RATIOS: [(&str, &str, &str); 4] = [
     ("ssbvb_exact_over_esvo", "ssbvb-exact", "esvo"),
     ("ssbvb_unique_over_octree", "ssbvb-unique", "octree"),
     ("ssbvb_exact_over_octree", "ssbvb-exact", "octree"),
+];
+
+/// The ratios against the faster form of a ray caster (fragment or compute): (key, SSBVB
+/// technique, the caster's forms, Markdown name).
+const BEST_RATIOS: [(&str, &str, &[&str], &str); 2] = [
+    (
+        "ssbvb_unique_over_best_esvo",
+        "ssbvb-unique",
+        &["esvo", "esvo-compute"],
+        "ssbvb-unique / best ESVO",
+    ),
+    (
+        "ssbvb_unique_over_best_octree",
+        "ssbvb-unique",
+        &["octree", "octree-compute"],
+        "ssbvb-unique / best octree",
+    ),
 ];
 
 fn table(rows: &[PaperRow]) -> Table<'_, PaperRow> {
@@ -239,11 +321,21 @@ fn table(rows: &[PaperRow]) -> Table<'_, PaperRow> {
                 .md(format!("{technique} ms"), Fmt::fixed(1).or("-")),
         );
     }
+    for (k, key) in GPU_MS_KEYS.iter().enumerate() {
+        columns.push(Column::new(key, move |r: &PaperRow| r.gpu_ms[k]).csv(Fmt::fixed(3)));
+    }
     for (key, num, den) in RATIOS {
         columns.push(
             Column::new(key, move |r: &PaperRow| r.ratio(num, den))
                 .csv(Fmt::fixed(4))
                 .md(format!("{num} / {den}"), Fmt::fixed(2).or("-")),
+        );
+    }
+    for (key, num, dens, name) in BEST_RATIOS {
+        columns.push(
+            Column::new(key, move |r: &PaperRow| r.ratio_to_best(num, dens))
+                .csv(Fmt::fixed(4))
+                .md(name, Fmt::fixed(2).or("-")),
         );
     }
     columns.push(
@@ -256,16 +348,29 @@ fn table(rows: &[PaperRow]) -> Table<'_, PaperRow> {
     Table::new(rows, columns)
 }
 
-fn markdown(r: &PaperReport) -> String {
+fn markdown(r: &PaperReport, rows: &[PaperRow]) -> String {
     let mut s = format!(
         "## The paper's comparison (Table 2, Figure 9), {}\n\n",
         r.adapter
     );
     s.push_str(&r.rows.markdown());
+    if rows
+        .iter()
+        .any(|row| row.gpu_ms.iter().any(Option::is_some))
+    {
+        s.push_str("\nGPU time of the same frames (median over the timed frames of the sum of each frame's pass timestamps; the host's submission and wait left out):\n\n");
+        s.push_str(&gpu_table(rows).markdown());
+        s.push_str(
+            "\nRatios of a row whose every measured technique has a GPU time compare GPU \
+             times; other rows (software adapters, the grid's wall-timed row) compare wall \
+             times.\n",
+        );
+    }
     s.push_str(
         "\nMedian frame ms of each technique's whole frame in the same run; ratios are SSBVB \
-         frame over ray-caster frame (below 1: SSBVB faster). The paper's ratio is its render \
-         times (GTX 660).\n",
+         frame over ray-caster frame (below 1: SSBVB faster); \"best\" is the faster of a \
+         caster's fragment and compute forms. The paper's ratio is its render times (GTX \
+         660).\n",
     );
     let f = &r.figure8;
     s.push_str(&format!(
@@ -307,12 +412,31 @@ mod tests {
             level: 9,
             width: 1280,
             height: 720,
-            ms: vec![Some(3.0), Some(2.0), Some(8.0), Some(4.0), None],
+            ms: vec![
+                Some(3.0),
+                Some(2.0),
+                Some(8.0),
+                Some(4.0),
+                None,
+                Some(6.0),
+                None,
+            ],
+            gpu_ms: vec![None; 7],
             paper_ssbvb_over_esvo: Some(PAPER_BUNNY_L9_720P),
         };
         assert_eq!(row.ratio("ssbvb-exact", "esvo"), Some(0.25));
         assert_eq!(row.ratio("ssbvb-unique", "octree"), Some(0.75));
         assert_eq!(row.ratio("ssbvb-unique", "dense-dda"), None);
+        // The faster form of ESVO (compute, 6 ms) and the only octree form measured.
+        assert_eq!(
+            row.ratio_to_best("ssbvb-unique", &["esvo", "esvo-compute"]),
+            Some(0.5)
+        );
+        assert_eq!(
+            row.ratio_to_best("ssbvb-unique", &["octree", "octree-compute"]),
+            Some(0.75)
+        );
+        assert_eq!(row.ratio_to_best("ssbvb-unique", &["dense-dda"]), None);
         let csv = table(std::slice::from_ref(&row)).csv();
         assert!(
             csv.starts_with("scene,level,width,height,ssbvb_unique_ms"),
@@ -320,5 +444,41 @@ mod tests {
         );
         assert!(csv.contains(",0.2500,"), "{csv}");
         assert!((PAPER_BUNNY_L9_720P - 0.2779).abs() < 1e-4);
+    }
+
+    #[test]
+    fn ratios_compare_gpu_times_only_when_the_whole_row_has_them() {
+        let row = |esvo_gpu: Option<f64>| PaperRow {
+            scene: "bunny.obj".into(),
+            level: 9,
+            width: 1280,
+            height: 720,
+            ms: vec![Some(3.0), None, Some(8.0), None, None, Some(5.0), None],
+            gpu_ms: vec![Some(1.0), None, esvo_gpu, None, None, Some(2.0), None],
+            paper_ssbvb_over_esvo: None,
+        };
+        let gpu = row(Some(4.0));
+        assert_eq!(gpu.ratio("ssbvb-unique", "esvo"), Some(0.25));
+        assert_eq!(
+            gpu.ratio_to_best("ssbvb-unique", &["esvo", "esvo-compute"]),
+            Some(0.5)
+        );
+        // ESVO's frame has no GPU time: the whole row compares wall times.
+        let wall = row(None);
+        assert_eq!(wall.ratio("ssbvb-unique", "esvo"), Some(3.0 / 8.0));
+        assert_eq!(
+            wall.ratio_to_best("ssbvb-unique", &["esvo", "esvo-compute"]),
+            Some(0.6)
+        );
+        let csv = table(std::slice::from_ref(&gpu)).csv();
+        assert!(
+            csv.lines().next().unwrap().contains("esvo_compute_gpu_ms"),
+            "{csv}"
+        );
+        let md = gpu_table(std::slice::from_ref(&gpu)).markdown();
+        assert!(
+            md.contains("esvo-compute GPU ms") && md.contains("2.00"),
+            "{md}"
+        );
     }
 }
