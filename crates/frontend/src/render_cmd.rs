@@ -10,13 +10,14 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use glam::{DAffine3, DVec3};
 use serde::Serialize;
-use ssbvb_gpu::scene::{GpuScene, LodPolicy, Scene, VoxelObject};
-use ssbvb_passes::{Profiling, Renderer};
+use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject};
+use ssbvb_passes::Profiling;
 use ssbvb_voxel::camera::Camera;
 
 use crate::pipeline_cmd::parse_size;
 use crate::progress::BarProgress;
 use crate::scene_file;
+use crate::session::{GpuSession, SessionSource};
 
 /// Arguments of `ssbvb render`.
 #[derive(Args, Debug)]
@@ -87,6 +88,10 @@ pub struct RenderArgs {
     /// The camera's path during `--frames`.
     #[arg(long, value_enum, default_value = "orbit")]
     pub camera_path: crate::soak::CameraPath,
+    /// Fault injection for tests: `device-lost@FRAME` destroys the device before soak
+    /// frame FRAME (repeatable); the soak recovers (`device_recoveries` in `--json`).
+    #[arg(long, hide = true, value_parser = crate::device_loss::parse_fault)]
+    pub inject_fault: Vec<crate::device_loss::Fault>,
 }
 
 /// Parses a sample count of `--samples` (a square from 1 to 256).
@@ -151,6 +156,8 @@ struct Report {
     streaming: Option<crate::budget::StreamingReport>,
     /// With `--frames N > 1`: memory at the start and end of the soak (`null` without).
     soak: Option<crate::soak::SoakReport>,
+    /// Times the soak lost the GPU device and recreated it (0 without a soak).
+    device_recoveries: usize,
     /// With animated objects: the time drawn and each update's cost by stage.
     #[serde(skip_serializing_if = "Option::is_none")]
     animation: Option<crate::animation::AnimationReport>,
@@ -272,6 +279,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.reference && args.frames > 1 {
         bail!("--frames (a soak of the GPU renderer) does not apply to --reference");
     }
+    crate::device_loss::check_faults(&args.inject_fault, args.frames)?;
     let report = if args.reference {
         render_reference(args, &scene, &animated, camera, warnings, notes)?
     } else {
@@ -392,6 +400,7 @@ fn render_reference(
         warnings,
         streaming: None,
         soak: None,
+        device_recoveries: 0,
         animation: (!animated.is_empty()).then(|| crate::animation::AnimationReport {
             time_s: args.time,
             method: None,
@@ -434,35 +443,17 @@ fn render_gpu(
         .clone()
         .or(scene_pipeline)
         .unwrap_or_else(|| assets_dir().join("pipelines/ssbvb.ron"));
-    let pipeline = crate::adapter_cmd::resolve(&pipeline_path)?;
-    let ctx = crate::adapter_cmd::headless_context(&[&pipeline])?;
-    let mut gpu_scene = match budget {
-        Some(mib) => {
-            // Offline: stream every page a frame asks for before the next one.
-            let options = crate::budget::options(mib, &page_sources, usize::MAX, &mut notes)?;
-            GpuScene::streamed(&ctx, scene, &options)?
-        }
-        None if !animated.is_empty() => {
-            GpuScene::with_dynamic(&ctx, scene, &crate::animation::rooms(&animated))?
-        }
-        None => GpuScene::new(&ctx, scene)?,
+    let source = SessionSource {
+        scene,
+        pipeline: crate::adapter_cmd::resolve(&pipeline_path)?,
+        budget,
+        page_sources,
+        animated,
+        time: args.time,
+        size: args.size,
     };
-    let animation = if animated.is_empty() {
-        None
-    } else {
-        let animator = ssbvb_gpu_build::animated::Animator::new(&ctx)?;
-        Some(crate::animation::update_all(
-            &ctx,
-            &mut gpu_scene,
-            &animator,
-            &animated,
-            args.time,
-        )?)
-    };
-    let mut renderer = Renderer::new(&ctx, &gpu_scene, pipeline, args.size)?;
-    // The report prints the frame's counters.
-    renderer.set_counting(true);
-    let profiling = if ctx.report().is_software {
+    let mut session = source.open(&mut notes)?;
+    let profiling = if session.ctx.report().is_software {
         Profiling::TimestampsAndWall
     } else {
         Profiling::Timestamps
@@ -470,27 +461,43 @@ fn render_gpu(
     // Warm-up frames (pipeline caches, lazy allocations; under a budget, until no page
     // is missing), then the measured one.
     let (frames, converged) = crate::budget::converge(
-        &ctx,
-        &mut renderer,
-        &mut gpu_scene,
+        &session.ctx,
+        &mut session.renderer,
+        &mut session.scene,
         &camera,
         args.max_frames,
     )?;
-    let streaming = crate::budget::StreamingReport::of(&gpu_scene, frames, converged);
+    let streaming = crate::budget::StreamingReport::of(&session.scene, frames, converged);
     streaming_warnings(streaming.as_ref(), frames, &mut warnings);
     let soak = if args.frames > 1 {
         let r = crate::soak::run(
-            &ctx,
-            &mut renderer,
-            &mut gpu_scene,
+            &mut session,
+            &source,
             &camera,
             args.camera_path,
             args.frames as usize,
+            &args.inject_fault,
+            args.max_frames,
+        )?;
+        // The written frame is the scene's camera converged again: under a budget the
+        // soak's path (and a recovery's fresh pool) left other pages resident.
+        crate::budget::converge(
+            &session.ctx,
+            &mut session.renderer,
+            &mut session.scene,
+            &camera,
+            args.max_frames,
         )?;
         Some(r)
     } else {
         None
     };
+    let GpuSession {
+        ctx,
+        scene: mut gpu_scene,
+        mut renderer,
+        animation,
+    } = session;
     let stats = renderer.render(&ctx, &mut gpu_scene, &camera, profiling)?;
     let out = ctx.read_texture(
         &renderer.output().texture,
@@ -520,6 +527,7 @@ fn render_gpu(
         lod_histogram: gpu_scene.lod_histogram(),
         warnings,
         streaming,
+        device_recoveries: soak.as_ref().map_or(0, |s| s.device_recoveries),
         soak,
         animation,
         gpu_memory_bytes: gpu_scene

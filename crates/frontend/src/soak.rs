@@ -6,16 +6,23 @@
 //!
 //! The start sample is taken after a warm-up (1 % of the frames, at least 10): the first
 //! frames fill allocator caches and pipeline caches that are not leaks.
+//!
+//! A frame whose device is lost (a driver reset, or `--inject-fault device-lost@FRAME`)
+//! opens a new session from the CPU-side state and is drawn again
+//! (`crate::device_loss`); the report counts the recoveries.
 
 use std::time::Instant;
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use glam::{DQuat, DVec3};
 use serde::Serialize;
 use ssbvb_gpu::GpuContext;
 use ssbvb_gpu::scene::GpuScene;
-use ssbvb_passes::{Profiling, Renderer};
+use ssbvb_passes::Profiling;
 use ssbvb_voxel::camera::Camera;
+
+use crate::device_loss::{Fault, Recoveries, loses_device_at};
+use crate::session::{GpuSession, SessionSource};
 
 /// How the camera moves during a soak.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
@@ -129,6 +136,8 @@ pub struct SoakReport {
     pub frame_ms_median: f64,
     /// Worst frame.
     pub frame_ms_max: f64,
+    /// Times the device was lost and the session opened again.
+    pub device_recoveries: usize,
 }
 
 /// The viewer's `--memory-report`: memory after the warm-up and at the end of a
@@ -169,34 +178,47 @@ fn growth(start: u64, end: u64) -> f64 {
 }
 
 /// Renders `n` frames along `path` from `base`, streaming pages between frames under a
-/// budget; fails on the first wgpu error.
+/// budget; fails on the first wgpu error. A frame whose device was lost (or is made lost
+/// by `faults`) opens a new session from `source` (warmed up to that frame's camera, at
+/// most `max_frames` frames) and is drawn again, unless the device was lost shortly
+/// before too.
 pub fn run(
-    ctx: &GpuContext,
-    renderer: &mut Renderer,
-    scene: &mut GpuScene,
+    session: &mut GpuSession,
+    source: &SessionSource,
     base: &Camera,
     path: CameraPath,
     n: usize,
+    faults: &[Fault],
+    max_frames: usize,
 ) -> Result<SoakReport> {
     let warmup = warmup_frames(n);
     let every = (n / 9).max(1);
     let mut samples = Vec::new();
     let mut times = Vec::with_capacity(n);
+    let mut recoveries = Recoveries::default();
     for i in 0..n {
         if i >= warmup && (i - warmup).is_multiple_of(every) {
-            samples.push(Sample::take(ctx, scene, i));
+            samples.push(Sample::take(&session.ctx, &session.scene, i));
         }
         let cam = camera_at(base, path, i, n);
-        let t = Instant::now();
-        renderer.render(ctx, scene, &cam, Profiling::Off)?;
-        ctx.wait_idle()?;
-        times.push(t.elapsed().as_secs_f64() * 1e3);
-        let errors = ctx.take_uncaptured_errors();
-        if let Some(e) = errors.first() {
-            bail!("wgpu error at soak frame {i}: {e}");
+        if loses_device_at(faults, i) {
+            session.ctx.inject_device_loss();
         }
+        let t = Instant::now();
+        if let Err(e) = draw(session, &cam, i) {
+            let Some(reason) = session.ctx.lost() else {
+                return Err(e);
+            };
+            recoveries.lost_at(i, &reason)?;
+            log::warn!("soak frame {i}: the GPU device was lost ({reason}); recreating it");
+            *session = source.reopen(&cam, max_frames).with_context(|| {
+                format!("recreating the GPU session after losing it at frame {i}")
+            })?;
+            draw(session, &cam, i)?;
+        }
+        times.push(t.elapsed().as_secs_f64() * 1e3);
     }
-    let end = Sample::take(ctx, scene, n);
+    let end = Sample::take(&session.ctx, &session.scene, n);
     times.sort_by(f64::total_cmp);
     Ok(SoakReport {
         frames: n,
@@ -204,7 +226,20 @@ pub fn run(
         memory: MemoryTrend::of(samples, end),
         frame_ms_median: times.get(times.len() / 2).copied().unwrap_or(0.0),
         frame_ms_max: times.last().copied().unwrap_or(0.0),
+        device_recoveries: recoveries.count,
     })
+}
+
+/// One soak frame, waited for; any wgpu error fails it.
+fn draw(s: &mut GpuSession, cam: &Camera, i: usize) -> Result<()> {
+    s.renderer
+        .render(&s.ctx, &mut s.scene, cam, Profiling::Off)?;
+    s.ctx.wait_idle()?;
+    let errors = s.ctx.take_uncaptured_errors();
+    if let Some(e) = errors.first() {
+        bail!("wgpu error at soak frame {i}: {e}");
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -50,6 +50,13 @@ pub enum GpuError {
         /// Why.
         message: String,
     },
+    /// The device was lost: a driver reset, the GPU removed or switched, or
+    /// [`GpuContext::inject_device_loss`].
+    #[error("the GPU device was lost ({reason}); every GPU resource is gone")]
+    DeviceLost {
+        /// wgpu's reason and message.
+        reason: String,
+    },
     /// Writing an image failed.
     #[error("cannot write {path}: {message}")]
     Write {
@@ -211,6 +218,8 @@ pub struct GpuContext {
     pub queue: wgpu::Queue,
     report: AdapterReport,
     uncaptured: Arc<Mutex<Vec<String>>>,
+    /// Why the device was lost, once it is (set by wgpu's device-lost callback).
+    lost: Arc<Mutex<Option<String>>>,
 }
 
 impl std::fmt::Debug for GpuContext {
@@ -397,6 +406,14 @@ impl GpuContext {
                 v.push(e.to_string());
             }
         }));
+        let lost = Arc::new(Mutex::new(None));
+        let lost_sink = lost.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            log::error!("GPU device lost: {reason:?}: {message}");
+            if let Ok(mut l) = lost_sink.lock() {
+                *l = Some(format!("{reason:?}: {message}"));
+            }
+        });
         let report = AdapterReport::new(&info, features, fallbacks);
         Ok(Self {
             instance,
@@ -405,6 +422,7 @@ impl GpuContext {
             queue,
             report,
             uncaptured,
+            lost,
         })
     }
 
@@ -425,6 +443,8 @@ impl GpuContext {
             queue,
             report,
             uncaptured: Arc::new(Mutex::new(Vec::new())),
+            // The caller's device-lost callback stays the caller's.
+            lost: Arc::new(Mutex::new(None)),
         }
     }
 
@@ -498,15 +518,32 @@ impl GpuContext {
             .unwrap_or_default()
     }
 
-    /// Blocks until all submitted work is done.
+    /// Blocks until all submitted work is done; [`GpuError::DeviceLost`] when the device
+    /// was lost (wgpu drops the errors of a lost device's operations, so this is where a
+    /// loss surfaces).
     pub fn wait_idle(&self) -> Result<(), GpuError> {
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map(|_| ())
-            .map_err(|e| GpuError::Readback {
-                label: "device poll".into(),
-                message: e.to_string(),
-            })
+        let polled = self.device.poll(wgpu::PollType::wait_indefinitely());
+        if let Some(reason) = self.lost() {
+            return Err(GpuError::DeviceLost { reason });
+        }
+        polled.map(|_| ()).map_err(|e| GpuError::Readback {
+            label: "device poll".into(),
+            message: e.to_string(),
+        })
+    }
+
+    /// Why the device was lost, if it was (wgpu reports a loss while the device is polled;
+    /// this polls once without waiting). `None` for a device from [`GpuContext::from_parts`],
+    /// whose loss its owner handles.
+    pub fn lost(&self) -> Option<String> {
+        let _ = self.device.poll(wgpu::PollType::Poll);
+        self.lost.lock().ok().and_then(|l| l.clone())
+    }
+
+    /// Destroys the device as a driver reset would: every later operation on it is a no-op
+    /// and [`GpuContext::lost`] says so. Fault injection (`--inject-fault device-lost@N`).
+    pub fn inject_device_loss(&self) {
+        self.device.destroy();
     }
 
     /// Creates a shader module from WGSL, failing with the compiler's message (file, line)

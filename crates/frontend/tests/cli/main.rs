@@ -3,6 +3,7 @@
 
 mod animation;
 mod cone_trace;
+mod device_loss;
 mod presets;
 mod rastavox;
 mod supersample;
