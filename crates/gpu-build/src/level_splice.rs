@@ -8,7 +8,7 @@
 //! Morton ranks, so an edit moves every later voxel by the change in count: the tail is
 //! moved on the GPU, which is a copy, not a rebuild.
 
-use ssbvb_gpu::wgpu::util::DeviceExt;
+use ssbvb_gpu::InitBuffer;
 use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_voxel::level_splice::{LevelPatch, Segment, Source};
 use ssbvb_voxel::lookup::NODE_WORDS;
@@ -91,7 +91,7 @@ impl LevelSplicer {
         });
         let init = |label: &str, words: &[u32]| {
             let words: &[u32] = if words.is_empty() { &[0] } else { words };
-            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            d.init_buffer(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
                 contents: bytemuck::cast_slice(words),
                 usage: wgpu::BufferUsages::STORAGE,

@@ -18,6 +18,7 @@
 //! - [`scene`] uploads a [`scene::Scene`] (objects, instances, LOD policy) and keeps it
 //!   current per frame; [`error::ResourceError`] is what building it can fail with.
 
+pub mod buffer_init;
 pub mod context;
 pub mod error;
 pub mod kernels;
@@ -27,6 +28,7 @@ pub mod scene;
 pub mod shader_source;
 pub mod shaders;
 
+pub use buffer_init::InitBuffer;
 pub use context::*;
 pub use error::ResourceError;
 pub use requirements::{Requirements, Verdict};

@@ -8,6 +8,7 @@ mod chunks;
 mod cone_trace;
 mod cube_raster;
 mod dense_dda;
+mod device_loss;
 mod dynamic;
 mod embed;
 mod empty_space;

@@ -100,6 +100,11 @@ pub struct BenchArgs {
     /// against (a square, 1 to 256).
     #[arg(long, default_value_t = 16, value_parser = crate::render_cmd::parse_samples)]
     pub flip_samples: u32,
+    /// Fault injection for tests: `device-lost@ROW` destroys the device before the main
+    /// matrix measures row ROW (from 0; repeatable). That row is reported failed and the
+    /// rows after it run on a new device.
+    #[arg(long, hide = true, value_parser = crate::device_loss::parse_fault)]
+    pub inject_fault: Vec<crate::device_loss::Fault>,
 }
 
 impl BenchArgs {

@@ -243,6 +243,8 @@ pub(crate) struct Results {
     pub(crate) rows: Vec<Row>,
     /// Why cells were not measured.
     pub(crate) skipped: Vec<String>,
+    /// Rows that failed because the GPU device was lost (the run went on with a new one).
+    pub(crate) failed: Vec<String>,
 }
 
 /// Everything one run measured, as written to `bench.json`.
@@ -255,6 +257,8 @@ struct Report<'a> {
     camera: Camera,
     rows: Table<'a, Row>,
     skipped: &'a [String],
+    /// Rows that failed with the device lost, and why.
+    failed: &'a [String],
     /// Knob sweeps (empty without `--sweep`).
     sweeps: Table<'a, SweepRow>,
     /// Fastest technique per model, target size and level (the study's Table 11).
@@ -299,6 +303,7 @@ pub(crate) fn write(
         camera,
         rows: rows_table(&results.rows),
         skipped: &results.skipped,
+        failed: &results.failed,
         sweeps: sweeps_table(sweeps),
         fastest: fastest(&results.rows),
         plots,
@@ -372,6 +377,9 @@ fn markdown(r: &Report) -> String {
     s.push_str(&r.rows.markdown());
     for k in r.skipped {
         s.push_str(&format!("\nskipped: {k}"));
+    }
+    for k in r.failed {
+        s.push_str(&format!("\nfailed: {k}"));
     }
     s.push('\n');
     s.push_str(&fastest_markdown(&r.fastest));

@@ -111,3 +111,63 @@ fn repeated_losses_and_faults_outside_the_soak_are_errors() {
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
 }
+
+/// `bench`: the row whose device is lost is reported failed with the reason, and the rows
+/// after it are measured on a new device; a loss on the next row too ends the run.
+#[test]
+fn bench_reports_the_row_that_lost_the_device_and_goes_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let bench = [
+        "bench",
+        "--levels",
+        "5",
+        "--sizes",
+        "64x48",
+        "--techniques",
+        "ssbvb-unique,esvo,octree",
+        "--frames",
+        "1",
+        "--json",
+        "--out",
+    ];
+    let out = succeeded(
+        ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+            .args(bench)
+            .arg(dir.path().join("one"))
+            .args(["--inject-fault", "device-lost@1"]),
+    );
+    let json = stdout_json(&out);
+    let rows: Vec<&str> = json["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["technique"].as_str().unwrap())
+        .collect();
+    assert_eq!(rows, ["ssbvb-unique", "octree"], "{json}");
+    let failed = json["failed"].as_array().unwrap();
+    assert_eq!(failed.len(), 1, "{json}");
+    let why = failed[0].as_str().unwrap();
+    assert!(
+        why.starts_with("esvo on bunny.obj level 5") && why.contains("device was lost"),
+        "{why}"
+    );
+    let again = ssbvb()
+        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+        .args(bench)
+        .arg(dir.path().join("two"))
+        .args([
+            "--inject-fault",
+            "device-lost@1",
+            "--inject-fault",
+            "device-lost@2",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&again.stderr);
+    assert!(
+        !again.status.success() && err.contains("lost again"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+}

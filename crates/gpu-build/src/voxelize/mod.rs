@@ -27,7 +27,7 @@
 use std::time::Instant;
 
 use glam::DVec3;
-use ssbvb_gpu::wgpu::util::DeviceExt;
+use ssbvb_gpu::InitBuffer;
 use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_voxel::model::{Mesh, ObjectSpace};
 use ssbvb_voxel::svo::LevelVoxels;
@@ -47,7 +47,7 @@ use inputs::{TriangleInputs, triangle_inputs};
 /// hold something).
 fn texture_buffer(d: &wgpu::Device, words: &[u32]) -> wgpu::Buffer {
     let words: &[u32] = if words.is_empty() { &[0] } else { words };
-    d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+    d.init_buffer(&wgpu::util::BufferInitDescriptor {
         label: Some("voxelizer textures"),
         contents: bytemuck::cast_slice(words),
         usage: wgpu::BufferUsages::STORAGE,
@@ -375,7 +375,7 @@ impl GpuVoxelizer {
         let n = 1u32 << level;
         let init = |label: &str, data: &[f32]| {
             let one = [0f32; 4];
-            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            d.init_buffer(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
                 contents: bytemuck::cast_slice(if data.is_empty() { &one } else { data }),
                 usage: wgpu::BufferUsages::STORAGE,
@@ -461,7 +461,7 @@ impl GpuVoxelizer {
         let kernels = self.exact.as_ref().expect("checked by the caller");
         let d = &ctx.device;
         let init = |label: &str, bytes: &[u8]| {
-            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            d.init_buffer(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
                 contents: if bytes.is_empty() { &[0; 16] } else { bytes },
                 usage: wgpu::BufferUsages::STORAGE,

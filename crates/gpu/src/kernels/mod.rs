@@ -3,7 +3,7 @@
 //! and the build steps of `ssbvb-gpu-build`). Explicit rather than automatic layouts, so every entry
 //! point takes the same bind group whichever bindings it uses.
 
-use wgpu::util::DeviceExt;
+use crate::InitBuffer;
 
 use crate::{GpuContext, ResourceError, shaders, wgpu};
 
@@ -154,7 +154,7 @@ impl Kernels {
 
 /// A uniform buffer holding `words`.
 pub fn uniform(d: &wgpu::Device, label: &str, words: &[u32]) -> wgpu::Buffer {
-    d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+    d.init_buffer(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
         contents: bytemuck::cast_slice(words),
         usage: wgpu::BufferUsages::UNIFORM,
@@ -176,7 +176,7 @@ pub fn storage(d: &wgpu::Device, label: &str, len: u64) -> wgpu::Buffer {
 /// A storage buffer holding `words`.
 pub fn storage_init(d: &wgpu::Device, label: &str, words: &[u32]) -> wgpu::Buffer {
     let one = [0u32];
-    d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+    d.init_buffer(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
         contents: bytemuck::cast_slice(if words.is_empty() { &one } else { words }),
         usage: wgpu::BufferUsages::STORAGE

@@ -3,10 +3,10 @@
 //! under a budget), the dynamic objects' rooms and the proxy meshes; then the group-0
 //! layout, the proxy and triangle-mesh buffers.
 
+use crate::InitBuffer;
 use glam::DVec3;
 use ssbvb_voxel::asset::LodLevel;
 use ssbvb_voxel::lookup::NODE_WORDS;
-use wgpu::util::DeviceExt;
 
 use super::description::{Scene, TriangleObject};
 use super::dynamic::{self, DynamicLevel, DynamicObject, DynamicRoom};
@@ -315,7 +315,7 @@ pub(super) fn proxy_buffers(
     proxy_v: &[[f32; 4]],
     proxy_i: &[u32],
 ) -> (wgpu::Buffer, wgpu::Buffer) {
-    let vertices = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+    let vertices = d.init_buffer(&wgpu::util::BufferInitDescriptor {
         label: Some("proxy vertices"),
         contents: bytemuck::cast_slice(if proxy_v.is_empty() {
             &[[0f32; 4]][..]
@@ -324,7 +324,7 @@ pub(super) fn proxy_buffers(
         }),
         usage: wgpu::BufferUsages::VERTEX,
     });
-    let indices = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+    let indices = d.init_buffer(&wgpu::util::BufferInitDescriptor {
         label: Some("proxy indices"),
         contents: bytemuck::cast_slice(if proxy_i.is_empty() {
             &[0u32; 4][..]
@@ -351,12 +351,12 @@ pub(super) fn triangle_meshes(
                 .flat_map(|(p, n)| [p[0], p[1], p[2], n[0], n[1], n[2]])
                 .collect();
             GpuTriangleMesh {
-                vertices: d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                vertices: d.init_buffer(&wgpu::util::BufferInitDescriptor {
                     label: Some("mesh vertices"),
                     contents: bytemuck::cast_slice(&verts),
                     usage: wgpu::BufferUsages::VERTEX,
                 }),
-                indices: d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                indices: d.init_buffer(&wgpu::util::BufferInitDescriptor {
                     label: Some("mesh indices"),
                     contents: bytemuck::cast_slice(&t.indices),
                     usage: wgpu::BufferUsages::INDEX,

@@ -28,7 +28,7 @@
 
 use std::collections::HashMap;
 
-use ssbvb_gpu::wgpu::util::DeviceExt;
+use ssbvb_gpu::InitBuffer;
 use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_graph::CubeRasterParams;
 use ssbvb_voxel::asset::VoxelAsset;
@@ -110,7 +110,7 @@ impl CubeRaster {
             )));
         };
         let bind_group = ctx.validated("cube_raster cubes", |d| {
-            let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            let buffer = d.init_buffer(&wgpu::util::BufferInitDescriptor {
                 label: Some("cube_raster cubes"),
                 contents: bytemuck::cast_slice(&list.cubes),
                 usage: wgpu::BufferUsages::STORAGE,

@@ -151,7 +151,7 @@ impl DenseDda {
         }
         let view = texture.create_view(&Default::default());
         let bind_group = ctx.validated(label, |d| {
-            let slices = wgpu::util::DeviceExt::create_buffer_init(
+            let slices = ssbvb_gpu::InitBuffer::init_buffer(
                 d,
                 &wgpu::util::BufferInitDescriptor {
                     label: Some("dense_dda slices"),

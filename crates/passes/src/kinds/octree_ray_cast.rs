@@ -31,7 +31,7 @@
 //! - Cost per pixel: the instances whose boxes its ray enters before its best hit (the
 //!   instance hierarchy) × the nodes visited along the ray, bounded by `max_steps`.
 
-use ssbvb_gpu::wgpu::util::DeviceExt;
+use ssbvb_gpu::InitBuffer;
 use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_graph::OctreeRayCastParams;
 use ssbvb_voxel::asset::VoxelAsset;
@@ -279,14 +279,14 @@ impl OctreeCaster {
                     let part = &part[..part.len().min(chunk)];
                     // Empty bindings are invalid: an unused chunk gets one node.
                     let zero = [SvoNode::default()];
-                    d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    d.init_buffer(&wgpu::util::BufferInitDescriptor {
                         label: Some("octree_ray_cast svo_nodes"),
                         contents: bytemuck::cast_slice(if part.is_empty() { &zero } else { part }),
                         usage: wgpu::BufferUsages::STORAGE,
                     })
                 })
                 .collect();
-            let offset_buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            let offset_buffer = d.init_buffer(&wgpu::util::BufferInitDescriptor {
                 label: Some("octree_ray_cast svo_level_offsets"),
                 contents: bytemuck::cast_slice(&offsets),
                 usage: wgpu::BufferUsages::STORAGE,

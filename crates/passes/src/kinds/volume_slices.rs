@@ -21,7 +21,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::DMat4;
 use ssbvb_gpu::wgpu;
-use ssbvb_gpu::wgpu::util::DeviceExt;
+use ssbvb_gpu::InitBuffer;
 use ssbvb_graph::VolumeSlicesParams;
 use ssbvb_voxel::rgba_volume::atlas::VolumeAtlas;
 use ssbvb_voxel::rgba_volume::slicing::{SliceGeometry, SliceSettings, slice};
@@ -163,7 +163,7 @@ fn upload_atlas(
     // Never empty: a binding needs at least one word.
     let mut table = atlas.table.clone();
     table.push(ssbvb_voxel::rgba_volume::EMPTY_BRICK);
-    let table = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+    let table = d.init_buffer(&wgpu::util::BufferInitDescriptor {
         label: Some("volume brick table"),
         contents: bytemuck::cast_slice(&table),
         usage: wgpu::BufferUsages::STORAGE,

@@ -38,14 +38,31 @@ pub(crate) struct Measured {
 pub(crate) fn run(args: &BenchArgs) -> Result<Measured> {
     let m = matrix(args);
     let techniques = techniques::select(args)?;
-    let ctx = open_context(&techniques)?;
+    let mut device = Device {
+        ctx: open_context(&techniques)?,
+        faults: &args.inject_fault,
+        rows: 0,
+        lost_last_row: false,
+    };
     let budget = args.gpu_budget.as_ref().and_then(|b| b.first().copied());
-    let results = run_matrix(&ctx, &m, &techniques, budget, !args.json)?;
+    let results = run_matrix(&mut device, &m, &techniques, budget, !args.json)?;
+    let ctx = device.ctx;
     Ok(Measured {
         ctx,
         camera: m.camera,
         results,
     })
+}
+
+/// The matrix's device: replaced by a new one when it is lost while a row is measured.
+struct Device<'a> {
+    ctx: GpuContext,
+    /// Faults to inject (`--inject-fault device-lost@ROW`).
+    faults: &'a [crate::device_loss::Fault],
+    /// Rows begun so far.
+    rows: usize,
+    /// Whether the last row lost the device (a second loss in a row ends the run).
+    lost_last_row: bool,
 }
 
 /// A headless GPU context that can run every technique's pipeline.
@@ -229,7 +246,7 @@ fn matrix(args: &BenchArgs) -> Matrix {
 
 /// Measures every technique on every cell of `m`; `log` prints a line per cell.
 fn run_matrix(
-    ctx: &GpuContext,
+    device: &mut Device<'_>,
     m: &Matrix,
     techniques: &[&Technique],
     budget_mib: Option<u64>,
@@ -262,7 +279,7 @@ fn run_matrix(
                     voxels,
                     budget_mib,
                 };
-                run_cell(ctx, &cell, techniques, log, &mut out)?;
+                run_cell(device, &cell, techniques, log, &mut out)?;
             }
         }
     }
@@ -271,7 +288,7 @@ fn run_matrix(
 
 /// Measures every technique on one cell.
 fn run_cell(
-    ctx: &GpuContext,
+    device: &mut Device<'_>,
     cell: &Cell,
     techniques: &[&Technique],
     log: bool,
@@ -290,7 +307,34 @@ fn run_cell(
             "{} on {} level {level} {}x{}",
             t.name, cell.model, cell.size.0, cell.size.1
         );
-        let row = match run_one(ctx, t, cell) {
+        if crate::device_loss::loses_device_at(device.faults, device.rows) {
+            device.ctx.inject_device_loss();
+        }
+        device.rows += 1;
+        let result = run_one(&device.ctx, t, cell);
+        if result.is_err()
+            && let Some(reason) = device.ctx.lost()
+        {
+            if device.lost_last_row {
+                anyhow::bail!(
+                    "{what}: the GPU device was lost again on the row after the last loss \
+                     ({reason}); giving up rather than retrying"
+                );
+            }
+            let why = format!(
+                "{what}: the GPU device was lost ({reason}); the rows after it ran on a new device"
+            );
+            if log {
+                eprintln!("failed {why}");
+            }
+            out.failed.push(why);
+            device.ctx = open_context(techniques)
+                .with_context(|| format!("a new GPU device after losing it on {what}"))?;
+            device.lost_last_row = true;
+            continue;
+        }
+        device.lost_last_row = false;
+        let row = match result {
             Ok(row) => row,
             // What the device cannot hold is a result, not a failure of the run.
             Err(e) if too_large(&e) || needs_whole_levels(&e) => {
