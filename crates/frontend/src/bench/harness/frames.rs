@@ -78,6 +78,9 @@ pub(crate) fn profiling(ctx: &GpuContext) -> Profiling {
 pub(crate) struct TimedFrames {
     /// Median wall time of the timed frames (ms).
     pub(crate) frame_ms: f64,
+    /// Median GPU time of as many frames timed by timestamps ([`gpu_timed_frames`]; `None`
+    /// on software adapters).
+    pub(crate) frame_gpu_ms: Option<f64>,
     /// The profiled frame.
     pub(crate) stats: FrameStats,
     software: bool,
@@ -97,10 +100,13 @@ impl TimedFrames {
         renderer.render(ctx, gpu_scene, camera, Profiling::Off)?;
         ctx.wait_idle()?;
         let mut times = timed_frames(ctx, renderer, gpu_scene, camera, frames)?;
+        let frame_gpu_ms =
+            gpu_timed_frames(ctx, renderer, gpu_scene, camera, frames)?.map(|mut g| median(&mut g));
         renderer.set_counting(true);
         let stats = renderer.render(ctx, gpu_scene, camera, profiling(ctx))?;
         Ok(Self {
             frame_ms: median(&mut times),
+            frame_gpu_ms,
             stats,
             software: ctx.report().is_software,
         })

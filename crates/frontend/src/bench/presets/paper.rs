@@ -194,6 +194,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
     {
         if let Some(k) = PAPER_TECHNIQUES.iter().position(|t| *t == g.technique) {
             grid_row.ms[k] = Some(g.frame_ms_median);
+            grid_row.gpu_ms[k] = g.frame_gpu_ms_median;
         }
     }
     rows.push(grid_row);

@@ -43,6 +43,8 @@ struct ScaleRow {
     width: u32,
     height: u32,
     frame_ms_median: f64,
+    /// Median GPU time of the frames timed by timestamps (`None` on software adapters).
+    frame_gpu_ms_median: Option<f64>,
     /// The filter pass's time (wall on a software adapter, GPU timestamps otherwise).
     filter_ms: Option<f64>,
     /// Pixels the reference covers.
@@ -105,6 +107,8 @@ pub(crate) struct ScaleTime {
     pub(crate) view: &'static str,
     pub(crate) instances: usize,
     pub(crate) frame_ms_median: f64,
+    /// Median GPU time (timestamps; `None` on software adapters).
+    pub(crate) frame_gpu_ms_median: Option<f64>,
 }
 
 /// [`run`], printing the report only when `print_report`; returns the rows' times.
@@ -148,6 +152,7 @@ pub(crate) fn run_with(args: &BenchArgs, print_report: bool) -> Result<Vec<Scale
             view: r.view,
             instances: r.instances,
             frame_ms_median: r.frame_ms_median,
+            frame_gpu_ms_median: r.frame_gpu_ms_median,
         })
         .collect())
 }
@@ -359,6 +364,7 @@ fn measure(
         width: v.size.0,
         height: v.size.1,
         frame_ms_median: frame_ms,
+        frame_gpu_ms_median: timed.frame_gpu_ms,
         filter_ms,
         covered_pixels: covered,
         filter_us_per_covered_px: filter_ms.and_then(per_px),
@@ -423,6 +429,9 @@ fn table(rows: &[ScaleRow]) -> Table<'_, ScaleRow> {
             Column::new("frame_ms_median", |r: &ScaleRow| r.frame_ms_median)
                 .csv(Fmt::fixed(4))
                 .md("frame ms", Fmt::fixed(1)),
+            Column::new("frame_gpu_ms_median", |r: &ScaleRow| r.frame_gpu_ms_median)
+                .csv(Fmt::fixed(4))
+                .md("GPU ms", Fmt::fixed(2).or("-")),
             Column::new("filter_ms", |r: &ScaleRow| r.filter_ms).csv(Fmt::fixed(4)),
             Column::new("covered_pixels", |r: &ScaleRow| r.covered_pixels).csv(Fmt::PLAIN),
             Column::new("filter_us_per_covered_px", |r: &ScaleRow| {
