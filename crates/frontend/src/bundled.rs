@@ -31,6 +31,10 @@ const FILES: &[(&str, &[u8])] = &[
         include_bytes!("../../../assets/pipelines/ssbvb_aa.ron"),
     ),
     (
+        "pipelines/ssbvb_edge_aa.ron",
+        include_bytes!("../../../assets/pipelines/ssbvb_edge_aa.ron"),
+    ),
+    (
         "pipelines/ssbvb_flat.ron",
         include_bytes!("../../../assets/pipelines/ssbvb_flat.ron"),
     ),

@@ -10,6 +10,7 @@ mod cube_raster;
 mod dense_dda;
 mod device_loss;
 mod dynamic;
+mod edge_aa;
 mod embed;
 mod empty_space;
 mod esvo_ray_cast;

@@ -134,6 +134,7 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
         ],
     ),
     ("ray_cast_compute.inc.wgsl", &["ray_cast_compute::"]),
+    ("edge_aa.wgsl", &["edge_aa::"]),
 ];
 
 #[derive(Debug, Default)]

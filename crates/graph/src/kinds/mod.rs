@@ -11,6 +11,7 @@ mod cone_composite;
 mod cone_trace;
 mod cube_raster;
 mod dense_dda;
+mod edge_aa;
 mod empty_space_prepass;
 mod esvo_ray_cast;
 mod formats;
@@ -31,6 +32,7 @@ pub use cone_composite::ConeCompositeKind;
 pub use cone_trace::{ConeTraceParams, MAX_CONES, MAX_VOLUME_RESOLUTION};
 pub use cube_raster::CubeRasterParams;
 pub use dense_dda::DenseDdaParams;
+pub use edge_aa::EdgeAaParams;
 pub use empty_space_prepass::EmptySpacePrepassKind;
 pub use esvo_ray_cast::EsvoRayCastParams;
 pub use formats::LIGHT;
@@ -105,6 +107,9 @@ pass_kinds! {
     /// to the current colour's neighbourhood and blended with it (the renderer jitters the
     /// projection of every frame while a pipeline has this pass).
     Temporal(TemporalParams);
+    /// Single-frame anti-aliasing of the output colour for stills (FXAA-style): edge
+    /// pixels blended with their neighbour across the edge by the share the edge covers.
+    EdgeAa(EdgeAaParams);
 }
 
 #[cfg(test)]
@@ -132,6 +137,7 @@ mod tests {
             ConeCompositeKind::NAME,
             VolumeSlicesParams::NAME,
             TemporalParams::NAME,
+            EdgeAaParams::NAME,
         ];
         assert_eq!(spec_names, KIND_NAMES);
     }

@@ -33,6 +33,7 @@ pass_modules! {
     cone_composite::ConeComposite,
     volume_slices::VolumeSlices,
     temporal::Temporal,
+    edge_aa::EdgeAa,
 }
 
 /// The registration of `kind`.

@@ -101,6 +101,14 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         edit: None,
         max_level: 16,
     },
+    // The default pipeline with single-frame anti-aliasing (`EdgeAa`, FXAA-style): the
+    // option for stills.
+    Technique {
+        name: "ssbvb-edge-aa",
+        pipeline: "ssbvb_edge_aa.ron",
+        edit: None,
+        max_level: 16,
+    },
     // The default pipeline with the billboards splatted in compute.
     Technique {
         name: "ssbvb-splat",
@@ -199,10 +207,15 @@ pub(crate) const PAPER_TECHNIQUES: &[&str] = &[
     "octree-compute",
 ];
 
-/// Techniques that measure what another already does (left out unless named): the default
-/// pipeline by another name, and the compute forms of the octree casters (their fragment
-/// forms' images; the paper preset runs them).
-const ALIASES: &[&str] = &["ssbvb-fast", "octree-compute", "esvo-compute"];
+/// Techniques left out unless named: the default pipeline by another name, the compute
+/// forms of the octree casters (their fragment forms' images; the paper preset runs them)
+/// and the still-image anti-aliasing (the quality preset runs it).
+const ALIASES: &[&str] = &[
+    "ssbvb-fast",
+    "octree-compute",
+    "esvo-compute",
+    "ssbvb-edge-aa",
+];
 
 /// Technique names, for `--techniques`.
 fn technique_names() -> Vec<&'static str> {

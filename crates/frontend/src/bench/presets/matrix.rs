@@ -469,7 +469,12 @@ fn run_one(ctx: &GpuContext, t: &Technique, c: &Cell) -> Result<Row> {
         // (one slot per voxel, at the pixel that claimed it) over those pixels only.
         same_voxel_rate: if matches!(
             t.name,
-            "ssbvb-unique" | "ssbvb-exact" | "ssbvb-fast" | "ssbvb-splat" | "ssbvb-aa"
+            "ssbvb-unique"
+                | "ssbvb-exact"
+                | "ssbvb-fast"
+                | "ssbvb-splat"
+                | "ssbvb-aa"
+                | "ssbvb-edge-aa"
         ) {
             m.slot_same_voxel_rate
         } else {

@@ -174,7 +174,13 @@ fn quality_techniques(args: &BenchArgs) -> Result<Vec<&'static Technique>> {
             .filter(|t| {
                 matches!(
                     t.name,
-                    "ssbvb-unique" | "ssbvb-aa" | "ssbvb-flat" | "ssbvb-raybox" | "octree" | "esvo"
+                    "ssbvb-unique"
+                        | "ssbvb-aa"
+                        | "ssbvb-edge-aa"
+                        | "ssbvb-flat"
+                        | "ssbvb-raybox"
+                        | "octree"
+                        | "esvo"
                 )
             })
             .collect(),
