@@ -2,8 +2,9 @@
 // Single-frame anti-aliasing for stills (`EdgeAa`), FXAA-style (after Lottes' FXAA: the
 // contrast test, the edge orientation from the 3 x 3 luma, the search along the edge and
 // the sub-pixel blend), on the output colour with straight alpha: colours are taken
-// premultiplied by alpha, so a silhouette against the empty background (alpha 0) is an
-// edge like any other, and the output is straight alpha again.
+// premultiplied by alpha and luma counts coverage (COVERAGE_LUMA), so a silhouette against
+// the empty background (alpha 0) is an edge like any other, a dark object's too, and the
+// output is straight alpha again.
 //
 // Per pixel: skip unless the 3 x 3 luma range exceeds THRESHOLD of its maximum (and an
 // absolute floor); the edge runs along x when the vertical second differences dominate.
@@ -31,9 +32,14 @@ fn texel(p: vec2<i32>) -> vec4<f32> {
     return vec4(c.rgb * c.a, c.a);
 }
 
-// Perceptual brightness of a premultiplied colour.
+// The least luma of a covered pixel: a dark object against the empty background still
+// has a silhouette of this contrast.
+const COVERAGE_LUMA: f32 = 0.25;
+
+// Perceptual brightness of a premultiplied colour, at least COVERAGE_LUMA times its
+// coverage.
 fn luma(c: vec4<f32>) -> f32 {
-    return sqrt(max(dot(c.rgb, vec3(0.299, 0.587, 0.114)), 0.0));
+    return max(sqrt(max(dot(c.rgb, vec3(0.299, 0.587, 0.114)), 0.0)), COVERAGE_LUMA * c.a);
 }
 
 fn luma_at(p: vec2<i32>) -> f32 {

@@ -50,18 +50,32 @@ fn every_chunk_of_every_stream_is_read_like_a_single_binding() {
         "{nodes} nodes, chunks of 2^{node_bits}"
     );
     let cam = Camera::new(DVec3::new(1.6, 0.9, 2.2), DVec3::new(0.0, 0.05, 0.0));
+    let octree = include_str!("../../../assets/pipelines/octree_ray_cast.ron");
+    let esvo = include_str!("../../../assets/pipelines/esvo.ron");
+    // The casters' compute form reads the chunks through its own pipelines.
+    let compute = |text: &str, kind: &str| {
+        let from = format!("kind: {kind}(max_steps: 4096)");
+        assert!(text.contains(&from), "{kind}: the bundled file changed");
+        text.replace(
+            &from,
+            &format!("kind: {kind}(max_steps: 4096, compute: true)"),
+        )
+    };
     for (name, pipeline) in [
-        ("ssbvb", include_str!("../../../assets/pipelines/ssbvb.ron")),
         (
-            "octree",
-            include_str!("../../../assets/pipelines/octree_ray_cast.ron"),
+            "ssbvb",
+            include_str!("../../../assets/pipelines/ssbvb.ron").to_string(),
         ),
-        ("esvo", include_str!("../../../assets/pipelines/esvo.ron")),
+        ("octree", octree.to_string()),
+        ("octree compute", compute(octree, "OctreeRayCast")),
+        ("esvo", esvo.to_string()),
+        ("esvo compute", compute(esvo, "EsvoRayCast")),
         (
             "cube raster",
-            include_str!("../../../assets/pipelines/cube_raster.ron"),
+            include_str!("../../../assets/pipelines/cube_raster.ron").to_string(),
         ),
     ] {
+        let pipeline = pipeline.as_str();
         let render = |chunks: StreamChunks| {
             // Level 6 and a coarser LOD, so LOD offsets into later chunks are exercised.
             [6, 4].map(|level| {

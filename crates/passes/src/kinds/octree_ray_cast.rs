@@ -215,7 +215,7 @@ impl OctreeCaster {
         }
         if let Some(c) = &mut self.compute {
             let (w, h) = rec.screen;
-            if c.hits(rec.gpu, u64::from(w) * u64::from(h)).1 {
+            if c.hits(rec.gpu, self.kind, u64::from(w) * u64::from(h))?.1 {
                 self.octrees = None;
             }
         }

@@ -75,19 +75,42 @@ impl ComputeCast {
     }
 
     /// The hit buffer for `pixels` pixels, and whether it was made anew (bind groups that
-    /// hold the old one must be made again).
-    pub(crate) fn hits(&mut self, ctx: &GpuContext, pixels: u64) -> (&wgpu::Buffer, bool) {
+    /// hold the old one must be made again). A screen whose hits exceed the device's
+    /// storage-binding or buffer size is refused as too large.
+    pub(crate) fn hits(
+        &mut self,
+        ctx: &GpuContext,
+        kind: &str,
+        pixels: u64,
+    ) -> Result<(&wgpu::Buffer, bool), PassError> {
         let fresh = self.hits.as_ref().is_none_or(|h| h.1 != pixels);
         if fresh {
-            let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("ray cast hits"),
-                size: (pixels * RECORD_BYTES).max(RECORD_BYTES),
-                usage: wgpu::BufferUsages::STORAGE,
-                mapped_at_creation: false,
-            });
+            let size = (pixels * RECORD_BYTES).max(RECORD_BYTES);
+            let limits = ctx.device.limits();
+            let most = limits
+                .max_storage_buffer_binding_size
+                .min(limits.max_buffer_size);
+            if size > most {
+                return Err(PassError::TooLarge(format!(
+                    "{kind} (compute): {pixels} pixels need {} MiB of hits, more than the \
+                     device binds ({} MiB); use the fragment form (compute: false) or a \
+                     smaller image",
+                    size >> 20,
+                    most >> 20
+                )));
+            }
+            let label = format!("{kind} hits");
+            let buffer = ctx.validated(&label, |d| {
+                d.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(&label),
+                    size,
+                    usage: wgpu::BufferUsages::STORAGE,
+                    mapped_at_creation: false,
+                })
+            })?;
             self.hits = Some((buffer, pixels));
         }
-        (&self.hits.as_ref().expect("made above").0, fresh)
+        Ok((&self.hits.as_ref().expect("made above").0, fresh))
     }
 
     /// The hit buffer, once made.

@@ -220,6 +220,8 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
     rows.push(fig_row);
     let mut skipped = m.results.skipped.clone();
     skipped.dedup();
+    // Rows that lost the device are not measured either; say so where the ratios are.
+    skipped.extend(m.results.failed.iter().map(|f| format!("failed: {f}")));
     skipped.extend(fig.skipped.iter().cloned());
     let report = PaperReport {
         adapter: m.ctx.report().to_string(),
