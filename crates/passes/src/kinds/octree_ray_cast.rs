@@ -133,7 +133,8 @@ pub const OWN: &[OwnBinding] = &[
         name: "ray_counters",
         kind: OwnKind::StorageReadWrite,
     },
-    // The compute form's per-pixel hits (`ray_cast_compute`; a placeholder otherwise).
+    // The compute form's per-pixel hits (`ray_cast_compute`); the fragment form binds its
+    // 16-byte `no_hits` buffer here, which its shader never reads.
     OwnBinding {
         name: "cast_hits",
         kind: OwnKind::StorageReadWrite,
