@@ -5,7 +5,7 @@ mod animation;
 mod bench;
 mod budget;
 mod bundled;
-mod device_loss;
+mod faults;
 mod flip;
 mod pipeline_cmd;
 mod progress;

@@ -90,8 +90,11 @@ pub struct RenderArgs {
     pub camera_path: crate::soak::CameraPath,
     /// Fault injection for tests: `device-lost@FRAME` destroys the device before soak
     /// frame FRAME (repeatable); the soak recovers (`device_recoveries` in `--json`).
-    #[arg(long, hide = true, value_parser = crate::device_loss::parse_fault)]
-    pub inject_fault: Vec<crate::device_loss::Fault>,
+    /// `oom@FRAME` refuses the next large allocation and rebuilds the session there
+    /// (`oom@0` without a soak: the first upload); under a budget the budget is halved
+    /// until the scene fits, without one the run ends naming the resource.
+    #[arg(long, hide = true, value_parser = crate::faults::parse_fault)]
+    pub inject_fault: Vec<crate::faults::Fault>,
 }
 
 /// Parses a sample count of `--samples` (a square from 1 to 256).
@@ -279,7 +282,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.reference && args.frames > 1 {
         bail!("--frames (a soak of the GPU renderer) does not apply to --reference");
     }
-    crate::device_loss::check_faults(&args.inject_fault, args.frames)?;
+    crate::faults::check_faults(&args.inject_fault, args.frames)?;
     let report = if args.reference {
         render_reference(args, &scene, &animated, camera, warnings, notes)?
     } else {
@@ -443,7 +446,7 @@ fn render_gpu(
         .clone()
         .or(scene_pipeline)
         .unwrap_or_else(|| assets_dir().join("pipelines/ssbvb.ron"));
-    let source = SessionSource {
+    let mut source = SessionSource {
         scene,
         pipeline: crate::adapter_cmd::resolve(&pipeline_path)?,
         budget,
@@ -452,7 +455,12 @@ fn render_gpu(
         time: args.time,
         size: args.size,
     };
-    let mut session = source.open(&mut notes)?;
+    let opened = source.open_refusing(
+        &mut notes,
+        crate::faults::runs_out_of_memory_at(&args.inject_fault, 0) && args.frames == 1,
+    )?;
+    warnings.extend(opened.warnings);
+    let mut session = opened.session;
     let profiling = if session.ctx.report().is_software {
         Profiling::TimestampsAndWall
     } else {
@@ -467,27 +475,33 @@ fn render_gpu(
         &camera,
         args.max_frames,
     )?;
-    let streaming = crate::budget::StreamingReport::of(&session.scene, frames, converged);
+    let mut streaming = crate::budget::StreamingReport::of(&session.scene, frames, converged);
     streaming_warnings(streaming.as_ref(), frames, &mut warnings);
     let soak = if args.frames > 1 {
-        let r = crate::soak::run(
-            &mut session,
-            &source,
+        let (s, r) = crate::soak::run(
+            session,
+            &mut source,
             &camera,
             args.camera_path,
             args.frames as usize,
             &args.inject_fault,
             args.max_frames,
         )?;
+        session = s;
+        warnings.extend(r.warnings.iter().cloned());
         // The written frame is the scene's camera converged again: under a budget the
         // soak's path (and a recovery's fresh pool) left other pages resident.
-        crate::budget::converge(
+        let (frames, converged) = crate::budget::converge(
             &session.ctx,
             &mut session.renderer,
             &mut session.scene,
             &camera,
             args.max_frames,
         )?;
+        if r.out_of_memory_rebuilds > 0 {
+            // A rebuild may have lowered the budget: report the scene the frame is drawn from.
+            streaming = crate::budget::StreamingReport::of(&session.scene, frames, converged);
+        }
         Some(r)
     } else {
         None

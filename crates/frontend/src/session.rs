@@ -1,7 +1,7 @@
 //! The GPU state of one `ssbvb render`: the device, the scene on it and the renderer,
 //! opened from what stays on the CPU for the whole command ([`SessionSource`]: the scene,
 //! the resolved pipeline, the budget, the animated objects), so that a soak can open it
-//! again when the device is lost (`crate::device_loss`).
+//! again when the device is lost (`crate::faults`).
 
 use anyhow::Result;
 use ssbvb_gpu::GpuContext;
@@ -43,52 +43,116 @@ pub struct GpuSession {
     pub animation: Option<AnimationReport>,
 }
 
+/// A session opened and the out-of-memory steps it took (`warnings` for the report).
+pub struct Opened {
+    /// The session.
+    pub session: GpuSession,
+    /// One line per allocation the driver refused and the budget it lowered.
+    pub warnings: Vec<String>,
+}
+
 impl SessionSource {
     /// Creates a device that fits the pipeline, uploads the scene (under the budget, the
     /// pages streaming from their cache files; `notes` says where they cannot), poses the
-    /// animated objects and builds the renderer.
-    pub fn open(&self, notes: &mut Vec<String>) -> Result<GpuSession> {
+    /// animated objects and builds the renderer. With `refuse`, the device refuses the
+    /// first large allocation (`--inject-fault oom@FRAME`). An allocation the driver refuses lowers a
+    /// budget to half (kept in `self.budget`, so later sessions open under it too) and the
+    /// upload starts again; without a budget it is an error naming the resource, its size
+    /// and `--gpu-budget`.
+    pub fn open_refusing(&mut self, notes: &mut Vec<String>, refuse: bool) -> Result<Opened> {
         let ctx = crate::adapter_cmd::headless_context(&[&self.pipeline])?;
+        if refuse {
+            ctx.refuse_allocation(crate::faults::INJECTED_OOM_MIN_BYTES);
+        }
+        let mut warnings = Vec::new();
+        loop {
+            let e = match self.upload(&ctx, notes) {
+                Ok((scene, renderer, animation)) => {
+                    let session = GpuSession {
+                        ctx,
+                        scene,
+                        renderer,
+                        animation,
+                    };
+                    return Ok(Opened { session, warnings });
+                }
+                Err(e) => e,
+            };
+            let Some((resource, bytes)) = crate::faults::out_of_memory(&e) else {
+                return Err(e);
+            };
+            let refused = format!(
+                "out of GPU memory: the driver refused {} for {resource}",
+                ssbvb_gpu::alloc::mib_text(bytes)
+            );
+            match self.budget {
+                Some(mib) if mib > 1 => {
+                    let lower = mib / 2;
+                    let w = format!(
+                        "{refused}; --gpu-budget lowered from {mib} to {lower} MiB (finer levels \
+                         of the view may stay coarser)"
+                    );
+                    log::warn!("{w}");
+                    warnings.push(w);
+                    self.budget = Some(lower);
+                }
+                Some(mib) => {
+                    return Err(e.context(format!(
+                        "the scene does not fit the GPU's memory even under a {mib} MiB budget"
+                    )));
+                }
+                None => {
+                    return Err(e.context(format!(
+                        "the scene does not fit the GPU's memory; {}",
+                        crate::faults::out_of_memory_hint()
+                    )));
+                }
+            }
+        }
+    }
+
+    /// The scene, the renderer and the animation update on `ctx`.
+    fn upload(
+        &self,
+        ctx: &GpuContext,
+        notes: &mut Vec<String>,
+    ) -> Result<(GpuScene, Renderer, Option<AnimationReport>)> {
         let scene = self.scene.clone();
         let mut gpu_scene = match self.budget {
             Some(mib) => {
                 // Offline: stream every page a frame asks for before the next one.
                 let options = crate::budget::options(mib, &self.page_sources, usize::MAX, notes)?;
-                GpuScene::streamed(&ctx, scene, &options)?
+                GpuScene::streamed(ctx, scene, &options)?
             }
             None if !self.animated.is_empty() => {
-                GpuScene::with_dynamic(&ctx, scene, &crate::animation::rooms(&self.animated))?
+                GpuScene::with_dynamic(ctx, scene, &crate::animation::rooms(&self.animated))?
             }
-            None => GpuScene::new(&ctx, scene)?,
+            None => GpuScene::new(ctx, scene)?,
         };
         let animation = if self.animated.is_empty() {
             None
         } else {
-            let animator = ssbvb_gpu_build::animated::Animator::new(&ctx)?;
+            let animator = ssbvb_gpu_build::animated::Animator::new(ctx)?;
             Some(crate::animation::update_all(
-                &ctx,
+                ctx,
                 &mut gpu_scene,
                 &animator,
                 &self.animated,
                 self.time,
             )?)
         };
-        let mut renderer = Renderer::new(&ctx, &gpu_scene, self.pipeline.clone(), self.size)?;
+        let mut renderer = Renderer::new(ctx, &gpu_scene, self.pipeline.clone(), self.size)?;
         renderer.set_counting(true);
-        Ok(GpuSession {
-            ctx,
-            scene: gpu_scene,
-            renderer,
-            animation,
-        })
+        Ok((gpu_scene, renderer, animation))
     }
 
-    /// [`SessionSource::open`] after a device loss: the same, then frames of `camera`
-    /// until no page is missing (as the command's warm-up did), so that the next frame is
-    /// what it would have been on the lost device.
-    pub fn reopen(&self, camera: &Camera, max_frames: usize) -> Result<GpuSession> {
-        let mut s = self.open(&mut Vec::new())?;
+    /// [`SessionSource::open_refusing`] after a device loss or a refused allocation: the
+    /// same, then frames of `camera` until no page is missing (as the command's warm-up
+    /// did), so that the next frame is what it would have been on the lost device.
+    pub fn reopen(&mut self, camera: &Camera, max_frames: usize, refuse: bool) -> Result<Opened> {
+        let mut o = self.open_refusing(&mut Vec::new(), refuse)?;
+        let s = &mut o.session;
         crate::budget::converge(&s.ctx, &mut s.renderer, &mut s.scene, camera, max_frames)?;
-        Ok(s)
+        Ok(o)
     }
 }

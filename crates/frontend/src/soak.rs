@@ -9,7 +9,8 @@
 //!
 //! A frame whose device is lost (a driver reset, or `--inject-fault device-lost@FRAME`)
 //! opens a new session from the CPU-side state and is drawn again
-//! (`crate::device_loss`); the report counts the recoveries.
+//! (`crate::faults`); the report counts the recoveries. `oom@FRAME` rebuilds the session
+//! at that frame with its first large allocation refused.
 
 use std::time::Instant;
 
@@ -21,7 +22,7 @@ use ssbvb_gpu::scene::GpuScene;
 use ssbvb_passes::Profiling;
 use ssbvb_voxel::camera::Camera;
 
-use crate::device_loss::{Fault, Recoveries, loses_device_at};
+use crate::faults::{Fault, Recoveries, loses_device_at, runs_out_of_memory_at};
 use crate::session::{GpuSession, SessionSource};
 
 /// How the camera moves during a soak.
@@ -138,6 +139,10 @@ pub struct SoakReport {
     pub frame_ms_max: f64,
     /// Times the device was lost and the session opened again.
     pub device_recoveries: usize,
+    /// Sessions rebuilt by `oom@FRAME` (each with its first large allocation refused).
+    pub out_of_memory_rebuilds: usize,
+    /// What the rebuilds lowered (`render --json` lists these under `warnings` too).
+    pub warnings: Vec<String>,
 }
 
 /// The viewer's `--memory-report`: memory after the warm-up and at the end of a
@@ -181,55 +186,79 @@ fn growth(start: u64, end: u64) -> f64 {
 /// budget; fails on the first wgpu error. A frame whose device was lost (or is made lost
 /// by `faults`) opens a new session from `source` (warmed up to that frame's camera, at
 /// most `max_frames` frames) and is drawn again, unless the device was lost shortly
-/// before too.
+/// before too. An `oom@FRAME` fault rebuilds the session at that frame with its first
+/// large allocation refused (`crate::faults`). Returns the session the soak ended on.
 pub fn run(
-    session: &mut GpuSession,
-    source: &SessionSource,
+    mut session: GpuSession,
+    source: &mut SessionSource,
     base: &Camera,
     path: CameraPath,
     n: usize,
     faults: &[Fault],
     max_frames: usize,
-) -> Result<SoakReport> {
+) -> Result<(GpuSession, SoakReport)> {
     let warmup = warmup_frames(n);
     let every = (n / 9).max(1);
     let mut samples = Vec::new();
     let mut times = Vec::with_capacity(n);
     let mut recoveries = Recoveries::default();
+    let mut warnings = Vec::new();
+    let mut oom_rebuilds = 0;
     for i in 0..n {
         if i >= warmup && (i - warmup).is_multiple_of(every) {
             samples.push(Sample::take(&session.ctx, &session.scene, i));
         }
         let cam = camera_at(base, path, i, n);
+        if runs_out_of_memory_at(faults, i) {
+            // The old session's memory goes before the new one asks for its own.
+            drop(session);
+            let o = source.reopen(&cam, max_frames, true).with_context(|| {
+                format!("rebuilding the GPU session at soak frame {i} (oom@{i})")
+            })?;
+            session = o.session;
+            warnings.extend(
+                o.warnings
+                    .into_iter()
+                    .map(|w| format!("soak frame {i}: {w}")),
+            );
+            oom_rebuilds += 1;
+        }
         if loses_device_at(faults, i) {
             session.ctx.inject_device_loss();
         }
         let mut t = Instant::now();
-        if let Err(e) = draw(session, &cam, i) {
+        if let Err(e) = draw(&mut session, &cam, i) {
             let Some(reason) = session.ctx.lost() else {
                 return Err(e);
             };
             recoveries.lost_at(i, &reason)?;
             log::warn!("soak frame {i}: the GPU device was lost ({reason}); recreating it");
-            *session = source.reopen(&cam, max_frames).with_context(|| {
-                format!("recreating the GPU session after losing it at frame {i}")
-            })?;
+            drop(session);
+            session = source
+                .reopen(&cam, max_frames, false)
+                .with_context(|| {
+                    format!("recreating the GPU session after losing it at frame {i}")
+                })?
+                .session;
             // The frame's time is the redraw's: opening a device is not a frame.
             t = Instant::now();
-            draw(session, &cam, i)?;
+            draw(&mut session, &cam, i)?;
         }
         times.push(t.elapsed().as_secs_f64() * 1e3);
     }
     let end = Sample::take(&session.ctx, &session.scene, n);
     times.sort_by(f64::total_cmp);
-    Ok(SoakReport {
+    let report = SoakReport {
         frames: n,
         camera_path: path,
         memory: MemoryTrend::of(samples, end),
         frame_ms_median: times.get(times.len() / 2).copied().unwrap_or(0.0),
         frame_ms_max: times.last().copied().unwrap_or(0.0),
         device_recoveries: recoveries.count,
-    })
+        out_of_memory_rebuilds: oom_rebuilds,
+        warnings,
+    };
+    Ok((session, report))
 }
 
 /// One soak frame, waited for; any wgpu error fails it.

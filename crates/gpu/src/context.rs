@@ -42,6 +42,17 @@ pub enum GpuError {
         /// What to install or set.
         hint: String,
     },
+    /// The driver refused an allocation (or [`GpuContext::refuse_allocation`] made it).
+    #[error(
+        "out of GPU memory: the driver refused {} for {resource}",
+        crate::alloc::mib_text(*bytes)
+    )]
+    OutOfMemory {
+        /// What was being allocated (the buffer's or texture's label).
+        resource: String,
+        /// Its size in bytes.
+        bytes: u64,
+    },
     /// Waiting for the device or mapping a buffer failed.
     #[error("GPU readback of {label} failed: {message}")]
     Readback {
@@ -220,6 +231,9 @@ pub struct GpuContext {
     uncaptured: Arc<Mutex<Vec<String>>>,
     /// Why the device was lost, once it is (set by wgpu's device-lost callback).
     lost: Arc<Mutex<Option<String>>>,
+    /// The size from which the next checked allocation is refused (`crate::alloc`'s fault
+    /// injection; `u64::MAX`: none).
+    pub(crate) refuse_from: Arc<std::sync::atomic::AtomicU64>,
 }
 
 impl std::fmt::Debug for GpuContext {
@@ -423,6 +437,7 @@ impl GpuContext {
             report,
             uncaptured,
             lost,
+            refuse_from: Arc::new(std::sync::atomic::AtomicU64::new(u64::MAX)),
         })
     }
 
@@ -445,6 +460,7 @@ impl GpuContext {
             uncaptured: Arc::new(Mutex::new(Vec::new())),
             // The caller's device-lost callback stays the caller's.
             lost: Arc::new(Mutex::new(None)),
+            refuse_from: Arc::new(std::sync::atomic::AtomicU64::new(u64::MAX)),
         }
     }
 

@@ -13,11 +13,16 @@
 //! - Validation errors become Rust errors: [`GpuContext::validated`] wraps work in error
 //!   scopes, and errors outside any scope are collected ([`GpuContext::take_uncaptured_errors`])
 //!   instead of wgpu's default panic, so tests can fail on them with a message.
+//! - [`alloc`]: the large allocations (the scene's streams and pools, the render graph's
+//!   resources) in out-of-memory error scopes, so a refused one is
+//!   [`GpuError::OutOfMemory`] naming it and its size; and the fault injection that refuses
+//!   one.
 //! - [`readback`] copies textures (with 256-byte row padding handled) and buffers to the
 //!   CPU, and writes PNGs atomically.
 //! - [`scene`] uploads a [`scene::Scene`] (objects, instances, LOD policy) and keeps it
 //!   current per frame; [`error::ResourceError`] is what building it can fail with.
 
+pub mod alloc;
 pub mod buffer_init;
 pub mod context;
 pub mod error;

@@ -102,9 +102,10 @@ pub struct BenchArgs {
     pub flip_samples: u32,
     /// Fault injection for tests: `device-lost@ROW` destroys the device before the main
     /// matrix measures row ROW (from 0; repeatable). That row is reported failed and the
-    /// rows after it run on a new device.
-    #[arg(long, hide = true, value_parser = crate::device_loss::parse_fault)]
-    pub inject_fault: Vec<crate::device_loss::Fault>,
+    /// rows after it run on a new device. `oom@ROW` refuses that row's first large
+    /// allocation: the row is reported failed with the resource named.
+    #[arg(long, hide = true, value_parser = crate::faults::parse_fault)]
+    pub inject_fault: Vec<crate::faults::Fault>,
 }
 
 impl BenchArgs {

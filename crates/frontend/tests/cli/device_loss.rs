@@ -93,8 +93,12 @@ fn repeated_losses_and_faults_outside_the_soak_are_errors() {
             "--frames 6 or more",
         ),
         (
-            &["--frames", "5", "--inject-fault", "oom@1"][..],
-            "unknown fault `oom`",
+            &["--frames", "5", "--inject-fault", "leak@1"][..],
+            "unknown fault `leak`",
+        ),
+        (
+            &["--frames", "5", "--inject-fault", "oom@5"][..],
+            "--inject-fault oom@5 needs a soak of more than 5 frames (--frames 6 or more)",
         ),
     ] {
         let out = ssbvb()

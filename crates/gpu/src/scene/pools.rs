@@ -4,7 +4,6 @@
 use ssbvb_voxel::asset::GPU_VOXEL_BYTES;
 use ssbvb_voxel::lookup::NODE_WORDS;
 
-use crate::InitBuffer;
 use crate::{GpuContext, wgpu};
 
 use super::streaming::{BLOCK_BYTES, MAX_PAGE_BYTES, PagedLayoutBuilder, RUN_BYTES, SLOT_BYTES};
@@ -164,13 +163,13 @@ pub(super) fn storage(
     if data.len() < 16 {
         data.resize(16, 0);
     }
-    Ok(ctx.device.init_buffer(&wgpu::util::BufferInitDescriptor {
+    Ok(ctx.checked_init_buffer(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
         contents: &data,
         usage: wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_DST
             | wgpu::BufferUsages::COPY_SRC,
-    }))
+    })?)
 }
 
 pub(super) fn checked_u32(v: usize, what: &str) -> Result<u32, ResourceError> {

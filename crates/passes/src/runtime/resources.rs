@@ -64,7 +64,7 @@ impl FrameResources {
                 (ResourceDesc::Texture { format, size }, ResourceUsage::Texture(usage)) => {
                     let (w, h) = size.resolve(screen);
                     let format = texture_format(ctx, *format);
-                    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+                    let texture = ctx.checked_texture(&wgpu::TextureDescriptor {
                         label: Some(&label),
                         size: wgpu::Extent3d {
                             width: w,
@@ -78,7 +78,7 @@ impl FrameResources {
                         // Copies for readback in tests, tools and the embedding API.
                         usage: usage | wgpu::TextureUsages::COPY_SRC,
                         view_formats: &[],
-                    });
+                    })?;
                     let view = texture.create_view(&Default::default());
                     let depth_view = format.is_depth_stencil_format().then(|| {
                         texture.create_view(&wgpu::TextureViewDescriptor {
@@ -100,12 +100,12 @@ impl FrameResources {
                             "resource `{name}` needs {size} bytes, the device binds at most {max}"
                         )));
                     }
-                    FrameResource::Buffer(ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    FrameResource::Buffer(ctx.checked_buffer(&wgpu::BufferDescriptor {
                         label: Some(&label),
                         size: size.max(16),
                         usage,
                         mapped_at_creation: false,
-                    }))
+                    })?)
                 }
                 _ => unreachable!("graph usages match descriptors"),
             };

@@ -58,7 +58,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<Measured> {
 struct Device<'a> {
     ctx: GpuContext,
     /// Faults to inject (`--inject-fault device-lost@ROW`).
-    faults: &'a [crate::device_loss::Fault],
+    faults: &'a [crate::faults::Fault],
     /// Rows begun so far.
     rows: usize,
     /// Whether the last row lost the device (a second loss in a row ends the run).
@@ -307,8 +307,13 @@ fn run_cell(
             "{} on {} level {level} {}x{}",
             t.name, cell.model, cell.size.0, cell.size.1
         );
-        if crate::device_loss::loses_device_at(device.faults, device.rows) {
+        if crate::faults::loses_device_at(device.faults, device.rows) {
             device.ctx.inject_device_loss();
+        }
+        if crate::faults::runs_out_of_memory_at(device.faults, device.rows) {
+            device
+                .ctx
+                .refuse_allocation(crate::faults::INJECTED_OOM_MIN_BYTES);
         }
         device.rows += 1;
         let result = run_one(&device.ctx, t, cell);
@@ -337,6 +342,15 @@ fn run_cell(
         let row = match result {
             Ok(row) => row,
             // What the device cannot hold is a result, not a failure of the run.
+            // A refused allocation fails the row, with the resource named; the next row
+            // asks again.
+            Err(e) if crate::faults::out_of_memory(&e).is_some() => {
+                if log {
+                    eprintln!("failed {what}: {e:#}");
+                }
+                out.failed.push(format!("{what}: {e:#}"));
+                continue;
+            }
             Err(e) if too_large(&e) || needs_whole_levels(&e) => {
                 if log {
                     eprintln!("skipped {what}: {e:#}");
