@@ -7,9 +7,8 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result, anyhow};
+use anyhow::Result;
 use ssbvb_gpu::scene::{GpuScene, Scene};
-use ssbvb_gpu::wgpu;
 use ssbvb_graph::{PassKind, PipelineWatcher, ReloadOutcome, ResolvedPipeline};
 use ssbvb_passes::Renderer;
 use ssbvb_voxel::camera::Camera;
@@ -26,6 +25,11 @@ use super::input::CameraInput;
 use super::overlay::{self, Action, ObjectLod, OverlayState, OverlayView};
 use super::stats::Stats;
 use super::surface::WindowGpu;
+use crate::faults::Recoveries;
+
+mod open;
+mod present;
+mod recover;
 
 /// How often the pipeline file is checked for changes.
 const RELOAD_POLL: Duration = Duration::from_millis(300);
@@ -46,6 +50,8 @@ pub struct Options {
     pub memory_report: Option<PathBuf>,
     /// Automation: window pixels the brush paints at, after the first frame.
     pub paint: Vec<(u32, u32)>,
+    /// Faults injected before given frames (`--inject-fault`, tests).
+    pub faults: Vec<crate::faults::Fault>,
 }
 
 /// What is loaded before the window exists.
@@ -119,9 +125,28 @@ impl ApplicationHandler for App {
         let Some(viewer) = self.viewer.as_mut() else {
             return;
         };
-        let outcome = viewer.event(&self.options, &event);
+        let outcome = match viewer.event(&self.options, &event) {
+            // What fails on a lost device is the loss.
+            Err(e) => match viewer.gpu.ctx.lost() {
+                Some(reason) => Ok(Flow::Recover(recover::Fault::Lost(reason))),
+                None => Err(e),
+            },
+            ok => ok,
+        };
         match outcome {
             Ok(Flow::Continue) => {}
+            Ok(Flow::Recover(fault)) => {
+                let Some(viewer) = self.viewer.take() else {
+                    return;
+                };
+                match viewer.recovered(fault) {
+                    Ok(v) => {
+                        v.window.request_redraw();
+                        self.viewer = Some(v);
+                    }
+                    Err(e) => self.fail(event_loop, e),
+                }
+            }
             Ok(Flow::Exit) => {
                 self.viewer = None;
                 event_loop.exit();
@@ -146,11 +171,15 @@ impl ApplicationHandler for App {
 enum Flow {
     Continue,
     Exit,
+    /// The GPU side must be made again (`recover`).
+    Recover(recover::Fault),
 }
 
 /// Everything that exists once the window is open.
 struct Viewer {
     window: Arc<Window>,
+    /// The event loop's display connection (a new device's surface needs it).
+    display: winit::event_loop::OwnedDisplayHandle,
     gpu: WindowGpu,
     blit: Blit,
     egui_ctx: egui::Context,
@@ -191,92 +220,15 @@ struct Viewer {
     reloads: (u64, u64),
     /// Memory after the warm-up, for `--memory-report`.
     memory_samples: Vec<crate::soak::Sample>,
+    /// What the last GPU fault did (kept on screen).
+    notice: Option<String>,
+    /// Devices recreated so far, and the rule on repeated losses.
+    recoveries: Recoveries,
+    /// The frame whose injected faults were applied (each fires once).
+    faults_injected_at: Option<u64>,
 }
 
 impl Viewer {
-    fn new(event_loop: &ActiveEventLoop, options: &Options, loaded: Loaded) -> Result<Self> {
-        let attributes = Window::default_attributes()
-            .with_title(options.title.clone())
-            .with_inner_size(winit::dpi::PhysicalSize::new(
-                options.size.0,
-                options.size.1,
-            ));
-        let window = Arc::new(event_loop.create_window(attributes).map_err(|e| {
-            anyhow!(super::display::no_display_message(&format!(
-                "cannot create a window: {e}"
-            )))
-        })?);
-        let requirements = crate::adapter_cmd::requirements_of(&[loaded.watcher.current()]);
-        let gpu = WindowGpu::new(
-            window.clone(),
-            event_loop.owned_display_handle(),
-            &requirements,
-        )?;
-        let ctx = &gpu.ctx;
-        let blit = Blit::new(ctx, gpu.config.format)?;
-        let mut rooms = crate::animation::rooms(&loaded.animated);
-        rooms.extend(loaded.brush.iter().flat_map(|b| b.rooms()));
-        let scene = match &loaded.streaming {
-            Some(o) => GpuScene::streamed(ctx, loaded.scene, o),
-            None if !rooms.is_empty() => GpuScene::with_dynamic(ctx, loaded.scene, &rooms),
-            None => GpuScene::new(ctx, loaded.scene),
-        }
-        .context("uploading the scene")?;
-        let animator = if loaded.animated.is_empty() {
-            None
-        } else {
-            Some(ssbvb_gpu_build::animated::Animator::new(ctx)?)
-        };
-        let renderer = Renderer::new(ctx, &scene, loaded.watcher.current().clone(), gpu.size())
-            .with_context(|| format!("building {}", loaded.watcher.path().display()))?;
-        let egui_ctx = egui::Context::default();
-        let egui_state = egui_winit::State::new(
-            egui_ctx.clone(),
-            egui::ViewportId::ROOT,
-            window.as_ref(),
-            Some(window.scale_factor() as f32),
-            window.theme(),
-            Some(ctx.device.limits().max_texture_dimension_2d as usize),
-        );
-        let egui_renderer =
-            egui_wgpu::Renderer::new(&ctx.device, gpu.config.format, Default::default());
-        let stats = Stats::new(ctx.report());
-        Ok(Self {
-            window,
-            blit,
-            egui_ctx,
-            egui_state,
-            egui_renderer,
-            scene,
-            renderer,
-            animated: loaded.animated,
-            animator,
-            brush: loaded.brush,
-            started: Instant::now(),
-            watcher: loaded.watcher,
-            streaming: loaded.streaming,
-            knob_edits: BTreeMap::new(),
-            rig: CameraRig::new(loaded.camera),
-            initial_camera: loaded.camera,
-            input: CameraInput::default(),
-            cursor: None,
-            stats,
-            overlay: OverlayState::default(),
-            error: None,
-            status: None,
-            frame: 0,
-            sample_base: 0,
-            last_frame: Instant::now(),
-            last_poll: Instant::now(),
-            needs_rebuild: false,
-            screenshot_next: None,
-            screenshot_written: false,
-            reloads: (0, 0),
-            memory_samples: Vec::new(),
-            gpu,
-        })
-    }
-
     fn event(&mut self, options: &Options, event: &WindowEvent) -> Result<Flow> {
         let _ = self.egui_state.on_window_event(&self.window, event);
         if let WindowEvent::CursorMoved { position, .. } = event {
@@ -536,6 +488,9 @@ impl Viewer {
     }
 
     fn frame(&mut self, options: &Options) -> Result<Flow> {
+        if let Some(fault) = self.fault_now(options) {
+            return Ok(Flow::Recover(fault));
+        }
         let now = Instant::now();
         let dt = (now - self.last_frame).as_secs_f64().min(0.25);
         self.last_frame = now;
@@ -624,6 +579,7 @@ impl Viewer {
             fly_speed: self.rig.fly_speed,
             error: self.error.as_deref(),
             status: self.status.as_deref(),
+            notice: self.notice.as_deref(),
             size: self.gpu.size(),
             streaming: self.scene.streaming_stats(),
             brush: self.brush.as_ref().map(|b| b.settings),
@@ -662,130 +618,5 @@ impl Viewer {
             }
         }
         result
-    }
-
-    /// Draws the frame and the overlay onto the surface (and the screenshot target).
-    fn present(
-        &mut self,
-        options: &Options,
-        shapes: Vec<egui::epaint::ClippedShape>,
-        pixels_per_point: f32,
-    ) -> Result<Flow> {
-        let (surface_texture, suboptimal) = match self.gpu.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(t) => (t, false),
-            wgpu::CurrentSurfaceTexture::Suboptimal(t) => (t, true),
-            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
-                return Ok(Flow::Continue);
-            }
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                self.sync_size()?;
-                return Ok(Flow::Continue);
-            }
-            wgpu::CurrentSurfaceTexture::Validation => {
-                return Err(anyhow!("the window surface reported a validation error"));
-            }
-        };
-        let ctx = &self.gpu.ctx;
-        let paint_jobs = self.egui_ctx.tessellate(shapes, pixels_per_point);
-        let (w, h) = self.gpu.size();
-        let screen = egui_wgpu::ScreenDescriptor {
-            size_in_pixels: [w, h],
-            pixels_per_point,
-        };
-        let mut encoder = ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("view present"),
-            });
-        self.blit
-            .copy_frame(ctx, &mut encoder, &self.renderer.output().texture);
-        let callbacks = self.egui_renderer.update_buffers(
-            &ctx.device,
-            &ctx.queue,
-            &mut encoder,
-            &paint_jobs,
-            &screen,
-        );
-        let surface_view = surface_texture.texture.create_view(&Default::default());
-        let shot = self
-            .screenshot_next
-            .take()
-            .map(|path| (path, capture::target(ctx, self.gpu.config.format, (w, h))));
-        let shot_view = shot
-            .as_ref()
-            .map(|(_, t)| t.create_view(&Default::default()));
-        for target in std::iter::once(&surface_view).chain(shot_view.as_ref()) {
-            self.blit.draw(&mut encoder, target);
-            let mut pass = encoder
-                .begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("egui"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: target,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    ..Default::default()
-                })
-                .forget_lifetime();
-            self.egui_renderer.render(&mut pass, &paint_jobs, &screen);
-        }
-        ctx.queue
-            .submit(callbacks.into_iter().chain([encoder.finish()]));
-        self.window.pre_present_notify();
-        ctx.queue.present(surface_texture);
-        if suboptimal {
-            self.sync_size()?;
-        }
-        let ctx = &self.gpu.ctx;
-        let errors = ctx.take_uncaptured_errors();
-        if !errors.is_empty() {
-            return Err(anyhow!(
-                "wgpu error while presenting: {}",
-                errors.join("; ")
-            ));
-        }
-        if let Some((path, texture)) = shot {
-            match capture::write(ctx, &texture, &path) {
-                Ok(()) => {
-                    self.status = Some(format!("wrote {}", path.display()));
-                    if options.screenshot.as_ref() == Some(&path) {
-                        self.screenshot_written = true;
-                    }
-                }
-                // An automation screenshot that fails is a failed run; an F12 one is not.
-                Err(e) if options.screenshot.as_ref() == Some(&path) => return Err(e),
-                Err(e) => self.error = Some(format!("{e:#}")),
-            }
-        }
-        self.stats.presented(Instant::now());
-        self.frame += 1;
-
-        if let (Some(limit), Some(path)) = (options.frames, &options.memory_report) {
-            let warmup = crate::soak::warmup_frames(limit as usize) as u64;
-            let every = (limit / 9).max(1);
-            // Written at every sample (the report so far), so a run that dies leaves its
-            // last state, and a watcher knows the viewer is up.
-            let sample = self.frame >= warmup && (self.frame - warmup).is_multiple_of(every);
-            if sample || self.frame >= limit {
-                let s = crate::soak::Sample::take(&self.gpu.ctx, &self.scene, self.frame as usize);
-                let report = crate::soak::ViewMemoryReport {
-                    frames: self.frame,
-                    reloads_ok: self.reloads.0,
-                    reloads_failed: self.reloads.1,
-                    memory: crate::soak::MemoryTrend::of(self.memory_samples.clone(), s),
-                };
-                self.memory_samples.push(s);
-                crate::soak::write_json(path, &report)?;
-            }
-        }
-        // Automation: exit after the last frame (its screenshot was taken above).
-        if options.frames.is_some_and(|limit| self.frame >= limit) {
-            return Ok(Flow::Exit);
-        }
-        Ok(Flow::Continue)
     }
 }

@@ -135,6 +135,10 @@ pub struct Brush {
     pub settings: BrushSettings,
     objects: Vec<Editable>,
     splicer: Option<LevelSplicer>,
+    /// The objects left out (animated ones), for [`Brush::restarted`].
+    skip: Vec<usize>,
+    /// Every edit applied so far, in order, by object: what a device loss must not lose.
+    history: Vec<(usize, Edit)>,
 }
 
 impl Brush {
@@ -158,7 +162,77 @@ impl Brush {
             settings: BrushSettings::default(),
             objects,
             splicer: None,
+            skip: skip.to_vec(),
+            history: Vec::new(),
         }
+    }
+
+    /// The edits applied so far, in order.
+    pub fn history(&self) -> &[(usize, Edit)] {
+        &self.history
+    }
+
+    /// A brush with these settings on `scene` as it was before any edit (the scene's
+    /// assets are never edited: the edits live in the GPU rooms and the editors), for a new
+    /// device; [`Brush::replay`] then applies the history again.
+    pub fn restarted(&self, scene: &Scene) -> Self {
+        let mut b = Self::new(scene, &self.skip);
+        b.settings = self.settings;
+        b
+    }
+
+    /// Applies `edits` in order on a scene uploaded with [`Brush::rooms`]: the same
+    /// patches as when they were first made, so the rooms end as they were.
+    pub fn replay(
+        &mut self,
+        ctx: &GpuContext,
+        gpu_scene: &mut GpuScene,
+        edits: &[(usize, Edit)],
+    ) -> Result<()> {
+        for &(object, edit) in edits {
+            self.apply(ctx, gpu_scene, object, edit)?;
+        }
+        ctx.wait_idle()?;
+        Ok(())
+    }
+
+    /// Applies `edit` to `object` (its editor, then its room on the GPU, then the lookup
+    /// used for picking) and records it: the edit's report and the words uploaded.
+    fn apply(
+        &mut self,
+        ctx: &GpuContext,
+        gpu_scene: &mut GpuScene,
+        object: usize,
+        edit: Edit,
+    ) -> Result<(ssbvb_voxel::edit::EditReport, usize, u32, u64)> {
+        if self.splicer.is_none() {
+            self.splicer = Some(LevelSplicer::new(ctx)?);
+        }
+        let Some(splicer) = &self.splicer else {
+            bail!("the splice kernels did not compile");
+        };
+        let Some(e) = self.objects.iter_mut().find(|e| e.object == object) else {
+            bail!("object {object} is not editable");
+        };
+        let local = e.editor.apply(&[edit])?;
+        let stats = match splicer.apply(ctx, gpu_scene, object, &local.patches) {
+            Ok(s) => s,
+            Err(err) => {
+                // Nothing reached the GPU: the editor goes back to what the room holds.
+                e.editor.revert(&local);
+                return Err(err.into());
+            }
+        };
+        if let Some(finest) = local.patches.last() {
+            e.lookup.nodes = finest.apply_nodes(&e.lookup.nodes);
+        }
+        self.history.push((object, edit));
+        Ok((
+            local.report,
+            local.blocks,
+            local.block_side,
+            stats.words_uploaded,
+        ))
     }
 
     /// The room the editable objects need in the GPU scene.
@@ -227,39 +301,24 @@ impl Brush {
         let Some(pick) = self.pick(&gpu_scene.scene, camera, px, py, size) else {
             return Ok(None);
         };
-        if self.splicer.is_none() {
-            self.splicer = Some(LevelSplicer::new(ctx)?);
-        }
-        let Some(splicer) = &self.splicer else {
-            bail!("the splice kernels did not compile");
-        };
-        let Some(e) = self.objects.iter_mut().find(|e| e.object == pick.object) else {
+        let Some(level) = self
+            .objects
+            .iter()
+            .find(|e| e.object == pick.object)
+            .map(|e| e.lookup.level)
+        else {
             bail!("object {} is not editable", pick.object);
         };
         let t0 = Instant::now();
-        let edit = self.settings.edit_at(pick.center, e.lookup.level);
-        let local = e.editor.apply(&[edit])?;
-        let stats = match splicer.apply(ctx, gpu_scene, pick.object, &local.patches) {
-            Ok(s) => s,
-            Err(err) => {
-                // Nothing reached the GPU: the editor goes back to what the room holds.
-                e.editor.revert(&local);
-                return Err(err.into());
-            }
-        };
+        let edit = self.settings.edit_at(pick.center, level);
+        let (r, blocks, block_side, words) = self.apply(ctx, gpu_scene, pick.object, edit)?;
         ctx.wait_idle()?;
-        if let Some(finest) = local.patches.last() {
-            e.lookup.nodes = finest.apply_nodes(&e.lookup.nodes);
-        }
-        let r = local.report;
         let status = format!(
-            "brush on object {}: +{} −{} voxels ({} blocks of {}³, {} words uploaded) in {:.1} ms",
+            "brush on object {}: +{} −{} voxels ({blocks} blocks of {block_side}³, {words} \
+             words uploaded) in {:.1} ms",
             pick.object,
             r.added,
             r.removed,
-            local.blocks,
-            local.block_side,
-            stats.words_uploaded,
             t0.elapsed().as_secs_f64() * 1e3
         );
         Ok(Some(Painted {

@@ -85,6 +85,11 @@ pub struct ViewArgs {
     /// X,Y after the first frame; repeatable; implies --brush.
     #[arg(long, value_name = "X,Y", value_parser = parse_pixel, requires = "frames")]
     pub paint: Vec<(u32, u32)>,
+    /// Fault injection for tests: `device-lost@FRAME` destroys the device before frame
+    /// FRAME, `oom@FRAME` rebuilds the GPU side there with its first large allocation
+    /// refused (repeatable); the viewer recovers, keeping the brush edits.
+    #[arg(long, hide = true, value_parser = crate::faults::parse_fault)]
+    pub inject_fault: Vec<crate::faults::Fault>,
 }
 
 /// A window pixel `X,Y`.
@@ -108,6 +113,18 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     display::check_display_env().map_err(anyhow::Error::msg)?;
     if args.frames == Some(0) {
         return Err(anyhow!("--frames must be at least 1"));
+    }
+    if let Some(f) = args
+        .inject_fault
+        .iter()
+        .find(|f| args.frames.is_none_or(|n| f.frame() as u64 >= n))
+    {
+        return Err(anyhow!(
+            "--inject-fault {} needs --frames {} or more: faults are injected before a \
+             numbered frame of an automated run",
+            f.spelled(),
+            f.frame() + 1
+        ));
     }
     // Before any voxelization: fail fast when the display cannot be opened.
     let event_loop = create_event_loop()?;
@@ -182,6 +199,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         techniques: techniques::list(&assets_dir().join("pipelines")),
         memory_report: args.memory_report.clone(),
         paint: args.paint.clone(),
+        faults: args.inject_fault.clone(),
     };
     let mut app = app::App::new(
         options,

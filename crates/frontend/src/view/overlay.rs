@@ -104,6 +104,8 @@ pub struct OverlayView<'a> {
     pub error: Option<&'a str>,
     /// Latest status line (reloads, screenshots).
     pub status: Option<&'a str>,
+    /// What the last GPU fault did (a lost device recovered, a budget lowered).
+    pub notice: Option<&'a str>,
     /// Window size in pixels.
     pub size: (u32, u32),
     /// Under a GPU budget: what the page cache holds and did.
@@ -144,6 +146,10 @@ pub fn draw(ctx: &egui::Context, view: &OverlayView<'_>, state: &mut OverlayStat
         .default_open(open)
         .vscroll(true)
         .show(ctx, |ui| {
+            if let Some(n) = view.notice {
+                ui.colored_label(Color32::from_rgb(255, 190, 90), n);
+                ui.separator();
+            }
             performance(ui, view);
             ui.separator();
             pipeline(ui, view, state, &mut actions);
