@@ -18,6 +18,12 @@ struct ExactParams {
     capacity: u32,
     // Columns of all triangles (`exact_columns`).
     columns: u32,
+    // The first column of this submission: `exact_columns` runs in bounded submissions of
+    // columns (a GPU driver resets a device whose submission runs for seconds).
+    first_column: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 struct Fragment {
@@ -137,7 +143,7 @@ fn exact_columns(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
-    let i = thread_id(li, wg, nwg);
+    let i = params.first_column + thread_id(li, wg, nwg);
     if i >= params.columns {
         return;
     }

@@ -95,6 +95,11 @@ pub struct RenderArgs {
     /// until the scene fits, without one the run ends naming the resource.
     #[arg(long, hide = true, value_parser = crate::faults::parse_fault)]
     pub inject_fault: Vec<crate::faults::Fault>,
+    /// Time each GPU submission alone (the scene upload, the warm-up, the soak and the
+    /// written frame) and list the longest per kind in `--json` `submissions` (a driver
+    /// resets the GPU when one runs too long). Serializes the CPU and the GPU.
+    #[arg(long)]
+    pub time_submissions: bool,
 }
 
 /// Parses a sample count of `--samples` (a square from 1 to 256).
@@ -161,6 +166,9 @@ struct Report {
     soak: Option<crate::soak::SoakReport>,
     /// Times the soak lost the GPU device and recreated it (0 without a soak).
     device_recoveries: usize,
+    /// With `--time-submissions`: per kind of GPU submission, the longest first.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    submissions: Vec<ssbvb_gpu::submissions::SubmissionTimes>,
     /// With animated objects: the time drawn and each update's cost by stage.
     #[serde(skip_serializing_if = "Option::is_none")]
     animation: Option<crate::animation::AnimationReport>,
@@ -404,6 +412,7 @@ fn render_reference(
         streaming: None,
         soak: None,
         device_recoveries: 0,
+        submissions: Vec::new(),
         animation: (!animated.is_empty()).then(|| crate::animation::AnimationReport {
             time_s: args.time,
             method: None,
@@ -454,6 +463,7 @@ fn render_gpu(
         animated,
         time: args.time,
         size: args.size,
+        time_submissions: args.time_submissions,
     };
     let opened = source.open_refusing(
         &mut notes,
@@ -542,6 +552,7 @@ fn render_gpu(
         warnings,
         streaming,
         device_recoveries: soak.as_ref().map_or(0, |s| s.device_recoveries),
+        submissions: ctx.submission_times(),
         soak,
         animation,
         gpu_memory_bytes: gpu_scene

@@ -29,6 +29,8 @@ pub struct SessionSource {
     pub time: f64,
     /// Image size.
     pub size: (u32, u32),
+    /// Time each GPU submission alone (`--time-submissions`).
+    pub time_submissions: bool,
 }
 
 /// A device with the scene and the renderer on it.
@@ -61,6 +63,7 @@ impl SessionSource {
     /// and `--gpu-budget`.
     pub fn open_refusing(&mut self, notes: &mut Vec<String>, refuse: bool) -> Result<Opened> {
         let ctx = crate::adapter_cmd::headless_context(&[&self.pipeline])?;
+        ctx.time_submissions(self.time_submissions);
         if refuse {
             ctx.refuse_allocation(crate::faults::INJECTED_OOM_MIN_BYTES);
         }

@@ -63,6 +63,7 @@ pub(crate) fn run(args: &VoxelizeArgs) -> anyhow::Result<Report> {
     };
     let ctx = crate::adapter_cmd::headless_context(&[])?;
     let voxelizer = GpuVoxelizer::new(&ctx)?;
+    ctx.time_submissions(args.time_submissions);
     let method = match args.gpu_method {
         Some(GpuMethodArg::Exact) => GpuVoxelizeMethod::Exact,
         Some(GpuMethodArg::Raster) => GpuVoxelizeMethod::Raster,
@@ -110,6 +111,7 @@ pub(crate) fn run(args: &VoxelizeArgs) -> anyhow::Result<Report> {
             gpu_seconds,
             cpu_seconds,
             speedup: cpu_seconds / gpu_seconds,
+            submissions: ctx.submission_times(),
         }),
     })
 }

@@ -35,6 +35,11 @@ pub struct VoxelizeArgs {
     /// rasterization, a near superset).
     #[arg(long, value_enum, requires = "gpu")]
     pub gpu_method: Option<GpuMethodArg>,
+    /// With `--gpu`: time each GPU submission alone and list the longest per kind in
+    /// `gpu.submissions` (a driver resets the GPU when one runs too long). Serializes the
+    /// CPU and the GPU, so `gpu_seconds` grows.
+    #[arg(long, requires = "gpu")]
+    pub time_submissions: bool,
 }
 
 /// `--gpu-method`.
@@ -107,4 +112,7 @@ pub(crate) struct GpuReport {
     pub(crate) cpu_seconds: f64,
     /// `cpu_seconds / gpu_seconds`.
     pub(crate) speedup: f64,
+    /// With `--time-submissions`: per kind of submission, the longest first.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub(crate) submissions: Vec<ssbvb_gpu::submissions::SubmissionTimes>,
 }

@@ -186,7 +186,7 @@ impl LevelSplicer {
             stats.voxels_rewritten += new_n;
             stats.nodes_rewritten += u64::from(p.nodes);
         }
-        ctx.queue.submit([enc.finish()]);
+        ctx.submit("brush splice", [enc.finish()]);
         drop(keep);
         for (p, room) in patches.iter().zip(scene.dynamic[di].levels.iter_mut()) {
             room.voxels = p.voxels;

@@ -114,7 +114,7 @@ impl GpuLodBuilder {
         let sums = self.scan.record(d, &mut enc, flags, n);
         self.kernels
             .dispatch(&mut enc, "run_starts", &bg, n.div_ceil(WORKGROUP));
-        ctx.queue.submit([enc.finish()]);
+        ctx.submit("LOD build: runs", [enc.finish()]);
         Ok(read_words(ctx, &sums, GpuScan::total_index(n), 1)?[0])
     }
 
@@ -186,7 +186,7 @@ impl GpuLodBuilder {
                 &self.bind(d, &b, &params),
                 runs.div_ceil(WORKGROUP),
             );
-            ctx.queue.submit([enc.finish()]);
+            ctx.submit("LOD build: coarsen", [enc.finish()]);
             let next = self.finish_level(
                 ctx,
                 level.level - 1,
@@ -236,7 +236,7 @@ impl GpuLodBuilder {
             &self.bind(d, &b, &params),
             n.div_ceil(WORKGROUP),
         );
-        ctx.queue.submit([enc.finish()]);
+        ctx.submit("LOD build: pack points", [enc.finish()]);
         // The tree from the leaves up: `depth` groupings, the last one the root.
         let mut per_depth: Vec<(wgpu::Buffer, u32)> = Vec::new();
         let (mut klo, mut khi, mut count) = (key_lo.clone(), key_hi.clone(), n);
@@ -271,7 +271,7 @@ impl GpuLodBuilder {
                     &self.bind(d, &b, &params),
                     runs.div_ceil(WORKGROUP),
                 );
-                ctx.queue.submit([enc.finish()]);
+                ctx.submit("LOD build: lookup group", [enc.finish()]);
             }
             per_depth.push((nodes, runs));
             (klo, khi, count) = (olo, ohi, runs);
@@ -305,7 +305,7 @@ impl GpuLodBuilder {
             enc.copy_buffer_to_buffer(buf, 0, &nodes, 4 * NODE_WORDS as u64 * u64::from(at), bytes);
             at += count;
         }
-        ctx.queue.submit([enc.finish()]);
+        ctx.submit("LOD build: lookup bases", [enc.finish()]);
         Ok(GpuLevel {
             level,
             count: n,

@@ -309,7 +309,7 @@ impl BuildRun<'_> {
         self.builder
             .kernels
             .dispatch(&mut enc, "extract", &bg, groups(n));
-        self.ctx.queue.submit([enc.finish()]);
+        self.ctx.submit("surface: extract", [enc.finish()]);
         Ok(read_words(self.ctx, &counter, 0, 1)?[0])
     }
 
@@ -320,7 +320,7 @@ impl BuildRun<'_> {
             .builder
             .sort
             .record(&self.ctx.device, &mut enc, a, b, m, 3 * self.level);
-        self.ctx.queue.submit([enc.finish()]);
+        self.ctx.submit("surface: sort", [enc.finish()]);
         swapped
     }
 
@@ -370,7 +370,7 @@ impl BuildRun<'_> {
         self.builder
             .kernels
             .dispatch(&mut enc, "chunk_bounds", &bg, groups(m));
-        self.ctx.queue.submit([enc.finish()]);
+        self.ctx.submit("surface: chunk bounds", [enc.finish()]);
         let local_bounds = read_words(self.ctx, &bounds_buf, 1, 6 * u64::from(chunks))?;
         let level = GpuSurfaceLevel {
             ranges: ranges(&starts, m),
@@ -415,7 +415,7 @@ impl BuildRun<'_> {
             &self.params(nk, k, 0),
         );
         kernels.dispatch(&mut enc, "run_starts", &bg, groups(nk));
-        self.ctx.queue.submit([enc.finish()]);
+        self.ctx.submit("surface: runs", [enc.finish()]);
         let runs = read_words(self.ctx, &sums, GpuScan::total_index(nk), 1)?[0];
         let surface = storage(d, "rastavox surface", u64::from(runs));
         let attrs = storage(d, "rastavox attributes", 2 * u64::from(runs));
@@ -466,7 +466,7 @@ impl BuildRun<'_> {
         self.builder
             .kernels
             .dispatch(&mut enc, "chunk_starts", &bg, groups(n));
-        self.ctx.queue.submit([enc.finish()]);
+        self.ctx.submit("surface: chunk starts", [enc.finish()]);
         let count = read_words(self.ctx, &counter, 0, 1)?[0];
         let mut starts = read_words(self.ctx, flags, 0, u64::from(count))?;
         starts.sort_unstable();

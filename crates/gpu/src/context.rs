@@ -234,6 +234,8 @@ pub struct GpuContext {
     /// The size from which the next checked allocation is refused (`crate::alloc`'s fault
     /// injection; `u64::MAX`: none).
     pub(crate) refuse_from: Arc<std::sync::atomic::AtomicU64>,
+    /// Per kind of submission, how long they took (`crate::submissions`; `None`: not timed).
+    pub(crate) submission_log: crate::submissions::SubmissionLog,
 }
 
 impl std::fmt::Debug for GpuContext {
@@ -438,6 +440,7 @@ impl GpuContext {
             uncaptured,
             lost,
             refuse_from: Arc::new(std::sync::atomic::AtomicU64::new(u64::MAX)),
+            submission_log: Default::default(),
         })
     }
 
@@ -461,6 +464,7 @@ impl GpuContext {
             // The caller's device-lost callback stays the caller's.
             lost: Arc::new(Mutex::new(None)),
             refuse_from: Arc::new(std::sync::atomic::AtomicU64::new(u64::MAX)),
+            submission_log: Default::default(),
         }
     }
 

@@ -32,6 +32,7 @@ pub mod requirements;
 pub mod scene;
 pub mod shader_source;
 pub mod shaders;
+pub mod submissions;
 
 pub use buffer_init::InitBuffer;
 pub use context::*;

@@ -92,7 +92,7 @@ impl GpuContext {
                     depth_or_array_layers: 1,
                 },
             );
-            self.queue.submit([enc.finish()]);
+            self.submit("texture readback", [enc.finish()]);
         })?;
         let data = self.map_read(&staging, "texture")?;
         let mut bytes = Vec::with_capacity((row * height) as usize);
@@ -123,7 +123,7 @@ impl GpuContext {
                 label: Some("readback"),
             });
             enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
-            self.queue.submit([enc.finish()]);
+            self.submit("buffer readback", [enc.finish()]);
         })?;
         self.map_read(&staging, "buffer")
     }

@@ -7,6 +7,7 @@ mod device_loss;
 mod out_of_memory;
 mod presets;
 mod rastavox;
+mod submissions;
 mod supersample;
 mod volumes;
 mod voxelize_gpu;

@@ -56,6 +56,12 @@ fn texture_buffer(d: &wgpu::Device, words: &[u32]) -> wgpu::Buffer {
 
 /// Bytes of one voxel fragment (key, colour, normal).
 const FRAGMENT_BYTES: u64 = 16;
+
+/// Columns of the exact test per submission, and triangles of the raster path per
+/// submission: a driver resets a device whose submission runs for seconds, and at level 13
+/// one submission for a whole mesh would (`docs/reliability.md`, "Long submissions").
+const COLUMNS_PER_SUBMISSION: u32 = 1 << 19;
+const TRIANGLES_PER_SUBMISSION: u32 = 1 << 15;
 /// The first fragment list holds this many fragments per triangle (at least a million).
 const FRAGMENTS_PER_TRIANGLE: u64 = 8;
 
@@ -92,6 +98,8 @@ pub struct GpuVoxelizer {
     exact: Option<Kernels>,
     merge: Kernels,
     sort: GpuRadixSort,
+    /// Columns of the exact test, and triangles of the raster path, per submission.
+    bounds: (u32, u32),
 }
 
 fn layout_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
@@ -192,7 +200,16 @@ impl GpuVoxelizer {
                 &["fragment_keys", "run_flags", "run_starts", "merge"],
             )?,
             sort: GpuRadixSort::new(ctx)?,
+            bounds: (COLUMNS_PER_SUBMISSION, TRIANGLES_PER_SUBMISSION),
         })
+    }
+
+    /// The same voxelizer submitting at most `columns` columns of the exact test and
+    /// `triangles` triangles of the raster path at a time (at least 1 each; tests use
+    /// small bounds to cross them with small meshes).
+    pub fn with_submission_bounds(mut self, columns: u32, triangles: u32) -> Self {
+        self.bounds = (columns.max(1), triangles.max(1));
+        self
     }
 
     /// Voxelizes `mesh` at `level` on the GPU.
@@ -420,29 +437,32 @@ impl GpuVoxelizer {
                     &texture_buf,
                 ],
             );
-            let mut enc = d.create_command_encoder(&Default::default());
-            {
-                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("voxelize"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                            store: wgpu::StoreOp::Discard,
-                        },
-                    })],
-                    depth_stencil_attachment: None,
-                    timestamp_writes: None,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
-                pass.set_pipeline(&self.pipeline);
-                pass.set_bind_group(0, &bg, &[]);
-                pass.draw(0..3 * triangles, 0..1);
+            for first in (0..triangles).step_by(self.bounds.1 as usize) {
+                let count = (triangles - first).min(self.bounds.1);
+                let mut enc = d.create_command_encoder(&Default::default());
+                {
+                    let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                        label: Some("voxelize"),
+                        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                            view: &view,
+                            depth_slice: None,
+                            resolve_target: None,
+                            ops: wgpu::Operations {
+                                load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                                store: wgpu::StoreOp::Discard,
+                            },
+                        })],
+                        depth_stencil_attachment: None,
+                        timestamp_writes: None,
+                        occlusion_query_set: None,
+                        multiview_mask: None,
+                    });
+                    pass.set_pipeline(&self.pipeline);
+                    pass.set_bind_group(0, &bg, &[]);
+                    pass.draw(3 * first..3 * (first + count), 0..1);
+                }
+                ctx.submit("raster voxelization", [enc.finish()]);
             }
-            ctx.queue.submit([enc.finish()]);
         })?;
         Ok(u64::from(read_words(ctx, &counter, 0, 1)?[0]))
     }
@@ -483,7 +503,11 @@ impl GpuVoxelizer {
             )
         };
         // Columns per triangle, their offsets, then one thread per column.
-        let params = uniform(d, "exact voxelize", &[triangles, level, capacity as u32, 0]);
+        let params = uniform(
+            d,
+            "exact voxelize",
+            &[triangles, level, capacity as u32, 0, 0, 0, 0, 0],
+        );
         let mut enc = d.create_command_encoder(&Default::default());
         kernels.dispatch(
             &mut enc,
@@ -492,22 +516,26 @@ impl GpuVoxelizer {
             triangles.div_ceil(WORKGROUP),
         );
         let sums = self.sort.scan().record(d, &mut enc, &offsets, triangles);
-        ctx.queue.submit([enc.finish()]);
+        ctx.submit("exact voxelization: counting fragments", [enc.finish()]);
         let columns = read_words(ctx, &sums, GpuScan::total_index(triangles), 1)?[0];
-        let params = uniform(
-            d,
-            "exact voxelize",
-            &[triangles, level, capacity as u32, columns],
-        );
         ctx.validated("exact GPU voxelization", |_| {
-            let mut enc = d.create_command_encoder(&Default::default());
-            kernels.dispatch(
-                &mut enc,
-                "exact_columns",
-                &bind(&params),
-                columns.div_ceil(WORKGROUP),
-            );
-            ctx.queue.submit([enc.finish()]);
+            // Bounded submissions: a driver resets a device whose submission runs long.
+            for first in (0..columns).step_by(self.bounds.0 as usize) {
+                let n = (columns - first).min(self.bounds.0);
+                let params = uniform(
+                    d,
+                    "exact voxelize",
+                    &[triangles, level, capacity as u32, columns, first, 0, 0, 0],
+                );
+                let mut enc = d.create_command_encoder(&Default::default());
+                kernels.dispatch(
+                    &mut enc,
+                    "exact_columns",
+                    &bind(&params),
+                    n.div_ceil(WORKGROUP),
+                );
+                ctx.submit("exact voxelization: fragments", [enc.finish()]);
+            }
         })?;
         Ok(u64::from(read_words(ctx, &counter, 0, 1)?[0]))
     }
@@ -552,14 +580,20 @@ impl GpuVoxelizer {
         let mut enc = d.create_command_encoder(&Default::default());
         let bg = bind(&a, &params, &dummy);
         self.merge.dispatch(&mut enc, "fragment_keys", &bg, groups);
-        if self.sort.record(d, &mut enc, &a, &b, n, 3 * level) {
+        ctx.submit("voxel merge: keys", [enc.finish()]);
+        // One submission per radix pass: the sort is the longest part of the merge.
+        if self
+            .sort
+            .sort_submitting(ctx, &a, &b, n, 3 * level, "voxel merge: sort pass")
+        {
             std::mem::swap(&mut a, &mut b);
         }
+        let mut enc = d.create_command_encoder(&Default::default());
         let bg = bind(&a, &params, &dummy);
         self.merge.dispatch(&mut enc, "run_flags", &bg, groups);
         let sums = self.sort.scan().record(d, &mut enc, &flags, n);
         self.merge.dispatch(&mut enc, "run_starts", &bg, groups);
-        ctx.queue.submit([enc.finish()]);
+        ctx.submit("voxel merge: runs", [enc.finish()]);
         let runs = read_words(ctx, &sums, GpuScan::total_index(n), 1)?[0];
         let out = GpuVoxels::new(d, level, u64::from(runs));
         let params = uniform(d, "merge", &[n, runs]);
@@ -567,7 +601,7 @@ impl GpuVoxelizer {
         let bg = bind(&a, &params, &out);
         self.merge
             .dispatch(&mut enc, "merge", &bg, runs.div_ceil(WORKGROUP));
-        ctx.queue.submit([enc.finish()]);
+        ctx.submit("voxel merge", [enc.finish()]);
         Ok(out)
     }
 }

@@ -202,7 +202,7 @@ pub fn read_words(
             label: Some("read_words"),
         });
     enc.copy_buffer_to_buffer(buffer, 4 * offset, &staging, 0, 4 * len);
-    ctx.queue.submit([enc.finish()]);
+    ctx.submit("read words", [enc.finish()]);
     let bytes = ctx.read_buffer(&staging)?;
     Ok(bytemuck::cast_slice(&bytes[..4 * len as usize]).to_vec())
 }

@@ -73,24 +73,61 @@ impl GpuRadixSort {
         let passes = bits.min(64).div_ceil(4);
         let hist = storage(d, "radix hist", 16 * u64::from(tiles));
         for p in 0..passes {
-            let (src, dst) = if p % 2 == 0 {
-                (data, scratch)
-            } else {
-                (scratch, data)
-            };
-            let params = uniform(d, "radix params", &[n, 4 * p, tiles, 0]);
-            let bg = self.kernels.bind_group(
-                d,
-                &[
-                    &params, &src.lo, &src.hi, &src.val, &dst.lo, &dst.hi, &dst.val, &hist,
-                ],
-            );
-            self.kernels
-                .dispatch(encoder, "radix_histogram", &bg, tiles);
-            self.scan.record(d, encoder, &hist, 16 * tiles);
-            self.kernels.dispatch(encoder, "radix_scatter", &bg, tiles);
+            self.record_pass(d, encoder, (data, scratch), &hist, n, p);
         }
         passes % 2 == 1
+    }
+
+    /// [`GpuRadixSort::record`], each pass submitted alone (named `what`): a pass is
+    /// bounded work, the whole sort of a large set is not.
+    pub fn sort_submitting(
+        &self,
+        ctx: &GpuContext,
+        data: &SortBuffers,
+        scratch: &SortBuffers,
+        n: u32,
+        bits: u32,
+        what: &str,
+    ) -> bool {
+        let d = &ctx.device;
+        let tiles = u64::from(n).div_ceil(TILE) as u32;
+        let passes = bits.min(64).div_ceil(4);
+        let hist = storage(d, "radix hist", 16 * u64::from(tiles));
+        for p in 0..passes {
+            let mut encoder = d.create_command_encoder(&Default::default());
+            self.record_pass(d, &mut encoder, (data, scratch), &hist, n, p);
+            ctx.submit(what, [encoder.finish()]);
+        }
+        passes % 2 == 1
+    }
+
+    /// Pass `p`: the 4 key bits from `4 p`, from one buffer of `pair` to the other.
+    fn record_pass(
+        &self,
+        d: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        (data, scratch): (&SortBuffers, &SortBuffers),
+        hist: &wgpu::Buffer,
+        n: u32,
+        p: u32,
+    ) {
+        let tiles = u64::from(n).div_ceil(TILE) as u32;
+        let (src, dst) = if p.is_multiple_of(2) {
+            (data, scratch)
+        } else {
+            (scratch, data)
+        };
+        let params = uniform(d, "radix params", &[n, 4 * p, tiles, 0]);
+        let bg = self.kernels.bind_group(
+            d,
+            &[
+                &params, &src.lo, &src.hi, &src.val, &dst.lo, &dst.hi, &dst.val, hist,
+            ],
+        );
+        self.kernels
+            .dispatch(encoder, "radix_histogram", &bg, tiles);
+        self.scan.record(d, encoder, hist, 16 * tiles);
+        self.kernels.dispatch(encoder, "radix_scatter", &bg, tiles);
     }
 
     /// The scan it uses (shared with callers that need one).

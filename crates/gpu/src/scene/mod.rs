@@ -600,7 +600,7 @@ impl GpuScene {
             room.voxels = g.count;
             room.nodes = g.node_count;
         }
-        ctx.queue.submit([enc.finish()]);
+        ctx.submit("scene: dynamic level copy", [enc.finish()]);
         Ok(())
     }
 }

@@ -263,7 +263,7 @@ impl Renderer {
                             label: Some("frame"),
                         }),
                 );
-                ctx.queue.submit([done.finish()]);
+                ctx.submit("frame, one pass", [done.finish()]);
                 ctx.wait_idle().map_err(PassError::Gpu)?;
                 walls[i] = Some(t0.elapsed().as_secs_f64() * 1e3);
             }
@@ -273,7 +273,7 @@ impl Renderer {
             encoder.resolve_query_set(set, 0..(self.passes.len() * 2) as u32, buf, 0);
         }
         scene.end_frame(&mut encoder);
-        ctx.queue.submit([encoder.finish()]);
+        ctx.submit("frame", [encoder.finish()]);
         scene.after_submit();
         let mut gpu_ms = vec![None; self.passes.len()];
         if use_ts {

@@ -80,8 +80,10 @@ impl Viewer {
                 .forget_lifetime();
             self.egui_renderer.render(&mut pass, &paint_jobs, &screen);
         }
-        ctx.queue
-            .submit(callbacks.into_iter().chain([encoder.finish()]));
+        ctx.submit(
+            "view present",
+            callbacks.into_iter().chain([encoder.finish()]),
+        );
         self.window.pre_present_notify();
         ctx.queue.present(surface_texture);
         if suboptimal {
