@@ -21,7 +21,8 @@ struct ExactParams {
     // The first column of this submission: `exact_columns` runs in bounded submissions of
     // columns (a GPU driver resets a device whose submission runs for seconds).
     first_column: u32,
-    pad0: u32,
+    // One past its last column (a chunk's last workgroup runs past it).
+    end_column: u32,
     pad1: u32,
     pad2: u32,
 }
@@ -144,7 +145,7 @@ fn exact_columns(
     @builtin(num_workgroups) nwg: vec3<u32>,
 ) {
     let i = params.first_column + thread_id(li, wg, nwg);
-    if i >= params.columns {
+    if i >= params.columns || i >= params.end_column {
         return;
     }
     // The triangle: the last whose first column is at or before i.

@@ -12,8 +12,9 @@
 //!
 //! Injected, `oom@FRAME` arms a refusal of the next large allocation before frame FRAME
 //! and has the command rebuild its GPU session there (as after a device loss, or as the
-//! viewer does when its budget changes), so the refusal lands in the rebuild: frame 0 is
-//! the first upload.
+//! viewer does when its budget changes), so the refusal lands in the rebuild; `render`
+//! without a soak and the viewer at frame 0 refuse in their first upload. A refusal that
+//! did not fire is disarmed once the work it was meant for is done.
 
 use anyhow::{Result, bail};
 use ssbvb_gpu::{GpuError, ResourceError};
@@ -130,6 +131,18 @@ pub fn out_of_memory(e: &anyhow::Error) -> Option<(String, u64)> {
                 _ => None,
             })
     })
+}
+
+/// Whether a refused `resource` is part of the voxel scene (which a GPU budget sizes)
+/// rather than one of the frame's targets (which `--size` does).
+pub fn is_scene_resource(resource: &str) -> bool {
+    !resource.contains(ssbvb_passes::PHYSICAL_LABEL_MARK)
+}
+
+/// What to tell a user whose frame target was refused.
+pub fn frame_out_of_memory_hint() -> &'static str {
+    "the frame's targets do not fit the GPU's memory (a GPU budget does not size them): \
+     render a smaller --size or a pipeline with fewer targets"
 }
 
 /// What to tell a user whose allocation was refused without a budget.

@@ -97,7 +97,8 @@ pub struct RenderArgs {
     pub inject_fault: Vec<crate::faults::Fault>,
     /// Time each GPU submission alone (the scene upload, the warm-up, the soak and the
     /// written frame) and list the longest per kind in `--json` `submissions` (a driver
-    /// resets the GPU when one runs too long). Serializes the CPU and the GPU.
+    /// resets the GPU when one runs too long). Serializes the CPU and the GPU. After a
+    /// device loss or rebuild the list is the last device's.
     #[arg(long)]
     pub time_submissions: bool,
 }
@@ -289,6 +290,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     if args.reference && args.frames > 1 {
         bail!("--frames (a soak of the GPU renderer) does not apply to --reference");
+    }
+    if args.reference && !args.inject_fault.is_empty() {
+        bail!("--inject-fault injects GPU faults; --reference renders on the CPU");
     }
     crate::faults::check_faults(&args.inject_fault, args.frames)?;
     let report = if args.reference {
@@ -508,8 +512,8 @@ fn render_gpu(
             &camera,
             args.max_frames,
         )?;
-        if r.out_of_memory_rebuilds > 0 {
-            // A rebuild may have lowered the budget: report the scene the frame is drawn from.
+        if source.budget != budget {
+            // A rebuild lowered the budget: report the scene the frame is drawn from.
             streaming = crate::budget::StreamingReport::of(&session.scene, frames, converged);
         }
         Some(r)

@@ -57,10 +57,11 @@ impl SessionSource {
     /// Creates a device that fits the pipeline, uploads the scene (under the budget, the
     /// pages streaming from their cache files; `notes` says where they cannot), poses the
     /// animated objects and builds the renderer. With `refuse`, the device refuses the
-    /// first large allocation (`--inject-fault oom@FRAME`). An allocation the driver refuses lowers a
-    /// budget to half (kept in `self.budget`, so later sessions open under it too) and the
-    /// upload starts again; without a budget it is an error naming the resource, its size
-    /// and `--gpu-budget`.
+    /// first large allocation (`--inject-fault oom@FRAME`). A scene allocation the driver
+    /// refuses lowers a budget to half (kept in `self.budget`, so later sessions open under
+    /// it too) and the upload starts again; without a budget it is an error naming the
+    /// resource, its size and `--gpu-budget`. A refused frame target is an error naming
+    /// `--size` (a budget does not size it).
     pub fn open_refusing(&mut self, notes: &mut Vec<String>, refuse: bool) -> Result<Opened> {
         let ctx = crate::adapter_cmd::headless_context(&[&self.pipeline])?;
         ctx.time_submissions(self.time_submissions);
@@ -68,9 +69,14 @@ impl SessionSource {
             ctx.refuse_allocation(crate::faults::INJECTED_OOM_MIN_BYTES);
         }
         let mut warnings = Vec::new();
+        // Notes are of the first attempt (a retry would repeat them).
+        let mut retry_notes = Vec::new();
+        let mut notes = Some(notes);
         loop {
-            let e = match self.upload(&ctx, notes) {
+            let attempt = self.upload(&ctx, notes.take().unwrap_or(&mut retry_notes));
+            let e = match attempt {
                 Ok((scene, renderer, animation)) => {
+                    ctx.clear_refusal();
                     let session = GpuSession {
                         ctx,
                         scene,
@@ -88,6 +94,9 @@ impl SessionSource {
                 "out of GPU memory: the driver refused {} for {resource}",
                 ssbvb_gpu::alloc::mib_text(bytes)
             );
+            if !crate::faults::is_scene_resource(&resource) {
+                return Err(e.context(crate::faults::frame_out_of_memory_hint()));
+            }
             match self.budget {
                 Some(mib) if mib > 1 => {
                     let lower = mib / 2;

@@ -234,12 +234,15 @@ pub fn run(
             recoveries.lost_at(i, &reason)?;
             log::warn!("soak frame {i}: the GPU device was lost ({reason}); recreating it");
             drop(session);
-            session = source
-                .reopen(&cam, max_frames, false)
-                .with_context(|| {
-                    format!("recreating the GPU session after losing it at frame {i}")
-                })?
-                .session;
+            let o = source.reopen(&cam, max_frames, false).with_context(|| {
+                format!("recreating the GPU session after losing it at frame {i}")
+            })?;
+            session = o.session;
+            warnings.extend(
+                o.warnings
+                    .into_iter()
+                    .map(|w| format!("soak frame {i}: {w}")),
+            );
             // The frame's time is the redraw's: opening a device is not a frame.
             t = Instant::now();
             draw(&mut session, &cam, i)?;

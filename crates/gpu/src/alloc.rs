@@ -33,6 +33,11 @@ impl GpuContext {
         self.refuse_from.store(min_bytes, Ordering::SeqCst);
     }
 
+    /// Disarms a refusal that has not fired (the work it was meant for allocated less).
+    pub fn clear_refusal(&self) {
+        self.refuse_from.store(u64::MAX, Ordering::SeqCst);
+    }
+
     /// Whether an allocation of `bytes` is the injected refusal (which then is spent).
     fn refused_now(&self, bytes: u64) -> bool {
         self.refuse_from

@@ -338,12 +338,14 @@ fn voxelization_in_bounded_submissions_gives_the_same_voxels() {
         methods.push(GpuVoxelizeMethod::Exact);
     }
     for method in methods {
-        let (one, _) = whole.voxelize_by(&ctx, &m, level, None, method).unwrap();
+        let (one, one_stats) = whole.voxelize_by(&ctx, &m, level, None, method).unwrap();
         ctx.time_submissions(true);
         let (many, stats) = split.voxelize_by(&ctx, &m, level, None, method).unwrap();
         let times = ctx.submission_times();
         ctx.time_submissions(false);
         assert_eq!(many.voxels.codes, one.voxels.codes, "{method:?}");
+        // No column or triangle twice (a chunk's last workgroup runs past its end).
+        assert_eq!(stats.fragments, one_stats.fragments, "{method:?}");
         // Colours are averaged in the order fragments arrive (atomic appends, arbitrary
         // in either run): equal up to float rounding.
         let worst = many
@@ -352,8 +354,18 @@ fn voxelization_in_bounded_submissions_gives_the_same_voxels() {
             .iter()
             .zip(&one.voxels.colors)
             .flat_map(|(a, b)| (0..4).map(move |c| (a[c] - b[c]).abs()))
+            .chain(
+                many.voxels
+                    .normals
+                    .iter()
+                    .zip(&one.voxels.normals)
+                    .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs())),
+            )
             .fold(0.0f32, f32::max);
-        assert!(worst < 1e-5, "{method:?}: colours differ by {worst}");
+        assert!(
+            worst < 1e-5,
+            "{method:?}: colours or normals differ by {worst}"
+        );
         let count = |what: &str| times.iter().find(|t| t.what == what).map_or(0, |t| t.count);
         match method {
             GpuVoxelizeMethod::Raster => assert_eq!(

@@ -291,7 +291,11 @@ impl Viewer {
     fn quit(&mut self, options: &Options) -> Result<Flow> {
         if let (Some(path), false) = (&options.screenshot, self.screenshot_written) {
             self.screenshot_next = Some(path.clone());
-            self.frame(options)?;
+            // A fault found now is recovered (the window stays; the screenshot is drawn
+            // at the next close) rather than exiting without it.
+            if let Flow::Recover(fault) = self.frame(options)? {
+                return Ok(Flow::Recover(fault));
+            }
         }
         Ok(Flow::Exit)
     }

@@ -132,6 +132,11 @@ impl OverlayState {
         self.drafts.clear();
         self.knob_error = None;
     }
+
+    /// Shows the budget in effect again (after the viewer lowered it itself).
+    pub fn forget_budget_draft(&mut self) {
+        self.budget_draft = None;
+    }
 }
 
 /// Draws the overlay; returns what the user asked for.

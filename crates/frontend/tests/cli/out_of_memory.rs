@@ -158,3 +158,30 @@ fn bench_reports_the_row_whose_allocation_was_refused_and_goes_on() {
         "{why}"
     );
 }
+
+/// A refused frame target (the scene's streams of a level-3 bunny are all smaller than
+/// the injection's 64 KiB) is not the budget's to fix: an error naming `--size`, the
+/// budget left alone.
+#[test]
+fn a_refused_frame_target_names_the_size_not_the_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("x.png");
+    let out = ssbvb()
+        .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+        .args(["render", "assets/models/bunny.obj"])
+        .args(["--level", "3", "--size", "320x240", "--gpu-budget", "8"])
+        .args(["--inject-fault", "oom@0", "-o"])
+        .arg(&png)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("the frame's targets do not fit the GPU's memory")
+            && err.contains("--size")
+            && err.contains("(physical ")
+            && !err.contains("lowered"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked") && !png.exists(), "{err}");
+}

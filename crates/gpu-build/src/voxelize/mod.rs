@@ -525,7 +525,16 @@ impl GpuVoxelizer {
                 let params = uniform(
                     d,
                     "exact voxelize",
-                    &[triangles, level, capacity as u32, columns, first, 0, 0, 0],
+                    &[
+                        triangles,
+                        level,
+                        capacity as u32,
+                        columns,
+                        first,
+                        first + n,
+                        0,
+                        0,
+                    ],
                 );
                 let mut enc = d.create_command_encoder(&Default::default());
                 kernels.dispatch(

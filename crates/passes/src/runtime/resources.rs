@@ -7,6 +7,11 @@ use ssbvb_graph::{ResolvedPipeline, ResourceDesc, ResourceUsage};
 use crate::error::PassError;
 
 /// A texture resource with the views passes need.
+/// What the label of a frame resource (a texture or buffer of the render graph) holds
+/// between its name and its physical index: `"{name} (physical {i})"`. A refused
+/// allocation so named is the frame's, not the scene's (a GPU budget does not size it).
+pub const PHYSICAL_LABEL_MARK: &str = " (physical ";
+
 pub struct FrameTexture {
     /// The texture.
     pub texture: wgpu::Texture,
@@ -55,7 +60,7 @@ impl FrameResources {
         let mut physical = Vec::new();
         for (i, p) in pipeline.physical.iter().enumerate() {
             let name = pipeline.resources[p.aliases[0]].name.clone();
-            let label = format!("{name} (physical {i})");
+            let label = format!("{name}{PHYSICAL_LABEL_MARK}{i})");
             if let Some((_, tex)) = imports.iter().find(|(n, _)| *n == name) {
                 physical.push(FrameResource::Texture(import(ctx, tex, &name, p, screen)?));
                 continue;

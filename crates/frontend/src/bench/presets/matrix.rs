@@ -317,6 +317,8 @@ fn run_cell(
         }
         device.rows += 1;
         let result = run_one(&device.ctx, t, cell);
+        // An injected refusal is the row's: one that did not fire goes with it.
+        device.ctx.clear_refusal();
         if result.is_err()
             && let Some(reason) = device.ctx.lost()
         {

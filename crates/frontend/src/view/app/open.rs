@@ -108,10 +108,16 @@ impl GpuParts {
             let opened = Self::open(window, display, loaded, pipeline.clone(), refuse);
             refuse = false;
             let e = match opened {
-                Ok(p) => return Ok((p, lowered)),
+                Ok(p) => {
+                    p.gpu.ctx.clear_refusal();
+                    return Ok((p, lowered));
+                }
                 Err(e) => e,
             };
             match (crate::faults::out_of_memory(&e), &mut loaded.streaming) {
+                (Some((resource, _)), _) if !crate::faults::is_scene_resource(&resource) => {
+                    return Err(e.context(crate::faults::frame_out_of_memory_hint()));
+                }
                 (Some((resource, bytes)), Some(o)) if o.budget_bytes > 1 << 20 => {
                     let mib = o.budget_bytes >> 20;
                     o.budget_bytes = (mib / 2) << 20;

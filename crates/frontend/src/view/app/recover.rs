@@ -54,7 +54,8 @@ impl Viewer {
             .map(|b| b.history().to_vec())
             .unwrap_or_default();
         let brush = self.brush.as_ref().map(|b| b.restarted(&scene));
-        let pipeline = self.effective_pipeline();
+        // What is on screen: an edit or reload whose rebuild failed never drew.
+        let pipeline = self.renderer.pipeline.clone();
         let Viewer {
             window,
             display,
@@ -66,6 +67,7 @@ impl Viewer {
             scene: old_scene,
             renderer,
             animator,
+            brush: old_brush,
             watcher,
             streaming,
             animated,
@@ -78,18 +80,14 @@ impl Viewer {
             recoveries,
             started,
             screenshot_written,
+            screenshot_next,
+            cursor,
             faults_injected_at,
             ..
         } = self;
         // The old device's objects go before the new device asks for memory.
-        drop((
-            renderer,
-            old_scene,
-            animator,
-            blit,
-            egui_renderer,
-            egui_state,
-        ));
+        drop((renderer, old_scene, animator, old_brush));
+        drop((blit, egui_renderer, egui_state));
         drop((egui_ctx, gpu));
         let mut loaded = Loaded {
             scene,
@@ -114,6 +112,11 @@ impl Viewer {
         v.recoveries = recoveries;
         v.started = started;
         v.screenshot_written = screenshot_written;
+        v.screenshot_next = screenshot_next;
+        v.cursor = cursor;
+        if !lowered.is_empty() {
+            v.overlay.forget_budget_draft();
+        }
         v.faults_injected_at = faults_injected_at;
         if let Some(b) = &mut v.brush {
             b.replay(&v.gpu.ctx, &mut v.scene, &edits)?;
