@@ -2,7 +2,8 @@
 //! pass reproduces it line by line (all in f32, linear colour).
 //!
 //! ```text
-//! L    = normalize(light.direction)          // towards the light; (0,0,1) if degenerate
+//! L    = normalize(light.direction)          // towards the light, normalized in f64 first
+//!                                            // (Light::unit_direction); (0,0,1) if degenerate
 //! N    = normalize(normal)                   // (0,0,1) if degenerate
 //! V    = normalize(view_dir)                 // surface → eye; N if degenerate
 //! H    = normalize(L + V)                    // N if degenerate (L = -V)
@@ -63,6 +64,16 @@ fn normalize_or(v: [f32; 3], fallback: [f32; 3]) -> [f32; 3] {
     }
 }
 
+impl Light {
+    /// The unit direction towards the light, normalized in f64 (+z when the direction is
+    /// zero or not finite): what the GPU's frame constants carry, so that a direction whose
+    /// squared length overflows f32 (beyond about 1.8e19) still points where it says.
+    pub fn unit_direction(&self) -> [f32; 3] {
+        let d = glam::DVec3::from(self.direction.map(f64::from));
+        d.normalize_or(glam::DVec3::Z).as_vec3().to_array()
+    }
+}
+
 /// Blinn-Phong shading of a surface point (formula in the module docs).
 ///
 /// `albedo` is linear RGB, `normal` the surface normal, `view_dir` points from the surface
@@ -104,7 +115,7 @@ pub fn shade_lit(
     light: &Light,
     lit: &Lit,
 ) -> [f32; 3] {
-    let l = normalize_or(light.direction, [0.0, 0.0, 1.0]);
+    let l = normalize_or(light.unit_direction(), [0.0, 0.0, 1.0]);
     let n = normalize_or(normal, [0.0, 0.0, 1.0]);
     let v = normalize_or(view_dir, n);
     let h = normalize_or([l[0] + v[0], l[1] + v[1], l[2] + v[2]], n);
@@ -156,6 +167,30 @@ pub fn linear_to_srgb8(x: f32) -> u8 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A light direction's length does not matter, even past f32's square root of its
+    /// largest value (the GPU's frame constants normalize it in f64); zero or infinite
+    /// falls back to +z.
+    #[test]
+    fn the_light_direction_is_normalized_whatever_its_length() {
+        let at = |direction: [f32; 3]| {
+            let light = Light {
+                direction,
+                ..Light::default()
+            };
+            (
+                light.unit_direction(),
+                shade([0.5, 0.6, 0.7], [0.3, 0.5, 0.8], [0.1, 0.2, 1.0], &light),
+            )
+        };
+        let (unit, rgb) = at([3.0, -1.0, 2.0]);
+        assert_eq!(at([3e19, -1e19, 2e19]), (unit, rgb));
+        assert_eq!(at([3e-19, -1e-19, 2e-19]), (unit, rgb));
+        assert!((unit[0] - 3.0 / 14f32.sqrt()).abs() < 1e-7, "{unit:?}");
+        let z = at([0.0, 0.0, 1.0]);
+        assert_eq!(at([0.0; 3]), z);
+        assert_eq!(at([f32::INFINITY, 0.0, 0.0]), z);
+    }
 
     #[test]
     fn blinn_phong_matches_the_documented_formula() {

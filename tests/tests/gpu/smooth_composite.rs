@@ -94,6 +94,22 @@ fn eq1_at_below_and_above_min_dist_stays_finite() {
 
 #[test]
 fn composite_matches_the_reference_shading() {
+    composite_against_the_reference(None);
+}
+
+/// A light direction the shading cannot normalize (zero, or so long its squared length
+/// overflows f32) falls back to +z, on the GPU as in the reference: the composite still
+/// equals the reference's colours.
+#[test]
+fn composite_shades_a_degenerate_light_like_the_reference() {
+    for direction in [[0.0, 0.0, 0.0], [3e19, -1e19, 2e19]] {
+        composite_against_the_reference(Some(direction));
+    }
+}
+
+/// The default pipeline with flat billboards and no smoothing against the reference, with
+/// the scene's light pointing along `light_direction` when given.
+fn composite_against_the_reference(light_direction: Option<[f32; 3]>) {
     // Flat billboards (they carry the voxel's stored normal, as the reference shades) and no
     // smoothing: where the billboard is the reference's voxel, the only differences left
     // are f16 G-buffer storage and f32 vs f64; at silhouettes a neighbouring voxel's
@@ -104,6 +120,9 @@ fn composite_matches_the_reference_shading() {
     );
     let mut s = scene(6);
     s.triangles.clear();
+    if let Some(d) = light_direction {
+        s.light.direction = d;
+    }
     let cam = camera();
     let f = ssbvb_tests::render(&src, s.clone(), &cam, SIZE);
     let gpu = f.read("color");

@@ -49,7 +49,7 @@ pub fn jittered_frame_uniform(
     let (right, up, forward) = camera.basis();
     let tan_y = (camera.fov_y_deg.clamp(1e-9, 179.999).to_radians() * 0.5).tan();
     let tan_x = tan_y * aspect;
-    let ld = DVec3::from(light.direction.map(|v| v as f64)).normalize_or(DVec3::Z);
+    let ld = DVec3::from(light.unit_direction().map(f64::from));
     FrameUniform {
         view_proj: mat(view_proj),
         inv_view_proj: mat(view_proj.inverse()),

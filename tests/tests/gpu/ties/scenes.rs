@@ -138,6 +138,15 @@ pub(super) fn axis_views() -> Vec<View> {
             Lattice::Axis,
         ),
         view("along -x", [3.0, 0.0, 0.0], [0.0; 3], Lattice::Axis),
+        // Faces entered from below (negative geometric normals: the octahedral
+        // encoding's folded half).
+        view("along +z", [0.0, 0.0, -3.0], [0.0; 3], Lattice::Axis),
+        view(
+            "space diagonal from below",
+            [-3.0, -3.0, -3.0],
+            [0.0; 3],
+            Lattice::Centre,
+        ),
         far,
         view("space diagonal", [3.0, 3.0, 3.0], [0.0; 3], Lattice::Centre),
         view(
