@@ -3,10 +3,11 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::OnceLock;
 
 use anyhow::Result;
 use clap::Args;
-use ssbvb_gpu::{ContextOptions, GpuContext, Requirements};
+use ssbvb_gpu::{ContextOptions, DeviceLimits, GpuContext, Requirements};
 use ssbvb_graph::ResolvedPipeline;
 
 use crate::bundled::assets_dir;
@@ -17,6 +18,45 @@ pub struct AdapterArgs {
     /// The pipeline to check adapters against (default: the bundled SSBVB pipeline).
     #[arg(long)]
     pub pipeline: Option<PathBuf>,
+    /// Check against these limits (`webgpu`: WebGPU's defaults and no optional feature).
+    #[arg(long, value_enum, default_value = "adapter")]
+    pub limits: LimitsArg,
+}
+
+/// `--limits` of `render`, `view`, `bench` and `adapter`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum LimitsArg {
+    /// The adapter's own limits and the optional features ssbvb uses where present.
+    #[default]
+    Adapter,
+    /// WebGPU's default limits and no optional feature (what a browser guarantees): no
+    /// per-pass GPU times, no exact GPU voxelization; pipelines that need more are refused
+    /// up front, naming what they need.
+    Webgpu,
+}
+
+impl LimitsArg {
+    /// The device limits it asks for.
+    pub fn device(self) -> DeviceLimits {
+        match self {
+            LimitsArg::Adapter => DeviceLimits::Adapter,
+            LimitsArg::Webgpu => DeviceLimits::WebGpuDefaults,
+        }
+    }
+}
+
+/// The limits every device of this process is created with: one per command, set from
+/// its `--limits` before it runs ([`set_limits`]).
+static LIMITS: OnceLock<DeviceLimits> = OnceLock::new();
+
+/// Sets the limits of this process's devices (the first call wins).
+pub fn set_limits(limits: LimitsArg) {
+    let _ = LIMITS.set(limits.device());
+}
+
+/// The limits of this process's devices.
+pub fn limits() -> DeviceLimits {
+    LIMITS.get().copied().unwrap_or_default()
 }
 
 /// What `pipelines` together need from an adapter.
@@ -32,6 +72,7 @@ pub fn requirements_of(pipelines: &[&ResolvedPipeline]) -> Requirements {
 pub fn headless_context(pipelines: &[&ResolvedPipeline]) -> Result<GpuContext> {
     Ok(GpuContext::new_headless(&ContextOptions {
         requirements: Some(requirements_of(pipelines)),
+        limits: limits(),
         ..Default::default()
     })?)
 }
@@ -50,8 +91,15 @@ pub fn run(args: &AdapterArgs) -> Result<ExitCode> {
         .unwrap_or_else(|| assets_dir().join("pipelines/ssbvb.ron"));
     let pipeline = resolve(&path)?;
     let req = requirements_of(&[&pipeline]);
-    let list = GpuContext::list_adapters(&req);
-    println!("adapters, best first, checked against {}:", path.display());
+    let list = GpuContext::list_adapters(&req, limits());
+    let under = match limits() {
+        DeviceLimits::Adapter => "",
+        DeviceLimits::WebGpuDefaults => " under WebGPU's default limits",
+    };
+    println!(
+        "adapters, best first, checked against {}{under}:",
+        path.display()
+    );
     if list.is_empty() {
         println!("  (none)");
     }
@@ -72,6 +120,7 @@ pub fn run(args: &AdapterArgs) -> Result<ExitCode> {
     }
     let ctx = GpuContext::new_headless(&ContextOptions {
         requirements: Some(req),
+        limits: limits(),
         ..Default::default()
     })?;
     println!("chosen: {}", ctx.report());

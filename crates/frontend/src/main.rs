@@ -56,6 +56,13 @@ fn main() -> ExitCode {
     if !matches!(cli.command, Command::View(_)) {
         quiet_window_system_probe();
     }
+    match &cli.command {
+        Command::Adapter(a) => adapter_cmd::set_limits(a.limits),
+        Command::Bench(a) => adapter_cmd::set_limits(a.limits),
+        Command::Render(a) => adapter_cmd::set_limits(a.limits),
+        Command::View(a) => adapter_cmd::set_limits(a.limits),
+        Command::Pipeline(_) | Command::Voxelize(_) => {}
+    }
     let result = match cli.command {
         Command::Pipeline(c) => pipeline_cmd::run(&c),
         Command::Adapter(a) => adapter_cmd::run(&a),

@@ -101,6 +101,10 @@ pub struct RenderArgs {
     /// device loss or rebuild the list is the last device's.
     #[arg(long)]
     pub time_submissions: bool,
+    /// The device's limits: `adapter` (its own) or `webgpu` (WebGPU's defaults and no
+    /// optional feature; `limits` in `--json`).
+    #[arg(long, value_enum, default_value = "adapter")]
+    pub limits: crate::adapter_cmd::LimitsArg,
 }
 
 /// Parses a sample count of `--samples` (a square from 1 to 256).
@@ -138,6 +142,9 @@ struct Report {
     mode: &'static str,
     adapter: Option<String>,
     adapter_is_software: Option<bool>,
+    /// The limits the device was created with: `adapter` or `webgpu` (`null` for the
+    /// reference).
+    limits: Option<&'static str>,
     /// Format substitutions taken because the adapter lacks a pipeline format
     /// (`wanted -> used (resource)`).
     fallbacks: Vec<String>,
@@ -400,6 +407,7 @@ fn render_reference(
         samples: args.samples,
         adapter: None,
         adapter_is_software: None,
+        limits: None,
         fallbacks: Vec::new(),
         size: [w, h],
         camera,
@@ -541,6 +549,7 @@ fn render_gpu(
         samples: 1,
         adapter: Some(ctx.report().to_string()),
         adapter_is_software: Some(ctx.report().is_software),
+        limits: Some(ctx.report().limits),
         fallbacks: ctx.report().fallbacks.clone(),
         size: [w, h],
         camera,

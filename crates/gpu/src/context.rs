@@ -96,6 +96,8 @@ pub struct AdapterReport {
     /// Format substitutions taken because the adapter lacks the pipeline's format:
     /// `wanted -> used (who)`.
     pub fallbacks: Vec<String>,
+    /// The limits the device was created with (`adapter` or `webgpu`).
+    pub limits: &'static str,
 }
 
 impl AdapterReport {
@@ -114,6 +116,7 @@ impl AdapterReport {
                 wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
             ),
             fallbacks,
+            limits: DeviceLimits::Adapter.name(),
         }
     }
 }
@@ -122,7 +125,7 @@ impl std::fmt::Display for AdapterReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{} ({}, {}{}{})",
+            "{} ({}, {}{}{}{})",
             self.name,
             self.backend,
             self.device_type,
@@ -133,6 +136,11 @@ impl std::fmt::Display for AdapterReport {
             },
             if self.is_software {
                 ", software: timings are not representative"
+            } else {
+                ""
+            },
+            if self.limits == DeviceLimits::WebGpuDefaults.name() {
+                ", WebGPU default limits"
             } else {
                 ""
             }
@@ -147,6 +155,40 @@ pub struct ContextOptions {
     pub adapter: Option<AdapterChoice>,
     /// What the pipeline needs; adapters lacking any of it are skipped. `None`: any adapter.
     pub requirements: Option<Requirements>,
+    /// The limits and features the device is created with.
+    pub limits: DeviceLimits,
+}
+
+/// Which limits and optional features a device is created with.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum DeviceLimits {
+    /// The adapter's own limits and the optional features ssbvb uses where present
+    /// (timestamps, `Depth32FloatStencil8`, f64 shaders, …).
+    #[default]
+    Adapter,
+    /// WebGPU's default limits (`wgpu::Limits::default()`) and no optional feature: what
+    /// a browser, and many mobile drivers, guarantee. Pipelines are checked against these
+    /// limits; GPU timestamps (per-pass GPU times) and f64 shaders (the exact GPU
+    /// voxelization) are then not available.
+    WebGpuDefaults,
+}
+
+impl DeviceLimits {
+    /// The limits a device is created with on `adapter`.
+    pub fn on(&self, adapter: &wgpu::Adapter) -> wgpu::Limits {
+        match self {
+            DeviceLimits::Adapter => adapter.limits(),
+            DeviceLimits::WebGpuDefaults => wgpu::Limits::default(),
+        }
+    }
+
+    /// As reports name it (`render --json`'s `limits`): `adapter` or `webgpu`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            DeviceLimits::Adapter => "adapter",
+            DeviceLimits::WebGpuDefaults => "webgpu",
+        }
+    }
 }
 
 /// One adapter and whether it can run a pipeline (`ssbvb adapter` lists these).
@@ -246,6 +288,11 @@ impl std::fmt::Debug for GpuContext {
     }
 }
 
+/// Hint printed when no adapter fits under WebGPU's default limits.
+pub const WEBGPU_LIMITS_HINT: &str = "under WebGPU's default limits (--limits webgpu) the \
+     pipeline needs more than they allow (see `docs/architecture.md`, \"What each pass \
+     needs\"); without --limits the adapter's own limits are used";
+
 /// Hint printed when no adapter exists or none fits.
 pub const NO_ADAPTER_HINT: &str = "install a Vulkan driver (on Debian/Ubuntu without a GPU: \
      `sudo apt-get install -y mesa-vulkan-drivers libvulkan1` for Mesa's lavapipe), or run \
@@ -274,10 +321,11 @@ fn headless_instance() -> (wgpu::Instance, wgpu::Backends) {
 pub fn first_fitting(
     adapters: Vec<wgpu::Adapter>,
     req: &Requirements,
+    limits: DeviceLimits,
 ) -> Result<(wgpu::Adapter, Verdict), Vec<String>> {
     let mut refused = Vec::new();
     for adapter in adapters {
-        let verdict = req.check(&adapter);
+        let verdict = req.check_under(&adapter, &limits.on(&adapter));
         if verdict.fits() {
             return Ok((adapter, verdict));
         }
@@ -350,22 +398,26 @@ impl GpuContext {
             });
         }
         let Some(req) = &options.requirements else {
-            return Self::from_adapter(instance, adapters.swap_remove(0), Vec::new());
+            let adapter = adapters.swap_remove(0);
+            return Self::from_adapter_with(instance, adapter, Vec::new(), options.limits);
         };
-        match first_fitting(adapters, req) {
+        match first_fitting(adapters, req, options.limits) {
             Ok((adapter, verdict)) => {
-                Self::from_adapter(instance, adapter, verdict.fallback_notes())
+                Self::from_adapter_with(instance, adapter, verdict.fallback_notes(), options.limits)
             }
             Err(refused) => Err(GpuError::NoSuitableAdapter {
                 details: refused.join(" | "),
-                hint: NO_ADAPTER_HINT.to_string(),
+                hint: match options.limits {
+                    DeviceLimits::Adapter => NO_ADAPTER_HINT.to_string(),
+                    DeviceLimits::WebGpuDefaults => WEBGPU_LIMITS_HINT.to_string(),
+                },
             }),
         }
     }
 
     /// Every adapter the headless instance sees, best first, each with its verdict on
     /// `requirements` and whether `SSBVB_ADAPTER` allows it.
-    pub fn list_adapters(requirements: &Requirements) -> Vec<AdapterVerdict> {
+    pub fn list_adapters(requirements: &Requirements, limits: DeviceLimits) -> Vec<AdapterVerdict> {
         let choice = AdapterChoice::parse(&std::env::var("SSBVB_ADAPTER").unwrap_or_default());
         let (instance, backends) = headless_instance();
         let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
@@ -379,7 +431,7 @@ impl GpuContext {
                     backend: format!("{:?}", info.backend),
                     device_type: format!("{:?}", info.device_type),
                     allowed: choice.allows(&info),
-                    verdict: requirements.check(a),
+                    verdict: requirements.check_under(a, &limits.on(a)),
                 }
             })
             .collect()
@@ -392,6 +444,17 @@ impl GpuContext {
         adapter: wgpu::Adapter,
         fallbacks: Vec<String>,
     ) -> Result<Self, GpuError> {
+        Self::from_adapter_with(instance, adapter, fallbacks, DeviceLimits::Adapter)
+    }
+
+    /// [`GpuContext::from_adapter`] with the device's limits and features chosen by
+    /// `limits`.
+    pub fn from_adapter_with(
+        instance: wgpu::Instance,
+        adapter: wgpu::Adapter,
+        fallbacks: Vec<String>,
+        limits: DeviceLimits,
+    ) -> Result<Self, GpuError> {
         let info = adapter.get_info();
         let wanted = wgpu::Features::TIMESTAMP_QUERY
             | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
@@ -403,11 +466,14 @@ impl GpuContext {
             | wgpu::Features::PIPELINE_STATISTICS_QUERY
             // The exact GPU voxelization (f64 separating-axis test) where present.
             | wgpu::Features::SHADER_F64;
-        let features = adapter.features() & wanted;
+        let features = match limits {
+            DeviceLimits::Adapter => adapter.features() & wanted,
+            DeviceLimits::WebGpuDefaults => wgpu::Features::empty(),
+        };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("ssbvb"),
             required_features: features,
-            required_limits: adapter.limits(),
+            required_limits: limits.on(&adapter),
             ..Default::default()
         }))
         .map_err(|e| GpuError::RequestDevice {
@@ -430,7 +496,8 @@ impl GpuContext {
                 *l = Some(format!("{reason:?}: {message}"));
             }
         });
-        let report = AdapterReport::new(&info, features, fallbacks);
+        let mut report = AdapterReport::new(&info, features, fallbacks);
+        report.limits = limits.name();
         Ok(Self {
             instance,
             adapter,

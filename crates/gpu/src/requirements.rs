@@ -184,9 +184,14 @@ impl Requirements {
 
     /// Checks an adapter (see [`Requirements::check_with`]).
     pub fn check(&self, adapter: &wgpu::Adapter) -> Verdict {
+        self.check_under(adapter, &adapter.limits())
+    }
+
+    /// [`Requirements::check`] against `limits` instead of the adapter's own (a device
+    /// created with WebGPU's defaults); capabilities and formats are the adapter's.
+    pub fn check_under(&self, adapter: &wgpu::Adapter, limits: &Limits) -> Verdict {
         let downlevel = adapter.get_downlevel_capabilities().flags;
-        let limits = adapter.limits();
-        self.check_with(downlevel, &limits, |f| {
+        self.check_with(downlevel, limits, |f| {
             adapter.get_texture_format_features(f).allowed_usages
         })
     }
@@ -237,7 +242,7 @@ impl Requirements {
             let have = (n.get)(limits);
             if have < n.at_least {
                 v.missing.push(format!(
-                    "{who} needs {} >= {} (the adapter has {have})",
+                    "{who} needs {} >= {} (the device allows {have})",
                     n.name, n.at_least
                 ));
             }
@@ -350,7 +355,7 @@ mod tests {
             &[
                 "max_storage_buffers_per_shader_stage >= 10",
                 "pass `filter2`",
-                "has 8",
+                "allows 8",
             ],
         );
         assert_eq!(

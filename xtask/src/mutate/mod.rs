@@ -100,6 +100,8 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
         "common.inc.wgsl",
         &[
             "ties::exact",
+            // The G-buffer's geometric normals (`oct_encode`) on lattice rays.
+            "ties::ray_casters",
             "smooth_composite::",
             "billboards::",
             "triangles::",

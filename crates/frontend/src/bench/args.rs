@@ -106,6 +106,11 @@ pub struct BenchArgs {
     /// allocation: the row is reported failed with the resource named.
     #[arg(long, hide = true, value_parser = crate::faults::parse_fault)]
     pub inject_fault: Vec<crate::faults::Fault>,
+    /// The device's limits: `adapter` (its own) or `webgpu` (WebGPU's defaults and no
+    /// optional feature; the techniques' pipelines are checked against them up front, and
+    /// what they need beyond them is named).
+    #[arg(long, value_enum, default_value = "adapter")]
+    pub limits: crate::adapter_cmd::LimitsArg,
 }
 
 impl BenchArgs {

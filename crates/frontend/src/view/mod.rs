@@ -90,6 +90,10 @@ pub struct ViewArgs {
     /// refused (repeatable); the viewer recovers, keeping the brush edits.
     #[arg(long, hide = true, value_parser = crate::faults::parse_fault)]
     pub inject_fault: Vec<crate::faults::Fault>,
+    /// The device's limits: `adapter` (its own) or `webgpu` (WebGPU's defaults and no
+    /// optional feature).
+    #[arg(long, value_enum, default_value = "adapter")]
+    pub limits: crate::adapter_cmd::LimitsArg,
 }
 
 /// A window pixel `X,Y`.

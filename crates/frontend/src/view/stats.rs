@@ -126,6 +126,7 @@ mod tests {
             is_software,
             timestamps,
             fallbacks: Vec::new(),
+            limits: "adapter",
         }
     }
 

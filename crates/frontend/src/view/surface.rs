@@ -53,24 +53,30 @@ impl WindowGpu {
         adapters.retain(|a| a.is_surface_supported(&surface) && choice.allows(&a.get_info()));
         adapters.sort_by_key(|a| ssbvb_gpu::rank(&a.get_info()));
         let (adapter, verdict) =
-            ssbvb_gpu::first_fitting(adapters, requirements).map_err(|refused| {
-                anyhow!(
-                    "no GPU adapter can present to the window and run the pipeline (backends \
+            ssbvb_gpu::first_fitting(adapters, requirements, crate::adapter_cmd::limits())
+                .map_err(|refused| {
+                    anyhow!(
+                        "no GPU adapter can present to the window and run the pipeline (backends \
                  {backends:?}, SSBVB_ADAPTER {choice:?}, adapters seen: {}{}); {}",
-                    if seen.is_empty() {
-                        "none".into()
-                    } else {
-                        seen.join(", ")
-                    },
-                    if refused.is_empty() {
-                        String::new()
-                    } else {
-                        format!("; {}", refused.join(" | "))
-                    },
-                    ssbvb_gpu::NO_ADAPTER_HINT
-                )
-            })?;
-        let ctx = GpuContext::from_adapter(instance, adapter, verdict.fallback_notes())?;
+                        if seen.is_empty() {
+                            "none".into()
+                        } else {
+                            seen.join(", ")
+                        },
+                        if refused.is_empty() {
+                            String::new()
+                        } else {
+                            format!("; {}", refused.join(" | "))
+                        },
+                        ssbvb_gpu::NO_ADAPTER_HINT
+                    )
+                })?;
+        let ctx = GpuContext::from_adapter_with(
+            instance,
+            adapter,
+            verdict.fallback_notes(),
+            crate::adapter_cmd::limits(),
+        )?;
         let caps = surface.get_capabilities(&ctx.adapter);
         // An sRGB format when there is one (hardware encoding); the blit shader and egui
         // encode themselves otherwise.
