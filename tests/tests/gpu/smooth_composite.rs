@@ -97,19 +97,42 @@ fn composite_matches_the_reference_shading() {
     composite_against_the_reference(None);
 }
 
-/// A light direction the shading cannot normalize (zero, or so long its squared length
-/// overflows f32) falls back to +z, on the GPU as in the reference: the composite still
-/// equals the reference's colours.
+/// Lights at the edges of the shading model, on the GPU as in the reference: a direction
+/// the shading cannot normalize in f32 (zero: +z; so long its square overflows: where it
+/// points), a coloured light with a shininess below 1 (highlights wide enough to show
+/// whether surfaces facing away from the light are kept dark, and the colour on each
+/// term), and a negative shininess (clamped to 0: a flat highlight).
 #[test]
-fn composite_shades_a_degenerate_light_like_the_reference() {
-    for direction in [[0.0, 0.0, 0.0], [3e19, -1e19, 2e19]] {
-        composite_against_the_reference(Some(direction));
+fn composite_shades_edge_lights_like_the_reference() {
+    let base = ssbvb_voxel::shading::Light::default();
+    let lights = [
+        ssbvb_voxel::shading::Light {
+            direction: [0.0; 3],
+            ..base
+        },
+        ssbvb_voxel::shading::Light {
+            direction: [3e19, -1e19, 2e19],
+            ..base
+        },
+        ssbvb_voxel::shading::Light {
+            color: [1.0, 0.6, 0.3],
+            specular: 0.5,
+            shininess: 0.5,
+            ..base
+        },
+        ssbvb_voxel::shading::Light {
+            shininess: -3.0,
+            ..base
+        },
+    ];
+    for light in lights {
+        composite_against_the_reference(Some(light));
     }
 }
 
-/// The default pipeline with flat billboards and no smoothing against the reference, with
-/// the scene's light pointing along `light_direction` when given.
-fn composite_against_the_reference(light_direction: Option<[f32; 3]>) {
+/// The default pipeline with flat billboards and no smoothing against the reference, under
+/// `light` when given (else the scene's).
+fn composite_against_the_reference(light: Option<ssbvb_voxel::shading::Light>) {
     // Flat billboards (they carry the voxel's stored normal, as the reference shades) and no
     // smoothing: where the billboard is the reference's voxel, the only differences left
     // are f16 G-buffer storage and f32 vs f64; at silhouettes a neighbouring voxel's
@@ -120,8 +143,8 @@ fn composite_against_the_reference(light_direction: Option<[f32; 3]>) {
     );
     let mut s = scene(6);
     s.triangles.clear();
-    if let Some(d) = light_direction {
-        s.light.direction = d;
+    if let Some(l) = light {
+        s.light = l;
     }
     let cam = camera();
     let f = ssbvb_tests::render(&src, s.clone(), &cam, SIZE);
@@ -165,8 +188,11 @@ fn composite_against_the_reference(light_direction: Option<[f32; 3]>) {
         n / 3
     );
     // Flat billboards can show a neighbouring voxel at a few silhouette pixels, so the
-    // bound is on PSNR, not on the worst pixel.
-    assert!(psnr > 30.0, "PSNR {psnr:.1} dB");
+    // bound is on PSNR, not on the worst pixel. Measured: 33.4 dB under the scene's light,
+    // 30.0 to 33.4 under the edge lights (a flat or wide highlight makes those silhouette
+    // pixels differ more); bounds 30 and 28 dB.
+    let least = if light.is_some() { 28.0 } else { 30.0 };
+    assert!(psnr > least, "PSNR {psnr:.1} dB");
     // Background stays transparent.
     for (g, r) in gpu.chunks(4).zip(reference.chunks(4)) {
         if r[3] == 0 && g[3] == 0 {
