@@ -103,6 +103,44 @@ impl StreamingReport {
     }
 }
 
+/// Warnings about a budgeted render that did not settle at the levels asked for.
+pub fn streaming_warnings(
+    streaming: Option<&StreamingReport>,
+    frames: usize,
+    warnings: &mut Vec<String>,
+) {
+    let Some(s) = streaming else {
+        return;
+    };
+    if !s.converged {
+        warnings.push(format!(
+            "not converged in {frames} frames under a {} MiB GPU budget: {} pages \
+             still missing{}; those rays show coarser voxels",
+            s.stats.budget_bytes >> 20,
+            s.stats.pages_missing,
+            if s.stats.over_budget {
+                " (the view needs more pages than the budget holds)"
+            } else {
+                " (raise --max-frames)"
+            }
+        ));
+    }
+    if let Some(cap) = s.stats.level_cap {
+        warnings.push(format!(
+            "the view's pages do not fit a {} MiB GPU budget at the levels asked for: \
+             drawn at level {cap} at most",
+            s.stats.budget_bytes >> 20
+        ));
+    }
+    if s.stats.pages_failed > 0 {
+        warnings.push(format!(
+            "{} pages refused (damaged cache file?); their rays show coarser voxels: {}",
+            s.stats.pages_failed,
+            s.page_errors.first().map_or("", String::as_str)
+        ));
+    }
+}
+
 /// Renders frames of `camera` until one needs no missing page, at most `max_frames`,
 /// streaming between them (waiting for each frame's feedback: offline rendering). Returns
 /// how many frames it took and whether it converged. Without a budget: one frame.

@@ -498,7 +498,7 @@ fn render_gpu(
         args.max_frames,
     )?;
     let mut streaming = crate::budget::StreamingReport::of(&session.scene, frames, converged);
-    streaming_warnings(streaming.as_ref(), frames, &mut warnings);
+    crate::budget::streaming_warnings(streaming.as_ref(), frames, &mut warnings);
     let soak = if args.frames > 1 {
         let (s, r) = crate::soak::run(
             session,
@@ -581,44 +581,6 @@ fn render_gpu(
             .collect(),
         asset_notes: notes,
     })
-}
-
-/// Warnings about a budgeted render that did not settle at the levels asked for.
-fn streaming_warnings(
-    streaming: Option<&crate::budget::StreamingReport>,
-    frames: usize,
-    warnings: &mut Vec<String>,
-) {
-    let Some(s) = streaming else {
-        return;
-    };
-    if !s.converged {
-        warnings.push(format!(
-            "not converged in {frames} frames under a {} MiB GPU budget: {} pages \
-             still missing{}; those rays show coarser voxels",
-            s.stats.budget_bytes >> 20,
-            s.stats.pages_missing,
-            if s.stats.over_budget {
-                " (the view needs more pages than the budget holds)"
-            } else {
-                " (raise --max-frames)"
-            }
-        ));
-    }
-    if let Some(cap) = s.stats.level_cap {
-        warnings.push(format!(
-            "the view's pages do not fit a {} MiB GPU budget at the levels asked for: \
-             drawn at level {cap} at most",
-            s.stats.budget_bytes >> 20
-        ));
-    }
-    if s.stats.pages_failed > 0 {
-        warnings.push(format!(
-            "{} pages refused (damaged cache file?); their rays show coarser voxels: {}",
-            s.stats.pages_failed,
-            s.page_errors.first().map_or("", String::as_str)
-        ));
-    }
 }
 
 /// Why a view may show nothing, from the scene and camera alone: every voxel instance

@@ -212,15 +212,8 @@ pub fn run(
         if runs_out_of_memory_at(faults, i) {
             // The old session's memory goes before the new one asks for its own.
             drop(session);
-            let o = source.reopen(&cam, max_frames, true).with_context(|| {
-                format!("rebuilding the GPU session at soak frame {i} (oom@{i})")
-            })?;
-            session = o.session;
-            warnings.extend(
-                o.warnings
-                    .into_iter()
-                    .map(|w| format!("soak frame {i}: {w}")),
-            );
+            let why = format!("rebuilding the GPU session at soak frame {i} (oom@{i})");
+            session = reopen(source, &cam, max_frames, true, i, &why, &mut warnings)?;
             oom_rebuilds += 1;
         }
         if loses_device_at(faults, i) {
@@ -234,15 +227,8 @@ pub fn run(
             recoveries.lost_at(i, &reason)?;
             log::warn!("soak frame {i}: the GPU device was lost ({reason}); recreating it");
             drop(session);
-            let o = source.reopen(&cam, max_frames, false).with_context(|| {
-                format!("recreating the GPU session after losing it at frame {i}")
-            })?;
-            session = o.session;
-            warnings.extend(
-                o.warnings
-                    .into_iter()
-                    .map(|w| format!("soak frame {i}: {w}")),
-            );
+            let why = format!("recreating the GPU session after losing it at frame {i}");
+            session = reopen(source, &cam, max_frames, false, i, &why, &mut warnings)?;
             // The frame's time is the redraw's: opening a device is not a frame.
             t = Instant::now();
             draw(&mut session, &cam, i)?;
@@ -262,6 +248,28 @@ pub fn run(
         warnings,
     };
     Ok((session, report))
+}
+
+/// [`SessionSource::reopen`] at soak frame `i` (`why` names it in an error), its warnings
+/// added to `warnings`.
+fn reopen(
+    source: &mut SessionSource,
+    cam: &Camera,
+    max_frames: usize,
+    refuse: bool,
+    i: usize,
+    why: &str,
+    warnings: &mut Vec<String>,
+) -> Result<GpuSession> {
+    let o = source
+        .reopen(cam, max_frames, refuse)
+        .with_context(|| why.to_string())?;
+    warnings.extend(
+        o.warnings
+            .into_iter()
+            .map(|w| format!("soak frame {i}: {w}")),
+    );
+    Ok(o.session)
 }
 
 /// One soak frame, waited for; any wgpu error fails it.
