@@ -6,7 +6,8 @@
 // the previous frame (the previous camera's unjittered view), so the history is read at
 // `q` less this frame's jitter (a still camera reads its own pixel: no resampling blur).
 // The history is clamped to the current colour's 3 x 3 neighbourhood (what it may hold
-// of a surface no longer there), and weighted 1 - `taa.delta.w`. Colours are blended
+// of a surface no longer there), and weighted 1 - `taa.delta.w`, less where it moved (up
+// to 1 - `taa.motion.x` at a pixel of motion: its resampling blurs). Colours are blended
 // premultiplied by coverage; the output has straight alpha, like the composite's.
 
 // The targets are 8-bit without hardware sRGB: texels hold sRGB-encoded values.
@@ -18,6 +19,8 @@ struct Taa {
     // xyz: this frame's camera position minus the previous frame's (world); w: the
     // current frame's weight (1: no history).
     delta: vec4<f32>,
+    // x: the current frame's weight where the history moved by a pixel or more.
+    motion: vec4<f32>,
 }
 
 @group(1) @binding(0) var current: texture_2d<f32>;
@@ -26,6 +29,8 @@ struct Taa {
 @group(1) @binding(2) var<uniform> taa: Taa;
 // The previous output, premultiplied (Rgba16Float).
 @group(1) @binding(3) var history: texture_2d<f32>;
+// Bilinear, clamped to the edge.
+@group(1) @binding(4) var history_sampler: sampler;
 
 struct Out {
     @location(0) color: vec4<f32>,
@@ -49,20 +54,30 @@ fn current_at(p: vec2<i32>) -> vec4<f32> {
     return vec4(c.rgb * c.a, c.a);
 }
 
-// The history bilinearly at `p` (pixels, centres at + 0.5).
+// The history at `p` (pixels, centres at + 0.5), Catmull-Rom filtered: a moving camera
+// resamples the history every frame, and a bilinear filter's blur would accumulate frame
+// after frame; the cubic's overshoot is removed by the clamp after it. Its 4 x 4 taps as
+// five bilinear reads (the middle two taps of each axis merged into one read between them,
+// the four corner taps, whose weights are smallest, left out and the rest renormalized).
 fn history_at(p: vec2<f32>) -> vec4<f32> {
-    let size = vec2<i32>(textureDimensions(history));
-    let q = p - 0.5;
-    let i = vec2<i32>(floor(q));
-    let f = q - floor(q);
-    var s = vec4(0.0);
-    for (var dy = 0; dy < 2; dy++) {
-        for (var dx = 0; dx < 2; dx++) {
-            let w = select(1.0 - f.x, f.x, dx == 1) * select(1.0 - f.y, f.y, dy == 1);
-            s += w * textureLoad(history, clamp(i + vec2(dx, dy), vec2(0), size - 1), 0);
-        }
-    }
-    return s;
+    let inv = 1.0 / vec2<f32>(textureDimensions(history));
+    let centre = floor(p - 0.5) + 0.5;
+    let t = p - centre;
+    let w0 = t * (-0.5 + t * (1.0 - 0.5 * t));
+    let w1 = 1.0 + t * t * (-2.5 + 1.5 * t);
+    let w2 = t * (0.5 + t * (2.0 - 1.5 * t));
+    let w3 = t * t * (-0.5 + 0.5 * t);
+    let w12 = w1 + w2;
+    let mid = (centre + w2 / w12) * inv;
+    let lo = (centre - 1.0) * inv;
+    let hi = (centre + 2.0) * inv;
+    let tap = textureSampleLevel(history, history_sampler, mid, 0.0) * (w12.x * w12.y)
+        + textureSampleLevel(history, history_sampler, vec2(mid.x, lo.y), 0.0) * (w12.x * w0.y)
+        + textureSampleLevel(history, history_sampler, vec2(mid.x, hi.y), 0.0) * (w12.x * w3.y)
+        + textureSampleLevel(history, history_sampler, vec2(lo.x, mid.y), 0.0) * (w0.x * w12.y)
+        + textureSampleLevel(history, history_sampler, vec2(hi.x, mid.y), 0.0) * (w3.x * w12.y);
+    let total = w12.x * w12.y + w12.x * (w0.y + w3.y) + w12.y * (w0.x + w3.x);
+    return tap / total;
 }
 
 @fragment
@@ -94,7 +109,8 @@ fn fs_main(@builtin(position) pos: vec4<f32>) -> Out {
                 - frame.jitter.xy;
             if all(q >= vec2(0.0)) && all(q <= frame.screen.xy) {
                 let h = clamp(history_at(q), lo, hi);
-                result = mix(h, cur, taa.delta.w);
+                let moved = clamp(length(q - (vec2<f32>(px) + 0.5)), 0.0, 1.0);
+                result = mix(h, cur, mix(taa.delta.w, taa.motion.x, moved));
             }
         }
     }

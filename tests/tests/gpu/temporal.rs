@@ -119,3 +119,50 @@ fn a_camera_cut_drops_the_history_and_a_small_move_keeps_it() {
     let nudged = Camera::new(b.position * 1.01, DVec3::ZERO);
     assert!(partial(&draw(&mut aa, &mut gpu, &nudged, 1)) > 20);
 }
+
+/// The camera orbiting by `deg` degrees about the vertical through the look-at point.
+fn orbited(c: &Camera, deg: f64) -> Camera {
+    let offset = glam::DQuat::from_rotation_y(deg.to_radians()) * (c.position - c.look_at);
+    Camera::new(c.look_at + offset, c.look_at)
+}
+
+/// In motion the history is reprojected and resampled every frame: the anti-aliased frame
+/// must stay nearer the supersampled reference than the one-sample frame, and a history
+/// resampled bilinearly (its blur accumulating frame after frame) must not be what it
+/// draws.
+#[test]
+fn a_moving_camera_stays_nearer_the_supersampled_reference_than_one_sample() {
+    let s = scene();
+    let lod = &s.objects[0].asset.lods[LEVEL as usize];
+    let (mut aa, mut aa_scene) = renderer(AA, s.clone());
+    let start = camera();
+    draw(&mut aa, &mut aa_scene, &start, 16);
+    // Eight steps of half a degree: about a pixel of motion a frame at the silhouette.
+    let mut moved = start;
+    let mut out = Vec::new();
+    for _ in 0..8 {
+        moved = orbited(&moved, 0.5);
+        out = draw(&mut aa, &mut aa_scene, &moved, 1);
+    }
+    let inst = [Instance {
+        lod,
+        object_to_world: DAffine3::IDENTITY,
+        faces: None,
+    }];
+    let grid = SampleGrid::from_count(16).unwrap();
+    let truth: Vec<[f64; 3]> = render_supersampled(&inst, &moved, SIZE.0, SIZE.1, &s.light, grid)
+        .colors
+        .iter()
+        .map(|c| std::array::from_fn(|k| c[k] as f64))
+        .collect();
+    let (mut plain, mut plain_scene) = renderer(PLAIN, s);
+    let plain_out = draw(&mut plain, &mut plain_scene, &moved, 1);
+    let (e_plain, e_aa) = (
+        mean_abs_error(&over_black(&plain_out), &truth),
+        mean_abs_error(&over_black(&out), &truth),
+    );
+    eprintln!("error against 16 samples after 8 moving frames: plain {e_plain:.5}, AA {e_aa:.5}");
+    // Measured: 0.93 of the one-sample frame's error; 1.02 with a bilinear history, 1.31
+    // without the moving history's larger current weight (`motion_blend`).
+    assert!(e_aa < 0.97 * e_plain, "{e_aa} against {e_plain}");
+}

@@ -25,7 +25,7 @@ pub use gpu_level::GpuLevel;
 pub use layout::*;
 pub use pools::{COLOR_CHUNKS, NODE_CHUNKS, NORMAL_CHUNKS, SCENE_STORAGE_BUFFERS, StreamChunks};
 pub use streaming::{StreamingOptions, StreamingStats};
-pub use visibility::{choose_level, frame_uniform};
+pub use visibility::{DEFAULT_LOD_HYSTERESIS, choose_level, choose_level_held, frame_uniform};
 
 use pools::{chunked, plan_pools, storage};
 use streaming::{PINNED_LEVEL, StreamBuffers, Streaming};
@@ -72,6 +72,12 @@ pub struct GpuScene {
     pub meshes: Vec<GpuTriangleMesh>,
     /// Instances drawn this frame, in instance-buffer order.
     pub visible: Vec<VisibleInstance>,
+    /// How far past a threshold, in levels, Auto LOD waits before drawing an instance
+    /// coarser than in the frame before ([`DEFAULT_LOD_HYSTERESIS`]; 0: every frame
+    /// chooses afresh, as [`choose_level`] does).
+    pub lod_hysteresis: f64,
+    /// By scene index, the level each instance was drawn at in the last frame.
+    held_levels: Vec<Option<u32>>,
     /// GPU memory per object (the whole asset, as uploaded without a budget).
     pub memory: Vec<ObjectMemory>,
     /// The page cache under a budget (`None`: every level resident).
@@ -318,6 +324,8 @@ impl GpuScene {
             proxies,
             meshes,
             visible: Vec::new(),
+            lod_hysteresis: DEFAULT_LOD_HYSTERESIS,
+            held_levels: Vec::new(),
             memory,
             streaming,
             dynamic,
@@ -364,10 +372,17 @@ impl GpuScene {
             &self.scene,
             &self.lod_base,
             &self.proxies,
-            camera,
-            screen,
+            &visibility::View { camera, screen },
             caps,
+            &self.held_levels,
+            self.lod_hysteresis,
         );
+        let instances = self.scene.objects.iter().map(|o| o.instances.len()).sum();
+        self.held_levels.clear();
+        self.held_levels.resize(instances, None);
+        for v in &visible {
+            self.held_levels[v.scene_index as usize] = Some(v.level);
+        }
         let mut bvh = instance_bvh(&uniforms, &self.lod_bounds);
         if bvh.is_empty() && !uniforms.is_empty() {
             // Visible instances without voxels: a root that no ray enters (an empty box), so

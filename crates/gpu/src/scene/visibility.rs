@@ -80,6 +80,13 @@ pub fn jittered_frame_uniform(
     }
 }
 
+/// A frame's camera and screen size in pixels.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct View<'a> {
+    pub camera: &'a Camera,
+    pub screen: (u32, u32),
+}
+
 /// Caps on the levels of a frame: the finest level an instance may use, and the finest
 /// level whose proxy mesh is drawn (finer levels draw that one's).
 #[derive(Debug, Clone, Copy)]
@@ -91,14 +98,19 @@ pub(crate) struct LevelCaps {
 /// The instances of `scene` inside the view frustum, in instance-buffer order, with the
 /// record of each for the GPU. `lod_base[object]` is the object's level 0 in the LOD table,
 /// `proxies[object][level]` its proxy mesh ranges.
+/// `held` gives, by scene index, the level each instance was drawn at in the frame before
+/// (`None`: not drawn), which Auto LOD keeps within `hysteresis` levels
+/// ([`choose_level_held`]).
 pub(crate) fn visible_instances(
     scene: &Scene,
     lod_base: &[u32],
     proxies: &[Vec<ProxyRange>],
-    camera: &Camera,
-    screen: (u32, u32),
+    view: &View,
     caps: LevelCaps,
+    held: &[Option<u32>],
+    hysteresis: f64,
 ) -> (Vec<VisibleInstance>, Vec<InstanceUniform>) {
+    let View { camera, screen } = *view;
     let (w, h) = (screen.0.max(1) as f64, screen.1.max(1) as f64);
     let aspect = w / h;
     let eye = camera.position;
@@ -137,7 +149,9 @@ pub(crate) fn visible_instances(
             if planes.iter().any(|(n, d)| n.dot(center) + d < -radius) {
                 continue;
             }
-            let level = choose_level(obj.lod, xf, camera, screen, max_level);
+            let previous = held.get(si as usize).copied().flatten();
+            let level =
+                choose_level_held(obj.lod, xf, camera, screen, max_level, previous, hysteresis);
             let lod_index = lod_base[oi] + level;
             // Camera-relative object → world.
             let rel = DAffine3 {
@@ -226,6 +240,14 @@ pub(crate) fn instance_bvh(
         .collect()
 }
 
+/// How far past a level's threshold, in levels, the view must move before Auto LOD draws an
+/// instance coarser than in the frame before: a camera hovering at a threshold would
+/// otherwise switch the instance back and forth every frame (a pop each time). A quarter
+/// level: the instance keeps its finer level until its cells project to at most 0.84 of
+/// the pixel error (2^-0.25). Switching finer is never delayed, so the pixel-error bound
+/// holds in every frame.
+pub const DEFAULT_LOD_HYSTERESIS: f64 = 0.25;
+
 /// The LOD level of an instance for a camera and screen: fixed, or the coarsest level
 /// whose cell projects to at most `pixel_error` pixels at the instance's nearest
 /// bounding-sphere point, plus the bias, clamped to `0..=max_level`.
@@ -236,33 +258,68 @@ pub fn choose_level(
     screen: (u32, u32),
     max_level: u32,
 ) -> u32 {
+    choose_level_held(policy, xf, camera, screen, max_level, None, 0.0)
+}
+
+/// [`choose_level`] for an instance drawn at level `previous` in the frame before: under
+/// Auto LOD a coarser level than `previous` is taken only as far as the view is more than
+/// `hysteresis` levels past its threshold (the level chosen as if the view were
+/// `hysteresis` levels finer, never finer than `previous`); a finer level at once.
+/// `previous` beyond `max_level`, or a hysteresis that is not a finite positive number,
+/// holds nothing.
+pub fn choose_level_held(
+    policy: LodPolicy,
+    xf: &DAffine3,
+    camera: &Camera,
+    screen: (u32, u32),
+    max_level: u32,
+    previous: Option<u32>,
+    hysteresis: f64,
+) -> u32 {
     match policy {
         LodPolicy::Fixed(l) => l.min(max_level),
         LodPolicy::Auto { bias, pixel_error } => {
-            // Cell size in world units at level L: 2 * scale / 2^L. Projected size in
-            // pixels at distance d: cell / (d * 2 tan(fov/2)) * height, i.e. the whole
-            // box's `box_px` over 2^L; the coarsest L with box_px / 2^L <= pixel_error.
-            let h = screen.1.max(1) as f64;
-            let tan_y = (camera.fov_y_deg.clamp(1e-9, 179.999).to_radians() * 0.5).tan();
-            let scale = scale_of(xf);
-            let radius = scale * 3f64.sqrt();
-            let dist =
-                ((xf.translation - camera.position).length() - radius).max(camera.near.max(1e-9));
-            let box_px = 2.0 * scale * h / (dist * 2.0 * tan_y);
-            let ideal = (box_px / pixel_error).log2();
-            let l = if ideal == f64::NEG_INFINITY {
-                // Any error is allowed (an infinite pixel_error): the coarsest level.
-                0
-            } else if pixel_error > 0.0 && ideal.is_finite() {
-                // A hair below an integer stays there (the rounding of box_px must not cost
-                // a level).
-                (ideal - 1e-9).ceil() as i64
-            } else {
-                max_level as i64
+            let ideal = auto_detail(xf, camera, screen, pixel_error);
+            let level = |ideal: f64| {
+                let l = if ideal == f64::NEG_INFINITY {
+                    // Any error is allowed (an infinite pixel_error): the coarsest level.
+                    0
+                } else if pixel_error > 0.0 && ideal.is_finite() {
+                    // A hair below an integer stays there (the rounding of box_px must not
+                    // cost a level).
+                    (ideal - 1e-9).ceil() as i64
+                } else {
+                    max_level as i64
+                };
+                (l + bias as i64).clamp(0, max_level as i64) as u32
             };
-            (l + bias as i64).clamp(0, max_level as i64) as u32
+            let now = level(ideal);
+            match previous {
+                Some(p)
+                    if p <= max_level && now < p && hysteresis > 0.0 && hysteresis.is_finite() =>
+                {
+                    level(ideal + hysteresis).min(p)
+                }
+                _ => now,
+            }
         }
     }
+}
+
+/// Auto LOD's level before rounding and bias: log2 of the whole box's projected size in
+/// pixels at the instance's nearest bounding-sphere point over `pixel_error` (the coarsest
+/// level whose cells project to at most `pixel_error` pixels is its ceiling).
+fn auto_detail(xf: &DAffine3, camera: &Camera, screen: (u32, u32), pixel_error: f64) -> f64 {
+    // Cell size in world units at level L: 2 * scale / 2^L. Projected size in pixels at
+    // distance d: cell / (d * 2 tan(fov/2)) * height, i.e. the whole box's `box_px` over
+    // 2^L; the coarsest L with box_px / 2^L <= pixel_error.
+    let h = screen.1.max(1) as f64;
+    let tan_y = (camera.fov_y_deg.clamp(1e-9, 179.999).to_radians() * 0.5).tan();
+    let scale = scale_of(xf);
+    let radius = scale * 3f64.sqrt();
+    let dist = ((xf.translation - camera.position).length() - radius).max(camera.near.max(1e-9));
+    let box_px = 2.0 * scale * h / (dist * 2.0 * tan_y);
+    (box_px / pixel_error).log2()
 }
 
 /// Uniform scale of an instance transform (cube root of |det|).
@@ -369,6 +426,75 @@ mod tests {
         assert_eq!(
             choose_level(LodPolicy::Fixed(15), &xf, &cam, (1280, h), 9),
             9
+        );
+    }
+
+    /// A held level: coarser only a quarter level past the threshold, finer at once, and
+    /// nothing held without a previous level, beyond the cap, or with no hysteresis.
+    #[test]
+    fn auto_lod_holds_a_finer_level_within_the_hysteresis() {
+        let cam_at = |z: f64| Camera {
+            fov_y_deg: 90.0,
+            ..Camera::new(DVec3::new(0.0, 0.0, z), DVec3::ZERO)
+        };
+        let xf = DAffine3::IDENTITY;
+        let h = 720u32;
+        let r = 3f64.sqrt();
+        // At distance d the box projects to h / d px: level L's threshold is d = h / 2^L.
+        let at = |d: f64| cam_at(d + r);
+        let held = |d: f64, previous, hysteresis| {
+            choose_level_held(
+                LodPolicy::AUTO,
+                &xf,
+                &at(d),
+                (1280, h),
+                12,
+                previous,
+                hysteresis,
+            )
+        };
+        // Level 5 suffices from d = h / 32 on (cells of at most one pixel).
+        let threshold = h as f64 / 32.0;
+        assert_eq!(held(threshold * 0.99, None, 0.25), 6);
+        assert_eq!(held(threshold * 1.01, None, 0.25), 5);
+        // Just past the threshold: held at 6 until 2^0.25 = 1.19 of its distance.
+        assert_eq!(held(threshold * 1.01, Some(6), 0.25), 6);
+        assert_eq!(held(threshold * 1.18, Some(6), 0.25), 6);
+        assert_eq!(held(threshold * 1.20, Some(6), 0.25), 5);
+        // Far past: as coarse as the hysteresis allows, not the previous level.
+        assert_eq!(held(threshold * 4.5, None, 0.0), 3);
+        assert_eq!(held(threshold * 4.5, Some(6), 0.25), 4);
+        // Finer at once, whatever was held.
+        assert_eq!(held(threshold * 0.99, Some(5), 0.25), 6);
+        assert_eq!(held(threshold * 0.3, Some(5), 0.25), 7);
+        // Nothing held without hysteresis, at a non-finite one, or above the cap.
+        assert_eq!(held(threshold * 1.01, Some(6), 0.0), 5);
+        assert_eq!(held(threshold * 1.01, Some(6), f64::NAN), 5);
+        assert_eq!(held(threshold * 1.01, Some(6), f64::INFINITY), 5);
+        assert_eq!(
+            choose_level_held(
+                LodPolicy::AUTO,
+                &xf,
+                &at(threshold * 1.01),
+                (1280, h),
+                5,
+                Some(6),
+                0.25
+            ),
+            5
+        );
+        // A fixed policy ignores the previous level.
+        assert_eq!(
+            choose_level_held(
+                LodPolicy::Fixed(3),
+                &xf,
+                &at(threshold),
+                (1280, h),
+                12,
+                Some(6),
+                0.25
+            ),
+            3
         );
     }
 

@@ -1,7 +1,8 @@
 //! `Temporal`: temporal anti-aliasing. The renderer jitters every frame's projection by a
 //! sub-pixel offset (Halton 2, 3) while a pipeline has this pass; the pass reprojects its
 //! history into the current frame by the G-buffer's position, clamps it to the current
-//! colour's 3 × 3 neighbourhood and blends the current frame in.
+//! colour's 3 × 3 neighbourhood and blends the current frame in, with a larger share where
+//! the history moved.
 
 use serde::{Deserialize, Serialize};
 
@@ -20,6 +21,12 @@ pub struct TemporalParams {
     /// change of lens) reset the history: a cut, not motion.
     #[serde(default = "default_cut")]
     pub cut: f32,
+    /// The current frame's least weight where the history moved by a pixel or more since
+    /// the frame before (between no motion and a pixel: from `blend` in proportion). A
+    /// moving history is resampled every frame, and its blur accumulates; the current
+    /// frame's larger share bounds it.
+    #[serde(default = "default_motion_blend")]
+    pub motion_blend: f32,
 }
 
 fn default_blend() -> f32 {
@@ -30,11 +37,16 @@ fn default_cut() -> f32 {
     0.25
 }
 
+fn default_motion_blend() -> f32 {
+    0.5
+}
+
 impl Default for TemporalParams {
     fn default() -> Self {
         Self {
             blend: default_blend(),
             cut: default_cut(),
+            motion_blend: default_motion_blend(),
         }
     }
 }
@@ -52,9 +64,55 @@ impl KindSpec for TemporalParams {
         if !(self.blend > 0.0 && self.blend <= 1.0) {
             out.push(format!("blend must be in (0, 1], got {}", self.blend));
         }
+        if !(self.motion_blend >= self.blend && self.motion_blend <= 1.0) {
+            out.push(format!(
+                "motion_blend must be in [blend, 1] = [{}, 1], got {}",
+                self.blend, self.motion_blend
+            ));
+        }
         if !(self.cut.is_finite() && self.cut > 0.0) {
             out.push(format!("cut must be a number > 0, got {}", self.cut));
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params(blend: f32, cut: f32, motion_blend: f32) -> TemporalParams {
+        TemporalParams {
+            blend,
+            cut,
+            motion_blend,
+        }
+    }
+
+    #[test]
+    fn the_defaults_are_valid_and_each_bad_value_is_named() {
+        assert!(TemporalParams::default().problems().is_empty());
+        assert!(
+            params(0.1, 0.25, 0.1).problems().is_empty(),
+            "motion_blend = blend"
+        );
+        assert!(params(0.1, 0.25, 1.0).problems().is_empty());
+        let one = |p: TemporalParams, what: &str| {
+            let problems = p.problems();
+            assert_eq!(problems.len(), 1, "{problems:?}");
+            assert!(problems[0].starts_with(what), "{problems:?}");
+        };
+        one(params(0.0, 0.25, 0.5), "blend must be in (0, 1]");
+        one(params(0.1, 0.0, 0.5), "cut must be");
+        one(params(0.1, f32::INFINITY, 0.5), "cut must be");
+        one(
+            params(0.3, 0.25, 0.2),
+            "motion_blend must be in [blend, 1] = [0.3, 1], got 0.2",
+        );
+        one(params(0.1, 0.25, 1.5), "motion_blend must be");
+        one(params(0.1, 0.25, f32::NAN), "motion_blend must be");
+        // Read from RON without it: the default.
+        let p: TemporalParams = ron::from_str("(blend: 0.2, cut: 0.5)").unwrap();
+        assert_eq!(p.motion_blend, 0.5);
     }
 }

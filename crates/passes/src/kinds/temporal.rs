@@ -35,7 +35,8 @@ fn halton(mut k: u64, base: u64) -> f64 {
     r
 }
 
-/// What the pass binds itself: its constants and the history it reads.
+/// What the pass binds itself: its constants, the history it reads and the history's
+/// bilinear sampler (the cubic filter's taps).
 pub const OWN: &[OwnBinding] = &[
     OwnBinding {
         name: "taa",
@@ -44,6 +45,10 @@ pub const OWN: &[OwnBinding] = &[
     OwnBinding {
         name: "history",
         kind: OwnKind::Texture2dFloat,
+    },
+    OwnBinding {
+        name: "history_sampler",
+        kind: OwnKind::Sampler(wgpu::SamplerBindingType::Filtering),
     },
 ];
 
@@ -54,6 +59,8 @@ struct TaaUniform {
     prev_view_proj: [[f32; 4]; 4],
     /// xyz: this frame's camera minus the previous one's; w: the current frame's weight.
     delta: [f32; 4],
+    /// x: the current frame's least weight where the history moved by a pixel or more.
+    motion: [f32; 4],
 }
 
 const HISTORY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
@@ -64,6 +71,7 @@ pub struct Temporal {
     bindings: PassBindings,
     params: TemporalParams,
     uniform: wgpu::Buffer,
+    sampler: wgpu::Sampler,
     /// The two history textures and their size; `read` is the one holding the last output.
     history: Option<([wgpu::TextureView; 2], (u32, u32))>,
     read: usize,
@@ -104,11 +112,18 @@ impl PassImpl for Temporal {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let sampler = d.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("temporal history"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
         Ok(Self {
             pipeline,
             bindings,
             params: *params,
             uniform,
+            sampler,
             history: None,
             read: 0,
             frames: 0,
@@ -181,6 +196,7 @@ impl PassNode for Temporal {
         let constants = TaaUniform {
             prev_view_proj: prev_frame.view_proj,
             delta: [delta.x as f32, delta.y as f32, delta.z as f32, weight],
+            motion: [weight.max(self.params.motion_blend), 0.0, 0.0, 0.0],
         };
         rec.gpu
             .queue
@@ -192,6 +208,10 @@ impl PassNode for Temporal {
             &[
                 ("taa", self.uniform.as_entire_binding()),
                 ("history", wgpu::BindingResource::TextureView(read)),
+                (
+                    "history_sampler",
+                    wgpu::BindingResource::Sampler(&self.sampler),
+                ),
             ],
         )?;
         let history_out = wgpu::RenderPassColorAttachment {
