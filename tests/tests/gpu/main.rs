@@ -2,6 +2,7 @@
 //! grouped by pass or by property.
 
 mod all_models;
+mod billboard_footprint;
 mod billboard_harness;
 mod billboards;
 mod chunks;

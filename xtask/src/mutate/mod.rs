@@ -89,9 +89,21 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
     ),
     (
         "billboard_quad.inc.wgsl",
-        &["billboards::", "billboard_harness::", "splat::"],
+        &[
+            "billboards::",
+            "billboard_harness::",
+            "billboard_footprint::",
+            "splat::",
+        ],
     ),
-    ("billboards.wgsl", &["billboards::", "billboard_harness::"]),
+    (
+        "billboards.wgsl",
+        &[
+            "billboards::",
+            "billboard_harness::",
+            "billboard_footprint::",
+        ],
+    ),
     ("splat_billboards.wgsl", &["splat::"]),
     ("smooth.wgsl", &["smooth_composite::"]),
     ("composite.wgsl", &["smooth_composite::"]),
