@@ -312,4 +312,34 @@ fn sphere_footprints_are_the_circumscribed_spheres_bounds() {
             &compare(&scene, &cam, Footprint::Sphere),
         );
     }
+    // Coarse cells of a stretched, turned instance, seen from near: the four diagonals of a
+    // cell differ in length (the radius is the longest), and a sphere a fifth of its
+    // distance wide shows every term of the tangent slopes.
+    let stretched = Scene {
+        objects: vec![VoxelObject {
+            asset: model_asset(BUNNY, 3),
+            instances: vec![DAffine3 {
+                matrix3: glam::DMat3::from_quat(DQuat::from_euler(
+                    glam::EulerRot::YXZ,
+                    0.5,
+                    0.3,
+                    -0.2,
+                )) * glam::DMat3::from_cols(
+                    DVec3::new(0.9, 0.0, 0.0),
+                    DVec3::new(0.25, 0.5, 0.0),
+                    DVec3::new(0.0, 0.0, 0.7),
+                ),
+                translation: DVec3::ZERO,
+            }],
+            lod: LodPolicy::Fixed(3),
+        }],
+        ..Default::default()
+    };
+    let near = Camera::new(DVec3::new(0.6, 0.5, 1.6), DVec3::ZERO);
+    for footprint in [Footprint::Sphere, Footprint::Box] {
+        assert_exact(
+            &format!("{footprint:?}, stretched level 3"),
+            &compare(&stretched, &near, footprint),
+        );
+    }
 }
