@@ -20,7 +20,8 @@ use sites::Mutant;
 /// Usage of the task.
 pub const USAGE: &str =
     "usage: cargo xtask mutate-shaders [FILE ...] [--tests FILTER]... [--report FILE]
-       [--timeout SECONDS] [--lines A-B] [--every N] [--list] [--test-binary PATH]
+       [--timeout SECONDS] [--lines A-B] [--at L:C,...] [--every N] [--list]
+       [--test-binary PATH]
 
   FILE            shader files under shaders/ (default: the core shaders: the march, the filter,
                   the instance hierarchy, billboards and splats, smoothing, composite, the shading
@@ -30,6 +31,8 @@ pub const USAGE: &str =
   --report FILE   Markdown report (default target/mutate-shaders.md), rewritten after each file
   --timeout S     seconds per mutant run (default: 3 x the unmutated run + 30)
   --lines A-B     only mutants on lines A to B of each file
+  --at L:C,...    only mutants at these line:column positions (a report's missed ones, to
+                  run them again against other tests)
   --every N       only every N-th mutant of each file (a sample; 1 = all)
   --list          print the mutants and exit (builds nothing, runs nothing)
   --test-binary P the GPU test binary (default: built with cargo test -p ssbvb-tests --test gpu)";
@@ -158,6 +161,8 @@ struct Options {
     report: Option<PathBuf>,
     timeout: Option<u64>,
     lines: Option<(usize, usize)>,
+    /// `--at`: (line, column) positions; empty: every position.
+    at: Vec<(usize, usize)>,
     every: usize,
     list: bool,
     test_binary: Option<PathBuf>,
@@ -199,6 +204,16 @@ fn parse(args: &[String]) -> Result<Options> {
                 o.lines =
                     Some(range.with_context(|| format!("--lines {v}: expected A-B with A <= B"))?);
             }
+            "--at" => {
+                let v = value("--at")?;
+                for p in v.split(',').filter(|p| !p.is_empty()) {
+                    let pos = p
+                        .split_once(':')
+                        .and_then(|(l, c)| Some((l.parse().ok()?, c.parse().ok()?)))
+                        .with_context(|| format!("--at {p}: expected LINE:COLUMN"))?;
+                    o.at.push(pos);
+                }
+            }
             "--every" => {
                 let v = value("--every")?;
                 o.every = v
@@ -229,6 +244,7 @@ fn selected(src: &str, o: &Options) -> Vec<Mutant> {
     sites::mutants(src)
         .into_iter()
         .filter(|m| o.lines.is_none_or(|(a, b)| (a..=b).contains(&m.line)))
+        .filter(|m| o.at.is_empty() || o.at.contains(&(m.line, m.col)))
         .enumerate()
         .filter(|(i, _)| i % o.every == 0)
         .map(|(_, m)| m)
@@ -512,5 +528,19 @@ mod tests {
         assert!(parse(&args(&["--bogus"])).is_err());
         let o = parse(&args(&["--tests", "a::,b::", "--tests", "c"])).unwrap();
         assert_eq!(o.tests, vec!["a::", "b::", "c"]);
+        let o = parse(&args(&["--at", "36:12,90:41"])).unwrap();
+        assert_eq!(o.at, vec![(36, 12), (90, 41)]);
+        assert!(parse(&args(&["--at", "36"])).is_err());
+        assert!(parse(&args(&["--at", "a:1"])).is_err());
+        // Only the mutants at those positions.
+        let src = "fn f(x: f32) -> f32 {\n    return x * 2.0 + 1.0;\n}\n";
+        let all = sites::mutants(src);
+        let (line, col) = (all[0].line, all[0].col);
+        let at = selected(
+            src,
+            &parse(&args(&["--at", &format!("{line}:{col}")])).unwrap(),
+        );
+        assert!(!at.is_empty() && at.len() < all.len());
+        assert!(at.iter().all(|m| (m.line, m.col) == (line, col)));
     }
 }
