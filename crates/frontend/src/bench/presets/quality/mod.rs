@@ -1,5 +1,5 @@
 //! `ssbvb bench --preset quality`: image quality still and in motion, against ground
-//! truth. Each view ([`views`]: the 64-bunny grid along a path and hovering at an LOD
+//! truth. Each view ([`mod@views`]: the 64-bunny grid along a path and hovering at an LOD
 //! switch, one bunny along the path) is rendered by every technique and by the CPU
 //! reference at `--flip-samples` samples per pixel (the supersampled ground truth), all
 //! composited over black, at each of `--sizes`. The ground truth draws every instance at
