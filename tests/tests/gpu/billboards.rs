@@ -80,6 +80,7 @@ fn culling_by_voxel_normal_only_removes_coverage() {
     for (name, cam) in cameras().into_iter().take(3) {
         let mut last = usize::MAX;
         let mut last_flat = usize::MAX;
+        let mut unculled = (0, 0);
         for cull_cos in [DEFAULT_CULL_COS, -0.5, -0.2, 0.0] {
             for mode in [BillboardMode::RayBox, BillboardMode::Flat] {
                 let o = BillboardOptions {
@@ -114,8 +115,18 @@ fn culling_by_voxel_normal_only_removes_coverage() {
                     assert!(drawn <= last_flat, "{cull_cos}: {a:?}");
                     last_flat = drawn;
                 }
+                if cull_cos == DEFAULT_CULL_COS {
+                    unculled = (last, last_flat);
+                }
             }
         }
+        // Culling every billboard that faces away (cull_cos 0) removes some of the
+        // silhouette's (measured: 62 to 88 reference pixels lost per view against the
+        // default's none): a pass that ignores `cull_cos` must not pass.
+        assert!(
+            last < unculled.0 && last_flat < unculled.1,
+            "{name}: {last} {last_flat} vs {unculled:?}"
+        );
     }
 }
 
