@@ -258,6 +258,18 @@ pub(crate) fn select(args: &BenchArgs) -> Result<Vec<&'static Technique>> {
     })
 }
 
+/// The techniques named with `--techniques`, else those of `defaults` (a preset's own
+/// set), in the table's order.
+pub(crate) fn select_or(args: &BenchArgs, defaults: &[&str]) -> Result<Vec<&'static Technique>> {
+    match &args.techniques {
+        Some(_) => select(args),
+        None => Ok(TECHNIQUES
+            .iter()
+            .filter(|t| defaults.contains(&t.name))
+            .collect()),
+    }
+}
+
 /// Whether `e` is a technique's refusal of the scene (too large, or a baseline's limits).
 pub(crate) fn refused(e: &anyhow::Error) -> bool {
     e.chain().any(|c| {

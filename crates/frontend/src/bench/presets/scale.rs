@@ -22,7 +22,7 @@ use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::reference;
 
 use crate::bench::args::BenchArgs;
-use crate::bench::harness::techniques::{self, TECHNIQUES, Technique};
+use crate::bench::harness::techniques::{self, Technique};
 use crate::bench::harness::{TimedFrames, bundled_bunny, grid, grid_camera, technique_pipeline};
 use crate::bench::plot::{PlotInfo, Series, plot};
 use crate::bench::table::{Column, Fmt, Table, Value, write_report};
@@ -160,24 +160,18 @@ pub(crate) fn run_with(args: &BenchArgs, print_report: bool) -> Result<Vec<Scale
 /// The techniques of `--techniques`, else the SSBVB variants and the baselines that draw
 /// many instances.
 fn scale_techniques(args: &BenchArgs) -> Result<Vec<&'static Technique>> {
-    Ok(match &args.techniques {
-        Some(_) => techniques::select(args)?,
-        None => TECHNIQUES
-            .iter()
-            .filter(|t| {
-                matches!(
-                    t.name,
-                    "ssbvb-unique"
-                        | "ssbvb-splat"
-                        | "ssbvb-flat"
-                        | "octree"
-                        | "esvo"
-                        | "dense-dda"
-                        | "cube-raster"
-                )
-            })
-            .collect(),
-    })
+    techniques::select_or(
+        args,
+        &[
+            "ssbvb-unique",
+            "ssbvb-splat",
+            "ssbvb-flat",
+            "octree",
+            "esvo",
+            "dense-dda",
+            "cube-raster",
+        ],
+    )
 }
 
 /// Measures every technique on every view: the grid at each `--instances` count, then the

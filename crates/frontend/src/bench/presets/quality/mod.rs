@@ -37,7 +37,7 @@ use ssbvb_voxel::reference::{self, SampleGrid};
 
 use crate::bench::args::BenchArgs;
 use crate::bench::harness::technique_pipeline;
-use crate::bench::harness::techniques::{self, TECHNIQUES, Technique};
+use crate::bench::harness::techniques::{self, Technique};
 use crate::bench::table::{Column, Fmt, Table, write_report};
 use crate::flip::{flip_map_rgb8, flip_rgb8};
 use measure::{
@@ -88,24 +88,18 @@ const NO_HYSTERESIS: &str = "ssbvb-unique-no-hysteresis";
 /// The techniques of `--techniques`, else the SSBVB variants and the ray casters that draw
 /// many instances.
 fn quality_techniques(args: &BenchArgs) -> Result<Vec<&'static Technique>> {
-    Ok(match &args.techniques {
-        Some(_) => techniques::select(args)?,
-        None => TECHNIQUES
-            .iter()
-            .filter(|t| {
-                matches!(
-                    t.name,
-                    "ssbvb-unique"
-                        | "ssbvb-aa"
-                        | "ssbvb-edge-aa"
-                        | "ssbvb-flat"
-                        | "ssbvb-raybox"
-                        | "octree"
-                        | "esvo"
-                )
-            })
-            .collect(),
-    })
+    techniques::select_or(
+        args,
+        &[
+            "ssbvb-unique",
+            "ssbvb-aa",
+            "ssbvb-edge-aa",
+            "ssbvb-flat",
+            "ssbvb-raybox",
+            "octree",
+            "esvo",
+        ],
+    )
 }
 
 /// Runs the quality preset and writes `quality.{csv,json,md}` and the PNGs to `--out`.
