@@ -73,11 +73,15 @@ pub struct Sample {
 }
 
 impl Sample {
-    /// Samples now; `frame` frames were rendered before.
-    pub fn take(ctx: &GpuContext, scene: &GpuScene, frame: usize) -> Self {
+    /// Samples now; `frame` frames were rendered before. Waits for the device first: wgpu
+    /// frees a dropped buffer only once the work using it is done and the device is
+    /// polled, so without the wait the count depends on whether a read-back happened to
+    /// poll just before (two buffers more or less at the same state).
+    pub fn take(ctx: &GpuContext, scene: &GpuScene, frame: usize) -> Result<Self> {
+        ctx.wait_idle()?;
         let c = ctx.memory_counters();
         let st = scene.streaming_stats();
-        Self {
+        Ok(Self {
             pages_streamed: st.map(|s| s.pages_streamed),
             pages_evicted: st.map(|s| s.pages_evicted),
             frame,
@@ -86,7 +90,7 @@ impl Sample {
             buffers: c.buffers,
             textures: c.textures,
             bind_groups: c.bind_groups,
-        }
+        })
     }
 }
 
@@ -206,7 +210,7 @@ pub fn run(
     let mut oom_rebuilds = 0;
     for i in 0..n {
         if i >= warmup && (i - warmup).is_multiple_of(every) {
-            samples.push(Sample::take(&session.ctx, &session.scene, i));
+            samples.push(Sample::take(&session.ctx, &session.scene, i)?);
         }
         let cam = camera_at(base, path, i, n);
         if runs_out_of_memory_at(faults, i) {
@@ -235,7 +239,7 @@ pub fn run(
         }
         times.push(t.elapsed().as_secs_f64() * 1e3);
     }
-    let end = Sample::take(&session.ctx, &session.scene, n);
+    let end = Sample::take(&session.ctx, &session.scene, n)?;
     times.sort_by(f64::total_cmp);
     let report = SoakReport {
         frames: n,

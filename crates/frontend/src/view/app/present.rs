@@ -120,7 +120,7 @@ impl Viewer {
             // last state, and a watcher knows the viewer is up.
             let sample = self.frame >= warmup && (self.frame - warmup).is_multiple_of(every);
             if sample || self.frame >= limit {
-                let s = crate::soak::Sample::take(&self.gpu.ctx, &self.scene, self.frame as usize);
+                let s = crate::soak::Sample::take(&self.gpu.ctx, &self.scene, self.frame as usize)?;
                 let report = crate::soak::ViewMemoryReport {
                     frames: self.frame,
                     reloads_ok: self.reloads.0,
