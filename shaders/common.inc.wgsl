@@ -34,6 +34,9 @@ struct Frame {
     // `px` shows the unjittered camera's ray through `px + xy`, and `proj` is sheared to
     // match. zw: 0.
     jitter: vec4<f32>,
+    // The scene's word stream (scene_streams.inc.wgsl): x = log2 of its words per
+    // binding, y = its first colour word, z = its first normal word; w: 0.
+    streams: vec4<u32>,
 }
 
 // One visible instance of a voxel asset (group 0, binding 1), rebuilt every frame.
@@ -57,7 +60,7 @@ struct Instance {
 }
 
 // A node of the hierarchy over the visible instances' camera-relative world boxes (group 0,
-// binding 11), rebuilt every frame (ssbvb-voxel instance_bvh.rs; node 0 is the root).
+// binding 2), rebuilt every frame (ssbvb-voxel instance_bvh.rs; node 0 is the root).
 struct BvhNode {
     lo: vec3<f32>,
     // Left child, or BVH_LEAF | index into `instances`.
@@ -73,7 +76,7 @@ const BIG: f32 = 3.0e38;
 // Most nodes on a traversal stack (instance_bvh.rs MAX_DEPTH, plus one).
 const BVH_STACK: u32 = 26u;
 
-// Where one LOD of one asset lives in the shared voxel buffers (group 0, binding 2).
+// Where one LOD of one asset lives in the scene's streams (`lod_info`: the word stream).
 struct LodInfo {
     level: u32,
     // Depth of the lookup's 64-ary tree (ssbvb-voxel lookup.rs): the root covers 4^depth
@@ -85,8 +88,8 @@ struct LodInfo {
     node_offset: u32,
     // The scene object this LOD belongs to.
     object: u32,
-    // log2 of the words per binding of the colour and normal streams, and of the nodes per
-    // binding of the lookup-node stream (the same for every LOD of a scene).
+    // log2 of the words per binding of the word stream (as `frame.streams.x`), and of the
+    // nodes per binding of the lookup-node stream (the same for every LOD of a scene).
     chunk_bits: u32,
     node_chunk_bits: u32,
     // Under a GPU budget (gpu_scene.rs, `streaming.rs`): the global id of this LOD's first
@@ -137,54 +140,43 @@ const STENCIL_TRIANGLE: u32 = 2u;
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> instances: array<Instance>;
-@group(0) @binding(2) var<storage, read> lods: array<LodInfo>;
-// Per voxel: linear RGBA8 colour, and the 16-bit octahedral normal two to a word (low
-// half = even voxel). Positions are implied by the lookup (the voxel id is the Morton rank
-// of its cell), so nothing else is uploaded. No binding may exceed the device's storage
-// binding size (128 MiB on lavapipe), so each stream is split into chunks of
-// 2^LodInfo.chunk_bits words (2^node_chunk_bits nodes) over several bindings; unused
-// chunks are bound to a small empty buffer.
-@group(0) @binding(3) var<storage, read> voxel_colors_0: array<u32>;
-@group(0) @binding(4) var<storage, read> voxel_colors_1: array<u32>;
-@group(0) @binding(5) var<storage, read> voxel_colors_2: array<u32>;
-@group(0) @binding(6) var<storage, read> voxel_colors_3: array<u32>;
-@group(0) @binding(7) var<storage, read> voxel_normals_0: array<u32>;
-@group(0) @binding(8) var<storage, read> voxel_normals_1: array<u32>;
-@group(0) @binding(9) var<storage, read> lookup_nodes_0: array<LookupNode>;
-@group(0) @binding(10) var<storage, read> lookup_nodes_1: array<LookupNode>;
-@group(0) @binding(11) var<storage, read> instance_bvh: array<BvhNode>;
+@group(0) @binding(2) var<storage, read> instance_bvh: array<BvhNode>;
+// The scene's streams (ssbvb-gpu scene/bindings.rs): the word stream holds the LOD table
+// (LOD_WORDS words per entry), then per voxel its linear RGBA8 colour, then the 16-bit
+// octahedral normals two to a word (low half = even voxel); positions are implied by the
+// lookup (the voxel id is the Morton rank of its cell). The lookup-node stream holds the
+// trees. No binding may exceed the device's storage binding size, so each stream is split
+// into chunks of 2^frame.streams.x words (2^LodInfo.node_chunk_bits nodes) over as many
+// bindings as the scene needs; the include declares them and `scene_word` / `lookup_node`.
+//#include "scene_streams.inc.wgsl"
+
+const LOD_WORDS: u32 = 9u;
+
+// Entry `i` of the LOD table.
+fn lod_info(i: u32) -> LodInfo {
+    let w = i * LOD_WORDS;
+    return LodInfo(
+        scene_word(w),
+        scene_word(w + 1u),
+        scene_word(w + 2u),
+        scene_word(w + 3u),
+        scene_word(w + 4u),
+        scene_word(w + 5u),
+        scene_word(w + 6u),
+        scene_word(w + 7u),
+        scene_word(w + 8u),
+    );
+}
 
 // Colour word of voxel `g` (index over all LODs).
 fn voxel_color_word(lod: LodInfo, g: u32) -> u32 {
-    let i = g & ((1u << lod.chunk_bits) - 1u);
-    switch g >> lod.chunk_bits {
-        case 0u: { return voxel_colors_0[i]; }
-        case 1u: { return voxel_colors_1[i]; }
-        case 2u: { return voxel_colors_2[i]; }
-        default: { return voxel_colors_3[i]; }
-    }
+    return scene_word(frame.streams.y + g);
 }
 
 // 16-bit normal of voxel `g` (index over all LODs).
 fn voxel_normal_bits(lod: LodInfo, g: u32) -> u32 {
-    let w = g >> 1u;
-    let i = w & ((1u << lod.chunk_bits) - 1u);
-    var word: u32;
-    if (w >> lod.chunk_bits) == 0u {
-        word = voxel_normals_0[i];
-    } else {
-        word = voxel_normals_1[i];
-    }
+    let word = scene_word(frame.streams.z + (g >> 1u));
     return (word >> (16u * (g & 1u))) & 0xffffu;
-}
-
-// Lookup node `n` (index over all LODs).
-fn lookup_node(lod: LodInfo, n: u32) -> LookupNode {
-    let i = n & ((1u << lod.node_chunk_bits) - 1u);
-    if (n >> lod.node_chunk_bits) == 0u {
-        return lookup_nodes_0[i];
-    }
-    return lookup_nodes_1[i];
 }
 
 fn voxel_cell(v: PackedVoxel) -> vec3<u32> {

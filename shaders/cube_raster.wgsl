@@ -81,7 +81,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ci: u32) -> 
 @fragment
 fn fs_main(in: VertexOut) -> GBuffer {
     let inst = instances[in.visible];
-    let lod = lods[inst.lod];
+    let lod = lod_info(inst.lod);
     let c = cubes[in.cube];
     let size = 1u << cube_log2_size(c);
     let a = in.face % 3u;

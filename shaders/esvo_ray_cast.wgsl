@@ -74,7 +74,7 @@ fn esvo_hit(base: u32, level: u32, node: u32, t: f32, axis: u32, d: vec3<f32>) -
 fn trace(inst: Instance, o: vec3<f32>, d: vec3<f32>, t_best: f32) -> Hit {
     let miss = Hit(false, t_best, 0u, 0u);
     let target_level = inst.level;
-    let base = lods[inst.lod].object * SVO_STRIDE;
+    let base = lod_info(inst.lod).object * SVO_STRIDE;
     if target_level > MAX_LEVEL || arrayLength(&svo_level_offsets) < base + SVO_STRIDE {
         return miss;
     }

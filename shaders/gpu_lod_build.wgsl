@@ -117,9 +117,6 @@ fn coarsen(
         let c = key_lo[j] & 7u;
         offset += select(vec3(-0.5), vec3(0.5), ((vec3(c) >> vec3(0u, 1u, 2u)) & vec3(1u)) == vec3(1u));
     }
-    let parent = key_shifted(start, 3u);
-    out_lo[r] = parent.x;
-    out_hi[r] = parent.y;
     colors_out[r] = color / f32(end - start);
     var n = normal;
     if !(length(n) > 1e-12) {
@@ -130,6 +127,23 @@ fn coarsen(
     }
     let len = length(n);
     normals_out[r] = vec4(select(vec3(0.0, 0.0, 1.0), n / len, len > 1e-12), 0.0);
+}
+
+// The parents' keys of `coarsen`'s runs (a kernel of its own: with `coarsen` it would bind
+// 9 storage buffers, WebGPU allows 8).
+@compute @workgroup_size(256)
+fn coarsen_keys(
+    @builtin(local_invocation_index) li: u32,
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let r = thread_id(li, wg, nwg);
+    if r >= params.runs {
+        return;
+    }
+    let parent = key_shifted(starts[r], 3u);
+    out_lo[r] = parent.x;
+    out_hi[r] = parent.y;
 }
 
 // The point cloud's words (ssbvb_voxel::asset::PackedVoxel's colour and normal): thread i

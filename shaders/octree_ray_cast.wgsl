@@ -41,7 +41,7 @@ const STACK_DEPTH: u32 = 16u;
 fn trace(inst: Instance, o: vec3<f32>, d: vec3<f32>, t_best: f32) -> Hit {
     var out = Hit(false, t_best, 0u, 0u);
     let target_level = inst.level;
-    let base = lods[inst.lod].object * SVO_STRIDE;
+    let base = lod_info(inst.lod).object * SVO_STRIDE;
     if target_level > STACK_DEPTH || arrayLength(&svo_level_offsets) < base + SVO_STRIDE {
         return out;
     }

@@ -107,7 +107,7 @@ fn gbuffer_of_best(dir: vec3<f32>) -> GBufferDepth {
     let inst = instances[best_inst];
     let p = dir * best.t;
     var out: GBufferDepth;
-    let lod = lods[inst.lod];
+    let lod = lod_info(inst.lod);
     out.albedo = pack4x8unorm(vec4(lod_voxel_color(lod, best.id).rgb, 1.0));
     out.normal = vec4(lod_voxel_normal_world(inst, lod, best.id), 1.0);
     out.position = vec4(p, dot(p, frame.cam_forward.xyz));

@@ -47,7 +47,7 @@ override UNIQUE_VOXELS: bool = false;
 // for any scene.
 override PAGED: bool = true;
 override SEVERAL_INSTANCES: bool = true;
-// Count the frame's work into `filter_counters` (off: the pipeline of frames that no report
+// Count the frame's work into the counters of `filter_words` (off: the pipeline of frames that no report
 // reads; the march is the same).
 override COUNT_WORK: bool = true;
 
@@ -56,18 +56,20 @@ override COUNT_WORK: bool = true;
 // Compacted hits: entries 0 .. billboard_draw.instance_count are valid.
 @group(1) @binding(1) var<storage, read_write> ssbvb: array<VoxelSlot>;
 @group(1) @binding(2) var<storage, read_write> billboard_draw: DrawArgs;
-// Pass-private (UNIQUE_VOXELS): the set of (instance, voxel) keys appended this frame, an
-// open-addressing hash table of 2 x pixels words or more (a power of two, cleared every
-// frame), so its memory follows the screen, not the scene. Instance k's keys are
-// `claim_offsets[k] + voxel id` (NO_DEDUP: its keys do not fit 32 bits; each of its
-// pixels appends).
-@group(1) @binding(3) var<storage, read_write> voxel_claims: array<atomic<u32>>;
-@group(1) @binding(4) var<storage, read> claim_offsets: array<u32>;
-// Pass-private: the frame's counters (layout in ray_march_filter.rs, `CounterWords`),
-// cleared every frame.
-@group(1) @binding(5) var<storage, read_write> filter_counters: array<atomic<u32>>;
+// Pass-private, one buffer (WebGPU allows 8 storage buffers per stage; ray_march_filter.rs,
+// `FilterWords`):
+// - words 0 .. CLAIM_HEADER: the frame's counters (layout below), cleared every counted
+//   frame;
+// - (UNIQUE_VOXELS) word CLAIM_HEADER: where the claim table starts; CLAIM_HEADER + 1: its
+//   size - 1 (a power of two); from CLAIM_HEADER + 2: instance k's first key. The table is
+//   the set of (instance, voxel) keys appended this frame, an open-addressing hash table of
+//   2 x pixels words or more (cleared every frame), so its memory follows the screen, not
+//   the scene. Instance k's keys are its first key + voxel id (NO_DEDUP: its keys do not
+//   fit 32 bits; each of its pixels appends).
+@group(1) @binding(3) var<storage, read_write> filter_words: array<atomic<u32>>;
+override CLAIM_HEADER: u32 = 0u;
 
-// Words of `filter_counters`: rays, then (low, high) pairs of sums, then the histogram.
+// Words of the counters: rays, then (low, high) pairs of sums, then the histogram.
 const C_RAYS: u32 = 0u;
 const C_STEPS: u32 = 1u;
 const C_BOXES: u32 = 3u;
@@ -116,7 +118,7 @@ fn entry_margin(e: vec4<f32>, px: vec2<i32>, size: vec2<i32>, d: vec3<f32>, s: f
 // hit at the same distance compute the same `t`.
 fn march_prepass(k: u32, e: vec4<f32>, px: vec2<i32>, size: vec2<i32>, dir: vec3<f32>) -> Hit {
     let inst = instances[k];
-    let lod = lods[inst.lod];
+    let lod = lod_info(inst.lod);
     let ray = object_ray(inst, pixel_centre, dir);
     var t_from = 0.0;
     if (inst.flags & 1u) == 0u {
@@ -162,7 +164,7 @@ fn bvh_visit(j: u32, dir: vec3<f32>) -> f32 {
         return best.t;
     }
     let inst_j = instances[j];
-    let lod_j = lods[inst_j.lod];
+    let lod_j = lod_info(inst_j.lod);
     let ray = object_ray(inst_j, pixel_centre, dir);
     let rj = make_ray_od(ray.o, ray.d, lod_j.level);
     let limit = best.t - ray.t_base;
@@ -195,13 +197,14 @@ fn hash32(v: u32) -> u32 {
     return x;
 }
 
-// Claims `key` (< 2^32 - 1) in `voxel_claims`: true for the first claim this frame.
+// Claims `key` (< 2^32 - 1) in the claim table: true for the first claim this frame.
 fn claim(key: u32) -> bool {
-    let mask = arrayLength(&voxel_claims) - 1u;
+    let table = atomicLoad(&filter_words[CLAIM_HEADER]);
+    let mask = atomicLoad(&filter_words[CLAIM_HEADER + 1u]);
     let stored = key + 1u;
     var h = hash32(key) & mask;
     for (var i = 0u; i < MAX_PROBES; i++) {
-        let r = atomicCompareExchangeWeak(&voxel_claims[h], 0u, stored);
+        let r = atomicCompareExchangeWeak(&filter_words[table + h], 0u, stored);
         if r.exchanged {
             return true;
         }
@@ -249,14 +252,14 @@ fn filter_pixel(px: vec2<i32>) -> bool {
         return true;
     }
     // The voxel's own LOD: the instance's, or a coarser one where a page was not resident.
-    let hit_lod = lods[best.lod];
+    let hit_lod = lod_info(best.lod);
     if UNIQUE_VOXELS {
         // Instances of one object share voxel ids but are distinct billboards: each owns a
         // range of keys. The first pixel to claim a key appends. Keys count from the
         // instance's LOD's first voxel: its voxel ids, or (under a budget, where a hit may
-        // come from a coarser LOD) every voxel index of the scene (`claim_offsets`).
-        let base = claim_offsets[best_inst];
-        let key = hit_lod.voxel_offset + best.id - lods[instances[best_inst].lod].voxel_offset;
+        // come from a coarser LOD) every voxel index of the scene (the first keys).
+        let base = atomicLoad(&filter_words[CLAIM_HEADER + 2u + best_inst]);
+        let key = hit_lod.voxel_offset + best.id - lod_info(instances[best_inst].lod).voxel_offset;
         if base != NO_DEDUP && !claim(base + key) {
             return true;
         }
@@ -291,9 +294,9 @@ fn add_wide(word: u32, v: u32) {
     if v == 0u {
         return;
     }
-    let old = atomicAdd(&filter_counters[word], v);
+    let old = atomicAdd(&filter_words[word], v);
     if old + v < old {
-        atomicAdd(&filter_counters[word + 1u], 1u);
+        atomicAdd(&filter_words[word + 1u], 1u);
     }
 }
 
@@ -304,11 +307,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     boxes_tested = 0u;
     marches = 0u;
     if filter_pixel(vec2<i32>(gid.xy)) && COUNT_WORK {
-        atomicAdd(&filter_counters[C_RAYS], 1u);
+        atomicAdd(&filter_words[C_RAYS], 1u);
         add_wide(C_STEPS, march_steps);
         add_wide(C_BOXES, boxes_tested);
         add_wide(C_MARCHES, marches);
         add_wide(C_WORDS, march_words);
-        atomicAdd(&filter_counters[C_HISTOGRAM + steps_bin(march_steps)], 1u);
+        atomicAdd(&filter_words[C_HISTOGRAM + steps_bin(march_steps)], 1u);
     }
 }

@@ -74,7 +74,7 @@ var<private> march_words: u32;
 // LOD: the pages a march needed and did not find (FB_MISSING), the pages it entered
 // (FB_TOUCHED), and the missing pages it found looking past the first (FB_AHEAD); cleared
 // every frame.
-@group(0) @binding(12) var<storage, read_write> page_feedback: array<atomic<u32>>;
+@group(0) @binding(3) var<storage, read_write> page_feedback: array<atomic<u32>>;
 
 const FB_MISSING: u32 = 0u;
 const FB_TOUCHED: u32 = 1u;
@@ -623,7 +623,7 @@ fn march_lod(o: vec3<f32>, d: vec3<f32>, lod: LodInfo, t_from: f32, t_limit: f32
 fn march_resident(o: vec3<f32>, d: vec3<f32>, first: u32, t_from: f32, t_limit: f32) -> Hit {
     // No pages in the scene: one march, no fallback loop in the pipeline.
     if !PAGED {
-        var h = march_lod(o, d, lods[first], t_from, t_limit, true);
+        var h = march_lod(o, d, lod_info(first), t_from, t_limit, true);
         h.lod = first;
         return h;
     }
@@ -631,7 +631,7 @@ fn march_resident(o: vec3<f32>, d: vec3<f32>, first: u32, t_from: f32, t_limit: 
     var t_start = t_from;
     var record = true;
     loop {
-        let lod = lods[li];
+        let lod = lod_info(li);
         var h = march_lod(o, d, lod, t_start, t_limit, record);
         if !h.missing || lod.level == 0u {
             h.lod = li;

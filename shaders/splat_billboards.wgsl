@@ -18,7 +18,7 @@
 //    writes what that billboard's fragment writes, with its depth, depth-tested against
 //    the triangles already there; a pixel without one is discarded.
 //
-// Both per-pixel buffers are cleared to 0 every frame (0 = no depth, no entry).
+// The per-pixel words are cleared to 0 every frame (0 = no depth, no entry).
 
 // Whether the fragment intersects the pixel's ray with the voxel box (RayBox) or is the
 // flat quad (Flat, the paper).
@@ -27,9 +27,9 @@ override RAY_BOX: bool = false;
 @group(1) @binding(0) var<storage, read> ssbvb: array<VoxelSlot>;
 // Written by the filter: `instance_count` = the number of valid SSBVB entries.
 @group(1) @binding(1) var<storage, read> billboard_draw: array<u32, 4>;
-// Per pixel (y * width + x): the nearest depth's bits, then the winning entry, inverted.
-@group(1) @binding(2) var<storage, read_write> splat_depth_bits: array<atomic<u32>>;
-@group(1) @binding(3) var<storage, read_write> splat_entries: array<atomic<u32>>;
+// Per pixel p = y * width + x: word 2p the nearest depth's bits, word 2p + 1 the winning
+// entry, inverted (one buffer: WebGPU allows 8 storage buffers per stage).
+@group(1) @binding(2) var<storage, read_write> splat_pixels: array<atomic<u32>>;
 
 // The fragment of entry `slot` at pixel centre `px` (screen pixels).
 fn fragment_at(slot: VoxelSlot, q: Quad, px: vec2<f32>) -> Fragment {
@@ -117,9 +117,9 @@ fn splat(e: u32, pass_kind: u32) {
             let p = u32(y) * width + u32(x);
             let bits = bitcast<u32>(clamp(f.depth, 0.0, 1.0));
             if pass_kind == 0u {
-                atomicMax(&splat_depth_bits[p], bits);
-            } else if atomicLoad(&splat_depth_bits[p]) == bits {
-                atomicMax(&splat_entries[p], ~e);
+                atomicMax(&splat_pixels[2u * p], bits);
+            } else if atomicLoad(&splat_pixels[2u * p]) == bits {
+                atomicMax(&splat_pixels[2u * p + 1u], ~e);
             }
         }
     }
@@ -146,7 +146,7 @@ fn splat_main(
 fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     let pix = vec2<u32>(frag.xy);
     let p = pix.y * u32(frame.screen.x) + pix.x;
-    let inverted = atomicLoad(&splat_entries[p]);
+    let inverted = atomicLoad(&splat_pixels[2u * p + 1u]);
     if inverted == 0u {
         discard;
     }
@@ -167,6 +167,6 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     out.normal = f.normal;
     out.position = f.position;
     out.geometric_normal = f.geometric;
-    out.depth = bitcast<f32>(atomicLoad(&splat_depth_bits[p]));
+    out.depth = bitcast<f32>(atomicLoad(&splat_pixels[2u * p]));
     return out;
 }

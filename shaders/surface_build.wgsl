@@ -164,30 +164,58 @@ fn merge(
     if r >= params.count {
         return;
     }
-    let start = val[r];
-    var end = params.n;
-    if r + 1u < params.count {
-        end = val[r + 1u];
-    }
-    var mask = 0u;
+    let run = run_range(r);
     var rgba = vec4(0u);
     var normal = vec3(0.0);
-    for (var j = start; j < end; j++) {
-        mask |= (surface_in[j] >> 24u) & 63u;
+    for (var j = run.x; j < run.y; j++) {
         let c = attrs_in[2u * j];
         rgba += vec4(c & 0xffu, (c >> 8u) & 0xffu, (c >> 16u) & 0xffu, c >> 24u);
         normal += octahedral_l1(attrs_in[2u * j + 1u]);
     }
-    let count = end - start;
+    let count = run.y - run.x;
     let avg = (rgba + vec4(count / 2u)) / count;
-    let parent = shifted(start, 1u);
-    next_lo[r] = parent.x;
-    next_hi[r] = parent.y | (mask << 24u);
-    let child = surface_in[start];
+    let mask = run_mask(run);
+    let child = surface_in[run.x];
     let pos = vec3(child & 0xffu, (child >> 8u) & 0xffu, (child >> 16u) & 0xffu) >> vec3(1u);
     surface_out[r] = pos.x | (pos.y << 8u) | (pos.z << 16u) | (mask << 24u);
     attrs_out[2u * r] = avg.x | (avg.y << 8u) | (avg.z << 16u) | (avg.w << 24u);
     attrs_out[2u * r + 1u] = encode_octahedral(normal);
+}
+
+// The parents' keys of `merge`'s runs, with their child masks in the high key's top byte
+// (a kernel of its own: with `merge` it would bind 9 storage buffers, WebGPU allows 8).
+@compute @workgroup_size(256)
+fn merge_keys(
+    @builtin(local_invocation_index) li: u32,
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    let r = thread_id(li, wg, nwg);
+    if r >= params.count {
+        return;
+    }
+    let run = run_range(r);
+    let parent = shifted(run.x, 1u);
+    next_lo[r] = parent.x;
+    next_hi[r] = parent.y | (run_mask(run) << 24u);
+}
+
+// Run `r`'s first and one-past-last voxel.
+fn run_range(r: u32) -> vec2<u32> {
+    var end = params.n;
+    if r + 1u < params.count {
+        end = val[r + 1u];
+    }
+    return vec2(val[r], end);
+}
+
+// The union of a run's child masks.
+fn run_mask(run: vec2<u32>) -> u32 {
+    var mask = 0u;
+    for (var j = run.x; j < run.y; j++) {
+        mask |= (surface_in[j] >> 24u) & 63u;
+    }
+    return mask;
 }
 
 // The first voxel of each chunk at level k (unordered; the host sorts them): a voxel whose

@@ -77,8 +77,11 @@ fn merge(
         color += unpack4x8unorm(f.color);
         normal += decode_octahedral(f.normal);
     }
-    out_lo[r] = key_lo[start];
-    out_hi[r] = key_hi[start];
+    // The run's key from its first fragment (the sorted keys are the fragments'; reading
+    // them here would make `merge` bind 9 storage buffers, WebGPU allows 8).
+    let first = fragments[val[start]];
+    out_lo[r] = first.key_lo;
+    out_hi[r] = first.key_hi;
     out_colors[r] = color / f32(end - start);
     let len = length(normal);
     out_normals[r] = vec4(select(vec3(0.0, 0.0, 1.0), normal / len, len > 0.0), 0.0);

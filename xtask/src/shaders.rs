@@ -135,6 +135,10 @@ pub fn validate_dir(dir: &Path, kinds: &[Registered]) -> Result<Report> {
         let raw = std::fs::read_to_string(f).with_context(|| format!("reading {name}"))?;
         let base = f.parent().unwrap_or(dir).to_path_buf();
         let read = |inc: &str| {
+            if inc == ssbvb_gpu::scene::SCENE_STREAMS_INCLUDE {
+                // Generated per scene; check the one-binding-per-stream form.
+                return Some(ssbvb_gpu::scene::SceneBindings::SMALLEST.wgsl());
+            }
             std::fs::read_to_string(base.join(inc))
                 .or_else(|_| std::fs::read_to_string(dir.join(inc)))
                 .ok()

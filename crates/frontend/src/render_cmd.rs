@@ -11,6 +11,7 @@ use clap::Args;
 use glam::{DAffine3, DVec3};
 use serde::Serialize;
 use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject};
+use ssbvb_gpu_build::voxelize::GpuVoxelizeMethod;
 use ssbvb_passes::Profiling;
 use ssbvb_voxel::camera::Camera;
 
@@ -435,6 +436,30 @@ fn render_reference(
     })
 }
 
+/// The format substitutions the device took, and the exact GPU voxelization of animated
+/// objects given up where the device has no f64 shaders (WebGPU's limits, most mobile and
+/// browser adapters): they are voxelized by conservative rasterization instead.
+fn gpu_fallbacks(
+    ctx: &ssbvb_gpu::GpuContext,
+    animation: Option<&crate::animation::AnimationReport>,
+) -> Vec<String> {
+    let mut fallbacks = ctx.report().fallbacks.clone();
+    let raster = animation.is_some_and(|a| a.method == Some(GpuVoxelizeMethod::Raster));
+    if raster
+        && !ctx
+            .device
+            .features()
+            .contains(ssbvb_gpu::wgpu::Features::SHADER_F64)
+    {
+        fallbacks.push(
+            "animated objects voxelized by conservative rasterization, not exactly (the \
+             device has no SHADER_F64)"
+                .into(),
+        );
+    }
+    fallbacks
+}
+
 /// What the GPU path renders: the scene and where its pipeline, pages and animation come
 /// from.
 struct GpuInput {
@@ -550,7 +575,7 @@ fn render_gpu(
         adapter: Some(ctx.report().to_string()),
         adapter_is_software: Some(ctx.report().is_software),
         limits: Some(ctx.report().limits),
-        fallbacks: ctx.report().fallbacks.clone(),
+        fallbacks: gpu_fallbacks(&ctx, animation.as_ref()),
         size: [w, h],
         camera,
         pipeline: Some(pipeline_path.display().to_string()),

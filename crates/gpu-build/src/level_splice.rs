@@ -135,9 +135,9 @@ impl LevelSplicer {
                 Stream {
                     entry: "splice_colors",
                     words_per_thread: 1,
-                    chunks: &scene.color_buffers,
+                    chunks: &scene.word_buffers,
                     chunk_words: color_words,
-                    at,
+                    at: scene.color_word_base + at,
                     old_words: old_n,
                     new_words: new_n,
                     first,
@@ -153,9 +153,9 @@ impl LevelSplicer {
                 Stream {
                     entry: "splice_normals",
                     words_per_thread: 1,
-                    chunks: &scene.normal_buffers,
+                    chunks: &scene.word_buffers,
                     chunk_words: color_words,
-                    at: at / 2,
+                    at: scene.normal_word_base + at / 2,
                     old_words: old_n.div_ceil(2),
                     new_words: new_n.div_ceil(2),
                     first,

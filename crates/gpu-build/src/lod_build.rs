@@ -19,7 +19,9 @@ use ssbvb_voxel::svo::LevelVoxels;
 use crate::voxelize::GpuVoxels;
 use ssbvb_gpu::ResourceError;
 use ssbvb_gpu::kernels::scan::GpuScan;
-use ssbvb_gpu::kernels::{Bind, Kernels, WORKGROUP, read_words, storage, uniform};
+use ssbvb_gpu::kernels::{
+    Bind, KernelBindGroups, Kernels, WORKGROUP, read_words, storage, uniform,
+};
 use ssbvb_gpu::scene::GpuLevel;
 
 /// The compiled builder.
@@ -58,6 +60,7 @@ impl GpuLodBuilder {
                     "lookup_group",
                     "add_base",
                     "coarsen",
+                    "coarsen_keys",
                     "pack_points",
                 ],
             )?,
@@ -65,7 +68,7 @@ impl GpuLodBuilder {
         })
     }
 
-    fn bind(&self, d: &wgpu::Device, b: &Binds, params: &wgpu::Buffer) -> wgpu::BindGroup {
+    fn bind(&self, d: &wgpu::Device, b: &Binds, params: &wgpu::Buffer) -> KernelBindGroups {
         // Unused bindings get distinct small buffers: one buffer may not be bound twice
         // with writes.
         let ph: Vec<wgpu::Buffer> = (0..13).map(|_| storage(d, "unused", 4)).collect();
@@ -180,12 +183,11 @@ impl GpuLodBuilder {
                 ..Default::default()
             };
             let mut enc = d.create_command_encoder(&Default::default());
-            self.kernels.dispatch(
-                &mut enc,
-                "coarsen",
-                &self.bind(d, &b, &params),
-                runs.div_ceil(WORKGROUP),
-            );
+            let bound = self.bind(d, &b, &params);
+            let groups = runs.div_ceil(WORKGROUP);
+            self.kernels.dispatch(&mut enc, "coarsen", &bound, groups);
+            self.kernels
+                .dispatch(&mut enc, "coarsen_keys", &bound, groups);
             ctx.submit("LOD build: coarsen", [enc.finish()]);
             let next = self.finish_level(
                 ctx,

@@ -22,7 +22,9 @@ use ssbvb_voxel::svo::morton_decode;
 use ssbvb_gpu::ResourceError;
 use ssbvb_gpu::kernels::radix_sort::{GpuRadixSort, SortBuffers};
 use ssbvb_gpu::kernels::scan::GpuScan;
-use ssbvb_gpu::kernels::{Bind, Kernels, WORKGROUP, read_words, storage, storage_init, uniform};
+use ssbvb_gpu::kernels::{
+    Bind, KernelBindGroups, Kernels, WORKGROUP, read_words, storage, storage_init, uniform,
+};
 
 /// One LOD of a GPU surface model.
 pub struct GpuSurfaceLevel {
@@ -141,6 +143,7 @@ impl SurfaceBuilder {
                     "run_flags",
                     "run_starts",
                     "merge",
+                    "merge_keys",
                     "chunk_starts",
                     "chunk_bounds",
                 ],
@@ -264,7 +267,7 @@ impl BuildRun<'_> {
     }
 
     /// The bind group of one dispatch (unused bindings get the small unused buffers).
-    fn bind(&self, b: &Binds, p: &wgpu::Buffer) -> wgpu::BindGroup {
+    fn bind(&self, b: &Binds, p: &wgpu::Buffer) -> KernelBindGroups {
         let (rw, ro) = (&self.dummy_rw, &self.dummy_read);
         let list: [&wgpu::Buffer; 13] = [
             p,
@@ -434,6 +437,7 @@ impl BuildRun<'_> {
             &self.params(nk, k, runs),
         );
         kernels.dispatch(&mut enc, "merge", &bg, groups(runs));
+        kernels.dispatch(&mut enc, "merge_keys", &bg, groups(runs));
         let starts = self.chunk_starts(enc, b, flags, runs, k + 1)?;
         Ok(GpuSurfaceLevel {
             ranges: ranges(&starts, runs),

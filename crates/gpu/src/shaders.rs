@@ -5,6 +5,7 @@
 //! folder instead (a file missing there falls back to the embedded one), so an edited
 //! shader runs without rebuilding the binary. Native builds only.
 
+use crate::scene::{SCENE_STREAMS_INCLUDE, SceneBindings};
 use crate::shader_source::preprocess;
 
 use crate::ResourceError;
@@ -17,9 +18,21 @@ pub fn raw(name: &str) -> Option<&'static str> {
     FILES.iter().find(|(n, _)| *n == name).map(|(_, s)| *s)
 }
 
-/// The WGSL of `name` with includes expanded.
+/// The WGSL of `name` with includes expanded, for a scene whose streams take one binding
+/// each ([`SceneBindings::SMALLEST`]; [`source_for`] for a given scene's bindings).
 pub fn source(name: &str) -> Result<String, ResourceError> {
-    let read = |n: &str| override_file(n).or_else(|| raw(n).map(str::to_string));
+    source_for(name, &SceneBindings::SMALLEST)
+}
+
+/// The WGSL of `name` with includes expanded, the scene's stream bindings
+/// ([`SCENE_STREAMS_INCLUDE`]) generated for `scene`.
+pub fn source_for(name: &str, scene: &SceneBindings) -> Result<String, ResourceError> {
+    let read = |n: &str| {
+        if n == SCENE_STREAMS_INCLUDE {
+            return Some(scene.wgsl());
+        }
+        override_file(n).or_else(|| raw(n).map(str::to_string))
+    };
     let main =
         read(name).ok_or_else(|| ResourceError::Shader(format!("{name} is not embedded")))?;
     preprocess(name, &main, &read)

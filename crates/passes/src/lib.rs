@@ -22,7 +22,7 @@ pub mod runtime;
 
 pub use error::PassError;
 pub use kinds::{REGISTRY, create_pass, registered_kinds, registration};
-pub use runtime::adapter_needs::pipeline_requirements;
+pub use runtime::adapter_needs::{pipeline_requirements, pipeline_requirements_for};
 pub use runtime::counters::FrameCounters;
 pub use runtime::node::{CounterSource, PassNode};
 pub use runtime::recorder::Recorder;

@@ -78,7 +78,7 @@ fn a_refused_allocation_is_an_error_naming_the_resource_and_its_size() {
     ctx.refuse_allocation(64 << 10);
     match ssbvb_gpu::scene::GpuScene::new(&ctx, scene.clone()) {
         Err(ssbvb_gpu::ResourceError::Gpu(GpuError::OutOfMemory { resource, bytes })) => {
-            assert_eq!(resource, "voxel colours 0");
+            assert_eq!(resource, "LOD table, voxel colours and normals 0");
             assert!(bytes >= 64 << 10, "{bytes}");
         }
         Err(e) => panic!("{e}"),

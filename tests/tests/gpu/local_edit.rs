@@ -58,14 +58,19 @@ fn room_streams(scene: &GpuScene) -> Streams {
         .iter()
         .map(|l| {
             let (at, n) = (u64::from(l.voxel_offset), u64::from(l.voxels));
-            let halves = read(&scene.normal_buffers, words, at / 2, n.div_ceil(2));
+            let halves = read(
+                &scene.word_buffers,
+                words,
+                scene.normal_word_base + at / 2,
+                n.div_ceil(2),
+            );
             let normals = halves
                 .iter()
                 .flat_map(|w| [*w as u16, (w >> 16) as u16])
                 .take(n as usize)
                 .collect();
             (
-                read(&scene.color_buffers, words, at, n),
+                read(&scene.word_buffers, words, scene.color_word_base + at, n),
                 normals,
                 read(
                     &scene.lookup_buffers,

@@ -1,7 +1,9 @@
-//! A set of compute kernels from one WGSL file that share one explicit bind-group layout
-//! (group 0), for the GPU build steps that are not graph passes ([`scan`], [`radix_sort`]
-//! and the build steps of `ssbvb-gpu-build`). Explicit rather than automatic layouts, so every entry
-//! point takes the same bind group whichever bindings it uses.
+//! A set of compute kernels from one WGSL file whose bindings (group 0) are declared once,
+//! for the GPU build steps that are not graph passes ([`scan`], [`radix_sort`] and the build
+//! steps of `ssbvb-gpu-build`). A caller binds the file's whole list of buffers once
+//! ([`KernelBindGroups`]); each entry point gets a layout of only the bindings it uses
+//! (found by naga's validator, as wgpu finds them), so a file may declare more storage
+//! buffers than a device allows per stage (WebGPU: 8) as long as no one kernel uses more.
 
 use crate::InitBuffer;
 
@@ -50,75 +52,117 @@ pub fn bind_buffers(
 
 /// The compiled kernels of one file.
 pub struct Kernels {
-    layout: wgpu::BindGroupLayout,
-    pipelines: Vec<(&'static str, wgpu::ComputePipeline)>,
+    entries: Vec<Kernel>,
     file: &'static str,
 }
 
+/// One entry point: the bindings it uses, their layout and its pipeline.
+struct Kernel {
+    name: &'static str,
+    used: Vec<u32>,
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+}
+
+/// A file's buffers bound for each of its kernels (see [`Kernels::bind_group`]).
+pub struct KernelBindGroups {
+    groups: Vec<(&'static str, wgpu::BindGroup)>,
+}
+
 impl Kernels {
-    /// Compiles `entries` of `file` with bindings `binds` (binding `i` = `binds[i]`).
+    /// Compiles `entries` of `file` with bindings `binds` (binding `i` = `binds[i]`); an
+    /// error naming the kernel when one uses more storage buffers than the device allows.
     pub fn new(
         ctx: &GpuContext,
         file: &'static str,
         binds: &[Bind],
         entries: &[&'static str],
     ) -> Result<Self, ResourceError> {
-        let module = ctx.shader(file, &shaders::source(file)?)?;
+        let source = shaders::source(file)?;
+        let used = used_bindings(file, &source, entries)?;
+        let limit = ctx.device.limits().max_storage_buffers_per_shader_stage;
+        for (entry, used) in entries.iter().zip(&used) {
+            let storage = used
+                .iter()
+                .filter(|&&b| binds.get(b as usize).is_some_and(|b| *b != Bind::Uniform))
+                .count() as u32;
+            if storage > limit {
+                return Err(ResourceError::TooLarge(format!(
+                    "{file}: kernel `{entry}` uses {storage} storage buffers; the device \
+                     allows {limit} per shader stage (max_storage_buffers_per_shader_stage)"
+                )));
+            }
+            if let Some(b) = used.iter().find(|&&b| b as usize >= binds.len()) {
+                return Err(ResourceError::Shader(format!(
+                    "{file}: kernel `{entry}` uses binding {b}, {} are declared",
+                    binds.len()
+                )));
+            }
+        }
+        let module = ctx.shader(file, &source)?;
         Ok(ctx.validated(file, |d| {
-            let layout_entries: Vec<wgpu::BindGroupLayoutEntry> = binds
+            let entries = entries
                 .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupLayoutEntry {
-                    binding: i as u32,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: match b {
-                            Bind::Uniform => wgpu::BufferBindingType::Uniform,
-                            Bind::Read => wgpu::BufferBindingType::Storage { read_only: true },
-                            Bind::ReadWrite => {
-                                wgpu::BufferBindingType::Storage { read_only: false }
-                            }
-                        },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                })
-                .collect();
-            let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some(file),
-                entries: &layout_entries,
-            });
-            let pipeline_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(file),
-                bind_group_layouts: &[Some(&layout)],
-                immediate_size: 0,
-            });
-            let pipelines = entries
-                .iter()
-                .map(|&entry| {
-                    let p = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                        label: Some(entry),
+                .zip(used)
+                .map(|(&name, used)| {
+                    let layout_entries: Vec<wgpu::BindGroupLayoutEntry> = used
+                        .iter()
+                        .map(|&i| layout_entry(i, binds[i as usize]))
+                        .collect();
+                    let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                        label: Some(name),
+                        entries: &layout_entries,
+                    });
+                    let pipeline_layout =
+                        d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                            label: Some(name),
+                            bind_group_layouts: &[Some(&layout)],
+                            immediate_size: 0,
+                        });
+                    let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some(name),
                         layout: Some(&pipeline_layout),
                         module: &module,
-                        entry_point: Some(entry),
+                        entry_point: Some(name),
                         compilation_options: Default::default(),
                         cache: None,
                     });
-                    (entry, p)
+                    Kernel {
+                        name,
+                        used,
+                        layout,
+                        pipeline,
+                    }
                 })
                 .collect();
-            Self {
-                layout,
-                pipelines,
-                file,
-            }
+            Self { entries, file }
         })?)
     }
 
-    /// A bind group of `buffers` in binding order.
-    pub fn bind_group(&self, d: &wgpu::Device, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
-        bind_buffers(d, self.file, &self.layout, buffers)
+    /// `buffers` in binding order (`buffers[i]` at binding `i`), bound for every kernel:
+    /// each gets the ones it uses.
+    pub fn bind_group(&self, d: &wgpu::Device, buffers: &[&wgpu::Buffer]) -> KernelBindGroups {
+        let groups = self
+            .entries
+            .iter()
+            .map(|k| {
+                let entries: Vec<wgpu::BindGroupEntry> = k
+                    .used
+                    .iter()
+                    .map(|&i| wgpu::BindGroupEntry {
+                        binding: i,
+                        resource: buffers[i as usize].as_entire_binding(),
+                    })
+                    .collect();
+                let group = d.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some(k.name),
+                    layout: &k.layout,
+                    entries: &entries,
+                });
+                (k.name, group)
+            })
+            .collect();
+        KernelBindGroups { groups }
     }
 
     /// Dispatches `entry` over `groups` workgroups, split over x and y when above the
@@ -128,15 +172,16 @@ impl Kernels {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         entry: &str,
-        bind_group: &wgpu::BindGroup,
+        bind_groups: &KernelBindGroups,
         groups: u32,
     ) {
-        let pipeline = &self
-            .pipelines
+        let found = self
+            .entries
             .iter()
-            .find(|(e, _)| *e == entry)
-            .unwrap_or_else(|| panic!("{}: no kernel `{entry}` was compiled", self.file))
-            .1;
+            .zip(&bind_groups.groups)
+            .find(|(k, _)| k.name == entry)
+            .unwrap_or_else(|| panic!("{}: no kernel `{entry}` was compiled", self.file));
+        let (pipeline, bind_group) = (&found.0.pipeline, &found.1.1);
         if groups == 0 {
             return;
         }
@@ -150,6 +195,66 @@ impl Kernels {
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups(x, y, 1);
     }
+}
+
+/// The layout entry of binding `i`, used as `bind`.
+fn layout_entry(i: u32, bind: Bind) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding: i,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: match bind {
+                Bind::Uniform => wgpu::BufferBindingType::Uniform,
+                Bind::Read => wgpu::BufferBindingType::Storage { read_only: true },
+                Bind::ReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
+            },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// The group-0 bindings each of `entries` uses, in increasing order: the globals naga's
+/// validator finds the entry point (or a function it calls) referring to, which is what
+/// wgpu checks a pipeline layout against.
+fn used_bindings(
+    file: &str,
+    source: &str,
+    entries: &[&str],
+) -> Result<Vec<Vec<u32>>, ResourceError> {
+    let module = naga::front::wgsl::parse_str(source)
+        .map_err(|e| ResourceError::Shader(format!("{file}: {}", e.emit_to_string(source))))?;
+    let info = naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::all(),
+    )
+    .validate(&module)
+    .map_err(|e| ResourceError::Shader(format!("{file}: {}", e.emit_to_string(source))))?;
+    entries
+        .iter()
+        .map(|&entry| {
+            let index = module
+                .entry_points
+                .iter()
+                .position(|ep| ep.name == entry)
+                .ok_or_else(|| {
+                    ResourceError::Shader(format!("{file}: no entry point `{entry}`"))
+                })?;
+            let uses = info.get_entry_point(index);
+            let mut used: Vec<u32> = module
+                .global_variables
+                .iter()
+                .filter(|(h, _)| !uses[*h].is_empty())
+                .filter_map(|(_, v)| v.binding.as_ref())
+                .filter(|b| b.group == 0)
+                .map(|b| b.binding)
+                .collect();
+            used.sort_unstable();
+            used.dedup();
+            Ok(used)
+        })
+        .collect()
 }
 
 /// A uniform buffer holding `words`.

@@ -35,6 +35,9 @@ pub struct FrameUniform {
     pub misc: [f32; 4],
     /// Sub-pixel jitter in pixels (xy; `proj` sheared to match), zw 0.
     pub jitter: [f32; 4],
+    /// The scene's word stream ([`super::SceneBindings`]): log2 of its words per binding,
+    /// its first colour word, its first normal word, 0 (set by [`super::GpuScene::update`]).
+    pub streams: [u32; 4],
 }
 
 /// Mirror of WGSL `Instance` (224 bytes).
@@ -78,7 +81,8 @@ pub struct GpuBvhNode {
 /// `LodInfo::page_base` of a LOD resident whole (WGSL `NO_PAGES`).
 pub const NO_PAGES: u32 = u32::MAX;
 
-/// Mirror of WGSL `LodInfo` (36 bytes).
+/// Mirror of WGSL `LodInfo` (36 bytes; entry `i` is words `9i..9i + 9` of the scene's
+/// word stream).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq, Eq)]
 pub struct LodInfo {
@@ -92,7 +96,7 @@ pub struct LodInfo {
     pub node_offset: u32,
     /// The scene object this LOD belongs to (which octree the octree baseline reads).
     pub object: u32,
-    /// log2 of the words per binding of the colour and normal streams.
+    /// log2 of the words per binding of the word stream (LOD table, colours, normals).
     pub chunk_bits: u32,
     /// log2 of the nodes per binding of the lookup-node stream.
     pub node_chunk_bits: u32,

@@ -8,6 +8,7 @@ use ssbvb_voxel::lookup::NODE_WORDS;
 
 use crate::{GpuContext, ResourceError, wgpu};
 
+mod bindings;
 mod description;
 mod dynamic;
 mod gpu_level;
@@ -18,18 +19,21 @@ pub mod streaming;
 mod upload;
 pub mod visibility;
 
+pub use bindings::{
+    FIRST_STREAM_BINDING, LOD_WORDS, SCENE_STREAMS_INCLUDE, SceneBindings, chunks_for,
+};
 pub use description::{LodPolicy, Scene, TriangleObject, VolumeObject, VoxelObject};
 pub use dynamic::{DynamicLevel, DynamicObject, DynamicRoom};
 pub use dynamic::{copy_words, copy_words_from_chunks};
 pub use gpu_level::GpuLevel;
 pub use layout::*;
-pub use pools::{COLOR_CHUNKS, NODE_CHUNKS, NORMAL_CHUNKS, SCENE_STORAGE_BUFFERS, StreamChunks};
+pub use pools::{MAX_STREAM_CHUNKS, StreamChunks};
 pub use streaming::{StreamingOptions, StreamingStats};
 pub use visibility::{DEFAULT_LOD_HYSTERESIS, choose_level, choose_level_held, frame_uniform};
 
-use pools::{chunked, plan_pools, storage};
+use pools::{checked_u32, chunked, plan_pools};
 use streaming::{PINNED_LEVEL, StreamBuffers, Streaming};
-use upload::{SceneStreams, check_inputs, proxy_buffers, scene_layout, triangle_meshes};
+use upload::{SceneStreams, check_inputs, proxy_buffers, triangle_meshes};
 use visibility::{instance_bvh, mat, visible_instances};
 
 /// The scene on the GPU.
@@ -39,6 +43,9 @@ pub struct GpuScene {
     /// How the streams are split over bindings (passes that upload their own large
     /// buffers split them alike).
     pub chunks: StreamChunks,
+    /// How many bindings the streams take in group 0 (the WGSL of every pass that binds
+    /// group 0 is generated for them: [`crate::shaders::source_for`]).
+    pub bindings: SceneBindings,
     /// Group 0 layout shared by every pass.
     pub layout: wgpu::BindGroupLayout,
     /// Group 0 of the current frame.
@@ -49,13 +56,16 @@ pub struct GpuScene {
     pub instance_buffer: wgpu::Buffer,
     /// The hierarchy over the visible instances' boxes (room for every instance).
     pub bvh_buffer: wgpu::Buffer,
-    /// LOD table.
-    pub lod_buffer: wgpu::Buffer,
-    /// Voxel colours (linear RGBA8, one word per voxel), in [`COLOR_CHUNKS`] bindings.
-    pub color_buffers: Vec<wgpu::Buffer>,
-    /// Voxel normals (16-bit octahedral, two per word), in [`NORMAL_CHUNKS`] bindings.
-    pub normal_buffers: Vec<wgpu::Buffer>,
-    /// The lookup trees' nodes (12 bytes each), in [`NODE_CHUNKS`] bindings.
+    /// The word stream: the LOD table, the voxel colours (linear RGBA8, one word per
+    /// voxel) from word [`Self::color_word_base`], the voxel normals (16-bit octahedral,
+    /// two per word) from word [`Self::normal_word_base`]; in bindings of
+    /// `2^chunks.word_bits` words.
+    pub word_buffers: Vec<wgpu::Buffer>,
+    /// First word of the colours in the word stream.
+    pub color_word_base: u64,
+    /// First word of the normals in the word stream.
+    pub normal_word_base: u64,
+    /// The lookup trees' nodes (12 bytes each), in bindings of `2^chunks.node_bits` nodes.
     pub lookup_buffers: Vec<wgpu::Buffer>,
     /// Proxy vertices (object space, vec4).
     pub proxy_vertices: wgpu::Buffer,
@@ -97,47 +107,56 @@ pub struct GpuScene {
     pub screen: (u32, u32),
 }
 
-/// The colour, normal and lookup-node bindings of the scene's streams.
-type StreamBindings = (Vec<wgpu::Buffer>, Vec<wgpu::Buffer>, Vec<wgpu::Buffer>);
+/// The scene's word and node streams, uploaded.
+struct UploadedStreams {
+    words: Vec<wgpu::Buffer>,
+    color_word_base: u64,
+    normal_word_base: u64,
+    nodes: Vec<wgpu::Buffer>,
+}
 
-/// Uploads the voxel colours, normals (two per word) and lookup nodes, each cut into the
-/// chunks the scene binds.
+/// Uploads the word stream (the LOD table, the voxel colours, the normals two per word) and
+/// the lookup nodes, each cut into the chunks the scene binds.
 fn upload_streams(
     ctx: &GpuContext,
     chunks: StreamChunks,
+    lods: &[LodInfo],
     colors: Vec<u32>,
     mut normals: Vec<u16>,
     nodes: Vec<u32>,
-) -> Result<StreamBindings, ResourceError> {
+) -> Result<UploadedStreams, ResourceError> {
     if normals.len() % 2 == 1 {
         normals.push(0);
     }
-    let words = 4usize << chunks.word_bits;
-    let color_buffers = chunked(
+    let color_word_base = (lods.len() * LOD_WORDS) as u64;
+    let normal_word_base = color_word_base + colors.len() as u64;
+    let words = chunked(
         ctx,
-        "voxel colours",
-        bytemuck::cast_slice(&colors),
-        words,
-        COLOR_CHUNKS,
+        "LOD table, voxel colours and normals",
+        &[
+            bytemuck::cast_slice(lods),
+            bytemuck::cast_slice(&colors),
+            bytemuck::cast_slice(&normals),
+        ],
+        4usize << chunks.word_bits,
     )?;
-    drop(colors);
-    let normal_buffers = chunked(
-        ctx,
-        "voxel normals",
-        bytemuck::cast_slice(&normals),
-        words,
-        NORMAL_CHUNKS,
+    checked_u32(
+        (normal_word_base + normals.len() as u64 / 2) as usize,
+        "words of the LOD table, colours and normals",
     )?;
-    drop(normals);
-    let lookup_buffers = chunked(
+    drop((colors, normals));
+    let nodes = chunked(
         ctx,
         "lookup nodes",
-        bytemuck::cast_slice(&nodes),
+        &[bytemuck::cast_slice(&nodes)],
         (4 * NODE_WORDS) << chunks.node_bits,
-        NODE_CHUNKS,
     )?;
-    drop(nodes);
-    Ok((color_buffers, normal_buffers, lookup_buffers))
+    Ok(UploadedStreams {
+        words,
+        color_word_base,
+        normal_word_base,
+        nodes,
+    })
 }
 
 impl GpuScene {
@@ -235,7 +254,6 @@ impl GpuScene {
         } = streams;
         let voxel_slots = colors.len() as u64;
         let d = &ctx.device;
-        let layout = scene_layout(d);
         let frame_buffer = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame"),
             size: std::mem::size_of::<FrameUniform>() as u64,
@@ -261,9 +279,12 @@ impl GpuScene {
         if lods.is_empty() {
             lods.push(bytemuck::Zeroable::zeroed());
         }
-        let lod_buffer = storage(ctx, "lods", bytemuck::cast_slice(&lods))?;
-        let (color_buffers, normal_buffers, lookup_buffers) =
-            upload_streams(ctx, chunks, colors, normals, nodes)?;
+        let streams = upload_streams(ctx, chunks, &lods, colors, normals, nodes)?;
+        let bindings = SceneBindings {
+            word_chunks: streams.words.len() as u32,
+            node_chunks: streams.nodes.len() as u32,
+        };
+        let layout = bindings.layout(d);
         let streaming = match (streaming, pools) {
             (Some(options), Some(p)) => Some(Streaming::new(
                 ctx,
@@ -297,26 +318,25 @@ impl GpuScene {
             &ctx.device,
             "scene",
             &layout,
-            &[&frame_buffer, &instance_buffer, &lod_buffer]
+            &[&frame_buffer, &instance_buffer, &bvh_buffer, feedback]
                 .into_iter()
-                .chain(&color_buffers)
-                .chain(&normal_buffers)
-                .chain(&lookup_buffers)
-                .chain([&bvh_buffer, feedback])
+                .chain(&streams.words)
+                .chain(&streams.nodes)
                 .collect::<Vec<_>>(),
         );
         Ok(Self {
             scene,
             chunks,
+            bindings,
             layout,
             bind_group,
             frame_buffer,
             instance_buffer,
             bvh_buffer,
-            lod_buffer,
-            color_buffers,
-            normal_buffers,
-            lookup_buffers,
+            word_buffers: streams.words,
+            color_word_base: streams.color_word_base,
+            normal_word_base: streams.normal_word_base,
+            lookup_buffers: streams.nodes,
             proxy_vertices,
             proxy_indices,
             lod_base,
@@ -400,6 +420,12 @@ impl GpuScene {
         }
         let mut frame = frame;
         frame.misc[3] = visible.len() as f32;
+        frame.streams = [
+            self.chunks.word_bits,
+            self.color_word_base as u32,
+            self.normal_word_base as u32,
+            0,
+        ];
         ctx.queue
             .write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&frame));
         if !uniforms.is_empty() {
@@ -427,8 +453,9 @@ impl GpuScene {
     /// The streams the page cache writes into.
     fn stream_buffers(&self) -> StreamBuffers<'_> {
         StreamBuffers {
-            colors: &self.color_buffers,
-            normals: &self.normal_buffers,
+            words: &self.word_buffers,
+            color_word_base: self.color_word_base,
+            normal_word_base: self.normal_word_base,
             nodes: &self.lookup_buffers,
             word_chunk_bytes: 4u64 << self.chunks.word_bits,
             node_chunk_bytes: (4 * NODE_WORDS as u64) << self.chunks.node_bits,
@@ -589,18 +616,18 @@ impl GpuScene {
                 &mut enc,
                 &g.packed,
                 0,
-                &self.color_buffers,
+                &self.word_buffers,
                 color_words,
-                at,
+                self.color_word_base + at,
                 n,
             );
             copy_words(
                 &mut enc,
                 &g.packed_normals,
                 0,
-                &self.normal_buffers,
+                &self.word_buffers,
                 color_words,
-                at / 2,
+                self.normal_word_base + at / 2,
                 n.div_ceil(2),
             );
             copy_words(

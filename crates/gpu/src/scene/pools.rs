@@ -9,9 +9,6 @@ use crate::{GpuContext, wgpu};
 use super::streaming::{BLOCK_BYTES, MAX_PAGE_BYTES, PagedLayoutBuilder, RUN_BYTES, SLOT_BYTES};
 use crate::ResourceError;
 
-/// Storage bindings of group 0: instances, LODs, the chunked streams, the hierarchy.
-pub const SCENE_STORAGE_BUFFERS: usize = 4 + COLOR_CHUNKS + NORMAL_CHUNKS + NODE_CHUNKS;
-
 /// How the scene's streams are split over bindings (`LodInfo.chunk_bits` in
 /// `common.inc.wgsl`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -48,39 +45,46 @@ impl Default for StreamChunks {
         }
     }
 }
-/// Bindings of the colour stream (with 128 MiB bindings: up to 2^27 voxels over all LODs
-/// of the scene).
-pub const COLOR_CHUNKS: usize = 4;
-/// Bindings of the normal stream (with 128 MiB bindings: 2^26 words, 2^27 voxels).
-pub const NORMAL_CHUNKS: usize = 2;
-/// Bindings of the lookup-node stream (with 128 MiB bindings: 2^24 nodes).
-pub const NODE_CHUNKS: usize = 2;
+/// Most bindings one stream of the scene may take (with 128 MiB bindings: 1 GiB); a
+/// device's storage-buffer limit may allow fewer, which the pipeline check names.
+pub const MAX_STREAM_CHUNKS: usize = 8;
 
-/// A stream split over `chunks` bindings of at most `chunk_bytes` each (unused ones get a
-/// 16-byte buffer); an error when it needs more.
+/// A stream, the concatenation of `parts`, split into as few bindings of at most
+/// `chunk_bytes` each as hold it (one small buffer when it is empty); an error when it
+/// needs more than [`MAX_STREAM_CHUNKS`]. One chunk at a time is assembled on the CPU.
 pub(super) fn chunked(
     ctx: &GpuContext,
     label: &str,
-    bytes: &[u8],
+    parts: &[&[u8]],
     chunk_bytes: usize,
-    chunks: usize,
 ) -> Result<Vec<wgpu::Buffer>, ResourceError> {
-    let needed = bytes.len().div_ceil(chunk_bytes);
-    if needed > chunks {
+    let total: usize = parts.iter().map(|p| p.len()).sum();
+    let needed = total.div_ceil(chunk_bytes).max(1);
+    if needed > MAX_STREAM_CHUNKS {
         return Err(ResourceError::TooLarge(format!(
-            "the scene's {label} take {} bytes; the renderer binds at most {chunks} × {} \
-             bytes of them: use a coarser level or fewer objects",
-            bytes.len(),
-            chunk_bytes
+            "the scene's {label} take {total} bytes; the renderer binds at most \
+             {MAX_STREAM_CHUNKS} × {chunk_bytes} bytes of them: use a coarser level, fewer \
+             objects or a GPU budget"
         )));
     }
-    (0..chunks)
-        .map(|i| {
-            let part = bytes.get(i * chunk_bytes..).unwrap_or(&[]);
-            let part = &part[..part.len().min(chunk_bytes)];
-            storage(ctx, &format!("{label} {i}"), part)
-        })
-        .collect()
+    let mut chunk = Vec::with_capacity(total.min(chunk_bytes));
+    let mut buffers = Vec::with_capacity(needed);
+    for part in parts {
+        let mut rest = *part;
+        while !rest.is_empty() {
+            let n = rest.len().min(chunk_bytes - chunk.len());
+            chunk.extend_from_slice(&rest[..n]);
+            rest = &rest[n..];
+            if chunk.len() == chunk_bytes {
+                buffers.push(storage(ctx, &format!("{label} {}", buffers.len()), &chunk)?);
+                chunk.clear();
+            }
+        }
+    }
+    if !chunk.is_empty() || buffers.is_empty() {
+        buffers.push(storage(ctx, &format!("{label} {}", buffers.len()), &chunk)?);
+    }
+    Ok(buffers)
 }
 
 /// The pools of a streamed scene.

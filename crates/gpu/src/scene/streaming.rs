@@ -324,10 +324,14 @@ pub struct Streaming {
 
 /// Buffers the streamer writes into (the scene's streams).
 pub(crate) struct StreamBuffers<'a> {
-    pub colors: &'a [wgpu::Buffer],
-    pub normals: &'a [wgpu::Buffer],
+    /// The word stream's bindings (LOD table, colours, normals).
+    pub words: &'a [wgpu::Buffer],
+    /// First word of the colours in the word stream.
+    pub color_word_base: u64,
+    /// First word of the normals in the word stream.
+    pub normal_word_base: u64,
     pub nodes: &'a [wgpu::Buffer],
-    /// Bytes per binding of the colour and normal streams.
+    /// Bytes per binding of the word stream.
     pub word_chunk_bytes: u64,
     /// Bytes per binding of the node stream.
     pub node_chunk_bytes: u64,
@@ -744,16 +748,16 @@ impl Streaming {
             }
             write_stream(
                 ctx,
-                buffers.colors,
+                buffers.words,
                 buffers.word_chunk_bytes,
-                g * 4,
+                (buffers.color_word_base + g) * 4,
                 bytemuck::cast_slice(&colors),
             );
             write_stream(
                 ctx,
-                buffers.normals,
+                buffers.words,
                 buffers.word_chunk_bytes,
-                g * 2,
+                buffers.normal_word_base * 4 + g * 2,
                 bytemuck::cast_slice(&normals),
             );
         }

@@ -11,7 +11,7 @@ use ssbvb_voxel::lookup::NODE_WORDS;
 use super::description::{Scene, TriangleObject};
 use super::dynamic::{self, DynamicLevel, DynamicObject, DynamicRoom};
 use super::layout::{GpuTriangleMesh, LodInfo, MeshUniform, NO_PAGES, ObjectMemory, ProxyRange};
-use super::pools::{SCENE_STORAGE_BUFFERS, StreamChunks, checked_u32};
+use super::pools::{StreamChunks, checked_u32};
 use super::streaming::{PINNED_LEVEL, PagedLayoutBuilder, StreamingOptions, pool_need};
 use crate::{ResourceError, wgpu};
 
@@ -277,35 +277,6 @@ fn voxel_bounds(lod: &LodLevel) -> Option<(DVec3, DVec3)> {
     let s = ssbvb_voxel::model::cell_size(lod.level);
     let corner = |c: [u32; 3]| DVec3::from(c.map(|v| v as f64 * s - 1.0));
     Some((corner(lo), corner(hi.map(|v| v + 1))))
-}
-
-/// Group 0's layout: the frame uniform, the read-only scene streams, and the page
-/// feedback the filter writes.
-pub(super) fn scene_layout(d: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let all =
-        wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
-    let buffer = |binding: u32, visibility, ty| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    let read_only = wgpu::BufferBindingType::Storage { read_only: true };
-    let mut entries = vec![buffer(0, all, wgpu::BufferBindingType::Uniform)];
-    entries.extend((1..SCENE_STORAGE_BUFFERS as u32).map(|b| buffer(b, all, read_only)));
-    entries.push(buffer(
-        SCENE_STORAGE_BUFFERS as u32,
-        wgpu::ShaderStages::COMPUTE,
-        wgpu::BufferBindingType::Storage { read_only: false },
-    ));
-    d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("scene"),
-        entries: &entries,
-    })
 }
 
 /// The proxy vertex and index buffers (one dummy element each when empty: a buffer is

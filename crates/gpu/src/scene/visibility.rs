@@ -77,6 +77,7 @@ pub fn jittered_frame_uniform(
             0.0,
         ],
         jitter: [jitter[0] as f32, jitter[1] as f32, 0.0, 0.0],
+        streams: [0; 4],
     }
 }
 

@@ -117,7 +117,7 @@ impl Billboards {
             )));
         }
         let d = &ctx.device;
-        let module = ctx.shader("billboards.wgsl", &shaders::source("billboards.wgsl")?)?;
+        let module = ctx.shader("billboards.wgsl", &shaders::source_for("billboards.wgsl", &scene.bindings)?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, &[]);
         let layout = pipeline_layout(d, "billboards", scene, Some(&bindings));
         let constants = [

@@ -34,7 +34,7 @@ impl Composite {
     pub fn compile(init: &PassInit<'_>, shader: &str) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
         let d = &ctx.device;
-        let module = ctx.shader(shader, &shaders::source(shader)?)?;
+        let module = ctx.shader(shader, &shaders::source_for(shader, &scene.bindings)?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, &[]);
         let layout = pipeline_layout(d, shader, scene, Some(&bindings));
         let out = slot_format(ctx, pipeline, pass, "color");

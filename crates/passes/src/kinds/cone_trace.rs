@@ -252,7 +252,7 @@ impl PassImpl for ConeTrace {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let module = ctx.shader("cone_trace.wgsl", &shaders::source("cone_trace.wgsl")?)?;
+        let module = ctx.shader("cone_trace.wgsl", &shaders::source_for("cone_trace.wgsl", &scene.bindings)?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
         let layout = pipeline_layout(d, "cone_trace", scene, Some(&bindings));
         let targets = [

@@ -28,7 +28,7 @@ impl PassImpl for EdgeAa {
     fn new(init: &PassInit<'_>, params: &EdgeAaParams) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
         let d = &ctx.device;
-        let module = ctx.shader(Self::SHADER, &shaders::source(Self::SHADER)?)?;
+        let module = ctx.shader(Self::SHADER, &shaders::source_for(Self::SHADER, &scene.bindings)?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, &[]);
         let label = format!("pass `{}`: {}", pass.name, Self::SHADER);
         let layout = pipeline_layout(d, &label, scene, Some(&bindings));

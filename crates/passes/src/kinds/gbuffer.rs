@@ -177,7 +177,7 @@ impl PulledPipeline {
     ) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
         let (shader, own) = (P::SHADER, P::OWN);
-        let module = ctx.shader(shader, &shaders::source(shader)?)?;
+        let module = ctx.shader(shader, &shaders::source_for(shader, &scene.bindings)?)?;
         let targets = gbuffer_targets(ctx, pipeline, pass);
         let depth_stencil = gbuffer_depth_stencil(ctx, pipeline, pass);
         let label = format!("pass `{}`: {shader} pipeline", pass.name);

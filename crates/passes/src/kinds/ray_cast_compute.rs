@@ -44,7 +44,10 @@ impl ComputeCast {
         let (ctx, scene, _, pass) = init.parts();
         let resolve =
             PulledPipeline::with_fragment::<P>(init, &constants(chunk_variants[0]), "fs_resolve")?;
-        let module = ctx.shader(P::SHADER, &ssbvb_gpu::shaders::source(P::SHADER)?)?;
+        let module = ctx.shader(
+            P::SHADER,
+            &ssbvb_gpu::shaders::source_for(P::SHADER, &scene.bindings)?,
+        )?;
         let label = format!("pass `{}`: {} compute trace", pass.name, P::SHADER);
         let trace = ctx.validated(&label, |d| {
             let layout = pipeline_layout(d, &label, scene, Some(bindings));

@@ -11,7 +11,7 @@
 //! its best hit: its cost follows the instances its ray meets, and overlaps stay exact.
 //!
 //! With `unique_voxels` each (visible instance, voxel) is appended once, by the first pixel
-//! to claim `claim_offsets[instance] + voxel id` in an open-addressing hash set of at least
+//! to claim its instance's first key + voxel id in an open-addressing hash set of at least
 //! twice the filter's pixels: its memory follows the screen, and a voxel spanning n pixels
 //! is drawn once, not n times, which bounds the overdraw of a camera close to a surface (an
 //! instance whose keys would pass 2³² − 1 is not deduplicated).
@@ -93,11 +93,10 @@ pub struct RayMarchFilter {
     counted: bool,
     bindings: PassBindings,
     unique_voxels: bool,
-    /// `unique_voxels`: the claim table and the per-instance key offsets (the table
-    /// follows the filter's size, the offsets grow with the visible instances).
-    claims: Option<Claims>,
-    /// The frame's counters (`CounterWords` words).
-    counters: wgpu::Buffer,
+    /// The frame's counters and, with `unique_voxels`, the per-instance first keys and
+    /// the claim table (the table follows the filter's size, the keys grow with the
+    /// visible instances).
+    words: FilterWords,
 }
 
 /// Words of the counter buffer: rays, (low, high) sums of steps, boxes, marches and
@@ -107,47 +106,56 @@ const COUNTER_WORDS: usize = HISTOGRAM_WORD + crate::runtime::counters::STEP_BIN
 /// The first word of the histogram (`C_HISTOGRAM`).
 const HISTOGRAM_WORD: usize = 9;
 
-/// What the filter binds itself: the claim table and the first key of each visible
-/// instance (`unique_voxels`), and the frame's counters.
-pub const OWN: &[OwnBinding] = &[
-    OwnBinding {
-        name: "voxel_claims",
-        kind: OwnKind::StorageReadWrite,
-    },
-    OwnBinding {
-        name: "claim_offsets",
-        kind: OwnKind::StorageRead,
-    },
-    OwnBinding {
-        name: "filter_counters",
-        kind: OwnKind::StorageReadWrite,
-    },
-];
+/// What the filter binds itself: one buffer of words ([`FilterWords`]), so that the
+/// filter fits WebGPU's default 8 storage buffers per stage with the scene's and its slots.
+pub const OWN: &[OwnBinding] = &[OwnBinding {
+    name: "filter_words",
+    kind: OwnKind::StorageReadWrite,
+}];
 
-struct Claims {
-    table: wgpu::Buffer,
-    offsets: wgpu::Buffer,
+/// The filter's own words: the frame's counters (`COUNTER_WORDS`), then (`CLAIM_HEADER` in
+/// the WGSL) where the claim table starts and its size − 1, the first key of each of up to
+/// `key_capacity` visible instances, then the claim table.
+struct FilterWords {
+    buffer: wgpu::Buffer,
+    key_capacity: u64,
+    table_words: u64,
 }
 
 /// Marks an instance whose keys do not fit 32 bits (`NO_DEDUP` in the WGSL).
 const NO_DEDUP: u32 = u32::MAX;
 
-impl Claims {
+impl FilterWords {
     /// `table_words` must be a power of two (the shader masks the hash with it).
-    fn new(ctx: &GpuContext, table_words: u64, instances: u64) -> Self {
+    fn new(ctx: &GpuContext, table_words: u64, key_capacity: u64) -> Self {
         debug_assert!(table_words.is_power_of_two());
-        let buffer = |label, size: u64| {
-            ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: size.max(16),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            })
-        };
+        let words = Self::table_start(key_capacity) + table_words;
         Self {
-            table: buffer("voxel claims", table_words * 4),
-            offsets: buffer("claim offsets", instances * 4),
+            buffer: ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("filter words"),
+                size: words * 4,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            key_capacity,
+            table_words,
         }
+    }
+
+    /// The first word of the claim table.
+    fn table_start(key_capacity: u64) -> u64 {
+        COUNTER_WORDS as u64 + 2 + key_capacity
+    }
+
+    /// The header and the first keys, as written before a frame.
+    fn header(&self, keys: &[u32]) -> Vec<u32> {
+        let start = Self::table_start(self.key_capacity) as u32;
+        [start, self.table_words as u32 - 1]
+            .into_iter()
+            .chain(keys.iter().copied())
+            .collect()
     }
 }
 
@@ -214,7 +222,7 @@ struct MainPipelines {
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
     /// The pass's own overrides (from its parameters).
-    constants: [(&'static str, f64); 3],
+    constants: [(&'static str, f64); 4],
     label: String,
     built: Vec<(MainVariant, wgpu::ComputePipeline)>,
 }
@@ -268,7 +276,7 @@ impl PassImpl for RayMarchFilter {
     // Its output is the billboards' indirect draw; 16×16 threads per workgroup.
     const NEEDS: KindNeeds = KindNeeds {
         limit: Some(max_compute_invocations_per_workgroup(256)),
-        ..KindNeeds::new(wgpu::DownlevelFlags::INDIRECT_EXECUTION, 5)
+        ..KindNeeds::new(wgpu::DownlevelFlags::INDIRECT_EXECUTION, 3)
     };
 
     /// Compiles `clear_draw`; `main` is compiled per [`MainVariant`] when a frame first
@@ -283,13 +291,14 @@ impl PassImpl for RayMarchFilter {
         } = *params;
         let module = ctx.shader(
             "ray_march_filter.wgsl",
-            &shaders::source("ray_march_filter.wgsl")?,
+            &shaders::source_for("ray_march_filter.wgsl", &scene.bindings)?,
         )?;
         let label = format!("pass `{}`: ray_march_filter pipelines", pass.name);
         let constants = [
             ("MAX_STEPS", f64::from(max_steps)),
             ("UNIQUE_VOXELS", flag(unique_voxels)),
             ("FAST_MARCH", flag(march == MarchMode::Fast)),
+            ("CLAIM_HEADER", COUNTER_WORDS as f64),
         ];
         let (clear, layout, bindings) = ctx.validated(&label, |d| {
             let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
@@ -304,24 +313,15 @@ impl PassImpl for RayMarchFilter {
             label,
             built: Vec::new(),
         };
-        // Without unique_voxels the shader never touches the claims: bind minimal buffers.
-        let claims = Some(Claims::new(ctx, 16, 4));
-        let counters = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("filter counters"),
-            size: (COUNTER_WORDS * 4) as u64,
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_DST
-                | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
+        // Without unique_voxels the shader never touches the claims: the smallest table.
+        let words = FilterWords::new(ctx, 16, 4);
         Ok(Self {
             clear,
             mains,
             counted: false,
             bindings,
             unique_voxels,
-            claims,
-            counters,
+            words,
         })
     }
 }
@@ -335,15 +335,9 @@ impl PassNode for RayMarchFilter {
         if self.unique_voxels {
             self.prepare_claims(rec, encoder)?;
         }
-        let claims = self.claims.as_ref().expect("claims exist");
-        let bind_group = self.bindings.bind_group(
-            rec,
-            &[
-                ("voxel_claims", claims.table.as_entire_binding()),
-                ("claim_offsets", claims.offsets.as_entire_binding()),
-                ("filter_counters", self.counters.as_entire_binding()),
-            ],
-        )?;
+        let bind_group = self
+            .bindings
+            .bind_group(rec, &[("filter_words", self.words.buffer.as_entire_binding())])?;
         self.counted = rec.counting;
         let variant = MainVariant {
             count_work: self.counted,
@@ -352,7 +346,7 @@ impl PassNode for RayMarchFilter {
         };
         let main = self.mains.get(rec.gpu, variant)?;
         if self.counted {
-            encoder.clear_buffer(&self.counters, 0, None);
+            encoder.clear_buffer(&self.words.buffer, 0, Some(COUNTER_WORDS as u64 * 4));
         }
         let entry = &rec.texture("entry").texture;
         let (w, h) = (entry.width(), entry.height());
@@ -383,8 +377,12 @@ impl PassNode for RayMarchFilter {
         if !self.counted {
             return Ok(());
         }
-        let words: Vec<u32> =
-            bytemuck::pod_collect_to_vec(&frame.gpu.read_buffer(&self.counters)?);
+        let words = ssbvb_gpu::kernels::read_words(
+            frame.gpu,
+            &self.words.buffer,
+            0,
+            COUNTER_WORDS as u64,
+        )?;
         if words.len() < COUNTER_WORDS {
             return Err(PassError::BadScene("filter counters readback is short".into()));
         }
@@ -430,34 +428,38 @@ impl RayMarchFilter {
         let entry = &rec.texture("entry").texture;
         let words = claim_table_words(entry.width() as u64 * entry.height() as u64);
         let max = rec.gpu.device.limits().max_storage_buffer_binding_size;
-        if words * 4 > max {
+        let instances = offsets.len().max(1) as u64;
+        let bytes = (FilterWords::table_start(instances + instances / 2) + words) * 4;
+        if bytes > max {
             return Err(PassError::TooLarge(format!(
-                "unique_voxels needs a {}-byte claim table for {}x{} pixels; the device binds \
-                 at most {max}: use a smaller screen or turn unique_voxels off",
-                words * 4,
+                "unique_voxels needs a {bytes}-byte claim table for {}x{} pixels and {} \
+                 instances; the device binds at most {max}: use a smaller screen or turn \
+                 unique_voxels off",
                 entry.width(),
-                entry.height()
+                entry.height(),
+                offsets.len()
             )));
         }
-        let instances = offsets.len().max(1) as u64;
-        let (table_fits, offsets_fit) = self.claims.as_ref().map_or((false, false), |c| {
-            (c.table.size() == words * 4, c.offsets.size() >= instances * 4)
-        });
-        if !table_fits || !offsets_fit {
-            let cap = if offsets_fit {
-                self.claims.as_ref().map_or(instances, |c| c.offsets.size() / 4)
+        let (table_fits, keys_fit) = (
+            self.words.table_words == words,
+            self.words.key_capacity >= instances,
+        );
+        if !table_fits || !keys_fit {
+            let cap = if keys_fit {
+                self.words.key_capacity
             } else {
                 instances + instances / 2
             };
-            self.claims = Some(Claims::new(rec.gpu, words, cap));
+            self.words = FilterWords::new(rec.gpu, words, cap);
         }
-        let claims = self.claims.as_ref().expect("claims exist");
-        if !offsets.is_empty() {
-            rec.gpu
-                .queue
-                .write_buffer(&claims.offsets, 0, bytemuck::cast_slice(&offsets));
-        }
-        encoder.clear_buffer(&claims.table, 0, None);
+        let header = self.words.header(&offsets);
+        rec.gpu.queue.write_buffer(
+            &self.words.buffer,
+            COUNTER_WORDS as u64 * 4,
+            bytemuck::cast_slice(&header),
+        );
+        let table = FilterWords::table_start(self.words.key_capacity) * 4;
+        encoder.clear_buffer(&self.words.buffer, table, Some(words * 4));
         Ok(())
     }
 }

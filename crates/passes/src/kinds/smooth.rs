@@ -53,7 +53,7 @@ impl PassImpl for Smooth {
         let (ctx, scene, pipeline, pass) = init.parts();
         let SmoothParams { max_i, min_dist } = *params;
         let d = &ctx.device;
-        let module = ctx.shader("smooth.wgsl", &shaders::source("smooth.wgsl")?)?;
+        let module = ctx.shader("smooth.wgsl", &shaders::source_for("smooth.wgsl", &scene.bindings)?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
         let layout = pipeline_layout(d, "smooth", scene, Some(&bindings));
         let ds_format = slot_format(ctx, pipeline, pass, "depth_stencil");

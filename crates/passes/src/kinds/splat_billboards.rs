@@ -5,7 +5,7 @@
 //! shading as [`crate::kinds::billboards`] (`shaders/billboard_quad.inc.wgsl`), so the G-buffer is
 //! the same and smoothing and composite run unchanged.
 //!
-//! Per frame: the two per-pixel buffers are cleared; a first dispatch (one thread per SSBVB
+//! Per frame: the per-pixel words (depth bits and entry, interleaved) are cleared; a first dispatch (one thread per SSBVB
 //! entry, 64 per workgroup, a 2D grid over the SSBVB's capacity) takes the nearest depth of
 //! every pixel its billboard covers by `atomicMax` on the reversed-Z depth's bits; a second
 //! dispatch of the same pipeline keeps, where that depth is its own, the lowest entry (as
@@ -37,25 +37,20 @@ use crate::runtime::node::PassNode;
 /// Threads per workgroup of both splat entry points.
 const WORKGROUP: u64 = 64;
 
-/// What the splat binds itself: per pixel the nearest depth's bits and the winning entry.
-pub const OWN: &[OwnBinding] = &[
-    OwnBinding {
-        name: "splat_depth_bits",
-        kind: OwnKind::StorageReadWrite,
-    },
-    OwnBinding {
-        name: "splat_entries",
-        kind: OwnKind::StorageReadWrite,
-    },
-];
+/// What the splat binds itself: per pixel the nearest depth's bits and the winning entry,
+/// interleaved in one buffer (the pass then fits WebGPU's 8 storage buffers per stage).
+pub const OWN: &[OwnBinding] = &[OwnBinding {
+    name: "splat_pixels",
+    kind: OwnKind::StorageReadWrite,
+}];
 
 /// The compiled splat: two compute pipelines and the resolve.
 pub struct SplatBillboards {
     /// Both splat steps (dispatched with one, then two layers of workgroups).
     splat: wgpu::ComputePipeline,
     resolve: PulledPipeline,
-    /// The per-pixel buffers (depth bits, entries) and the pixels they hold.
-    pixels: Option<(wgpu::Buffer, wgpu::Buffer, u64)>,
+    /// The per-pixel words (depth bits, entry) and the pixels they hold.
+    pixels: Option<(wgpu::Buffer, u64)>,
 }
 
 impl PassImpl for SplatBillboards {
@@ -65,7 +60,7 @@ impl PassImpl for SplatBillboards {
     // Compute splats, and a fragment shader that reads the atomics it wrote.
     const NEEDS: KindNeeds = KindNeeds::new(
         wgpu::DownlevelFlags::COMPUTE_SHADERS.union(wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE),
-        4,
+        3,
     );
 
     /// Compiles the splat and the resolve; `mode` becomes the WGSL override `RAY_BOX`.
@@ -83,7 +78,7 @@ impl PassImpl for SplatBillboards {
         let resolve = PulledPipeline::new::<Self>(init, &constants)?;
         let module = ctx.shader(
             Self::SHADER,
-            &ssbvb_gpu::shaders::source(Self::SHADER)?,
+            &ssbvb_gpu::shaders::source_for(Self::SHADER, &scene.bindings)?,
         )?;
         let label = format!("pass `{}`: splat pipelines", pass.name);
         let splat = ctx.validated(&label, |d| {
@@ -116,22 +111,16 @@ pub fn splat_grid(entries: u64) -> (u32, u32) {
 }
 
 impl SplatBillboards {
-    /// Makes the per-pixel buffers for `pixels` pixels unless they exist at that size.
+    /// Makes the per-pixel words for `pixels` pixels unless they exist at that size.
     fn buffers(&mut self, ctx: &GpuContext, pixels: u64) {
-        if self.pixels.as_ref().is_none_or(|p| p.2 != pixels) {
-            let make = |label| {
-                ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(label),
-                    size: (pixels * 4).max(16),
-                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                })
-            };
-            self.pixels = Some((
-                make("splat depth bits"),
-                make("splat entries"),
-                pixels,
-            ));
+        if self.pixels.as_ref().is_none_or(|p| p.1 != pixels) {
+            let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("splat pixels"),
+                size: (pixels * 8).max(16),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            self.pixels = Some((buffer, pixels));
         }
     }
 }
@@ -145,16 +134,12 @@ impl PassNode for SplatBillboards {
         let (w, h) = rec.screen;
         let entries = rec.buffer("ssbvb").size() / 32;
         self.buffers(rec.gpu, w as u64 * h as u64);
-        let (depth, winners, _) = self.pixels.as_ref().expect("made above");
-        let bind_group = self.resolve.bindings.bind_group(
-            rec,
-            &[
-                ("splat_depth_bits", depth.as_entire_binding()),
-                ("splat_entries", winners.as_entire_binding()),
-            ],
-        )?;
-        encoder.clear_buffer(depth, 0, None);
-        encoder.clear_buffer(winners, 0, None);
+        let (words, _) = self.pixels.as_ref().expect("made above");
+        let bind_group = self
+            .resolve
+            .bindings
+            .bind_group(rec, &[("splat_pixels", words.as_entire_binding())])?;
+        encoder.clear_buffer(words, 0, None);
         let (gx, gy) = splat_grid(entries);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

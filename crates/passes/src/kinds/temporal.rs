@@ -88,7 +88,7 @@ impl PassImpl for Temporal {
     fn new(init: &PassInit<'_>, params: &TemporalParams) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
         let d = &ctx.device;
-        let module = ctx.shader(Self::SHADER, &shaders::source(Self::SHADER)?)?;
+        let module = ctx.shader(Self::SHADER, &shaders::source_for(Self::SHADER, &scene.bindings)?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
         let layout = pipeline_layout(d, Self::SHADER, scene, Some(&bindings));
         let out = slot_format(ctx, pipeline, pass, "color");

@@ -37,7 +37,7 @@ impl PassImpl for Triangles {
     fn new(init: &PassInit<'_>, _params: &TrianglesKind) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
         let d = &ctx.device;
-        let module = ctx.shader("triangles.wgsl", &shaders::source("triangles.wgsl")?)?;
+        let module = ctx.shader("triangles.wgsl", &shaders::source_for("triangles.wgsl", &scene.bindings)?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
         let layout = pipeline_layout(d, "triangles", scene, Some(&bindings));
         let targets = gbuffer_targets(ctx, pipeline, pass);

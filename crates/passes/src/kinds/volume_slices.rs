@@ -291,7 +291,7 @@ impl PassImpl for VolumeSlices {
         });
         let module = ctx.shader(
             "volume_slices.wgsl",
-            &shaders::source("volume_slices.wgsl")?,
+            &shaders::source_for("volume_slices.wgsl", &scene.bindings)?,
         )?;
         let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
         let layout = pipeline_layout(d, "volume_slices", scene, Some(&bindings));

@@ -60,7 +60,8 @@ pub fn shared_structs() -> Vec<StructLayout> {
                 light_dir,
                 light_color,
                 misc,
-                jitter
+                jitter,
+                streams
             }
         ),
         layout!(

@@ -6,6 +6,7 @@ use ssbvb_gpu::requirements::{
     Requirements, color_attachment_bytes, max_bind_groups, max_color_attachment_bytes_per_sample,
     max_storage_buffers_per_shader_stage,
 };
+use ssbvb_gpu::scene::SceneBindings;
 use ssbvb_gpu::wgpu;
 use ssbvb_graph::{Access, PassStage, ResolvedPipeline, ResourceDesc, ResourceUsage, SlotClass};
 
@@ -13,13 +14,21 @@ use crate::kinds::registration;
 
 use wgpu::DownlevelFlags as F;
 
-/// Storage buffers of the scene's bind group (group 0), visible to every stage.
-const SCENE_STORAGE_BUFFERS: u64 = ssbvb_gpu::scene::SCENE_STORAGE_BUFFERS as u64;
-
-/// What `pipeline` needs from an adapter: the scene's bindings, each live pass kind's
-/// needs, every texture resource's format with its usages, and the depth-stencil readback
-/// the fill count and `render --json` use.
+/// What `pipeline` needs from an adapter for a scene whose streams take one binding each
+/// (the least any scene binds: what can be checked before the scene is loaded;
+/// [`pipeline_requirements_for`] for a given scene).
 pub fn pipeline_requirements(pipeline: &ResolvedPipeline) -> Requirements {
+    pipeline_requirements_for(pipeline, &SceneBindings::SMALLEST)
+}
+
+/// What `pipeline` needs from an adapter to draw a scene bound as `scene`: the scene's
+/// bindings, each live pass kind's needs, every texture resource's format with its usages,
+/// and the depth-stencil readback the fill count and `render --json` use.
+pub fn pipeline_requirements_for(
+    pipeline: &ResolvedPipeline,
+    scene: &SceneBindings,
+) -> Requirements {
+    let scene_storage = u64::from(scene.max_storage_buffers());
     let mut req = Requirements::default();
     // The scene's group 0 is visible to the vertex, fragment and compute stages.
     req.need_flags(
@@ -27,7 +36,7 @@ pub fn pipeline_requirements(pipeline: &ResolvedPipeline) -> Requirements {
         "the scene's bindings (group 0)",
     );
     req.need_limit(
-        max_storage_buffers_per_shader_stage(SCENE_STORAGE_BUFFERS),
+        max_storage_buffers_per_shader_stage(scene_storage),
         "the scene's bindings (group 0)",
     );
     for pass in &pipeline.passes {
@@ -43,7 +52,7 @@ pub fn pipeline_requirements(pipeline: &ResolvedPipeline) -> Requirements {
             req.need_flags(n.flags, &who);
         }
         req.need_limit(
-            max_storage_buffers_per_shader_stage(SCENE_STORAGE_BUFFERS + n.storage_buffers),
+            max_storage_buffers_per_shader_stage(scene_storage + n.storage_buffers),
             &who,
         );
         req.need_limit(max_bind_groups(n.bind_groups), &who);
@@ -142,10 +151,23 @@ mod tests {
             .iter()
             .find(|(n, _)| n.name == "max_storage_buffers_per_shader_stage")
             .unwrap();
-        // 12 of the scene (group 0: instances, LODs, 4 + 2 + 2 stream chunks, the
-        // hierarchy, the page feedback) and 5 of the filter.
-        assert_eq!(storage.0.at_least, 17, "{storage:?}");
+        // 5 of the scene in compute (group 0: instances, the hierarchy, the page feedback,
+        // one word and one node chunk) and 3 of the filter (the SSBVB, the draw, its own
+        // words): WebGPU's default of 8.
+        assert_eq!(storage.0.at_least, 8, "{storage:?}");
         assert!(storage.1.contains("RayMarchFilter"), "{storage:?}");
+        // A scene that needs two word chunks needs one more.
+        let two = SceneBindings {
+            word_chunks: 2,
+            node_chunks: 1,
+        };
+        let req = pipeline_requirements_for(&p, &two);
+        let (n, _) = req
+            .limits
+            .iter()
+            .find(|(n, _)| n.name == "max_storage_buffers_per_shader_stage")
+            .unwrap();
+        assert_eq!(n.at_least, 9);
     }
 
     /// Every bundled pipeline's render passes fit WebGPU's default 32 bytes of colour

@@ -88,6 +88,18 @@ impl Renderer {
         screen: (u32, u32),
         imports: &[(&str, wgpu::Texture)],
     ) -> Result<Self, PassError> {
+        // The device was chosen for the pipeline before the scene was loaded; a scene whose
+        // streams take more bindings than one each may need more than it allows.
+        let verdict = crate::pipeline_requirements_for(&pipeline, &scene.bindings)
+            .check_under(&ctx.adapter, &ctx.device.limits());
+        if !verdict.fits() {
+            return Err(PassError::TooLarge(format!(
+                "this scene's streams take {} + {} bindings: {}",
+                scene.bindings.word_chunks,
+                scene.bindings.node_chunks,
+                verdict.missing.join("; ")
+            )));
+        }
         let resources = FrameResources::with_imports(ctx, &pipeline, screen, imports)?;
         let temporal = pipeline
             .passes
