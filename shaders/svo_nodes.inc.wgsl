@@ -18,10 +18,11 @@ struct SvoNode {
     first_child: u32,
 }
 
-// The nodes, split over bindings of 2^NODE_CHUNK_BITS nodes (octree_ray_cast.rs); a
-// pipeline for octrees within one binding has NODE_CHUNKS_USED = 1 and reads it directly.
+// The nodes, split over bindings of 2^NODE_CHUNK_BITS nodes (octree_ray_cast.rs). A
+// pipeline binds only the chunks its octrees fill: `svo_node` (svo_node_read.inc.wgsl,
+// which the pass generates for that count; the file holds the eight-chunk form) reads no
+// other, and the layout leaves the rest out.
 override NODE_CHUNK_BITS: u32 = 24u;
-override NODE_CHUNKS_USED: u32 = 8u;
 @group(1) @binding(0) var<storage, read> svo_nodes_0: array<SvoNode>;
 @group(1) @binding(1) var<storage, read> svo_nodes_1: array<SvoNode>;
 @group(1) @binding(2) var<storage, read> svo_nodes_2: array<SvoNode>;
@@ -32,19 +33,4 @@ override NODE_CHUNKS_USED: u32 = 8u;
 @group(1) @binding(7) var<storage, read> svo_nodes_7: array<SvoNode>;
 @group(1) @binding(8) var<storage, read> svo_level_offsets: array<u32>;
 
-fn svo_node(n: u32) -> SvoNode {
-    if NODE_CHUNKS_USED == 1u {
-        return svo_nodes_0[n];
-    }
-    let i = n & ((1u << NODE_CHUNK_BITS) - 1u);
-    switch n >> NODE_CHUNK_BITS {
-        case 0u: { return svo_nodes_0[i]; }
-        case 1u: { return svo_nodes_1[i]; }
-        case 2u: { return svo_nodes_2[i]; }
-        case 3u: { return svo_nodes_3[i]; }
-        case 4u: { return svo_nodes_4[i]; }
-        case 5u: { return svo_nodes_5[i]; }
-        case 6u: { return svo_nodes_6[i]; }
-        default: { return svo_nodes_7[i]; }
-    }
-}
+//#include "svo_node_read.inc.wgsl"

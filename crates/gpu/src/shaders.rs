@@ -27,9 +27,22 @@ pub fn source(name: &str) -> Result<String, ResourceError> {
 /// The WGSL of `name` with includes expanded, the scene's stream bindings
 /// ([`SCENE_STREAMS_INCLUDE`]) generated for `scene`.
 pub fn source_for(name: &str, scene: &SceneBindings) -> Result<String, ResourceError> {
+    source_with(name, scene, &[])
+}
+
+/// [`source_for`] with generated text in place of some included files (`(file, text)`):
+/// a pass specializes what its shader binds by the size of its data.
+pub fn source_with(
+    name: &str,
+    scene: &SceneBindings,
+    generated: &[(&str, &str)],
+) -> Result<String, ResourceError> {
     let read = |n: &str| {
         if n == SCENE_STREAMS_INCLUDE {
             return Some(scene.wgsl());
+        }
+        if let Some((_, text)) = generated.iter().find(|(file, _)| *file == n) {
+            return Some(text.to_string());
         }
         override_file(n).or_else(|| raw(n).map(str::to_string))
     };
@@ -38,6 +51,49 @@ pub fn source_for(name: &str, scene: &SceneBindings) -> Result<String, ResourceE
     preprocess(name, &main, &read)
         .map(|p| p.source)
         .map_err(ResourceError::Shader)
+}
+
+/// The bindings of group `group` each of `entries` uses, in increasing order: the globals
+/// naga's validator finds the entry point (or a function it calls) referring to, which is
+/// what wgpu checks a pipeline layout against. `file` names the source in errors.
+pub fn used_bindings(
+    file: &str,
+    source: &str,
+    entries: &[&str],
+    group: u32,
+) -> Result<Vec<Vec<u32>>, ResourceError> {
+    let module = naga::front::wgsl::parse_str(source)
+        .map_err(|e| ResourceError::Shader(format!("{file}: {}", e.emit_to_string(source))))?;
+    let info = naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::all(),
+    )
+    .validate(&module)
+    .map_err(|e| ResourceError::Shader(format!("{file}: {}", e.emit_to_string(source))))?;
+    entries
+        .iter()
+        .map(|&entry| {
+            let index = module
+                .entry_points
+                .iter()
+                .position(|ep| ep.name == entry)
+                .ok_or_else(|| {
+                    ResourceError::Shader(format!("{file}: no entry point `{entry}`"))
+                })?;
+            let uses = info.get_entry_point(index);
+            let mut used: Vec<u32> = module
+                .global_variables
+                .iter()
+                .filter(|(h, _)| !uses[*h].is_empty())
+                .filter_map(|(_, v)| v.binding.as_ref())
+                .filter(|b| b.group == group)
+                .map(|b| b.binding)
+                .collect();
+            used.sort_unstable();
+            used.dedup();
+            Ok(used)
+        })
+        .collect()
 }
 
 /// `name` from the folder `SSBVB_SHADER_DIR` names, when it is set and holds the file.

@@ -2,8 +2,9 @@
 //! feature (what a browser or a minimal driver guarantees), on the same adapter as the other
 //! tests. A pipeline either fits, and then it draws exactly what it draws on the adapter's
 //! own limits, with no validation error, or the requirements check refuses it up front
-//! naming the limit (never a validation error in the middle of a frame). Which pipelines
-//! fit is pinned (`REFUSED`), so a pass that raises its needs fails here. The outcome per
+//! naming the limit (never a validation error in the middle of a frame). Every bundled
+//! pipeline fits, so a pass that raises its needs fails here; a form that does not fit
+//! (the octree casters' compute form) is refused when its pass is built. The outcome per
 //! pipeline is the table in `docs/architecture.md` ("What each pass needs").
 
 use std::sync::{Arc, Mutex};
@@ -13,12 +14,6 @@ use ssbvb_gpu::scene::{GpuScene, SceneBindings};
 use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_passes::{Profiling, Renderer};
 use ssbvb_voxel::camera::Camera;
-
-/// The bundled pipelines that need more than WebGPU's default limits, and the limit.
-const REFUSED: [(&str, &str); 2] = [
-    ("esvo", "max_storage_buffers_per_shader_stage"),
-    ("octree_ray_cast", "max_storage_buffers_per_shader_stage"),
-];
 
 /// A device on the shared adapter with WebGPU's default limits and no optional feature, and
 /// the errors wgpu reports outside error scopes.
@@ -134,12 +129,33 @@ fn every_pipeline_draws_under_webgpu_default_limits_what_it_draws_under_the_adap
         println!("{name}: fits, PSNR {psnr:.1} dB against the adapter-limits frame");
         assert!(psnr >= 40.0, "{name}: {psnr:.1} dB");
     }
-    let refused_names: Vec<&str> = refused.iter().map(|(n, _)| n.as_str()).collect();
-    let expected: Vec<&str> = REFUSED.iter().map(|(n, _)| *n).collect();
-    assert_eq!(refused_names, expected, "{refused:#?}");
-    for ((_, why), (_, limit)) in refused.iter().zip(REFUSED) {
-        assert!(why.contains(limit), "{why}");
+    assert!(refused.is_empty(), "{refused:#?}");
+
+    // The octree casters' compute form binds its hits too: 9 storage buffers, refused when
+    // the pass is built, naming the limit, and no validation error.
+    let esvo = std::fs::read_to_string(dir.join("esvo.ron")).unwrap();
+    let compute = esvo.replace(
+        "kind: EsvoRayCast(max_steps: 4096)",
+        "kind: EsvoRayCast(max_steps: 4096, compute: true)",
+    );
+    assert_ne!(compute, esvo, "esvo.ron changed");
+    let resolved = ssbvb_graph::resolve_str(&compute, "esvo compute").unwrap();
+    let gpu_scene =
+        GpuScene::new(&ctx, ssbvb_tests::single_object_scene(asset.clone(), 5)).unwrap();
+    match Renderer::new(&ctx, &gpu_scene, resolved, (64, 48)) {
+        Err(e) => {
+            let text = e.to_string();
+            assert!(
+                text.contains("max_storage_buffers_per_shader_stage >= 9")
+                    && text.contains("EsvoRayCast, compute"),
+                "{text}"
+            );
+        }
+        Ok(_) => panic!("the compute form was built under WebGPU's limits"),
     }
+    ctx.wait_idle().unwrap();
+    let errs = std::mem::take(&mut *errors.lock().unwrap());
+    assert!(errs.is_empty(), "{errs:#?}");
     // What each kind needs beyond WebGPU's defaults (the table in docs/architecture.md).
     let scene = u64::from(ssbvb_gpu::scene::SceneBindings::SMALLEST.max_storage_buffers());
     for kind in ssbvb_passes::registered_kinds() {

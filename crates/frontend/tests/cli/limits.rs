@@ -72,21 +72,41 @@ fn webgpu_limits_are_checked_up_front_and_named() {
         }
     }
 
-    // A pipeline that needs more (the octree casters bind their octree in 8 chunks) is
-    // refused up front, naming the limit and the pass.
+    // A pipeline that needs more (the ESVO caster in compute form also binds its hits) is
+    // refused before it draws, naming the limit and the pass.
+    let esvo = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/pipelines/esvo.ron"),
+    )
+    .unwrap();
+    let compute = dir.path().join("esvo_compute.ron");
+    std::fs::write(
+        &compute,
+        esvo.replace(
+            "kind: EsvoRayCast(max_steps: 4096)",
+            "kind: EsvoRayCast(max_steps: 4096, compute: true)",
+        ),
+    )
+    .unwrap();
     std::fs::remove_file(&png).ok();
     let out = ssbvb()
-        .args(["render", "--size", "32x24", "--limits", "webgpu"])
-        .args(["--pipeline", "assets/pipelines/esvo.ron", "-o"])
+        .args([
+            "render",
+            "--size",
+            "32x24",
+            "--limits",
+            "webgpu",
+            "--pipeline",
+        ])
+        .arg(&compute)
+        .arg("-o")
         .arg(&png)
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "{stderr}");
     assert!(
-        stderr.contains("max_storage_buffers_per_shader_stage")
-            && stderr.contains("EsvoRayCast")
-            && stderr.contains("under WebGPU's default limits (--limits webgpu)")
+        stderr.contains("max_storage_buffers_per_shader_stage >= 9")
+            && stderr.contains("EsvoRayCast, compute")
             && !stderr.contains("panicked"),
         "{stderr}"
     );

@@ -79,7 +79,7 @@ impl Kernels {
         entries: &[&'static str],
     ) -> Result<Self, ResourceError> {
         let source = shaders::source(file)?;
-        let used = used_bindings(file, &source, entries)?;
+        let used = shaders::used_bindings(file, &source, entries, 0)?;
         let limit = ctx.device.limits().max_storage_buffers_per_shader_stage;
         for (entry, used) in entries.iter().zip(&used) {
             let storage = used
@@ -213,48 +213,6 @@ fn layout_entry(i: u32, bind: Bind) -> wgpu::BindGroupLayoutEntry {
         },
         count: None,
     }
-}
-
-/// The group-0 bindings each of `entries` uses, in increasing order: the globals naga's
-/// validator finds the entry point (or a function it calls) referring to, which is what
-/// wgpu checks a pipeline layout against.
-fn used_bindings(
-    file: &str,
-    source: &str,
-    entries: &[&str],
-) -> Result<Vec<Vec<u32>>, ResourceError> {
-    let module = naga::front::wgsl::parse_str(source)
-        .map_err(|e| ResourceError::Shader(format!("{file}: {}", e.emit_to_string(source))))?;
-    let info = naga::valid::Validator::new(
-        naga::valid::ValidationFlags::all(),
-        naga::valid::Capabilities::all(),
-    )
-    .validate(&module)
-    .map_err(|e| ResourceError::Shader(format!("{file}: {}", e.emit_to_string(source))))?;
-    entries
-        .iter()
-        .map(|&entry| {
-            let index = module
-                .entry_points
-                .iter()
-                .position(|ep| ep.name == entry)
-                .ok_or_else(|| {
-                    ResourceError::Shader(format!("{file}: no entry point `{entry}`"))
-                })?;
-            let uses = info.get_entry_point(index);
-            let mut used: Vec<u32> = module
-                .global_variables
-                .iter()
-                .filter(|(h, _)| !uses[*h].is_empty())
-                .filter_map(|(_, v)| v.binding.as_ref())
-                .filter(|b| b.group == 0)
-                .map(|b| b.binding)
-                .collect();
-            used.sort_unstable();
-            used.dedup();
-            Ok(used)
-        })
-        .collect()
 }
 
 /// A uniform buffer holding `words`.

@@ -138,8 +138,8 @@ impl SceneBindings {
 }
 
 /// The body of an accessor: element `index` of a stream split over `chunks` bindings named
-/// `{name}_{i}` of `2^bits` elements each.
-fn chunk_switch(chunks: u32, bits: &str, index: &str, name: &str) -> String {
+/// `{name}_{i}` of `2^bits` elements each (`bits` a WGSL expression).
+pub fn chunk_switch(chunks: u32, bits: &str, index: &str, name: &str) -> String {
     if chunks == 1 {
         return format!("    return {name}_0[{index}];\n");
     }

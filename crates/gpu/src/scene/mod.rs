@@ -20,7 +20,7 @@ mod upload;
 pub mod visibility;
 
 pub use bindings::{
-    FIRST_STREAM_BINDING, LOD_WORDS, SCENE_STREAMS_INCLUDE, SceneBindings, chunks_for,
+    FIRST_STREAM_BINDING, LOD_WORDS, SCENE_STREAMS_INCLUDE, SceneBindings, chunk_switch, chunks_for,
 };
 pub use description::{LodPolicy, Scene, TriangleObject, VolumeObject, VoxelObject};
 pub use dynamic::{DynamicLevel, DynamicObject, DynamicRoom};

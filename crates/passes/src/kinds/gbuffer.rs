@@ -126,6 +126,15 @@ fn begin_gbuffer_pass_timed<'e>(
     pass
 }
 
+/// A pass's shader specialized for its data: the WGSL text, and the group-1 bindings its
+/// pipelines read (the layout holds only those).
+pub(crate) struct Specialized {
+    /// The WGSL, includes expanded.
+    pub source: String,
+    /// Group-1 bindings in the layout.
+    pub used: Vec<u32>,
+}
+
 /// The compiled pipeline of a G-buffer writer that pulls its own vertices (`vs_main`, no
 /// vertex buffers) and writes the G-buffer in `fs_main`: the ray-casting baselines and the
 /// cube rasterizer. Group 1 holds only the pass's own resources.
@@ -146,17 +155,28 @@ impl PulledPipeline {
         init: &PassInit<'_>,
         constants: &[(&str, f64)],
     ) -> Result<Self, PassError> {
-        Self::build::<P>(init, constants, false, "fs_main")
+        Self::build::<P>(init, constants, false, "fs_main", None)
     }
 
-    /// [`PulledPipeline::new`] with fragment entry point `fs_entry` (a resolve of work an
-    /// earlier compute pass did: [`PulledPipeline::record_resolve`]).
-    pub fn with_fragment<P: PassImpl>(
+    /// [`PulledPipeline::new`] of a specialized shader with fragment entry point
+    /// `fs_entry` (a resolve of work an earlier compute pass did:
+    /// [`PulledPipeline::record_resolve`]).
+    pub fn with_fragment_for<P: PassImpl>(
         init: &PassInit<'_>,
         constants: &[(&str, f64)],
         fs_entry: &str,
+        special: &Specialized,
     ) -> Result<Self, PassError> {
-        Self::build::<P>(init, constants, false, fs_entry)
+        Self::build::<P>(init, constants, false, fs_entry, Some(special))
+    }
+
+    /// [`PulledPipeline::counting`] for a specialized shader.
+    pub fn counting_for<P: PassImpl>(
+        init: &PassInit<'_>,
+        constants: &[(&str, f64)],
+        special: &Specialized,
+    ) -> Result<Self, PassError> {
+        Self::build::<P>(init, constants, true, "fs_main", Some(special))
     }
 
     /// [`PulledPipeline::new`] for a shader that counts its work under the WGSL override
@@ -166,7 +186,7 @@ impl PulledPipeline {
         init: &PassInit<'_>,
         constants: &[(&str, f64)],
     ) -> Result<Self, PassError> {
-        Self::build::<P>(init, constants, true, "fs_main")
+        Self::build::<P>(init, constants, true, "fs_main", None)
     }
 
     fn build<P: PassImpl>(
@@ -174,15 +194,20 @@ impl PulledPipeline {
         constants: &[(&str, f64)],
         with_uncounted: bool,
         fs_entry: &str,
+        special: Option<&Specialized>,
     ) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
         let (shader, own) = (P::SHADER, P::OWN);
-        let module = ctx.shader(shader, &shaders::source_for(shader, &scene.bindings)?)?;
+        let module = match special {
+            Some(s) => ctx.shader(shader, &s.source)?,
+            None => ctx.shader(shader, &shaders::source_for(shader, &scene.bindings)?)?,
+        };
         let targets = gbuffer_targets(ctx, pipeline, pass);
         let depth_stencil = gbuffer_depth_stencil(ctx, pipeline, pass);
         let label = format!("pass `{}`: {shader} pipeline", pass.name);
         Ok(ctx.validated(&label, |d| {
-            let bindings = PassBindings::new(ctx, pipeline, pass, own);
+            let used = special.map(|s| &s.used[..]);
+            let bindings = PassBindings::used_only(ctx, pipeline, pass, own, used);
             let layout = pipeline_layout(d, &label, scene, Some(&bindings));
             let make = |constants: &[(&str, f64)]| {
                 render_pipeline(

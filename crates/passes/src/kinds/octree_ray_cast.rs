@@ -10,8 +10,9 @@
 //! exact depth (`frag_depth`), the voxel's stored normal and the entered face's
 //! (`crate::kinds::gbuffer`). The shared smoothing and composite run after it unchanged.
 //!
-//! The octrees of every object are built with [`Svo::from_asset`] the first frame,
-//! concatenated (`svo_nodes_*`: `SvoNode`s of every level but each object's finest, which no
+//! The octrees of every object are built with [`Svo::from_asset`] when the pass is built,
+//! concatenated (`svo_nodes_*`, as many bindings as they fill, the shader's `svo_node`
+//! generated to read those only: `SvoNode`s of every level but each object's finest, which no
 //! traversal reads, child indices shifted by where the object starts; `svo_level_offsets`:
 //! per object [`SVO_STRIDE`] entries, the first node of each level and then the end) and
 //! bound for every later frame; an instance finds its object's octree through its LOD's
@@ -27,7 +28,10 @@
 //! - Levels above [`MAX_OCTREE_LEVEL`] (16, the shader's stack depth) and octrees larger
 //!   than [`NODE_CHUNKS`] bindings of the scene's chunk size are refused with
 //!   [`PassError::TooLarge`]; below that the nodes are split over the bindings, so no
-//!   binding exceeds the device's limit.
+//!   binding exceeds the device's limit. The fragment form of octrees within one binding
+//!   binds 3 storage buffers of its own (8 with the scene's: WebGPU's default); each
+//!   further chunk, and the compute form's hits, one more, which is checked against the
+//!   device when the pass is built.
 //! - Cost per pixel: the instances whose boxes its ray enters before its best hit (the
 //!   instance hierarchy) × the nodes visited along the ray, bounded by `max_steps`.
 
@@ -41,9 +45,10 @@ use crate::runtime::registry::{OwnBinding, OwnKind};
 use crate::runtime::counters::FrameCounters;
 use crate::kinds::ray_cast_counters::RayCastCounters;
 use crate::runtime::recorder::Recorder;
-use crate::kinds::gbuffer::PulledPipeline;
+use crate::kinds::gbuffer::{PulledPipeline, Specialized};
 use crate::kinds::ray_cast_compute::ComputeCast;
-use ssbvb_gpu::scene::GpuScene;
+use ssbvb_gpu::scene::{GpuScene, chunk_switch};
+use ssbvb_gpu::shaders;
 use crate::runtime::registry::{KindNeeds, PassImpl, PassInit};
 use ssbvb_graph::KindSpec;
 use crate::error::PassError;
@@ -69,21 +74,14 @@ pub struct OctreeRayCast(OctreeCaster);
 pub(crate) struct OctreeCaster {
     /// The kind's name, for errors.
     kind: &'static str,
-    /// Reads nodes through the chunk switch.
+    /// The fragment form's pipelines, for the chunks the octrees fill (its layout is also
+    /// the compute form's).
     pipeline: PulledPipeline,
-    /// The same shader specialized for octrees that fit one binding (`NODE_CHUNKS_USED =
-    /// 1`: no switch per node read, which is costly on the software adapter;
-    /// docs/benchmarks.md).
-    single: PulledPipeline,
-    /// The octrees fit one binding: `single` draws.
-    one_chunk: bool,
-    /// log2 of the nodes per binding (`NODE_CHUNK_BITS` in the WGSL).
-    chunk_bits: u32,
-    /// The bind group of every object's octree, made the first frame (and again when the
-    /// compute form's hit buffer is resized).
+    /// The bind group of every object's octree (made again when the compute form's hit
+    /// buffer is resized).
     octrees: Option<wgpu::BindGroup>,
-    /// The octrees' node buffers and level offsets, uploaded the first frame.
-    buffers: Option<(Vec<wgpu::Buffer>, wgpu::Buffer)>,
+    /// The octrees' node buffers (as many as they fill) and level offsets.
+    buffers: (Vec<wgpu::Buffer>, wgpu::Buffer),
     /// Traces in a compute shader and resolves (`compute: true`).
     compute: Option<ComputeCast>,
     /// What the fragment form binds as `cast_hits`, which it does not use.
@@ -150,34 +148,33 @@ impl OctreeCaster {
         max_steps: u32,
         compute: bool,
     ) -> Result<Self, PassError> {
+        let kind = <P::Params as KindSpec>::NAME;
         let chunk_bits = init.scene.chunks.octree_bits;
-        let constants = |chunks: usize| {
-            vec![
-                ("MAX_STEPS", f64::from(max_steps)),
-                ("NODE_CHUNK_BITS", f64::from(chunk_bits)),
-                ("NODE_CHUNKS_USED", chunks as f64),
-            ]
-        };
-        let pipeline = |chunks: usize| PulledPipeline::counting::<P>(init, &constants(chunks));
-        let pipeline_all = pipeline(NODE_CHUNKS)?;
+        let assets: Vec<&VoxelAsset> = init.scene.scene.objects.iter().map(|o| &*o.asset).collect();
+        let (nodes, offsets) = concatenated_octrees(kind, &assets)?;
+        let buffers = upload(init.ctx, kind, chunk_bits, &nodes, &offsets)?;
+        drop((nodes, offsets));
+        let special = specialize::<P>(init, buffers.0.len(), compute)?;
+        let constants = [
+            ("MAX_STEPS", f64::from(max_steps)),
+            ("NODE_CHUNK_BITS", f64::from(chunk_bits)),
+        ];
+        let pipeline = PulledPipeline::counting_for::<P>(init, &constants, &special)?;
         let compute = if compute {
             Some(ComputeCast::new::<P>(
                 init,
-                &pipeline_all.bindings,
-                [NODE_CHUNKS, 1],
+                &pipeline.bindings,
                 &constants,
+                &special,
             )?)
         } else {
             None
         };
         Ok(Self {
-            kind: <P::Params as KindSpec>::NAME,
-            pipeline: pipeline_all,
-            single: pipeline(1)?,
-            one_chunk: true,
-            chunk_bits,
+            kind,
+            pipeline,
             octrees: None,
-            buffers: None,
+            buffers,
             compute,
             no_hits: init.ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("ray cast hits (unused)"),
@@ -201,40 +198,29 @@ impl OctreeCaster {
         Ok(())
     }
 
-    /// Uploads the octrees the first frame that draws anything, then draws the fullscreen
-    /// triangle with the pipeline for their size.
+    /// Draws the fullscreen triangle (or the compute trace and its resolve).
     pub(crate) fn record(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         rec: &mut Recorder<'_>,
     ) -> Result<(), PassError> {
         self.check_levels(rec.scene)?;
-        if self.buffers.is_none() && !rec.scene.visible.is_empty() {
-            let assets: Vec<&VoxelAsset> =
-                rec.scene.scene.objects.iter().map(|o| &*o.asset).collect();
-            self.buffers = Some(self.upload(rec.gpu, &assets)?);
-        }
         if let Some(c) = &mut self.compute {
             let (w, h) = rec.screen;
             if c.hits(rec.gpu, self.kind, u64::from(w) * u64::from(h))?.1 {
                 self.octrees = None;
             }
         }
-        if self.octrees.is_none() && self.buffers.is_some() {
+        if self.octrees.is_none() {
             self.octrees = Some(self.bind_octrees(rec.gpu)?);
         }
         let bind_group = self.octrees.as_ref().filter(|_| !rec.scene.visible.is_empty());
         self.counters.begin_frame(encoder, rec.counting);
         if let Some(c) = &self.compute {
-            c.record(encoder, rec, bind_group, self.one_chunk);
+            c.record(encoder, rec, bind_group);
             return Ok(());
         }
-        let pipeline = if self.one_chunk {
-            &self.single
-        } else {
-            &self.pipeline
-        };
-        pipeline.record_fullscreen(encoder, rec, bind_group);
+        self.pipeline.record_fullscreen(encoder, rec, bind_group);
         Ok(())
     }
 
@@ -252,84 +238,132 @@ impl OctreeCaster {
         Ok(())
     }
 
-    /// Builds every object's octree and uploads them together: the node chunks and the
-    /// level offsets.
-    fn upload(
-        &mut self,
-        ctx: &GpuContext,
-        assets: &[&VoxelAsset],
-    ) -> Result<(Vec<wgpu::Buffer>, wgpu::Buffer), PassError> {
-        let (nodes, offsets) = concatenated_octrees(self.kind, assets)?;
-        let chunk = 1usize << self.chunk_bits;
-        self.one_chunk = nodes.len() <= chunk;
-        let node_bytes = std::mem::size_of::<SvoNode>();
-        if nodes.len() > NODE_CHUNKS * chunk {
-            return Err(PassError::TooLarge(format!(
-                "{}: the octrees take {} MiB; the pass binds at most {NODE_CHUNKS} × {} MiB \
-                 of them",
-                self.kind,
-                (nodes.len() * node_bytes) >> 20,
-                (chunk * node_bytes) >> 20
-            )));
-        }
-        let label = format!("{} octrees", self.kind);
-        Ok(ctx.validated(&label, |d| {
-            let node_buffers: Vec<wgpu::Buffer> = (0..NODE_CHUNKS)
-                .map(|i| {
-                    let part = nodes.get(i * chunk..).unwrap_or(&[]);
-                    let part = &part[..part.len().min(chunk)];
-                    // Empty bindings are invalid: an unused chunk gets one node.
-                    let zero = [SvoNode::default()];
-                    d.init_buffer(&wgpu::util::BufferInitDescriptor {
-                        label: Some("octree_ray_cast svo_nodes"),
-                        contents: bytemuck::cast_slice(if part.is_empty() { &zero } else { part }),
-                        usage: wgpu::BufferUsages::STORAGE,
-                    })
-                })
-                .collect();
-            let offset_buffer = d.init_buffer(&wgpu::util::BufferInitDescriptor {
-                label: Some("octree_ray_cast svo_level_offsets"),
-                contents: bytemuck::cast_slice(&offsets),
-                usage: wgpu::BufferUsages::STORAGE,
-            });
-            (node_buffers, offset_buffer)
-        })?)
-    }
-
-    /// The bind group of the uploaded octrees, the counters and the hit buffer.
+    /// The bind group of the uploaded octrees, the counters and the hit buffer (the
+    /// layout takes those the pipelines read).
     fn bind_octrees(&self, ctx: &GpuContext) -> Result<wgpu::BindGroup, PassError> {
-        let (nodes, offsets) = self.buffers.as_ref().expect("uploaded before binding");
+        let (nodes, offsets) = &self.buffers;
         let hits = self
             .compute
             .as_ref()
             .and_then(ComputeCast::hit_buffer)
             .unwrap_or(&self.no_hits);
-        let pipeline = if self.one_chunk {
-            &self.single
-        } else {
-            &self.pipeline
-        };
         let label = format!("{} octrees", self.kind);
+        let mut own: Vec<(&'static str, wgpu::BindingResource<'_>)> = NODE_BINDINGS
+            .iter()
+            .zip(nodes)
+            .map(|(name, b)| (*name, b.as_entire_binding()))
+            .collect();
+        own.extend([
+            ("svo_level_offsets", offsets.as_entire_binding()),
+            ("ray_counters", self.counters.binding()),
+            ("cast_hits", hits.as_entire_binding()),
+        ]);
         ctx.validated(&label, |d| {
-            pipeline.bindings.own_bind_group(
-                d,
-                self.kind,
-                &[
-                    ("svo_nodes_0", nodes[0].as_entire_binding()),
-                    ("svo_nodes_1", nodes[1].as_entire_binding()),
-                    ("svo_nodes_2", nodes[2].as_entire_binding()),
-                    ("svo_nodes_3", nodes[3].as_entire_binding()),
-                    ("svo_nodes_4", nodes[4].as_entire_binding()),
-                    ("svo_nodes_5", nodes[5].as_entire_binding()),
-                    ("svo_nodes_6", nodes[6].as_entire_binding()),
-                    ("svo_nodes_7", nodes[7].as_entire_binding()),
-                    ("svo_level_offsets", offsets.as_entire_binding()),
-                    ("ray_counters", self.counters.binding()),
-                    ("cast_hits", hits.as_entire_binding()),
-                ],
-            )
+            self.pipeline.bindings.own_bind_group(d, self.kind, &own)
         })?
     }
+}
+
+/// The names of the node bindings, in order.
+const NODE_BINDINGS: [&str; NODE_CHUNKS] = [
+    "svo_nodes_0",
+    "svo_nodes_1",
+    "svo_nodes_2",
+    "svo_nodes_3",
+    "svo_nodes_4",
+    "svo_nodes_5",
+    "svo_nodes_6",
+    "svo_nodes_7",
+];
+
+/// Uploads the concatenated octrees: the nodes in as many bindings of `2^chunk_bits` nodes
+/// as they fill (at most [`NODE_CHUNKS`]), and the level offsets.
+fn upload(
+    ctx: &GpuContext,
+    kind: &str,
+    chunk_bits: u32,
+    nodes: &[SvoNode],
+    offsets: &[u32],
+) -> Result<(Vec<wgpu::Buffer>, wgpu::Buffer), PassError> {
+    let chunk = 1usize << chunk_bits;
+    let node_bytes = std::mem::size_of::<SvoNode>();
+    let chunks = nodes.len().div_ceil(chunk).max(1);
+    if chunks > NODE_CHUNKS {
+        return Err(PassError::TooLarge(format!(
+            "{kind}: the octrees take {} MiB; the pass binds at most {NODE_CHUNKS} × {} MiB \
+             of them",
+            std::mem::size_of_val(nodes) >> 20,
+            (chunk * node_bytes) >> 20
+        )));
+    }
+    let label = format!("{kind} octrees");
+    Ok(ctx.validated(&label, |d| {
+        let node_buffers: Vec<wgpu::Buffer> = nodes
+            .chunks(chunk)
+            .map(|part| {
+                d.init_buffer(&wgpu::util::BufferInitDescriptor {
+                    label: Some("octree_ray_cast svo_nodes"),
+                    contents: bytemuck::cast_slice(part),
+                    usage: wgpu::BufferUsages::STORAGE,
+                })
+            })
+            .collect();
+        let offset_buffer = d.init_buffer(&wgpu::util::BufferInitDescriptor {
+            label: Some("octree_ray_cast svo_level_offsets"),
+            contents: bytemuck::cast_slice(offsets),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        (node_buffers, offset_buffer)
+    })?)
+}
+
+/// `P`'s shader for octrees in `chunks` node bindings (`svo_node` reads those only), and
+/// the group-1 bindings its pipelines read: the fragment form's, or the compute form's
+/// trace and resolve. An error naming the limit when they and the scene's bindings exceed
+/// the device's storage buffers per stage.
+fn specialize<P: PassImpl>(
+    init: &PassInit<'_>,
+    chunks: usize,
+    compute: bool,
+) -> Result<Specialized, PassError> {
+    let mut read = String::from(
+        "// Generated by octree_ray_cast.rs for the chunks the octrees fill.\n\
+         fn svo_node(n: u32) -> SvoNode {\n",
+    );
+    read.push_str(&chunk_switch(
+        chunks as u32,
+        "NODE_CHUNK_BITS",
+        "n",
+        "svo_nodes",
+    ));
+    read.push_str("}\n");
+    let source = shaders::source_with(
+        P::SHADER,
+        &init.scene.bindings,
+        &[("svo_node_read.inc.wgsl", &read)],
+    )?;
+    let entries: &[&str] = if compute {
+        &["cs_main", "vs_main", "fs_resolve"]
+    } else {
+        &["vs_main", "fs_main"]
+    };
+    let mut used = shaders::used_bindings(P::SHADER, &source, entries, 1)?.concat();
+    used.sort_unstable();
+    used.dedup();
+    // Every own binding of these kinds is a storage buffer.
+    let storage = used.len() as u64 + u64::from(init.scene.bindings.max_storage_buffers());
+    let allowed = u64::from(init.ctx.device.limits().max_storage_buffers_per_shader_stage);
+    if storage > allowed {
+        return Err(PassError::TooLarge(format!(
+            "pass `{}` ({}{}): octrees in {chunks} binding{} need \
+             max_storage_buffers_per_shader_stage >= {storage} (the device allows {allowed})",
+            init.pass.name,
+            <P::Params as KindSpec>::NAME,
+            if compute { ", compute" } else { "" },
+            if chunks == 1 { "" } else { "s" },
+        )));
+    }
+    Ok(Specialized { source, used })
 }
 
 /// Every asset's octree in one node array (child indices shifted by where each starts)
@@ -378,10 +412,12 @@ pub fn concatenated_octrees(
 }
 
 /// What the octree ray casters need from an adapter: the counters are written in the
-/// fragment shader; the nodes' bindings, the level offsets and the counters.
+/// fragment shader; the fragment form of octrees within one binding binds that binding, the
+/// level offsets and the counters (more chunks and the compute form's hits are checked
+/// against the device when the pass is built, once the octrees' size is known).
 pub(crate) const NEEDS: KindNeeds = KindNeeds::new(
     wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE.union(wgpu::DownlevelFlags::COMPUTE_SHADERS),
-    NODE_CHUNKS as u64 + 3,
+    3,
 );
 
 impl PassImpl for OctreeRayCast {

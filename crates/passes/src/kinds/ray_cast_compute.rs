@@ -9,7 +9,7 @@
 use ssbvb_gpu::{GpuContext, wgpu};
 
 use crate::error::PassError;
-use crate::kinds::gbuffer::PulledPipeline;
+use crate::kinds::gbuffer::{PulledPipeline, Specialized};
 use crate::runtime::bindings::PassBindings;
 use crate::runtime::pipelines::pipeline_layout;
 use crate::runtime::recorder::Recorder;
@@ -23,36 +23,32 @@ const RECORD_BYTES: u64 = 16;
 
 /// The compute pipelines and the resolve of one ray-casting pass.
 pub(crate) struct ComputeCast {
-    /// Indexed `[one_chunk as usize][counting as usize]`: the node-chunk switch and the
-    /// counters compiled in or out, as the fragment form's pipelines.
-    trace: [[wgpu::ComputePipeline; 2]; 2],
+    /// Indexed `[counting as usize]`: the counters compiled in or out, as the fragment
+    /// form's pipelines.
+    trace: [wgpu::ComputePipeline; 2],
     resolve: PulledPipeline,
     /// The per-pixel hit records and the pixels they hold.
     hits: Option<(wgpu::Buffer, u64)>,
 }
 
 impl ComputeCast {
-    /// Compiles `P`'s `cs_main` for each chunk count in `chunk_variants` (all chunks, one
-    /// chunk) with and without counting, over `bindings`' layout, and the resolve
-    /// (`fs_resolve`). `constants(chunks)` are the WGSL overrides of a variant.
+    /// Compiles `P`'s `cs_main` of `special` with and without counting, over `bindings`'
+    /// layout, and the resolve (`fs_resolve`); `constants` are the WGSL overrides.
     pub(crate) fn new<P: PassImpl>(
         init: &PassInit<'_>,
         bindings: &PassBindings,
-        chunk_variants: [usize; 2],
-        constants: &dyn Fn(usize) -> Vec<(&'static str, f64)>,
+        constants: &[(&'static str, f64)],
+        special: &Specialized,
     ) -> Result<Self, PassError> {
         let (ctx, scene, _, pass) = init.parts();
         let resolve =
-            PulledPipeline::with_fragment::<P>(init, &constants(chunk_variants[0]), "fs_resolve")?;
-        let module = ctx.shader(
-            P::SHADER,
-            &ssbvb_gpu::shaders::source_for(P::SHADER, &scene.bindings)?,
-        )?;
+            PulledPipeline::with_fragment_for::<P>(init, constants, "fs_resolve", special)?;
+        let module = ctx.shader(P::SHADER, &special.source)?;
         let label = format!("pass `{}`: {} compute trace", pass.name, P::SHADER);
         let trace = ctx.validated(&label, |d| {
             let layout = pipeline_layout(d, &label, scene, Some(bindings));
-            let make = |chunks: usize, counting: bool| {
-                let mut c = constants(chunks);
+            let make = |counting: bool| {
+                let mut c = constants.to_vec();
                 if !counting {
                     c.push(("COUNT_WORK", 0.0));
                 }
@@ -68,7 +64,7 @@ impl ComputeCast {
                     cache: None,
                 })
             };
-            chunk_variants.map(|chunks| [make(chunks, false), make(chunks, true)])
+            [make(false), make(true)]
         })?;
         Ok(Self {
             trace,
@@ -122,14 +118,12 @@ impl ComputeCast {
     }
 
     /// Records the trace over the screen (when `bind_group` is given: something is
-    /// visible) and the resolve, the pass's time spanning both. `one_chunk` picks the
-    /// pipeline for octrees within one binding.
+    /// visible) and the resolve, the pass's time spanning both.
     pub(crate) fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         rec: &Recorder<'_>,
         bind_group: Option<&wgpu::BindGroup>,
-        one_chunk: bool,
     ) {
         let (w, h) = rec.screen;
         {
@@ -138,7 +132,7 @@ impl ComputeCast {
                 timestamp_writes: rec.span_begin_timestamps(),
             });
             if let Some(bg) = bind_group {
-                pass.set_pipeline(&self.trace[usize::from(one_chunk)][usize::from(rec.counting)]);
+                pass.set_pipeline(&self.trace[usize::from(rec.counting)]);
                 pass.set_bind_group(0, &rec.scene.bind_group, &[]);
                 pass.set_bind_group(1, bg, &[]);
                 pass.dispatch_workgroups(w.div_ceil(TILE), h.div_ceil(TILE), 1);

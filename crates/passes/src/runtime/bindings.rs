@@ -38,6 +38,8 @@ pub struct PassBindings {
     slots: Vec<(&'static str, SlotClass)>,
     /// Own bindings, after the slots.
     own: &'static [OwnBinding],
+    /// The bindings in the layout when not all are (`PassBindings::used_only`).
+    used: Option<Vec<u32>>,
 }
 
 /// A resource given for an own binding when the bind group is made.
@@ -71,6 +73,20 @@ impl PassBindings {
         pipeline: &ResolvedPipeline,
         pass: &ScheduledPass,
         own: &'static [OwnBinding],
+    ) -> Self {
+        Self::used_only(ctx, pipeline, pass, own, None)
+    }
+
+    /// [`PassBindings::new`] with only the bindings in `used` (when given) in the layout:
+    /// those a shader specialized for its data reads (each counts against the device's
+    /// per-stage limits). Binding numbers stay the declared positions; the bind groups
+    /// leave the others out.
+    pub fn used_only(
+        ctx: &GpuContext,
+        pipeline: &ResolvedPipeline,
+        pass: &ScheduledPass,
+        own: &'static [OwnBinding],
+        used: Option<&[u32]>,
     ) -> Self {
         let stage = pass.kind.stage();
         let mut entries = Vec::new();
@@ -144,13 +160,26 @@ impl PassBindings {
                 count: None,
             });
         }
+        if let Some(used) = used {
+            entries.retain(|e| used.contains(&e.binding));
+        }
         let layout = ctx
             .device
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some(&pass.name),
                 entries: &entries,
             });
-        Self { layout, slots, own }
+        Self {
+            layout,
+            slots,
+            own,
+            used: used.map(<[u32]>::to_vec),
+        }
+    }
+
+    /// Whether binding `b` is in the layout.
+    fn has(&self, b: u32) -> bool {
+        self.used.as_ref().is_none_or(|u| u.contains(&b))
     }
 
     /// Whether the group has any binding (a pass without one binds no group 1).
@@ -167,6 +196,9 @@ impl PassBindings {
     ) -> Result<wgpu::BindGroup, PassError> {
         let mut entries = Vec::with_capacity(self.slots.len() + self.own.len());
         for (i, (name, class)) in self.slots.iter().enumerate() {
+            if !self.has(i as u32) {
+                continue;
+            }
             let resource = match class {
                 SlotClass::StorageBuffer(_) => rec.buffer(name).as_entire_binding(),
                 SlotClass::DepthStencilAttachment(_) => {
@@ -181,6 +213,10 @@ impl PassBindings {
             });
         }
         for (j, o) in self.own.iter().enumerate() {
+            let binding = (self.slots.len() + j) as u32;
+            if !self.has(binding) {
+                continue;
+            }
             let (_, resource) = own.iter().find(|(n, _)| *n == o.name).ok_or_else(|| {
                 PassError::Bindings(format!(
                     "pass `{}`: own binding `{}` was not given",
@@ -188,7 +224,7 @@ impl PassBindings {
                 ))
             })?;
             entries.push(wgpu::BindGroupEntry {
-                binding: (self.slots.len() + j) as u32,
+                binding,
                 resource: resource.clone(),
             });
         }
@@ -217,6 +253,9 @@ impl PassBindings {
         }
         let mut entries = Vec::with_capacity(self.own.len());
         for (j, o) in self.own.iter().enumerate() {
+            if !self.has(j as u32) {
+                continue;
+            }
             let (_, resource) = own.iter().find(|(n, _)| *n == o.name).ok_or_else(|| {
                 PassError::Bindings(format!("{label}: own binding `{}` was not given", o.name))
             })?;
