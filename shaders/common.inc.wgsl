@@ -141,7 +141,7 @@ const STENCIL_TRIANGLE: u32 = 2u;
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> instances: array<Instance>;
 @group(0) @binding(2) var<storage, read> instance_bvh: array<BvhNode>;
-// The scene's streams (ssbvb-gpu scene/bindings.rs): the word stream holds the LOD table
+// The scene's streams (ssbvb-gpu scene_bindings.rs): the word stream holds the LOD table
 // (LOD_WORDS words per entry), then per voxel its linear RGBA8 colour, then the 16-bit
 // octahedral normals two to a word (low half = even voxel); positions are implied by the
 // lookup (the voxel id is the Morton rank of its cell). The lookup-node stream holds the

@@ -21,6 +21,9 @@
 //!   CPU, and writes PNGs atomically.
 //! - [`scene`] uploads a [`scene::Scene`] (objects, instances, LOD policy) and keeps it
 //!   current per frame; [`error::ResourceError`] is what building it can fail with.
+//! - [`scene_bindings`]: how group 0 binds the scene's streams in as many bindings as their
+//!   data needs, and the WGSL generated for that (WebGPU allows 8 storage buffers per
+//!   stage).
 
 pub mod alloc;
 pub mod buffer_init;
@@ -30,6 +33,7 @@ pub mod kernels;
 pub mod readback;
 pub mod requirements;
 pub mod scene;
+pub mod scene_bindings;
 pub mod shader_source;
 pub mod shaders;
 pub mod submissions;

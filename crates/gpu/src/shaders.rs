@@ -5,7 +5,7 @@
 //! folder instead (a file missing there falls back to the embedded one), so an edited
 //! shader runs without rebuilding the binary. Native builds only.
 
-use crate::scene::{SCENE_STREAMS_INCLUDE, SceneBindings};
+use crate::scene_bindings::{SCENE_STREAMS_INCLUDE, SceneBindings};
 use crate::shader_source::preprocess;
 
 use crate::ResourceError;

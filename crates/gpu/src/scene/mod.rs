@@ -8,7 +8,6 @@ use ssbvb_voxel::lookup::NODE_WORDS;
 
 use crate::{GpuContext, ResourceError, wgpu};
 
-mod bindings;
 mod description;
 mod dynamic;
 mod gpu_level;
@@ -19,7 +18,7 @@ pub mod streaming;
 mod upload;
 pub mod visibility;
 
-pub use bindings::{
+pub use crate::scene_bindings::{
     FIRST_STREAM_BINDING, LOD_WORDS, SCENE_STREAMS_INCLUDE, SceneBindings, chunk_switch, chunks_for,
 };
 pub use description::{LodPolicy, Scene, TriangleObject, VolumeObject, VoxelObject};
@@ -650,6 +649,11 @@ impl GpuScene {
 #[cfg(test)]
 mod tests {
     use super::StreamChunks;
+
+    #[test]
+    fn a_lod_table_entry_is_lod_words_words() {
+        assert_eq!(std::mem::size_of::<super::LodInfo>(), 4 * super::LOD_WORDS);
+    }
 
     #[test]
     fn chunks_follow_the_device_binding_size() {

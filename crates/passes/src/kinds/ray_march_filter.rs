@@ -106,7 +106,7 @@ const COUNTER_WORDS: usize = HISTOGRAM_WORD + crate::runtime::counters::STEP_BIN
 /// The first word of the histogram (`C_HISTOGRAM`).
 const HISTOGRAM_WORD: usize = 9;
 
-/// What the filter binds itself: one buffer of words ([`FilterWords`]), so that the
+/// What the filter binds itself: one buffer of words (`FilterWords`), so that the
 /// filter fits WebGPU's default 8 storage buffers per stage with the scene's and its slots.
 pub const OWN: &[OwnBinding] = &[OwnBinding {
     name: "filter_words",
