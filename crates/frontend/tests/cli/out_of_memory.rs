@@ -37,7 +37,7 @@ fn a_refused_allocation_under_a_budget_halves_it_and_the_frame_goes_on() {
     let w = first["warnings"].to_string();
     assert!(
         w.contains("out of GPU memory: the driver refused")
-            && w.contains("MiB for voxel colours")
+            && w.contains("MiB for LOD table, voxel colours and normals")
             && w.contains("--gpu-budget lowered from 8 to 4 MiB"),
         "{w}"
     );
@@ -108,7 +108,7 @@ fn a_refused_allocation_without_a_budget_names_the_resource_and_the_flag() {
         assert!(err.contains(want), "{args:?}: {err}");
         assert!(
             err.contains("out of GPU memory: the driver refused")
-                && err.contains("for voxel colours 0"),
+                && err.contains("for LOD table, voxel colours and normals 0"),
             "{args:?}: {err}"
         );
         assert!(!err.contains("panicked"), "{args:?}: {err}");
