@@ -13,9 +13,14 @@ override MAX_I: f32 = 1.0;
 override MIN_DIST: f32 = 0.5;
 
 @group(1) @binding(0) var gbuffer_normal: texture_2d<f32>;
-// Depth aspect of the read-only depth-stencil attachment (reversed Z).
-@group(1) @binding(1) var depth_stencil: texture_depth_2d;
+// Depth aspect of the read-only depth-stencil attachment (reversed Z), bound as an
+// unfilterable float texture: GLSL has no texel fetch from depth textures.
+@group(1) @binding(1) var depth_stencil: texture_2d<f32>;
 @group(1) @binding(2) var normal_sampler: sampler;
+// Where the device cannot sample the depth-stencil it tests against (GL, WebGL: no
+// read-only depth-stencil attachments), or `copy_depth`: the depth's bits, written by
+// `fs_copy_depth` in a pass before (smooth.rs).
+@group(1) @binding(3) var depth_copy: texture_2d<u32>;
 
 // Fullscreen triangle.
 // Eq. 1 made total: at Dist = MinDist the quotient is infinite and below it the parabola
@@ -37,11 +42,10 @@ fn camera_distance(px: vec2<f32>, depth: f32) -> f32 {
     return length(p.xyz / p.w);
 }
 
-@fragment
-fn fs_smooth(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {
+// The smoothed normal of the voxel pixel at `pos` whose depth is `depth`.
+fn smoothed(pos: vec4<f32>, depth: f32) -> vec4<f32> {
     let p = vec2<i32>(pos.xy);
     let center = textureLoad(gbuffer_normal, p, 0);
-    let depth = textureLoad(depth_stencil, p, 0);
     let offset = smoothing_offset(camera_distance(pos.xy, depth));
     var sum = vec3(0.0);
     for (var dy = -1; dy <= 1; dy++) {
@@ -53,6 +57,22 @@ fn fs_smooth(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {
         }
     }
     return vec4(safe_normalize(sum, center.xyz), center.w);
+}
+
+@fragment
+fn fs_smooth(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {
+    return smoothed(pos, textureLoad(depth_stencil, vec2<i32>(pos.xy), 0).x);
+}
+
+@fragment
+fn fs_smooth_copied(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {
+    return smoothed(pos, bitcast<f32>(textureLoad(depth_copy, vec2<i32>(pos.xy), 0).x));
+}
+
+// The depth's bits, for `fs_smooth_copied` (a pass with no depth-stencil attachment).
+@fragment
+fn fs_copy_depth(@builtin(position) pos: vec4<f32>) -> @location(0) u32 {
+    return bitcast<u32>(textureLoad(depth_stencil, vec2<i32>(pos.xy), 0).x);
 }
 
 // Everything that is not a voxel pixel: copied bit for bit.

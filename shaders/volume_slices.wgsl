@@ -18,7 +18,7 @@ struct SliceVolume {
 }
 
 // Read-only: the opaque depth the slices are tested against (the pipeline's depth test).
-@group(1) @binding(0) var depth_stencil: texture_depth_2d;
+@group(1) @binding(0) var depth_stencil: texture_2d<f32>;
 @group(1) @binding(1) var atlas: texture_3d<f32>;
 @group(1) @binding(2) var atlas_sampler: sampler;
 // Per brick of every level of every volume: its slot in the atlas, or EMPTY_BRICK.

@@ -119,14 +119,26 @@ fn is_root() -> bool {
         .unwrap_or(false)
 }
 
+/// Whether Mesa's EGL (the GL backend's test) is installed.
+fn mesa_egl_present() -> bool {
+    [
+        "/usr/lib/x86_64-linux-gnu",
+        "/usr/lib/aarch64-linux-gnu",
+        "/usr/lib64",
+        "/usr/lib",
+    ]
+    .iter()
+    .any(|d| Path::new(d).join("libEGL_mesa.so.0").exists())
+}
+
 /// Whether `xvfb-run` (the `ssbvb view` test's virtual display) is on the PATH.
 fn xvfb_present() -> bool {
     std::env::var_os("PATH")
         .is_some_and(|p| std::env::split_paths(&p).any(|d| d.join("xvfb-run").is_file()))
 }
 
-/// Packages the tests need on Debian/Ubuntu: Mesa's lavapipe, and Xvfb with the X libraries
-/// winit loads at run time for the `ssbvb view` test.
+/// Packages the tests need on Debian/Ubuntu: Mesa's lavapipe and GL driver, and Xvfb with
+/// the X libraries winit loads at run time for the `ssbvb view` test.
 const APT_PACKAGES: &[&str] = &[
     "mesa-vulkan-drivers",
     "libvulkan1",
@@ -136,6 +148,11 @@ const APT_PACKAGES: &[&str] = &[
     "libxcursor1",
     "libxi6",
     "libxrandr2",
+    // Mesa's GL driver (EGL, GLES) for the GL backend's test.
+    "libegl1",
+    "libegl-mesa0",
+    "libgles2",
+    "libgl1-mesa-dri",
     // libFuzzer (C++) for the fuzz smoke.
     "g++",
 ];
@@ -144,7 +161,8 @@ const APT_PACKAGES: &[&str] = &[
 /// Xvfb), installs Mesa's lavapipe and Xvfb when running as root with apt, else says what
 /// to install (a missing Xvfb is reported by the viewer test itself).
 fn ensure_adapter() -> Result<()> {
-    if !cfg!(target_os = "linux") || (vulkan_icd_present() && xvfb_present()) {
+    if !cfg!(target_os = "linux") || (vulkan_icd_present() && xvfb_present() && mesa_egl_present())
+    {
         return Ok(());
     }
     let apt = Path::new("/usr/bin/apt-get").exists();

@@ -52,6 +52,8 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    // SAFETY: first thing in `main`, before any other thread exists.
+    unsafe { ssbvb_gpu::context::prefer_gles_on_mesa() };
     let cli = Cli::parse();
     if !matches!(cli.command, Command::View(_)) {
         quiet_window_system_probe();

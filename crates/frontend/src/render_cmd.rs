@@ -436,14 +436,28 @@ fn render_reference(
     })
 }
 
-/// The format substitutions the device took, and the exact GPU voxelization of animated
-/// objects given up where the device has no f64 shaders (WebGPU's limits, most mobile and
-/// browser adapters): they are voxelized by conservative rasterization instead.
+/// The format substitutions the device took, what a device without read-only depth-stencil
+/// attachments or depth-to-buffer copies does instead (GL), and the exact GPU voxelization
+/// of animated objects given up where the device has no f64 shaders (WebGPU's limits, most
+/// mobile and browser adapters): they are voxelized by conservative rasterization instead.
 fn gpu_fallbacks(
     ctx: &ssbvb_gpu::GpuContext,
     animation: Option<&crate::animation::AnimationReport>,
 ) -> Vec<String> {
     let mut fallbacks = ctx.report().fallbacks.clone();
+    let flags = ctx.adapter.get_downlevel_capabilities().flags;
+    if !flags.contains(ssbvb_gpu::wgpu::DownlevelFlags::READ_ONLY_DEPTH_STENCIL) {
+        fallbacks.push(
+            "the smoothing copies the depth before it (no read-only depth-stencil \
+             attachments)"
+                .into(),
+        );
+    }
+    if !flags.contains(ssbvb_gpu::wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES) {
+        fallbacks.push(
+            "no stencil read-back (no depth texture to buffer copies): voxel_pixels is null".into(),
+        );
+    }
     let raster = animation.is_some_and(|a| a.method == Some(GpuVoxelizeMethod::Raster));
     if raster
         && !ctx

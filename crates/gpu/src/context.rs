@@ -298,6 +298,25 @@ pub const NO_ADAPTER_HINT: &str = "install a Vulkan driver (on Debian/Ubuntu wit
      `sudo apt-get install -y mesa-vulkan-drivers libvulkan1` for Mesa's lavapipe), or run \
      `cargo xtask test`, which installs it when it can";
 
+/// Makes wgpu's GL backend use OpenGL ES on Mesa (Mesa's GL driver, llvmpipe included),
+/// by capping Mesa's desktop GL version below the 3.3 core profile wgpu asks for first
+/// (`MESA_GL_VERSION_OVERRIDE=3.0`; wgpu then falls back to GLES 3.2). On desktop GL, wgpu
+/// reports no float render targets (a core profile lists no `*_color_buffer_float`
+/// extension, which wgpu looks for), so `Rgba32Float` attachments, which every SSBVB
+/// pipeline has, would be refused; on GLES they render. Does nothing when the variable is
+/// set already; Vulkan and the other backends ignore it.
+///
+/// # Safety
+///
+/// Sets an environment variable: call it before any other thread may read or write the
+/// environment (first thing in `main`, or before a test binary's first device).
+pub unsafe fn prefer_gles_on_mesa() {
+    if std::env::var_os("MESA_GL_VERSION_OVERRIDE").is_none() {
+        // SAFETY: the caller guarantees no other thread touches the environment.
+        unsafe { std::env::set_var("MESA_GL_VERSION_OVERRIDE", "3.0") };
+    }
+}
+
 /// The instance headless commands use: every native backend (narrowed by
 /// `WGPU_BACKEND`), validation on (off with `WGPU_VALIDATION=0`), and no window-system
 /// display, so commands that open no window do not probe X11 or Wayland.

@@ -296,6 +296,7 @@ fn typed_edits_touch_exactly_what_they_name() {
     let k = PassKind::Smooth(ssbvb_graph::SmoothParams {
         max_i: 2.0,
         min_dist: 0.25,
+        copy_depth: false,
     });
     let q = p.with_pass_kind("smooth", &k).unwrap();
     assert_eq!(

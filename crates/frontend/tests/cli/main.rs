@@ -4,6 +4,7 @@
 mod animation;
 mod cone_trace;
 mod device_loss;
+mod gl;
 mod limits;
 mod out_of_memory;
 mod presets;

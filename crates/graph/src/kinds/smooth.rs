@@ -16,6 +16,12 @@ pub struct SmoothParams {
     /// MinDist: the distance (world units) at and below which the offset is MaxI.
     #[serde(default = "default_min_dist")]
     pub min_dist: f32,
+    /// Copy the depth into a texture of the pass's own before smoothing, rather than
+    /// sample the depth-stencil it stencil-tests against. Devices that cannot do the latter
+    /// (GL, WebGL: no read-only depth-stencil attachments) always copy; `true` makes any
+    /// device do it (the same image, one pass more).
+    #[serde(default)]
+    pub copy_depth: bool,
 }
 
 fn default_min_dist() -> f32 {
@@ -27,6 +33,7 @@ impl Default for SmoothParams {
         Self {
             max_i: one(),
             min_dist: default_min_dist(),
+            copy_depth: false,
         }
     }
 }

@@ -322,13 +322,18 @@ fn sign_not_zero(x: f32) -> f32 {
 }
 
 /// Pixels of a depth-stencil texture whose stencil is `value` (read back); `None` when the
-/// texture has no stencil.
+/// texture has no stencil, or the device cannot copy one to a buffer (GL).
 pub fn count_stencil(
     ctx: &GpuContext,
     texture: &wgpu::Texture,
     value: u32,
 ) -> Result<Option<u64>, PassError> {
-    if !texture.format().is_depth_stencil_format() {
+    let copies = ctx
+        .adapter
+        .get_downlevel_capabilities()
+        .flags
+        .contains(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES);
+    if !texture.format().is_depth_stencil_format() || !copies {
         return Ok(None);
     }
     let stencil = ctx.read_texture(texture, wgpu::TextureAspect::StencilOnly)?;

@@ -1,5 +1,12 @@
 //! `smooth`: Gaussian smoothing of voxel normals with the paper's distance-dependent offset
 //! (Eq. 1), stencil-tested so only voxel pixels change (see `shaders/smooth.wgsl`).
+//!
+//! The distance comes from the depth, which the pass samples from the depth-stencil it
+//! stencil-tests against (a read-only attachment). Devices without read-only depth-stencil
+//! attachments (GL, WebGL) cannot bind a texture both ways in one pass: there, and with
+//! `copy_depth`, a pass before copies the depth's bits into an `R32Uint` texture of the
+//! pass's own (integer targets are renderable everywhere), which the smoothing reads
+//! instead. Both paths draw the same image bit for bit (GPU test).
 
 use ssbvb_gpu::wgpu;
 use ssbvb_graph::SmoothParams;
@@ -27,11 +34,18 @@ pub fn smoothing_offset(dist: f32, max_i: f32, min_dist: f32) -> f32 {
     (max_i / (x * x)).clamp(0.0, max_i)
 }
 
-/// What the smoothing pass binds itself: the linear sampler of the normals.
-pub const OWN: &[OwnBinding] = &[OwnBinding {
-    name: "normal_sampler",
-    kind: OwnKind::Sampler(wgpu::SamplerBindingType::Filtering),
-}];
+/// What the smoothing pass binds itself: the linear sampler of the normals, and the copy
+/// of the depth where it smooths from one.
+pub const OWN: &[OwnBinding] = &[
+    OwnBinding {
+        name: "normal_sampler",
+        kind: OwnKind::Sampler(wgpu::SamplerBindingType::Filtering),
+    },
+    OwnBinding {
+        name: "depth_copy",
+        kind: OwnKind::Texture2dUint,
+    },
+];
 
 /// The smoothing pass.
 pub struct Smooth {
@@ -39,6 +53,16 @@ pub struct Smooth {
     copy: wgpu::RenderPipeline,
     bindings: PassBindings,
     sampler: wgpu::Sampler,
+    /// Smoothing from a copy of the depth (no read-only depth-stencil attachments, or
+    /// `copy_depth`).
+    depth_copy: Option<DepthCopy>,
+}
+
+/// The pass that copies the depth's bits, and its target (made at the screen's size).
+struct DepthCopy {
+    pipeline: wgpu::RenderPipeline,
+    bindings: PassBindings,
+    target: Option<(wgpu::Texture, wgpu::TextureView)>,
 }
 
 impl PassImpl for Smooth {
@@ -46,15 +70,39 @@ impl PassImpl for Smooth {
     const SHADER: &'static str = "smooth.wgsl";
     const OWN: &'static [OwnBinding] = OWN;
     // Samples the depth of the depth-stencil it stencil-tests against.
-    const NEEDS: KindNeeds = KindNeeds::new(wgpu::DownlevelFlags::READ_ONLY_DEPTH_STENCIL, 0);
+    const NEEDS: KindNeeds = KindNeeds::new(wgpu::DownlevelFlags::empty(), 0);
 
     /// Compiles both pipelines (voxel pixels smoothed, all others copied).
     fn new(init: &PassInit<'_>, params: &SmoothParams) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
-        let SmoothParams { max_i, min_dist } = *params;
+        let SmoothParams {
+            max_i,
+            min_dist,
+            copy_depth,
+        } = *params;
+        let copied = copy_depth
+            || !ctx
+                .adapter
+                .get_downlevel_capabilities()
+                .flags
+                .contains(wgpu::DownlevelFlags::READ_ONLY_DEPTH_STENCIL);
         let d = &ctx.device;
-        let module = ctx.shader("smooth.wgsl", &shaders::source_for("smooth.wgsl", &scene.bindings)?)?;
-        let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
+        let source = shaders::source_for("smooth.wgsl", &scene.bindings)?;
+        let module = ctx.shader("smooth.wgsl", &source)?;
+        let smooth_entry = if copied { "fs_smooth_copied" } else { "fs_smooth" };
+        let used = |entries: &[&str]| -> Result<Vec<u32>, PassError> {
+            let mut u = shaders::used_bindings("smooth.wgsl", &source, entries, 1)?.concat();
+            u.sort_unstable();
+            u.dedup();
+            Ok(u)
+        };
+        let bindings = PassBindings::used_only(
+            ctx,
+            pipeline,
+            pass,
+            OWN,
+            Some(&used(&["vs_main", smooth_entry, "fs_main"])?),
+        );
         let layout = pipeline_layout(d, "smooth", scene, Some(&bindings));
         let ds_format = slot_format(ctx, pipeline, pass, "depth_stencil");
         let targets = [Some(
@@ -89,8 +137,33 @@ impl PassImpl for Smooth {
                 },
             )
         };
-        let smooth = make("fs_smooth", wgpu::CompareFunction::Equal);
+        let smooth = make(smooth_entry, wgpu::CompareFunction::Equal);
         let copy = make("fs_main", wgpu::CompareFunction::NotEqual);
+        let depth_copy = if copied {
+            let bindings = PassBindings::used_only(
+                ctx,
+                pipeline,
+                pass,
+                OWN,
+                Some(&used(&["vs_main", "fs_copy_depth"])?),
+            );
+            let layout = pipeline_layout(d, "smooth depth copy", scene, Some(&bindings));
+            let targets = [Some(wgpu::TextureFormat::R32Uint.into())];
+            let pipeline = render_pipeline(
+                d,
+                &RenderSpec {
+                    fs_entry: "fs_copy_depth",
+                    ..RenderSpec::new("smooth depth copy", &module, &layout, &targets)
+                },
+            );
+            Some(DepthCopy {
+                pipeline,
+                bindings,
+                target: None,
+            })
+        } else {
+            None
+        };
         let sampler = d.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("smooth"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -102,7 +175,56 @@ impl PassImpl for Smooth {
             copy,
             bindings,
             sampler,
+            depth_copy,
         })
+    }
+}
+
+impl DepthCopy {
+    /// Draws the depth's bits of `depth_stencil` into the target (made or remade at its
+    /// size).
+    fn record(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &Recorder<'_>,
+    ) -> Result<(), PassError> {
+        let ds = &rec.texture("depth_stencil").texture;
+        let size = ds.size();
+        if self.target.as_ref().is_none_or(|(t, _)| t.size() != size) {
+            let texture = rec.gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("smooth depth copy"),
+                size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::R32Uint,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            });
+            let view = texture.create_view(&Default::default());
+            self.target = Some((texture, view));
+        }
+        let (_, view) = self.target.as_ref().expect("made above");
+        let bg = self.bindings.bind_group(rec, &[])?;
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("smooth depth copy"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        });
+        pass.set_bind_group(0, &rec.scene.bind_group, &[]);
+        pass.set_bind_group(1, &bg, &[]);
+        pass.set_pipeline(&self.pipeline);
+        pass.draw(0..3, 0..1);
+        Ok(())
     }
 }
 
@@ -112,18 +234,23 @@ impl PassNode for Smooth {
         encoder: &mut wgpu::CommandEncoder,
         rec: &mut Recorder<'_>,
     ) -> Result<(), PassError> {
+        if let Some(c) = &mut self.depth_copy {
+            c.record(encoder, rec)?;
+        }
         let ds = rec.texture("depth_stencil");
-        let bg = self.bindings.bind_group(
-            rec,
-            &[(
-                "normal_sampler",
-                wgpu::BindingResource::Sampler(&self.sampler),
-            )],
-        )?;
+        let mut own = vec![(
+            "normal_sampler",
+            wgpu::BindingResource::Sampler(&self.sampler),
+        )];
+        if let Some((_, view)) = self.depth_copy.as_ref().and_then(|c| c.target.as_ref()) {
+            own.push(("depth_copy", wgpu::BindingResource::TextureView(view)));
+        }
+        let bg = self.bindings.bind_group(rec, &own)?;
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(&rec.pass.name),
             color_attachments: &[rec.color_attachment("smoothed_normal")],
-            // Read-only: the stencil selects pixels, the depth is sampled for Dist.
+            // Read-only: the stencil selects pixels, the depth is sampled for Dist (or its
+            // copy, where the device cannot do both in one pass).
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &ds.view,
                 depth_ops: None,

@@ -152,6 +152,14 @@ impl PassBindings {
                     },
                     false,
                 ),
+                OwnKind::Texture2dUint => (
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Uint,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    false,
+                ),
             };
             entries.push(wgpu::BindGroupLayoutEntry {
                 binding,
@@ -285,8 +293,10 @@ fn texture_binding(
             view_dimension: wgpu::TextureViewDimension::D2,
         },
         _ => {
+            // Depth as an unfilterable float (`texture_2d<f32>`, `.x`): GLSL has no texel
+            // fetch from depth textures, and no pass compares depth in a sampler.
             let sample_type = if format.is_depth_stencil_format() {
-                wgpu::TextureSampleType::Depth
+                wgpu::TextureSampleType::Float { filterable: false }
             } else {
                 match format.sample_type(None, Some(ctx.device.features())) {
                     Some(t) => t,

@@ -86,6 +86,8 @@ pub enum OwnKind {
     Texture3dFloat,
     /// A 2D float texture read with `textureLoad`.
     Texture2dFloat,
+    /// A 2D texture of unsigned integers, read with `textureLoad`.
+    Texture2dUint,
 }
 
 /// One resource a pass owns, by its WGSL global name.
