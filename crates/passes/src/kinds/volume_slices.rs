@@ -254,8 +254,8 @@ impl PassImpl for VolumeSlices {
     type Params = VolumeSlicesParams;
     const SHADER: &'static str = "volume_slices.wgsl";
     const OWN: &'static [OwnBinding] = OWN;
-    // Depth-tested against a read-only depth-stencil that is also bound.
-    const NEEDS: KindNeeds = KindNeeds::new(wgpu::DownlevelFlags::READ_ONLY_DEPTH_STENCIL, 0);
+    // Depth-tested against a read-only depth-stencil, which it does not sample.
+    const NEEDS: KindNeeds = KindNeeds::NONE;
 
     fn new(init: &PassInit<'_>, params: &VolumeSlicesParams) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
@@ -289,11 +289,16 @@ impl PassImpl for VolumeSlices {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        let module = ctx.shader(
-            "volume_slices.wgsl",
-            &shaders::source_for("volume_slices.wgsl", &scene.bindings)?,
-        )?;
-        let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
+        let source = shaders::source_for("volume_slices.wgsl", &scene.bindings)?;
+        let module = ctx.shader("volume_slices.wgsl", &source)?;
+        // Only the bindings the shaders read: the depth-stencil slot is the pass's read-only
+        // depth test, not a texture the shaders sample, so the pass also runs where a
+        // texture may not be bound and attached at once (GL).
+        let entries = ["vs_main", "fs_main", "vs_resolve", "fs_resolve"];
+        let mut used = shaders::used_bindings("volume_slices.wgsl", &source, &entries, 1)?.concat();
+        used.sort_unstable();
+        used.dedup();
+        let bindings = PassBindings::used_only(ctx, pipeline, pass, OWN, Some(&used));
         let layout = pipeline_layout(d, "volume_slices", scene, Some(&bindings));
         // Premultiplied "over", back to front: dst = src + (1 - src.a) dst.
         let over = wgpu::BlendComponent {
