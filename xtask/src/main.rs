@@ -255,21 +255,30 @@ fn test(extra: &[String]) -> Result<bool> {
     if std::env::var_os("WGPU_BACKEND").is_none() {
         cmd.env("WGPU_BACKEND", "vulkan");
     }
-    // Mesa's Vulkan WSI probes XDG_RUNTIME_DIR and prints an error per device when it is
-    // unset (typical in CI containers); give it a private folder.
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        let dir = std::env::temp_dir().join("ssbvb-xdg-runtime");
-        if std::fs::create_dir_all(&dir).is_ok() {
-            #[cfg(unix)]
-            {
-                use std::os::unix::fs::PermissionsExt;
-                let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700));
-            }
-            cmd.env("XDG_RUNTIME_DIR", &dir);
-        }
-    }
+    private_runtime_dir(&mut cmd);
     if !cmd.status().context("running cargo test")?.success() {
         return Ok(false);
+    }
+    // The core frame tests again on the GL backend (Mesa's llvmpipe as OpenGL ES), which the
+    // run above does not use.
+    if extra.is_empty() {
+        let mut gl = Command::new(&cargo);
+        gl.current_dir(&root)
+            .args([
+                "test",
+                "-p",
+                "ssbvb-tests",
+                "--test",
+                "gpu",
+                "core_frames::",
+            ])
+            .env("WGPU_BACKEND", "gl");
+        private_runtime_dir(&mut gl);
+        eprintln!("xtask: the core frame tests on GL (WGPU_BACKEND=gl)");
+        if !gl.status().context("running cargo test on GL")?.success() {
+            eprintln!("xtask: the core frame tests failed on the GL backend");
+            return Ok(false);
+        }
     }
     // A short fuzz smoke, so a parser regression shows on the next submission (the
     // campaign's long runs are `cargo xtask fuzz --seconds N`). Skipped when the test
@@ -279,6 +288,23 @@ fn test(extra: &[String]) -> Result<bool> {
         return fuzz::run(&root, &smoke);
     }
     Ok(true)
+}
+
+/// Mesa's Vulkan WSI probes XDG_RUNTIME_DIR and prints an error per device when it is unset
+/// (typical in CI containers): gives `cmd` a private folder then.
+fn private_runtime_dir(cmd: &mut Command) {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_some() {
+        return;
+    }
+    let dir = std::env::temp_dir().join("ssbvb-xdg-runtime");
+    if std::fs::create_dir_all(&dir).is_ok() {
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700));
+        }
+        cmd.env("XDG_RUNTIME_DIR", &dir);
+    }
 }
 
 /// Seconds per fuzz target in `cargo xtask test`.

@@ -7,6 +7,7 @@ mod billboard_harness;
 mod billboards;
 mod chunks;
 mod cone_trace;
+mod core_frames;
 mod cube_raster;
 mod dense_dda;
 mod device_loss;
