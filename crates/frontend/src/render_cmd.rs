@@ -455,7 +455,8 @@ fn gpu_fallbacks(
     }
     if !flags.contains(ssbvb_gpu::wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES) {
         fallbacks.push(
-            "no stencil read-back (no depth texture to buffer copies): voxel_pixels is null".into(),
+            "voxel pixels counted by a stencil-tested draw (no depth texture to buffer copies)"
+                .into(),
         );
     }
     let raster = animation.is_some_and(|a| a.method == Some(GpuVoxelizeMethod::Raster));

@@ -104,6 +104,27 @@ fn smoothing_from_a_copy_of_the_depth_is_bit_identical() {
     assert!(changed > 1000, "{changed} pixels smoothed");
 }
 
+/// GL's way of counting voxel pixels (a stencil-tested draw, no stencil copy) counts what
+/// the copy counts, for the voxel value and the triangle value alike.
+#[test]
+fn counting_the_stencil_by_drawing_matches_the_copy() {
+    let f = ssbvb_tests::render(&with_smooth(1.0, 0.5), scene(6), &camera(), SIZE);
+    let stencil = f.read_stencil("depth_stencil");
+    let i = f.renderer.resource("depth_stencil").unwrap();
+    let texture = &f.renderer.resources.texture(i).texture;
+    for value in [1u32, 2] {
+        let copied = stencil.iter().filter(|&&s| u32::from(s) == value).count() as u64;
+        let drawn = ssbvb_passes::kinds::gbuffer::count_stencil_by_drawing(
+            ssbvb_tests::ctx(),
+            texture,
+            value,
+        )
+        .unwrap();
+        assert!(copied > 1000, "stencil {value}: {copied} pixels");
+        assert_eq!(drawn, copied, "stencil {value}");
+    }
+}
+
 #[test]
 fn eq1_at_below_and_above_min_dist_stays_finite() {
     // The bunny is about 3.3 units from the camera: MinDist below, at (the singularity

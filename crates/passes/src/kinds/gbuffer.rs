@@ -322,25 +322,123 @@ fn sign_not_zero(x: f32) -> f32 {
 }
 
 /// Pixels of a depth-stencil texture whose stencil is `value` (read back); `None` when the
-/// texture has no stencil, or the device cannot copy one to a buffer (GL).
+/// texture has no stencil. A device that cannot copy a stencil to a buffer (GL) counts by
+/// drawing ([`count_stencil_by_drawing`]).
 pub fn count_stencil(
     ctx: &GpuContext,
     texture: &wgpu::Texture,
     value: u32,
 ) -> Result<Option<u64>, PassError> {
+    if !texture.format().is_depth_stencil_format() {
+        return Ok(None);
+    }
     let copies = ctx
         .adapter
         .get_downlevel_capabilities()
         .flags
         .contains(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES);
-    if !texture.format().is_depth_stencil_format() || !copies {
-        return Ok(None);
+    if !copies {
+        return count_stencil_by_drawing(ctx, texture, value).map(Some);
     }
     let stencil = ctx.read_texture(texture, wgpu::TextureAspect::StencilOnly)?;
     let value = value as u8;
     Ok(Some(
         stencil.bytes.iter().filter(|&&s| s == value).count() as u64
     ))
+}
+
+/// [`count_stencil`] without a stencil copy: a fullscreen triangle stencil-tested for
+/// `value` writes 1 into an `R32Uint` texture (`shaders/stencil_count.wgsl`), which is read
+/// back and summed. `texture` must be a depth-stencil texture that can be attached.
+pub fn count_stencil_by_drawing(
+    ctx: &GpuContext,
+    texture: &wgpu::Texture,
+    value: u32,
+) -> Result<u64, PassError> {
+    let d = &ctx.device;
+    let module = ctx.shader(
+        "stencil_count.wgsl",
+        &shaders::source("stencil_count.wgsl")?,
+    )?;
+    let size = texture.size();
+    let (target, pipeline) = ctx.validated("stencil count", |d| {
+        let target = d.create_texture(&wgpu::TextureDescriptor {
+            label: Some("stencil count"),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::R32Uint,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("stencil count"),
+            bind_group_layouts: &[],
+            immediate_size: 0,
+        });
+        let face = wgpu::StencilFaceState {
+            compare: wgpu::CompareFunction::Equal,
+            fail_op: wgpu::StencilOperation::Keep,
+            depth_fail_op: wgpu::StencilOperation::Keep,
+            pass_op: wgpu::StencilOperation::Keep,
+        };
+        let targets = [Some(wgpu::TextureFormat::R32Uint.into())];
+        let pipeline = render_pipeline(
+            d,
+            &RenderSpec {
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: texture.format(),
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::Always),
+                    stencil: wgpu::StencilState {
+                        front: face,
+                        back: face,
+                        read_mask: 0xff,
+                        write_mask: 0,
+                    },
+                    bias: Default::default(),
+                }),
+                ..RenderSpec::new("stencil count", &module, &layout, &targets)
+            },
+        );
+        (target, pipeline)
+    })?;
+    let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+        label: Some("stencil count"),
+    });
+    {
+        let view = target.create_view(&Default::default());
+        let ds = texture.create_view(&Default::default());
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("stencil count"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &ds,
+                depth_ops: None,
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_stencil_reference(value);
+        pass.draw(0..3, 0..1);
+    }
+    ctx.submit("stencil count", [enc.finish()]);
+    let counted = ctx.read_texture(&target, wgpu::TextureAspect::All)?;
+    Ok(counted
+        .bytes
+        .chunks_exact(4)
+        .map(|c| u64::from(u32::from_le_bytes([c[0], c[1], c[2], c[3]])))
+        .sum())
 }
 
 #[cfg(test)]

@@ -103,8 +103,8 @@ pub fn pipeline_requirements_for(
         );
     }
     // Reading the stencil back (voxel pixels in `render --json`, the viewer's overlay)
-    // copies a depth-stencil texture to a buffer; without that capability (GL) the count
-    // is reported as unknown (`count_stencil`), so it is not a need.
+    // copies a depth-stencil texture to a buffer; without that capability (GL) a
+    // stencil-tested draw counts instead (`count_stencil`), so it is not a need.
     req
 }
 
@@ -125,7 +125,7 @@ mod tests {
             assert!(flags.contains(f), "{f:?} missing from {:#?}", req.downlevel);
         }
         // What GL lacks has a fallback: the smoothing copies the depth first, and the
-        // stencil read-back reports no count.
+        // stencil is counted by a stencil-tested draw.
         for f in [
             F::READ_ONLY_DEPTH_STENCIL,
             F::DEPTH_TEXTURE_AND_BUFFER_COPIES,
