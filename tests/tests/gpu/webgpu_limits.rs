@@ -59,23 +59,6 @@ fn draw(ctx: &GpuContext, pipeline: &str, scene: ssbvb_gpu::scene::Scene) -> Vec
         .bytes
 }
 
-/// PSNR in dB of two RGBA8 images over their RGB channels (infinite when equal).
-fn psnr_rgb(a: &[u8], b: &[u8]) -> f64 {
-    assert_eq!(a.len(), b.len());
-    let (mut sum, mut n) = (0.0, 0.0);
-    for (pa, pb) in a.chunks(4).zip(b.chunks(4)) {
-        for c in 0..3 {
-            let d = f64::from(pa[c]) - f64::from(pb[c]);
-            sum += d * d;
-            n += 1.0;
-        }
-    }
-    if sum == 0.0 {
-        return f64::INFINITY;
-    }
-    10.0 * (255.0f64 * 255.0 / (sum / n)).log10()
-}
-
 #[test]
 fn every_pipeline_draws_under_webgpu_default_limits_what_it_draws_under_the_adapters() {
     let (ctx, errors) = minimal_device();
@@ -125,7 +108,7 @@ fn every_pipeline_draws_under_webgpu_default_limits_what_it_draws_under_the_adap
         // Without the optional DEPTH32FLOAT_STENCIL8 the depth-stencil falls back to
         // Depth24PlusStencil8: depth ties between a pipeline's passes may resolve otherwise
         // (the bound: 40 dB). Every other difference is a bug.
-        let psnr = psnr_rgb(&minimal, &full);
+        let psnr = ssbvb_voxel::accuracy::psnr_rgba8(&minimal, &full).unwrap();
         println!("{name}: fits, PSNR {psnr:.1} dB against the adapter-limits frame");
         assert!(psnr >= 40.0, "{name}: {psnr:.1} dB");
     }

@@ -61,7 +61,7 @@ fn webgpu_limits_are_checked_up_front_and_named() {
             // An animated object: its exact GPU voxelization needs f64 shaders, which
             // WebGPU's defaults lack; the raster one differs at the surface (measured
             // 31.2 dB at 48x36 for the twisting bunny).
-            let db = psnr_rgb(&webgpu, &adapter);
+            let db = ssbvb_voxel::accuracy::psnr_rgba8(&webgpu, &adapter).unwrap();
             assert!(db >= 25.0, "{}: {db:.1} dB", scene.display());
         } else {
             assert!(
@@ -111,20 +111,4 @@ fn webgpu_limits_are_checked_up_front_and_named() {
         "{stderr}"
     );
     assert!(!png.exists());
-}
-
-/// PSNR in dB of two RGBA8 images over their RGB channels (infinite when equal).
-fn psnr_rgb(a: &[u8], b: &[u8]) -> f64 {
-    let (mut sum, mut n) = (0.0, 0.0);
-    for (pa, pb) in a.chunks(4).zip(b.chunks(4)) {
-        for c in 0..3 {
-            let d = f64::from(pa[c]) - f64::from(pb[c]);
-            sum += d * d;
-            n += 1.0;
-        }
-    }
-    if sum == 0.0 {
-        return f64::INFINITY;
-    }
-    10.0 * (255.0f64 * 255.0 / (sum / n)).log10()
 }
