@@ -20,9 +20,13 @@ use ssbvb_voxel::reference::{self, ReferenceImage};
 pub fn ctx() -> &'static GpuContext {
     static CTX: OnceLock<GpuContext> = OnceLock::new();
     CTX.get_or_init(|| {
-        // SAFETY: before the binary's first device: no test thread has reached the driver
-        // (they all wait here), and none sets the environment.
-        unsafe { ssbvb_gpu::context::prefer_gles_on_mesa() };
+        // Only for a GL run (`cargo xtask test` runs `core_frames` so): the Vulkan run's
+        // environment stays as the user set it.
+        if std::env::var("WGPU_BACKEND").is_ok_and(|b| b.to_ascii_lowercase().contains("gl")) {
+            // SAFETY: before the binary's first device: no test thread has reached the
+            // driver (they all wait here), and none sets the environment.
+            unsafe { ssbvb_gpu::context::prefer_gles_on_mesa() };
+        }
         let c =
             GpuContext::new_headless(&ContextOptions::default()).unwrap_or_else(|e| panic!("{e}"));
         eprintln!("adapter: {}", c.report());
