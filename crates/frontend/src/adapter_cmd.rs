@@ -126,3 +126,43 @@ pub fn run(args: &AdapterArgs) -> Result<ExitCode> {
     println!("chosen: {}", ctx.report());
     Ok(ExitCode::SUCCESS)
 }
+
+/// The format substitutions the device took, what a device without read-only depth-stencil
+/// attachments or depth-to-buffer copies does instead (GL), and the exact GPU voxelization
+/// of animated objects given up where the device has no f64 shaders (WebGPU's limits, most
+/// mobile and browser adapters): they are voxelized by conservative rasterization instead.
+pub fn gpu_fallbacks(
+    ctx: &ssbvb_gpu::GpuContext,
+    animation: Option<&crate::animation::AnimationReport>,
+) -> Vec<String> {
+    let mut fallbacks = ctx.report().fallbacks.clone();
+    let flags = ctx.adapter.get_downlevel_capabilities().flags;
+    if !flags.contains(ssbvb_gpu::wgpu::DownlevelFlags::READ_ONLY_DEPTH_STENCIL) {
+        fallbacks.push(
+            "the smoothing copies the depth before it (no read-only depth-stencil \
+             attachments)"
+                .into(),
+        );
+    }
+    if !flags.contains(ssbvb_gpu::wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES) {
+        fallbacks.push(
+            "voxel pixels counted by a stencil-tested draw (no depth texture to buffer copies)"
+                .into(),
+        );
+    }
+    let raster = animation
+        .is_some_and(|a| a.method == Some(ssbvb_gpu_build::voxelize::GpuVoxelizeMethod::Raster));
+    if raster
+        && !ctx
+            .device
+            .features()
+            .contains(ssbvb_gpu::wgpu::Features::SHADER_F64)
+    {
+        fallbacks.push(
+            "animated objects voxelized by conservative rasterization, not exactly (the \
+             device has no SHADER_F64)"
+                .into(),
+        );
+    }
+    fallbacks
+}

@@ -11,7 +11,6 @@ use clap::Args;
 use glam::{DAffine3, DVec3};
 use serde::Serialize;
 use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject};
-use ssbvb_gpu_build::voxelize::GpuVoxelizeMethod;
 use ssbvb_passes::Profiling;
 use ssbvb_voxel::camera::Camera;
 
@@ -436,45 +435,6 @@ fn render_reference(
     })
 }
 
-/// The format substitutions the device took, what a device without read-only depth-stencil
-/// attachments or depth-to-buffer copies does instead (GL), and the exact GPU voxelization
-/// of animated objects given up where the device has no f64 shaders (WebGPU's limits, most
-/// mobile and browser adapters): they are voxelized by conservative rasterization instead.
-fn gpu_fallbacks(
-    ctx: &ssbvb_gpu::GpuContext,
-    animation: Option<&crate::animation::AnimationReport>,
-) -> Vec<String> {
-    let mut fallbacks = ctx.report().fallbacks.clone();
-    let flags = ctx.adapter.get_downlevel_capabilities().flags;
-    if !flags.contains(ssbvb_gpu::wgpu::DownlevelFlags::READ_ONLY_DEPTH_STENCIL) {
-        fallbacks.push(
-            "the smoothing copies the depth before it (no read-only depth-stencil \
-             attachments)"
-                .into(),
-        );
-    }
-    if !flags.contains(ssbvb_gpu::wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES) {
-        fallbacks.push(
-            "voxel pixels counted by a stencil-tested draw (no depth texture to buffer copies)"
-                .into(),
-        );
-    }
-    let raster = animation.is_some_and(|a| a.method == Some(GpuVoxelizeMethod::Raster));
-    if raster
-        && !ctx
-            .device
-            .features()
-            .contains(ssbvb_gpu::wgpu::Features::SHADER_F64)
-    {
-        fallbacks.push(
-            "animated objects voxelized by conservative rasterization, not exactly (the \
-             device has no SHADER_F64)"
-                .into(),
-        );
-    }
-    fallbacks
-}
-
 /// What the GPU path renders: the scene and where its pipeline, pages and animation come
 /// from.
 struct GpuInput {
@@ -590,7 +550,7 @@ fn render_gpu(
         adapter: Some(ctx.report().to_string()),
         adapter_is_software: Some(ctx.report().is_software),
         limits: Some(ctx.report().limits),
-        fallbacks: gpu_fallbacks(&ctx, animation.as_ref()),
+        fallbacks: crate::adapter_cmd::gpu_fallbacks(&ctx, animation.as_ref()),
         size: [w, h],
         camera,
         pipeline: Some(pipeline_path.display().to_string()),

@@ -321,6 +321,32 @@ fn sign_not_zero(x: f32) -> f32 {
     if x >= 0.0 { 1.0 } else { -1.0 }
 }
 
+/// A depth-stencil state that only tests the stencil against the reference with
+/// `compare` (depth always passes; nothing is written).
+pub fn stencil_test(
+    format: wgpu::TextureFormat,
+    compare: wgpu::CompareFunction,
+) -> wgpu::DepthStencilState {
+    let face = wgpu::StencilFaceState {
+        compare,
+        fail_op: wgpu::StencilOperation::Keep,
+        depth_fail_op: wgpu::StencilOperation::Keep,
+        pass_op: wgpu::StencilOperation::Keep,
+    };
+    wgpu::DepthStencilState {
+        format,
+        depth_write_enabled: Some(false),
+        depth_compare: Some(wgpu::CompareFunction::Always),
+        stencil: wgpu::StencilState {
+            front: face,
+            back: face,
+            read_mask: 0xff,
+            write_mask: 0,
+        },
+        bias: Default::default(),
+    }
+}
+
 /// Pixels of a depth-stencil texture whose stencil is `value` (read back); `None` when the
 /// texture has no stencil. A device that cannot copy a stencil to a buffer (GL) counts by
 /// drawing ([`count_stencil_by_drawing`]).
@@ -377,28 +403,11 @@ pub fn count_stencil_by_drawing(
             bind_group_layouts: &[],
             immediate_size: 0,
         });
-        let face = wgpu::StencilFaceState {
-            compare: wgpu::CompareFunction::Equal,
-            fail_op: wgpu::StencilOperation::Keep,
-            depth_fail_op: wgpu::StencilOperation::Keep,
-            pass_op: wgpu::StencilOperation::Keep,
-        };
         let targets = [Some(wgpu::TextureFormat::R32Uint.into())];
         let pipeline = render_pipeline(
             d,
             &RenderSpec {
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: texture.format(),
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::Always),
-                    stencil: wgpu::StencilState {
-                        front: face,
-                        back: face,
-                        read_mask: 0xff,
-                        write_mask: 0,
-                    },
-                    bias: Default::default(),
-                }),
+                depth_stencil: Some(stencil_test(texture.format(), wgpu::CompareFunction::Equal)),
                 ..RenderSpec::new("stencil count", &module, &layout, &targets)
             },
         );

@@ -14,7 +14,7 @@ use ssbvb_graph::SmoothParams;
 use crate::runtime::bindings::PassBindings;
 use crate::runtime::registry::{OwnBinding, OwnKind};
 use crate::runtime::recorder::{Recorder, slot_format};
-use crate::kinds::gbuffer::STENCIL_VOXEL;
+use crate::kinds::gbuffer::{STENCIL_VOXEL, stencil_test};
 use crate::runtime::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
 use crate::runtime::registry::{KindNeeds, PassImpl, PassInit};
 use crate::error::PassError;
@@ -110,29 +110,12 @@ impl PassImpl for Smooth {
         )];
         let constants = [("MAX_I", max_i as f64), ("MIN_DIST", min_dist as f64)];
         let make = |entry: &str, compare: wgpu::CompareFunction| {
-            let face = wgpu::StencilFaceState {
-                compare,
-                fail_op: wgpu::StencilOperation::Keep,
-                depth_fail_op: wgpu::StencilOperation::Keep,
-                pass_op: wgpu::StencilOperation::Keep,
-            };
             render_pipeline(
                 d,
                 &RenderSpec {
                     fs_entry: entry,
                     constants: &constants,
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: ds_format,
-                        depth_write_enabled: Some(false),
-                        depth_compare: Some(wgpu::CompareFunction::Always),
-                        stencil: wgpu::StencilState {
-                            front: face,
-                            back: face,
-                            read_mask: 0xff,
-                            write_mask: 0,
-                        },
-                        bias: Default::default(),
-                    }),
+                    depth_stencil: Some(stencil_test(ds_format, compare)),
                     ..RenderSpec::new(entry, &module, &layout, &targets)
                 },
             )
