@@ -100,10 +100,11 @@ fn a_still_camera_converges_toward_the_supersampled_reference() {
         "error against 16 samples: plain {e_plain:.5}, first AA frame {e_first:.5}, 16 AA frames {e_aa:.5}"
     );
     // One jittered frame has no history: every pixel in or out. Sixteen cover the
-    // silhouette in part, and their error is well below the one-sample frame's.
+    // silhouette in part, and their error is well below the one-sample frame's (measured:
+    // 0.41 of it with the pipeline's ray-box billboards, 0.45 with flat ones).
     assert_eq!(partial(&first), 0);
     assert!(partial(&converged) > 50, "{}", partial(&converged));
-    assert!(e_aa < 0.7 * e_plain, "{e_aa} against {e_plain}");
+    assert!(e_aa < 0.5 * e_plain, "{e_aa} against {e_plain}");
 }
 
 #[test]
@@ -162,7 +163,8 @@ fn a_moving_camera_stays_nearer_the_supersampled_reference_than_one_sample() {
         mean_abs_error(&over_black(&out), &truth),
     );
     eprintln!("error against 16 samples after 8 moving frames: plain {e_plain:.5}, AA {e_aa:.5}");
-    // Measured: 0.93 of the one-sample frame's error; 1.02 with a bilinear history, 1.31
-    // without the moving history's larger current weight (`motion_blend`).
+    // Measured: 0.92 of the one-sample frame's error (0.93 with flat billboards); 1.02
+    // with a bilinear history, 1.31 without the moving history's larger current weight
+    // (`motion_blend`).
     assert!(e_aa < 0.97 * e_plain, "{e_aa} against {e_plain}");
 }

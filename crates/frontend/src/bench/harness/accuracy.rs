@@ -234,7 +234,7 @@ fn composite_error(
         _ => None,
     };
     let flip_mean = match s.supersampled {
-        Some(sup) => Some(flip_over_black(s.size, hits, &gpu, sup)?),
+        Some(sup) => Some(flip_over_black(s.size, &gpu, sup)?),
         None => None,
     };
     Ok((
@@ -244,22 +244,12 @@ fn composite_error(
     ))
 }
 
-/// Mean FLIP of the GPU composite (its covered pixels, black elsewhere) against the
-/// supersampled reference composited over black.
-fn flip_over_black(
-    size: (u32, u32),
-    hits: &[Option<GpuHit>],
-    gpu: &[u8],
-    supersampled: &ReferenceImage,
-) -> Result<f64> {
-    let test: Vec<u8> = hits
-        .iter()
-        .zip(gpu.chunks_exact(4))
-        .flat_map(|(h, p)| match h {
-            Some(_) => [p[0], p[1], p[2]],
-            None => [0; 3],
-        })
-        .collect();
+/// Mean FLIP of the GPU composite against the supersampled reference, both composited over
+/// black by their alpha: a temporal pipeline's silhouette pixels are covered in part, as
+/// the reference's are (masking by the last frame's G-buffer hits, as before, made them
+/// either opaque or black and hid its anti-aliasing).
+fn flip_over_black(size: (u32, u32), gpu: &[u8], supersampled: &ReferenceImage) -> Result<f64> {
+    let test = crate::flip::over_black(gpu);
     let reference = crate::flip::over_black(&supersampled.to_rgba8());
     crate::flip::flip_rgb8(&reference, &test, size)
 }

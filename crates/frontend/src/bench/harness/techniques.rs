@@ -94,7 +94,8 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         max_level: 16,
     },
     // The default pipeline with temporal anti-aliasing (jittered frames blended into the
-    // reprojected history): its FLIP against the supersampled reference is the point.
+    // reprojected history) and ray-box billboards: its FLIP against the supersampled
+    // reference is the point.
     Technique {
         name: "ssbvb-aa",
         pipeline: "ssbvb_aa.ron",
