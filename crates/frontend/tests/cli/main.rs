@@ -252,13 +252,15 @@ fn render_json_and_bench_quick() {
         if r[col("technique")] == "ssbvb-aa" {
             // Temporal anti-aliasing: its G-buffer is a jittered frame's, up to half a
             // pixel off the reference's rays (measured IoU 0.9914+, PSNR 23.4+ against the
-            // one-sample reference); against the 16-sample one it is nearer than the
-            // default pipeline it anti-aliases (measured 0.93x and 0.90x at levels 5, 6).
-            assert!(iou >= 0.98 && (0.45..=0.6).contains(&depth), "{r:?}");
+            // one-sample reference), and its billboards are ray-box (depth on the voxel's
+            // face, not its centre: median 0.016 and 0.036 voxel at levels 5, 6); against the
+            // 16-sample reference it is nearer than the default pipeline it anti-aliases
+            // (measured FLIP 0.36x and 0.40x of it at levels 5, 6; the target 0.6x).
+            assert!(iou >= 0.98 && depth <= 0.1, "{r:?}");
             assert!(psnr >= 21.0 && ssim >= 0.92, "{r:?}");
             let unique = flip_of("ssbvb-unique", r[col("level")]);
             assert!(
-                flip < 0.97 * unique,
+                flip < 0.6 * unique,
                 "{r:?}: FLIP {flip} against ssbvb-unique's {unique}"
             );
         } else if matches!(
