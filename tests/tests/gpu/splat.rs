@@ -11,6 +11,63 @@ use ssbvb_voxel::camera::Camera;
 const DEFAULT: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
 const SPLAT: &str = include_str!("../../../assets/pipelines/ssbvb_splat.ron");
 
+/// Voxel pixels (stencil 1 in both frames' `sa`, `sb`) whose camera-relative positions
+/// (`gbuffer_position` xyz) differ by more than 1e-4 of their length: the splat computes a
+/// Flat fragment's point on the quad's plane where the rasterizer interpolates it.
+fn differing_positions(a: &Frame, b: &Frame, sa: &[u8], sb: &[u8]) -> usize {
+    let floats =
+        |f: &Frame| -> Vec<f32> { bytemuck::cast_slice(&f.read("gbuffer_position")).to_vec() };
+    let (x, y) = (floats(a), floats(b));
+    x.chunks(4)
+        .zip(y.chunks(4))
+        .zip(sa.iter().zip(sb))
+        .filter(|(_, (p, q))| **p == 1 && **q == 1)
+        .filter(|((p, q), _)| {
+            let d: f64 = (0..3).map(|k| (p[k] - q[k]) as f64).map(|v| v * v).sum();
+            let n: f64 = (0..3).map(|k| p[k] as f64).map(|v| v * v).sum();
+            d > 1e-8 * n
+        })
+        .count()
+}
+
+/// Voxel pixels (stencil 1 in both `sa`, `sb`) whose depths (`depth_stencil`) differ by
+/// more than `rel` of the larger: the splat computes a Flat fragment's depth on the quad's
+/// plane where the rasterizer interpolates the corners' depths.
+fn differing_depths(a: &Frame, b: &Frame, sa: &[u8], sb: &[u8], rel: f32) -> usize {
+    let floats =
+        |f: &Frame| -> Vec<f32> { bytemuck::cast_slice(&f.read("depth_stencil")).to_vec() };
+    let (x, y) = (floats(a), floats(b));
+    assert_eq!(x.len(), sa.len());
+    x.iter()
+        .zip(&y)
+        .zip(sa.iter().zip(sb))
+        .filter(|(_, (p, q))| **p == 1 && **q == 1)
+        .filter(|((p, q), _)| (*p - *q).abs() > rel * p.abs().max(q.abs()))
+        .count()
+}
+
+/// Two cameras inside the circumscribed sphere of the bunny's rightmost voxel at the
+/// scene's level (just outside its box, on its +x side), turned so that the voxel fills
+/// the left part of the image, then the right part: its billboard is a near-field quad
+/// (the whole screen, each pixel by ray–box), whose pixel range must reach both edges.
+fn near_field_cameras(scene: &Scene) -> [Camera; 2] {
+    let obj = &scene.objects[0];
+    let ssbvb_gpu::scene::LodPolicy::Fixed(level) = obj.lod else {
+        panic!("a fixed level")
+    };
+    let cells = &obj.asset.lods[level as usize].point_cloud.voxels;
+    let cell = cells.iter().map(|v| v.cell()).max_by_key(|c| c[0]).unwrap();
+    let size = 2.0 / (1u64 << level) as f64;
+    let centre = DVec3::from(cell.map(|c| -1.0 + (c as f64 + 0.5) * size));
+    // 0.7 half-sizes from the face: inside the sphere (radius 0.87 of a size).
+    let eye = centre + DVec3::new(0.5 * size + 0.2 * size, 0.0, 0.0);
+    let toward = |yaw_deg: f64| {
+        let d = glam::DQuat::from_rotation_y(yaw_deg.to_radians()) * DVec3::NEG_X;
+        Camera::new(eye, eye + d)
+    };
+    [toward(-60.0), toward(60.0)]
+}
+
 /// Pixels whose bytes differ between two frames' resource `name`.
 fn differing(a: &Frame, b: &Frame, name: &str, size: (u32, u32)) -> usize {
     let (x, y) = (a.read(name), b.read(name));
@@ -42,7 +99,8 @@ fn the_splat_draws_the_rasterized_gbuffer() {
         far: f64::INFINITY,
         ..Camera::new(DVec3::new(309426.0, 206284.0, 928279.0), DVec3::ZERO)
     };
-    let views: [(&str, &Scene, Camera); 4] = [
+    let [near_left, near_right] = near_field_cameras(&scene);
+    let views: [(&str, &Scene, Camera); 6] = [
         (
             "mid",
             &scene,
@@ -59,6 +117,8 @@ fn the_splat_draws_the_rasterized_gbuffer() {
             Camera::new(DVec3::new(0.3, 0.5, 2.8), DVec3::new(0.2, 0.0, 0.0)),
         ),
         ("far", &scene, far),
+        ("near left", &scene, near_left),
+        ("near right", &scene, near_right),
     ];
     for mode in ["Flat", "RayBox"] {
         let raster_src =
@@ -88,9 +148,11 @@ fn the_splat_draws_the_rasterized_gbuffer() {
             let normals = differing(&a, &b, "gbuffer_normal", size);
             let albedo = differing(&a, &b, "gbuffer_albedo", size);
             let faces = differing(&a, &b, "gbuffer_geometric_normal", size);
+            let positions = differing_positions(&a, &b, &sa, &sb);
+            let depths = differing_depths(&a, &b, &sa, &sb, 1e-5);
             eprintln!(
                 "{mode} {name}: {voxels} voxel px; differing stencil {stencil_diff}, normal \
-                 {normals}, albedo {albedo}"
+                 {normals}, albedo {albedo}, position {positions}, depth {depths}"
             );
             assert!(
                 voxels > 500 || (mode, *name) == ("RayBox", "far"),
@@ -119,11 +181,17 @@ fn the_splat_draws_the_rasterized_gbuffer() {
                 faces <= 8,
                 "{mode} {name}: {faces} geometric normal px differ"
             );
+            assert!(
+                positions <= 8,
+                "{mode} {name}: {positions} position px differ"
+            );
+            assert!(depths <= 8, "{mode} {name}: {depths} depth px differ");
             // The plane shows around the bunny in both (the splat's resolve is depth-tested
             // against it, and does not draw over it).
             let plane = |s: &[u8]| s.iter().filter(|&&v| v == 2).count();
             assert!(
-                plane(&sa) > 100 || matches!(*name, "touching" | "far"),
+                plane(&sa) > 100
+                    || matches!(*name, "touching" | "far" | "near left" | "near right"),
                 "{mode} {name}"
             );
         }

@@ -102,6 +102,7 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
     (
         "billboards.wgsl",
         &[
+            "splat::",
             "billboards::",
             "billboard_harness::",
             "billboard_footprint::",
