@@ -93,10 +93,10 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
     (
         "billboard_quad.inc.wgsl",
         &[
+            "splat::",
             "billboards::",
             "billboard_harness::",
             "billboard_footprint::",
-            "splat::",
         ],
     ),
     (
