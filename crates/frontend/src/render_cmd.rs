@@ -56,9 +56,9 @@ pub struct RenderArgs {
     /// Render with the exact CPU reference ray caster instead of the GPU.
     #[arg(long)]
     pub reference: bool,
-    /// Samples per pixel of `--reference`: a square (1, 4, 9, 16, … 256), one jittered ray
-    /// in each of k × k strata, box-filtered (the ground truth of an anti-aliased frame); 1
-    /// is the pixel centre.
+    /// Samples per pixel of `--reference`, 1 to 1024: one jittered ray in each stratum of
+    /// the most nearly square grid (16: 4 × 4; 8: 4 × 2), box-filtered (the ground truth of
+    /// an anti-aliased frame); 1 is the pixel centre.
     #[arg(long, default_value_t = 1, value_parser = parse_samples)]
     pub samples: u32,
     /// Output PNG.
@@ -107,7 +107,7 @@ pub struct RenderArgs {
     pub limits: crate::adapter_cmd::LimitsArg,
 }
 
-/// Parses a sample count of `--samples` (a square from 1 to 256).
+/// Parses a sample count of `--samples` (1 to 1024).
 pub(crate) fn parse_samples(s: &str) -> Result<u32, String> {
     let n: u32 = s
         .trim()

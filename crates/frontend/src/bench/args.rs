@@ -97,7 +97,7 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',', value_name = "MIB")]
     pub gpu_budget: Option<Vec<u64>>,
     /// Samples per pixel of the supersampled reference that `flip_mean` is measured
-    /// against (a square, 1 to 256).
+    /// against (1 to 1024).
     #[arg(long, default_value_t = 16, value_parser = crate::render_cmd::parse_samples)]
     pub flip_samples: u32,
     /// Fault injection for tests: `device-lost@ROW` destroys the device before the main

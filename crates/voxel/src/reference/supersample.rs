@@ -1,11 +1,13 @@
 //! The supersampled reference: the ground truth of an anti-aliased frame. Each pixel is
-//! split into `k × k` equal strata with one ray in each, jittered inside its stratum, and
-//! the shaded samples are averaged (a box filter over the pixel); misses count as
+//! split into `cols × rows` equal strata with one ray in each, jittered inside its stratum,
+//! and the shaded samples are averaged (a box filter over the pixel); misses count as
 //! transparent black, so alpha is the pixel's coverage and the colour is premultiplied by
 //! it. Stratified rather than a regular grid: a regular grid of samples aliases into moiré
-//! on the regular voxel lattice it is meant to resolve. The jitter is a hash of the pixel
-//! and the stratum, so a render is reproducible. One sample (`k = 1`) is the pixel centre:
-//! the image of [`render`](super::render), bit for bit.
+//! on the regular voxel lattice it is meant to resolve. N samples take the most nearly
+//! square factorization of N (16: 4 × 4, 8: 4 × 2, a prime: N × 1 strips, still one
+//! uniform sample per stratum, so unbiased). The jitter is a hash of the pixel and the
+//! sample, so a render is reproducible. One sample is the pixel centre: the image of
+//! [`render`](super::render), bit for bit.
 
 use rayon::prelude::*;
 use thiserror::Error;
@@ -14,50 +16,62 @@ use super::{Instance, PreparedScene, ReferenceImage, shade_with, trace_world};
 use crate::camera::Camera;
 use crate::shading::Light;
 
-/// Most samples per pixel a [`SampleGrid`] takes (16 × 16).
-pub const MAX_SAMPLES: u32 = 256;
+/// Most samples per pixel a [`SampleGrid`] takes (32 × 32).
+pub const MAX_SAMPLES: u32 = 1024;
 
-/// A sample count that is not a square of 1 to 16.
+/// A sample count outside 1 to [`MAX_SAMPLES`].
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
-#[error(
-    "samples per pixel must be a square number from 1 to {MAX_SAMPLES} (1, 4, 9, 16, …: \
-     k × k strata), got {0}"
-)]
+#[error("samples per pixel must be from 1 to {MAX_SAMPLES}, got {0}")]
 pub struct SampleCountError(pub u32);
 
-/// `k × k` strata per pixel, one sample in each.
+/// `cols × rows` strata per pixel, one sample in each.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SampleGrid {
-    k: u32,
+    cols: u32,
+    rows: u32,
 }
 
 impl SampleGrid {
     /// One sample: the pixel centre.
-    pub const CENTRE: SampleGrid = SampleGrid { k: 1 };
+    pub const CENTRE: SampleGrid = SampleGrid { cols: 1, rows: 1 };
 
-    /// The grid of `samples` strata (a square from 1 to [`MAX_SAMPLES`]).
+    /// The grid of `samples` strata (1 to [`MAX_SAMPLES`]): `rows` the largest divisor of
+    /// `samples` not above its square root, `cols` the rest.
     pub fn from_count(samples: u32) -> Result<Self, SampleCountError> {
-        let k = (1..=16).find(|k| k * k == samples);
-        k.map(|k| SampleGrid { k }).ok_or(SampleCountError(samples))
+        if !(1..=MAX_SAMPLES).contains(&samples) {
+            return Err(SampleCountError(samples));
+        }
+        let rows = (1..=samples.isqrt())
+            .rev()
+            .find(|r| samples % r == 0)
+            .unwrap_or(1);
+        Ok(SampleGrid {
+            cols: samples / rows,
+            rows,
+        })
     }
 
-    /// Samples per pixel (`k²`).
+    /// Samples per pixel (`cols × rows`).
     pub fn count(self) -> u32 {
-        self.k * self.k
+        self.cols * self.rows
+    }
+
+    /// Strata across and down a pixel.
+    pub fn strata(self) -> (u32, u32) {
+        (self.cols, self.rows)
     }
 
     /// The position, in pixels from the image's top-left corner, of sample `i` of pixel
-    /// `(px, py)`: inside stratum `(i mod k, i div k)`; the centre when `k = 1`.
+    /// `(px, py)`: inside stratum `(i mod cols, i div cols)`; the centre for one sample.
     pub fn position(self, px: u32, py: u32, i: u32) -> (f64, f64) {
-        if self.k == 1 {
+        if self.count() == 1 {
             return (px as f64 + 0.5, py as f64 + 0.5);
         }
-        let (sx, sy) = (i % self.k, i / self.k);
+        let (sx, sy) = (i % self.cols, i / self.cols);
         let (jx, jy) = jitter(px, py, i);
-        let k = self.k as f64;
         (
-            px as f64 + (sx as f64 + jx) / k,
-            py as f64 + (sy as f64 + jy) / k,
+            px as f64 + (sx as f64 + jx) / self.cols as f64,
+            py as f64 + (sy as f64 + jy) / self.rows as f64,
         )
     }
 }

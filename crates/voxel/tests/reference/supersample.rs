@@ -162,15 +162,50 @@ fn samples_lie_one_in_each_stratum_jittered_and_reproducibly() {
 }
 
 #[test]
-fn sample_counts_are_squares_up_to_256() {
-    for (n, k) in [(1, 1), (4, 2), (9, 3), (16, 4), (256, 16)] {
-        assert_eq!(SampleGrid::from_count(n).unwrap().count(), k * k);
+fn sample_counts_run_from_1_to_1024_on_the_most_nearly_square_grid() {
+    for (n, strata) in [
+        (1, (1, 1)),
+        (4, (2, 2)),
+        (8, (4, 2)),
+        (12, (4, 3)),
+        (16, (4, 4)),
+        (7, (7, 1)),
+        (256, (16, 16)),
+        (1024, (32, 32)),
+    ] {
+        let g = SampleGrid::from_count(n).unwrap();
+        assert_eq!((g.count(), g.strata()), (n, strata));
     }
-    for n in [0, 2, 8, 15, 257, 289, u32::MAX] {
+    for n in [0, 1025, u32::MAX] {
         let e = SampleGrid::from_count(n).unwrap_err().to_string();
-        assert!(e.contains(&n.to_string()) && e.contains("square"), "{e}");
+        assert!(
+            e.contains(&n.to_string()) && e.contains("from 1 to 1024"),
+            "{e}"
+        );
     }
-    assert_eq!(MAX_SAMPLES, 256);
+    assert_eq!(MAX_SAMPLES, 1024);
+}
+
+#[test]
+fn every_stratum_of_a_pixel_holds_exactly_one_sample() {
+    for n in [2, 6, 8, 9, 13] {
+        let g = SampleGrid::from_count(n).unwrap();
+        let (cols, rows) = g.strata();
+        let mut seen = vec![0; n as usize];
+        for i in 0..n {
+            let (x, y) = g.position(3, 5, i);
+            assert!(
+                (3.0..4.0).contains(&x) && (5.0..6.0).contains(&y),
+                "{n}: {x} {y}"
+            );
+            let (sx, sy) = (
+                ((x - 3.0) * cols as f64) as u32,
+                ((y - 5.0) * rows as f64) as u32,
+            );
+            seen[(sy * cols + sx) as usize] += 1;
+        }
+        assert!(seen.iter().all(|&c| c == 1), "{n}: {seen:?}");
+    }
 }
 
 #[test]
