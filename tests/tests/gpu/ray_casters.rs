@@ -91,6 +91,15 @@ fn several_instances_of_one_object_match_the_reference() {
     check("three instances", &scene, &cam, 2000);
 }
 
+/// Fifteen overlapping cubes (`scale::OVERLAPPING_CUBES`): the casters have no prepass, so
+/// the instance walk alone finds the nearest cube, and a walk that pruned it by a stale
+/// stack time would show a farther one at about a tenth of the pixels.
+#[test]
+fn overlapping_instance_boxes_match_the_reference() {
+    let (scene, cam) = crate::scale::overlapping_cubes();
+    check_at("overlapping cubes", &scene, &cam, 5000, 2, false);
+}
+
 #[test]
 fn a_camera_inside_the_grid_matches_the_reference() {
     let scene =

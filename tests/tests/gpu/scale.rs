@@ -273,3 +273,64 @@ fn the_far_narrow_view_of_two_bunnies_matches_the_reference() {
         assert!(r.coverage_iou >= bound, "{name}: {r:?}");
     }
 }
+
+/// Fifteen solid cubes (centre, half size) whose boxes overlap in depth, seen from the
+/// origin along −z. Found by a CPU search over random scenes for one where the instance
+/// walk, with a child's stack time left stale (the last time stored in that stack slot),
+/// prunes the subtree holding the nearest cube: 449 of this view's 4096 pixel rays then
+/// keep a farther cube. Regular grids never produce it (no test caught that mutant).
+const OVERLAPPING_CUBES: [([f64; 3], f64); 15] = [
+    ([-0.03, -2.12, -10.86], 1.52),
+    ([-1.01, -2.61, -4.85], 1.23),
+    ([1.84, 0.03, -10.27], 0.50),
+    ([0.64, 3.34, -13.68], 1.26),
+    ([1.01, 1.51, -9.65], 1.69),
+    ([-1.42, -1.68, -4.50], 1.11),
+    ([2.49, 2.13, -4.35], 0.92),
+    ([-0.56, -0.70, -9.97], 1.47),
+    ([-2.04, 2.93, -7.20], 1.24),
+    ([1.82, -3.07, -10.50], 0.90),
+    ([-1.25, 1.28, -5.62], 1.72),
+    ([-3.24, 2.95, -3.46], 1.77),
+    ([-0.80, 0.83, -3.36], 1.23),
+    ([1.72, 1.40, -10.35], 1.78),
+    ([-0.63, 0.43, -5.75], 1.50),
+];
+
+/// [`OVERLAPPING_CUBES`] as instances of a solid block at level 2, and the camera at the
+/// origin looking along −z.
+pub(crate) fn overlapping_cubes() -> (Scene, Camera) {
+    let level = 2;
+    let n = 1u32 << level;
+    let cells: Vec<[u32; 3]> = (0..n * n * n)
+        .map(|i| [i % n, i / n % n, i / (n * n)])
+        .collect();
+    let asset = crate::empty_space::synthetic_asset(level, &cells);
+    let instances = OVERLAPPING_CUBES
+        .iter()
+        .map(|&(c, h)| {
+            DAffine3::from_scale_rotation_translation(DVec3::splat(h), DQuat::IDENTITY, c.into())
+        })
+        .collect();
+    let scene = Scene {
+        objects: vec![VoxelObject {
+            asset,
+            instances,
+            lod: LodPolicy::Fixed(level),
+        }],
+        ..Default::default()
+    };
+    (scene, Camera::new(DVec3::ZERO, DVec3::new(0.0, 0.0, -1.0)))
+}
+
+/// Overlapping instance boxes: every pixel shows the nearest cube's face, as the reference.
+/// (The filter starts its walk from the prepass's nearest proxy, which is the nearest cube
+/// here, so it does not depend on the walk's pruning; `ray_casters::overlapping_…` does.)
+#[test]
+fn overlapping_instance_boxes_keep_the_nearest_hit() {
+    let (scene, camera) = overlapping_cubes();
+    let r = check_against_reference("overlapping_cubes", &scene, &camera, (64, 64));
+    assert!(r.covered_reference > 2000, "{r:?}");
+    assert!(r.same_voxel_rate >= 0.999, "{r:?}");
+    assert!(r.depth_error_voxels.max <= 1e-3, "{r:?}");
+}
