@@ -43,7 +43,7 @@ impl SampleGrid {
         }
         let rows = (1..=samples.isqrt())
             .rev()
-            .find(|r| samples % r == 0)
+            .find(|r| samples.is_multiple_of(*r))
             .unwrap_or(1);
         Ok(SampleGrid {
             cols: samples / rows,
