@@ -15,9 +15,10 @@ const SPLAT: &str = include_str!("../../../assets/pipelines/ssbvb_splat.ron");
 /// (`gbuffer_position` xyz) differ by more than 1e-4 of their length: the splat computes a
 /// Flat fragment's point on the quad's plane where the rasterizer interpolates it.
 fn differing_positions(a: &Frame, b: &Frame, sa: &[u8], sb: &[u8]) -> usize {
-    let floats =
-        |f: &Frame| -> Vec<f32> { bytemuck::cast_slice(&f.read("gbuffer_position")).to_vec() };
-    let (x, y) = (floats(a), floats(b));
+    let (x, y) = (
+        a.read_f32("gbuffer_position"),
+        b.read_f32("gbuffer_position"),
+    );
     x.chunks(4)
         .zip(y.chunks(4))
         .zip(sa.iter().zip(sb))
@@ -34,9 +35,7 @@ fn differing_positions(a: &Frame, b: &Frame, sa: &[u8], sb: &[u8]) -> usize {
 /// more than `rel` of the larger: the splat computes a Flat fragment's depth on the quad's
 /// plane where the rasterizer interpolates the corners' depths.
 fn differing_depths(a: &Frame, b: &Frame, sa: &[u8], sb: &[u8], rel: f32) -> usize {
-    let floats =
-        |f: &Frame| -> Vec<f32> { bytemuck::cast_slice(&f.read("depth_stencil")).to_vec() };
-    let (x, y) = (floats(a), floats(b));
+    let (x, y) = (a.read_f32("depth_stencil"), b.read_f32("depth_stencil"));
     assert_eq!(x.len(), sa.len());
     x.iter()
         .zip(&y)
@@ -82,7 +81,7 @@ fn near_voxel_pixels(
     cell: [u32; 3],
 ) -> (usize, usize) {
     let r = ssbvb_tests::reference_of(scene, camera, size);
-    let pos: Vec<f32> = bytemuck::cast_slice(&f.read("gbuffer_position")).to_vec();
+    let pos = f.read_f32("gbuffer_position");
     let mut total = 0;
     let mut wrong = 0;
     for (i, h) in r.hits.iter().enumerate() {
