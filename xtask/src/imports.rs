@@ -14,8 +14,18 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 
 /// The crates whose files may not import each other in a circle (`cargo xtask test` fails
-/// otherwise).
-pub const NO_CIRCLES: &[&str] = &["crates/passes", "crates/gpu", "crates/gpu-build"];
+/// otherwise): every crate of the workspace.
+pub const NO_CIRCLES: &[&str] = &[
+    "crates/frontend",
+    "crates/gpu",
+    "crates/gpu-build",
+    "crates/graph",
+    "crates/passes",
+    "crates/scene-file",
+    "crates/voxel",
+    "tests",
+    "xtask",
+];
 
 /// The import graph of a set of crates: files relative to the root, arrows between them.
 #[derive(Debug, Default)]
@@ -523,7 +533,11 @@ pub fn run(root: &Path, args: &[String]) -> Result<bool> {
         for circle in &s.circles {
             println!("    circle: {}", circle.join(" "));
         }
-        if NO_CIRCLES.contains(&c.as_str()) && !s.circles.is_empty() {
+        if !NO_CIRCLES.contains(&c.as_str()) {
+            eprintln!("xtask: crate {c} is not in imports::NO_CIRCLES; add it there");
+            ok = false;
+        }
+        if !s.circles.is_empty() {
             eprintln!("xtask: files of {c} import each other in a circle (see above)");
             ok = false;
         }
@@ -635,7 +649,7 @@ mod tests {
         let g = ImportGraph::of_workspace(root).unwrap();
         for c in NO_CIRCLES {
             let s = g.summary(&format!("{c}/src/"));
-            assert!(s.files > 3, "{c}: {} files read", s.files);
+            assert!(s.files >= 1, "{c}: no files read");
             assert!(s.circles.is_empty(), "{c}: {:?}", s.circles);
         }
     }

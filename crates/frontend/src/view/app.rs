@@ -2,73 +2,33 @@
 //! device on `resumed`, routes events to egui and the camera, and per frame: hot reload,
 //! render, overlay, blit + egui onto the surface, screenshots, and the `--frames` limit.
 
-use std::collections::BTreeMap;
-use std::path::PathBuf;
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::Result;
-use ssbvb_gpu::scene::{GpuScene, Scene};
-use ssbvb_graph::{PassKind, PipelineWatcher, ReloadOutcome, ResolvedPipeline};
+use ssbvb_gpu::scene::GpuScene;
+use ssbvb_graph::{PipelineWatcher, ReloadOutcome, ResolvedPipeline};
 use ssbvb_passes::Renderer;
-use ssbvb_voxel::camera::Camera;
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, WindowEvent};
 use winit::event_loop::ActiveEventLoop;
 use winit::keyboard::{KeyCode, PhysicalKey};
-use winit::window::{Window, WindowId};
+use winit::window::WindowId;
 
-use super::blit::Blit;
 use super::camera_control::CameraRig;
 use super::capture;
-use super::input::CameraInput;
-use super::overlay::{self, Action, ObjectLod, OverlayState, OverlayView};
+use super::overlay::{self, Action, ObjectLod, OverlayView};
 use super::stats::Stats;
-use super::surface::WindowGpu;
-use crate::faults::Recoveries;
 
 mod open;
 mod present;
 mod recover;
+mod state;
+
+use state::{Fault, Flow, Viewer};
+pub use state::{Loaded, Options};
 
 /// How often the pipeline file is checked for changes.
 const RELOAD_POLL: Duration = Duration::from_millis(300);
-
-/// Options from the command line.
-pub struct Options {
-    /// Window title.
-    pub title: String,
-    /// Initial window size in pixels.
-    pub size: (u32, u32),
-    /// Exit after this many presented frames.
-    pub frames: Option<u64>,
-    /// Write a PNG of the last frame here.
-    pub screenshot: Option<PathBuf>,
-    /// Pipeline files for the technique switch.
-    pub techniques: Vec<PathBuf>,
-    /// With --frames: write process and device memory at the start and end here.
-    pub memory_report: Option<PathBuf>,
-    /// Automation: window pixels the brush paints at, after the first frame.
-    pub paint: Vec<(u32, u32)>,
-    /// Faults injected before given frames (`--inject-fault`, tests).
-    pub faults: Vec<crate::faults::Fault>,
-}
-
-/// What is loaded before the window exists.
-pub struct Loaded {
-    /// The scene (uploaded once the device exists).
-    pub scene: Scene,
-    /// The scene's camera.
-    pub camera: Camera,
-    /// The pipeline file, resolved once.
-    pub watcher: PipelineWatcher,
-    /// Under a GPU budget: how the scene streams (the budget changes live).
-    pub streaming: Option<ssbvb_gpu::scene::StreamingOptions>,
-    /// Animated objects, re-voxelized on the GPU every frame at the time since start.
-    pub animated: Vec<ssbvb_gpu_build::animated::AnimatedMesh>,
-    /// With --brush: the editable objects (uploaded with room to change).
-    pub brush: Option<super::brush::Brush>,
-}
 
 /// The application: waiting for `resumed`, then running, or failed.
 pub struct App {
@@ -128,7 +88,7 @@ impl ApplicationHandler for App {
         let outcome = match viewer.event(&self.options, &event) {
             // What fails on a lost device is the loss.
             Err(e) => match viewer.gpu.ctx.lost() {
-                Some(reason) => Ok(Flow::Recover(recover::Fault::Lost(reason))),
+                Some(reason) => Ok(Flow::Recover(Fault::Lost(reason))),
                 None => Err(e),
             },
             ok => ok,
@@ -165,67 +125,6 @@ impl ApplicationHandler for App {
     fn exiting(&mut self, _event_loop: &ActiveEventLoop) {
         self.viewer = None;
     }
-}
-
-/// Whether the loop goes on.
-enum Flow {
-    Continue,
-    Exit,
-    /// The GPU side must be made again (`recover`).
-    Recover(recover::Fault),
-}
-
-/// Everything that exists once the window is open.
-struct Viewer {
-    window: Arc<Window>,
-    /// The event loop's display connection (a new device's surface needs it).
-    display: winit::event_loop::OwnedDisplayHandle,
-    gpu: WindowGpu,
-    blit: Blit,
-    egui_ctx: egui::Context,
-    egui_state: egui_winit::State,
-    egui_renderer: egui_wgpu::Renderer,
-    scene: GpuScene,
-    renderer: Renderer,
-    /// Animated objects and what updates them (none without animated objects).
-    animated: Vec<ssbvb_gpu_build::animated::AnimatedMesh>,
-    animator: Option<ssbvb_gpu_build::animated::Animator>,
-    /// With --brush: Ctrl + left click edits the voxel under the cursor.
-    brush: Option<super::brush::Brush>,
-    /// The animation clock's start.
-    started: Instant,
-    watcher: PipelineWatcher,
-    /// Under a GPU budget: how the scene streams.
-    streaming: Option<ssbvb_gpu::scene::StreamingOptions>,
-    /// Knob edits by pass name, applied over the file's pipeline.
-    knob_edits: BTreeMap<String, PassKind>,
-    rig: CameraRig,
-    initial_camera: Camera,
-    input: CameraInput,
-    /// Last cursor position in physical pixels.
-    cursor: Option<(f64, f64)>,
-    stats: Stats,
-    overlay: OverlayState,
-    error: Option<String>,
-    status: Option<String>,
-    frame: u64,
-    /// Frame number of the last renderer rebuild (timings are sampled from there).
-    sample_base: u64,
-    last_frame: Instant,
-    last_poll: Instant,
-    needs_rebuild: bool,
-    screenshot_next: Option<PathBuf>,
-    screenshot_written: bool,
-    /// Pipeline reloads that succeeded and that failed (the last good one kept).
-    reloads: (u64, u64),
-    /// Memory after the warm-up, for `--memory-report`.
-    memory_samples: Vec<crate::soak::Sample>,
-    /// What the last GPU fault did (kept on screen).
-    notice: Option<String>,
-    /// Devices recreated so far, and the rule on repeated losses.
-    recoveries: Recoveries,
-    /// The frame whose injected faults were applied (each fires once).
-    faults_injected_at: Option<u64>,
 }
 
 impl Viewer {

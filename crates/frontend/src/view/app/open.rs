@@ -19,7 +19,7 @@ use super::super::input::CameraInput;
 use super::super::overlay::OverlayState;
 use super::super::stats::Stats;
 use super::super::surface::WindowGpu;
-use super::{Loaded, Options, Viewer};
+use super::state::{Loaded, Options, Viewer};
 use crate::faults::Recoveries;
 
 /// Everything on the device.

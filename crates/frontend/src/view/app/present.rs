@@ -8,7 +8,7 @@ use anyhow::{Result, anyhow};
 use ssbvb_gpu::wgpu;
 
 use super::super::capture;
-use super::{Flow, Options, Viewer};
+use super::state::{Flow, Options, Viewer};
 
 impl Viewer {
     /// Draws the frame and the overlay onto the surface (and the screenshot target).

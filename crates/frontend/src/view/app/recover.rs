@@ -10,18 +10,10 @@
 use anyhow::Result;
 
 use super::open::GpuParts;
-use super::{Loaded, Options, Viewer};
+use super::state::{Fault, Loaded, Options, Viewer};
 
 /// What the window title gains after a recovery.
 const RECOVERED: &str = "recovered from a GPU fault";
-
-/// Why the GPU side is made again.
-pub(in crate::view) enum Fault {
-    /// The device was lost, for this reason.
-    Lost(String),
-    /// `oom@FRAME`: the new device refuses its first large allocation.
-    OutOfMemory,
-}
 
 impl Viewer {
     /// The device's fault before this frame, if any: an injected one now (each once), or a
