@@ -23,6 +23,8 @@ use ssbvb_voxel::camera::Camera;
 
 use crate::billboard_harness::{BUNNY, GBuffer, LEVEL, cameras, draw, options};
 
+mod isolated;
+
 const SIZE: (u32, u32) = (96, 72);
 /// Pixels this close to a quad's edge are not compared (in pixels).
 const BAND_PX: f64 = 2e-3;
@@ -57,6 +59,8 @@ struct View {
     tan: DVec2,
     size: (u32, u32),
     near: f64,
+    /// World → clip (reversed Z), as the frame's.
+    view_proj: glam::DMat4,
 }
 
 impl View {
@@ -71,6 +75,7 @@ impl View {
             tan: DVec2::new(tan_y * size.0 as f64 / size.1 as f64, tan_y),
             size,
             near: camera.near,
+            view_proj: camera.view_projection(size.0 as f64 / size.1 as f64),
         }
     }
 
@@ -90,23 +95,43 @@ impl View {
         ndc * self.tan
     }
 
+    /// The world direction of a ray of slope `s`.
+    fn direction(&self, s: DVec2) -> DVec3 {
+        self.right * s.x + self.up * s.y + self.forward
+    }
+
     /// One pixel in slope units (vertically).
     fn pixel(&self) -> f64 {
         2.0 * self.tan.y / self.size.1 as f64
     }
 }
 
-/// The candidate quads of the voxel whose cell is `cell` at `level` of the instance
-/// `xf`: one for `Sphere`, the tied least-area ones for `Box`. `None`: a near-field voxel.
-fn model_quads(
+/// What a voxel's billboard covers by the model.
+enum Model {
+    /// The candidate quads: one for `Sphere`, the tied least-area ones for `Box`.
+    Quads(Vec<Rect>),
+    /// A near-field voxel (its circumscribed sphere reaches within 0.1 % of the near plane):
+    /// the pixels whose ray hits its box, drawn at its centre's depth.
+    NearField {
+        world_to_object: DAffine3,
+        lo: DVec3,
+        hi: DVec3,
+        /// Reversed-Z depth of the voxel's centre.
+        depth: f64,
+    },
+}
+
+/// The footprint of the voxel whose cell is `cell` at `level` of the instance `xf`.
+fn model_footprint(
     view: &View,
     xf: &DAffine3,
     cell: [u32; 3],
     level: u32,
     footprint: Footprint,
-) -> Option<Vec<Rect>> {
+) -> Model {
     let size = 2.0 / (1u64 << level) as f64;
-    let centre_obj = DVec3::from(cell.map(f64::from)) * size - 1.0 + 0.5 * size;
+    let lo_obj = DVec3::from(cell.map(f64::from)) * size - 1.0;
+    let centre_obj = lo_obj + 0.5 * size;
     let cv = view.to_view(xf.transform_point3(centre_obj) - view.eye);
     let [a, b, c] = [xf.matrix3.x_axis, xf.matrix3.y_axis, xf.matrix3.z_axis];
     let r = 0.5
@@ -116,7 +141,20 @@ fn model_quads(
             .map(|d| d.length())
             .fold(0.0, f64::max);
     if cv.z + r >= -view.near * 1.001 {
-        return None;
+        // A centre at or behind the eye is drawn nearest (depth 1), as the reference sees
+        // every hit at t >= 0.
+        let clip = view.view_proj * xf.transform_point3(centre_obj).extend(1.0);
+        let depth = if clip.w > 0.0 {
+            (clip.z / clip.w).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        return Model::NearField {
+            world_to_object: xf.inverse(),
+            lo: lo_obj,
+            hi: lo_obj + size,
+            depth,
+        };
     }
     let guard = view.pixel() / 1024.0;
     let rect = |axis: DVec2, lo: DVec2, hi: DVec2| Rect {
@@ -124,7 +162,7 @@ fn model_quads(
         mid: (lo + hi) * 0.5,
         half: (hi - lo) * 0.5 + guard,
     };
-    Some(match footprint {
+    Model::Quads(match footprint {
         Footprint::Sphere => {
             // Tangents from the eye to the circle of radius r about (lateral, depth).
             let bounds = |lateral: f64| {
@@ -177,6 +215,26 @@ fn model_quads(
     })
 }
 
+/// Whether the ray from `o` along `d` (object space) hits the box [`lo`, `hi`] grown by
+/// `grow` of its size on every side (negative: shrunk), at t >= 0.
+fn ray_hits_box(o: DVec3, d: DVec3, lo: DVec3, hi: DVec3, grow: f64) -> bool {
+    let pad = (hi - lo) * grow;
+    let (lo, hi) = (lo - pad, hi + pad);
+    let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+    for a in 0..3 {
+        if d[a] == 0.0 {
+            if o[a] < lo[a] || o[a] > hi[a] {
+                return false;
+            }
+            continue;
+        }
+        let (ta, tb) = ((lo[a] - o[a]) / d[a], (hi[a] - o[a]) / d[a]);
+        t0 = t0.max(ta.min(tb));
+        t1 = t1.min(ta.max(tb));
+    }
+    t0 <= t1
+}
+
 /// What the comparison found.
 #[derive(Debug, Default)]
 struct Comparison {
@@ -189,6 +247,54 @@ struct Comparison {
     /// Pixels where the GPU and the model disagree (the first few listed).
     wrong: Vec<(usize, bool)>,
     voxels: usize,
+    /// Near-field voxels among them.
+    near_field: usize,
+    /// Pixels only a near-field voxel covers: (pixel, GPU depth, its centre's depth).
+    near_depths: Vec<(usize, f32, f64)>,
+}
+
+/// Where a pixel is against one voxel's model footprint.
+#[derive(Clone, Copy, PartialEq)]
+enum Side {
+    In,
+    Out,
+    Unsure,
+}
+
+impl Model {
+    /// Where the pixel of slope `s` is (within `band` slope units of a quad's edge, or of a
+    /// box's silhouette by 1e-3 of its size: unsure).
+    fn side(&self, view: &View, s: DVec2, band: f64) -> Side {
+        match self {
+            Model::Quads(q) => {
+                if q.iter().all(|rect| rect.margin(s) > band) {
+                    Side::In
+                } else if q.iter().all(|rect| rect.margin(s) < -band) {
+                    Side::Out
+                } else {
+                    Side::Unsure
+                }
+            }
+            Model::NearField {
+                world_to_object: m,
+                lo,
+                hi,
+                ..
+            } => {
+                let (o, d) = (
+                    m.transform_point3(view.eye),
+                    m.transform_vector3(view.direction(s)),
+                );
+                if ray_hits_box(o, d, *lo, *hi, -1e-3) {
+                    Side::In
+                } else if !ray_hits_box(o, d, *lo, *hi, 1e-3) {
+                    Side::Out
+                } else {
+                    Side::Unsure
+                }
+            }
+        }
+    }
 }
 
 /// Draws `scene` (one object at a fixed level) with Flat billboards of `footprint` over
@@ -213,33 +319,45 @@ fn compare(scene: &Scene, camera: &Camera, footprint: Footprint) -> Comparison {
         .collect();
     voxels.sort_unstable();
     voxels.dedup();
-    let quads: Vec<Vec<Rect>> = voxels
+    let models: Vec<Model> = voxels
         .iter()
         .map(|&(inst, voxel)| {
             let cell = lod.point_cloud.voxels[voxel as usize].cell();
-            model_quads(&view, &obj.instances[inst as usize], cell, level, footprint)
-                .expect("no voxel of these views is in the near field")
+            model_footprint(&view, &obj.instances[inst as usize], cell, level, footprint)
         })
         .collect();
     let band = BAND_PX * view.pixel();
     let mut out = Comparison {
         voxels: voxels.len(),
+        near_field: (models.iter())
+            .filter(|m| matches!(m, Model::NearField { .. }))
+            .count(),
         ..Default::default()
     };
     for i in 0..(SIZE.0 * SIZE.1) as usize {
         let s = view.pixel_slope(i);
-        // Inside: some voxel's every tied candidate holds the pixel beyond the band;
-        // outside: every candidate of every voxel leaves it beyond the band.
-        let surely_in = quads
-            .iter()
-            .any(|q| q.iter().all(|rect| rect.margin(s) > band));
-        let surely_out = quads.iter().flatten().all(|rect| rect.margin(s) < -band);
+        let sides: Vec<Side> = models.iter().map(|m| m.side(&view, s, band)).collect();
+        // Inside: some voxel holds the pixel beyond the band (every tied candidate of it);
+        // outside: every voxel leaves it beyond the band.
+        let surely_in = sides.contains(&Side::In);
+        let surely_out = sides.iter().all(|&v| v == Side::Out);
         let drawn = g.covered(i);
         match (surely_in, surely_out) {
             (true, _) if drawn => out.inside += 1,
             (_, true) if !drawn => out.outside += 1,
             (false, false) => out.ambiguous += 1,
             _ => out.wrong.push((i, drawn)),
+        }
+        let covering: Vec<usize> = (0..models.len())
+            .filter(|&k| sides[k] != Side::Out)
+            .collect();
+        if let [k] = covering[..]
+            && let Model::NearField { depth, .. } = models[k]
+            && sides[k] == Side::In
+            && drawn
+            && !g.depth.is_empty()
+        {
+            out.near_depths.push((i, g.depth[i], depth));
         }
     }
     out

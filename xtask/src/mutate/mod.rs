@@ -93,6 +93,7 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
     (
         "billboard_quad.inc.wgsl",
         &[
+            "billboard_footprint::isolated",
             "splat::",
             "billboards::",
             "billboard_harness::",
@@ -102,6 +103,7 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
     (
         "billboards.wgsl",
         &[
+            "billboard_footprint::isolated",
             "splat::",
             "billboards::",
             "billboard_harness::",
