@@ -23,7 +23,7 @@ use ssbvb_voxel::camera::Camera;
 
 use crate::billboard_harness::{BUNNY, GBuffer, LEVEL, cameras, draw, options};
 
-mod isolated;
+pub(crate) mod isolated;
 
 const SIZE: (u32, u32) = (96, 72);
 /// Pixels this close to a quad's edge are not compared (in pixels).

@@ -130,7 +130,9 @@ fn the_splat_draws_the_rasterized_gbuffer() {
         ..Camera::new(DVec3::new(309426.0, 206284.0, 928279.0), DVec3::ZERO)
     };
     let ([near_left, near_right], near_cell) = near_field_cameras(&scene);
-    let views: [(&str, &Scene, Camera); 6] = [
+    // Isolated one-voxel instances under a wide lens, one of them in the near field.
+    let isolated = crate::billboard_footprint::isolated::scene(1, 0.09, true);
+    let views: [(&str, &Scene, Camera); 7] = [
         (
             "mid",
             &scene,
@@ -149,6 +151,11 @@ fn the_splat_draws_the_rasterized_gbuffer() {
         ("far", &scene, far),
         ("near left", &scene, near_left),
         ("near right", &scene, near_right),
+        (
+            "isolated",
+            &isolated,
+            crate::billboard_footprint::isolated::camera(),
+        ),
     ];
     for mode in ["Flat", "RayBox"] {
         let raster_src =
@@ -230,7 +237,10 @@ fn the_splat_draws_the_rasterized_gbuffer() {
             let plane = |s: &[u8]| s.iter().filter(|&&v| v == 2).count();
             assert!(
                 plane(&sa) > 100
-                    || matches!(*name, "touching" | "far" | "near left" | "near right"),
+                    || matches!(
+                        *name,
+                        "touching" | "far" | "near left" | "near right" | "isolated"
+                    ),
                 "{mode} {name}"
             );
         }

@@ -44,7 +44,8 @@ impl Numbers {
     }
 }
 
-fn camera() -> Camera {
+/// The wide lens at the origin, looking along −z.
+pub(crate) fn camera() -> Camera {
     let mut cam = Camera::new(DVec3::ZERO, DVec3::new(0.0, 0.0, -1.0));
     cam.fov_y_deg = FOV_Y_DEG;
     cam.near = NEAR;
@@ -92,7 +93,7 @@ fn sheared(n: &mut Numbers, h: f64, signs: [f64; 3]) -> DMat3 {
 /// The scene: one instance per screen cell at 1.5 to 3 units, `size` its half-extent in
 /// slope units of its distance; with `near_pair`, the bottom-left two cells hold the
 /// cells by the near plane instead.
-fn scene(seed: u64, size: f64, near_pair: bool) -> Scene {
+pub(crate) fn scene(seed: u64, size: f64, near_pair: bool) -> Scene {
     let mut n = Numbers(seed);
     let mut instances = Vec::new();
     for j in 0..GRID.1 {
