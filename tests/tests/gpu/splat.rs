@@ -132,7 +132,10 @@ fn the_splat_draws_the_rasterized_gbuffer() {
     let ([near_left, near_right], near_cell) = near_field_cameras(&scene);
     // Isolated one-voxel instances under a wide lens, one of them in the near field.
     let isolated = crate::billboard_footprint::isolated::scene(1, 0.09, true);
-    let views: [(&str, &Scene, Camera); 7] = [
+    // Cells across the screen's edges, a near-field one across the right edge, and pixel
+    // centres 1/4096 pixel inside a quad's right edge.
+    let edges = crate::billboard_footprint::isolated::edge_scene();
+    let views: [(&str, &Scene, Camera); 8] = [
         (
             "mid",
             &scene,
@@ -154,6 +157,11 @@ fn the_splat_draws_the_rasterized_gbuffer() {
         (
             "isolated",
             &isolated,
+            crate::billboard_footprint::isolated::camera(),
+        ),
+        (
+            "edges",
+            &edges,
             crate::billboard_footprint::isolated::camera(),
         ),
     ];
@@ -192,7 +200,9 @@ fn the_splat_draws_the_rasterized_gbuffer() {
                  {normals}, albedo {albedo}, position {positions}, depth {depths}"
             );
             assert!(
-                voxels > 500 || (mode, *name) == ("RayBox", "far"),
+                voxels > 500
+                    || (mode, *name) == ("RayBox", "far")
+                    || *name == "edges" && voxels > 200,
                 "{mode} {name}: {voxels}"
             );
             if *name == "far" {
@@ -239,7 +249,7 @@ fn the_splat_draws_the_rasterized_gbuffer() {
                 plane(&sa) > 100
                     || matches!(
                         *name,
-                        "touching" | "far" | "near left" | "near right" | "isolated"
+                        "touching" | "far" | "near left" | "near right" | "isolated" | "edges"
                     ),
                 "{mode} {name}"
             );

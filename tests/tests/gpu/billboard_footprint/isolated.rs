@@ -221,17 +221,81 @@ fn near_field_cells_by_the_eye_are_drawn_nearest() {
     }
 }
 
-/// The slope bounds (x / −z, y / −z; least and greatest) of an axis-aligned cube of
-/// half-extent `h` centred at `c`, the camera at the origin looking along −z.
-fn slope_bounds(c: DVec3, h: f64) -> (DVec2, DVec2) {
+/// The slope bounds (x / −z, y / −z; least and greatest) of an axis-aligned box of
+/// half-extents `h` centred at `c`, the camera at the origin looking along −z.
+fn slope_bounds(c: DVec3, h: DVec3) -> (DVec2, DVec2) {
     (0..8)
         .map(|k| {
-            let s = |bit: u32| if k >> bit & 1 == 1 { h } else { -h };
+            let s = |bit: u32| {
+                if k >> bit & 1 == 1 {
+                    h[bit as usize]
+                } else {
+                    -h[bit as usize]
+                }
+            };
             DVec2::new(c.x + s(0), c.y + s(1)) / -(c.z + s(2))
         })
         .fold((DVec2::MAX, DVec2::MIN), |(lo, hi), p| {
             (lo.min(p), hi.max(p))
         })
+}
+
+/// An axis-aligned cell of half-extents `h`, 2 units ahead, its centre at height slope
+/// `y_slope`, placed (by bisection in f64) so that column `col`'s pixel centres lie
+/// `beyond` guards (1/1024 pixel) right of its rectangle's right edge.
+fn guard_cell(view: &super::View, col: u32, beyond: f64, h: DVec3, y_slope: f64) -> DAffine3 {
+    let target = view.pixel_slope(col as usize).x - beyond * view.pixel() / 1024.0;
+    // The edge moves right with the cell.
+    let (mut a, mut b) = (-5.0, 5.0);
+    for _ in 0..200 {
+        let m = 0.5 * (a + b);
+        if slope_bounds(DVec3::new(m, 0.0, -2.0), h).1.x < target {
+            a = m;
+        } else {
+            b = m;
+        }
+    }
+    DAffine3 {
+        matrix3: DMat3::from_diagonal(h),
+        translation: DVec3::new(0.5 * (a + b), y_slope * 2.0, -2.0),
+    }
+}
+
+/// Cells across the screen's edges and corners, a near-field cell across the right edge,
+/// and a tall cell whose right edge ends 3/4 of a guard short of column 60's pixel centres
+/// (a column of centres 1/4096 pixel inside its quad): where `splat::` holds the splat's
+/// pixel ranges to the rasterizer's.
+pub(crate) fn edge_scene() -> Scene {
+    let view = super::View::new(&camera(), SIZE);
+    let (tx, ty) = (view.tan.x, view.tan.y);
+    let cube = |sx: f64, sy: f64, depth: f64, h: f64| DAffine3 {
+        matrix3: DMat3::from_quat(DQuat::from_euler(glam::EulerRot::YXZ, 0.4, 0.3, 0.2))
+            * DMat3::from_diagonal(DVec3::splat(h)),
+        translation: DVec3::new(sx * depth, sy * depth, -depth),
+    };
+    let mut instances: Vec<DAffine3> = [
+        (-tx, 0.6 * ty),
+        (-0.4 * tx, ty),
+        (0.0, -ty),
+        (-tx, -ty),
+        (tx, ty),
+        (tx, -ty),
+    ]
+    .iter()
+    .map(|&(sx, sy)| cube(sx, sy, 2.0, 0.15))
+    .collect();
+    // Near field: its sphere (radius h·√3) ends at 1.0005 × the near distance.
+    let h = 0.02;
+    instances.push(cube(tx, 0.0, NEAR * 1.0005 + h * 3f64.sqrt(), h));
+    instances.push(guard_cell(&view, 60, 0.75, DVec3::new(0.1, 0.6, 0.1), 0.0));
+    Scene {
+        objects: vec![VoxelObject {
+            asset: crate::empty_space::synthetic_asset(0, &[[0, 0, 0]]),
+            instances,
+            lod: LodPolicy::Fixed(0),
+        }],
+        ..Default::default()
+    }
 }
 
 /// The guard: a quad reaches 1/1024 pixel beyond its rectangle, no more and no less. A cube
@@ -245,25 +309,9 @@ fn a_quads_guard_is_a_1024th_of_a_pixel() {
     let h = 0.1;
     // (column, pixel centres' distance beyond the edge in guards, centre's height slope).
     let cases = [(60u32, 0.75, 0.0), (30u32, 1.25, 0.6)];
-    let mut instances = Vec::new();
-    for &(col, beyond, y_slope) in &cases {
-        let target = view.pixel_slope(col as usize).x - beyond * px / 1024.0;
-        // The edge moves right with the cube: bisect for its x.
-        let (mut a, mut b) = (-5.0, 5.0);
-        for _ in 0..200 {
-            let m = 0.5 * (a + b);
-            if slope_bounds(DVec3::new(m, 0.0, -2.0), h).1.x < target {
-                a = m;
-            } else {
-                b = m;
-            }
-        }
-        let c = DVec3::new(0.5 * (a + b), y_slope * 2.0, -2.0);
-        instances.push(DAffine3 {
-            matrix3: DMat3::from_diagonal(DVec3::splat(h)),
-            translation: c,
-        });
-    }
+    let instances: Vec<DAffine3> = (cases.iter())
+        .map(|&(col, beyond, y_slope)| guard_cell(&view, col, beyond, DVec3::splat(h), y_slope))
+        .collect();
     let scene = Scene {
         objects: vec![VoxelObject {
             asset: crate::empty_space::synthetic_asset(0, &[[0, 0, 0]]),
@@ -277,7 +325,7 @@ fn a_quads_guard_is_a_1024th_of_a_pixel() {
     let (g, _) = crate::billboard_harness::draw(&scene, &cam, SIZE, Some(opts), false);
     for (&(col, beyond, _), xf) in cases.iter().zip(&scene.objects[0].instances) {
         // The rows whose centres lie well inside the cube's vertical extent.
-        let (lo, hi) = slope_bounds(xf.translation, h);
+        let (lo, hi) = slope_bounds(xf.translation, DVec3::splat(h));
         let rows: Vec<u32> = (0..SIZE.1)
             .filter(|&r| {
                 let y = view.pixel_slope((r * SIZE.0) as usize).y;
