@@ -363,20 +363,28 @@ fn compare(scene: &Scene, camera: &Camera, footprint: Footprint) -> Comparison {
     out
 }
 
+impl Comparison {
+    /// Prints the counts and fails on any pixel where the GPU and the model disagree.
+    fn assert_no_wrong_pixel(&self, what: &str) {
+        eprintln!(
+            "{what}: {} voxels ({} near field), {} inside, {} outside, {} left out, {} wrong",
+            self.voxels,
+            self.near_field,
+            self.inside,
+            self.outside,
+            self.ambiguous,
+            self.wrong.len()
+        );
+        assert!(
+            self.wrong.is_empty(),
+            "{what}: (pixel, GPU drew it) where the model disagrees: {:?}",
+            &self.wrong[..self.wrong.len().min(12)]
+        );
+    }
+}
+
 fn assert_exact(what: &str, c: &Comparison) {
-    eprintln!(
-        "{what}: {} voxels, {} inside, {} outside, {} left out, {} wrong",
-        c.voxels,
-        c.inside,
-        c.outside,
-        c.ambiguous,
-        c.wrong.len()
-    );
-    assert!(
-        c.wrong.is_empty(),
-        "{what}: (pixel, GPU drew it) where the model disagrees: {:?}",
-        &c.wrong[..c.wrong.len().min(12)]
-    );
+    c.assert_no_wrong_pixel(what);
     // Not vacuous: most covered pixels are decided, and the views cover a good part.
     assert!(c.inside > 300 && c.voxels > 20, "{what}: {c:?}");
     assert!(c.ambiguous * 50 < c.inside, "{what}: {c:?}");

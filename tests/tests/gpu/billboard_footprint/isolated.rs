@@ -121,6 +121,11 @@ pub(crate) fn scene(seed: u64, size: f64, near_pair: bool) -> Scene {
             });
         }
     }
+    one_voxel_scene(instances)
+}
+
+/// One object, a single cell at level 0, drawn once per instance.
+fn one_voxel_scene(instances: Vec<DAffine3>) -> Scene {
     Scene {
         objects: vec![VoxelObject {
             asset: crate::empty_space::synthetic_asset(0, &[[0, 0, 0]]),
@@ -132,20 +137,7 @@ pub(crate) fn scene(seed: u64, size: f64, near_pair: bool) -> Scene {
 }
 
 fn assert_isolated_exact(what: &str, c: &Comparison, voxels: usize) {
-    eprintln!(
-        "{what}: {} voxels ({} near field), {} inside, {} outside, {} left out, {} wrong",
-        c.voxels,
-        c.near_field,
-        c.inside,
-        c.outside,
-        c.ambiguous,
-        c.wrong.len()
-    );
-    assert!(
-        c.wrong.is_empty(),
-        "{what}: (pixel, GPU drew it) where the model disagrees: {:?}",
-        &c.wrong[..c.wrong.len().min(12)]
-    );
+    c.assert_no_wrong_pixel(what);
     assert_eq!(c.voxels, voxels, "{what}: every instance is seen");
     assert!(c.inside > 800, "{what}: {c:?}");
     assert!(c.ambiguous * 50 < c.inside, "{what}: {c:?}");
@@ -199,19 +191,12 @@ fn near_field_cells_by_the_eye_are_drawn_nearest() {
         matrix3: DMat3::from_diagonal(DVec3::splat(0.1)),
         translation: centre,
     };
-    let scene = Scene {
-        objects: vec![VoxelObject {
-            asset: crate::empty_space::synthetic_asset(0, &[[0, 0, 0]]),
-            instances: vec![
-                // Behind the eye plane (view z > 0), left of the camera.
-                cell(DVec3::new(-0.15, 0.0, 0.02)),
-                // In front of the eye, nearer than the near plane, right of the camera.
-                cell(DVec3::new(0.15, 0.0, -0.05)),
-            ],
-            lod: LodPolicy::Fixed(0),
-        }],
-        ..Default::default()
-    };
+    let scene = one_voxel_scene(vec![
+        // Behind the eye plane (view z > 0), left of the camera.
+        cell(DVec3::new(-0.15, 0.0, 0.02)),
+        // In front of the eye, nearer than the near plane, right of the camera.
+        cell(DVec3::new(0.15, 0.0, -0.05)),
+    ]);
     let c = compare(&scene, &camera(), Footprint::Box);
     assert_isolated_exact("near field by the eye", &c, 2);
     assert_eq!(c.near_field, 2);
@@ -288,14 +273,7 @@ pub(crate) fn edge_scene() -> Scene {
     let h = 0.02;
     instances.push(cube(tx, 0.0, NEAR * 1.0005 + h * 3f64.sqrt(), h));
     instances.push(guard_cell(&view, 60, 0.75, DVec3::new(0.1, 0.6, 0.1), 0.0));
-    Scene {
-        objects: vec![VoxelObject {
-            asset: crate::empty_space::synthetic_asset(0, &[[0, 0, 0]]),
-            instances,
-            lod: LodPolicy::Fixed(0),
-        }],
-        ..Default::default()
-    }
+    one_voxel_scene(instances)
 }
 
 /// The guard: a quad reaches 1/1024 pixel beyond its rectangle, no more and no less. A cube
@@ -312,14 +290,7 @@ fn a_quads_guard_is_a_1024th_of_a_pixel() {
     let instances: Vec<DAffine3> = (cases.iter())
         .map(|&(col, beyond, y_slope)| guard_cell(&view, col, beyond, DVec3::splat(h), y_slope))
         .collect();
-    let scene = Scene {
-        objects: vec![VoxelObject {
-            asset: crate::empty_space::synthetic_asset(0, &[[0, 0, 0]]),
-            instances,
-            lod: LodPolicy::Fixed(0),
-        }],
-        ..Default::default()
-    };
+    let scene = one_voxel_scene(instances);
     let mut opts = crate::billboard_harness::options(ssbvb_graph::BillboardMode::Flat);
     opts.cull_cos = -2.0;
     let (g, _) = crate::billboard_harness::draw(&scene, &cam, SIZE, Some(opts), false);
