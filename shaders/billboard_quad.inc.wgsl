@@ -59,6 +59,18 @@ fn circumradius(m: mat4x4<f32>, size: f32) -> f32 {
     return 0.5 * size * l;
 }
 
+// The centre of entry `slot`'s cell in object space.
+fn slot_centre_object(slot: VoxelSlot) -> vec3<f32> {
+    // The voxel's level rides in the slot (a coarser LOD's voxel where a page was missing).
+    let level = slot.voxel.uv;
+    return cell_min(voxel_cell(slot.voxel), level) + 0.5 * cell_size(level);
+}
+
+// The centre of entry `slot`'s cell, camera-relative world (the quad's `c`).
+fn slot_centre_world(inst: Instance, slot: VoxelSlot) -> vec3<f32> {
+    return (inst.object_to_world * vec4(slot_centre_object(slot), 1.0)).xyz;
+}
+
 // The quad of SSBVB entry `slot`.
 fn billboard_quad(slot: VoxelSlot) -> Quad {
     var q: Quad;
@@ -68,14 +80,12 @@ fn billboard_quad(slot: VoxelSlot) -> Quad {
         return q;
     }
     let inst = instances[slot.instance];
-    // The voxel's level rides in the slot (a coarser LOD's voxel where a page was missing).
-    let level = slot.voxel.uv;
-    let size = cell_size(level);
-    let centre_obj = cell_min(voxel_cell(slot.voxel), level) + 0.5 * size;
+    let size = cell_size(slot.voxel.uv);
+    let centre_obj = slot_centre_object(slot);
     // The centre in view space straight from object space (f64-composed matrix): exact
     // lateral offsets however far the instance is; `c` (world) for what needs no more.
     let cv_exact = (inst.object_to_view * vec4(centre_obj, 1.0)).xyz;
-    let c = (inst.object_to_world * vec4(centre_obj, 1.0)).xyz;
+    let c = slot_centre_world(inst, slot);
     let n = voxel_normal_world(inst, slot.voxel);
     if dot(n, -c) < CULL_COS * length(c) {
         return q;

@@ -7,6 +7,9 @@
 // weak (a CPU adapter; data-centre GPUs such as the H100/H200). Same quads and the same
 // pixel shading as billboards.wgsl (billboard_quad.inc.wgsl), three steps:
 //
+// 0. Arguments (compute, `args_main`, one thread): the two splat dispatches' workgroup
+//    counts from the filter's entry count, so that no workgroup starts for an empty slot
+//    of the SSBVB (on a CPU adapter an empty workgroup still costs about a microsecond).
 // 1. Depths (compute, `splat_main`, one thread per SSBVB entry): every pixel centre inside the
 //    entry's quad (the whole screen for a near-field quad) that the billboard covers takes
 //    the larger of its reversed-Z depth and the pixel's (`atomicMax` on the depth's bits:
@@ -16,7 +19,9 @@
 //    strict depth test keeps the first of equal-depth quads, drawn in entry order.
 // 3. `vs_main`/`fs_main` (a fullscreen triangle into the G-buffer): a pixel with a winner
 //    writes what that billboard's fragment writes, with its depth, depth-tested against
-//    the triangles already there; a pixel without one is discarded.
+//    the triangles already there; a pixel without one writes depth 0, which fails the
+//    depth test (reversed Z, `Greater`) as a discard would, and costs a CPU adapter far
+//    less than a shader that may discard.
 //
 // The per-pixel words are cleared to 0 every frame (0 = no depth, no entry).
 
@@ -28,8 +33,29 @@ override RAY_BOX: bool = false;
 // Written by the filter: `instance_count` = the number of valid SSBVB entries.
 @group(1) @binding(1) var<storage, read> billboard_draw: array<u32, 4>;
 // Per pixel p = y * width + x: word 2p the nearest depth's bits, word 2p + 1 the winning
-// entry, inverted (one buffer: WebGPU allows 8 storage buffers per stage).
+// entry, inverted; after the pixels, per entry e: word `entry_word(e)` its quad plane's
+// view depth (bits; `NEAR_FIELD_WORD` for a near-field quad), written by the depth step so
+// that the resolve need not rebuild the winner's quad at every pixel. One buffer: WebGPU
+// allows 8 storage buffers per stage.
 @group(1) @binding(2) var<storage, read_write> splat_pixels: array<atomic<u32>>;
+// `args_main`'s output, the splat dispatches' indirect arguments: words 0..3 the depth
+// step's grid (z = 1), words 3..6 the entry step's (z = 2). Bound only to `args_main`.
+@group(1) @binding(3) var<storage, read_write> splat_dispatch: array<u32, 6>;
+
+// A non-near-field quad's plane has a negative view depth: +0.0's bits mark a near field.
+const NEAR_FIELD_WORD: u32 = 0u;
+
+// The word of entry `e`'s quad depth, after the per-pixel words.
+fn entry_word(e: u32) -> u32 {
+    return 2u * u32(frame.screen.x) * u32(frame.screen.y) + e;
+}
+
+// The quad plane's point under pixel centre `px`: view space (s * -cz, cz), taken to world.
+fn quad_point_world(cz: f32, px: vec2<f32>) -> vec3<f32> {
+    let s = pixel_slope(px);
+    let view3 = mat3x3(frame.view[0].xyz, frame.view[1].xyz, frame.view[2].xyz);
+    return transpose(view3) * vec3(s * -cz, cz);
+}
 
 // The fragment of entry `slot` at pixel centre `px` (screen pixels).
 fn fragment_at(slot: VoxelSlot, q: Quad, px: vec2<f32>) -> Fragment {
@@ -44,11 +70,30 @@ fn fragment_at(slot: VoxelSlot, q: Quad, px: vec2<f32>) -> Fragment {
     if !quad_covers(q, px) {
         return f;
     }
-    let s = pixel_slope(px);
-    // The quad plane's point under the pixel (view space (s * -cz, cz), taken to world).
-    let view3 = mat3x3(frame.view[0].xyz, frame.view[1].xyz, frame.view[2].xyz);
-    let world = transpose(view3) * vec3(s * -q.cz, q.cz);
-    return flat_fragment(slot, q, px, world);
+    return flat_fragment(slot, q, px, quad_point_world(q.cz, px));
+}
+
+// The parts of entry `e`'s quad that its fragments read, without rebuilding the quad (a
+// CPU adapter runs both sides of a branch: a rebuild on a rare path costs every pixel):
+// the plane's depth from the depth step, the centre.
+fn winner_quad(slot: VoxelSlot, e: u32) -> Quad {
+    let cz_bits = atomicLoad(&splat_pixels[entry_word(e)]);
+    var q: Quad;
+    q.valid = true;
+    q.near_field = cz_bits == NEAR_FIELD_WORD;
+    q.cz = bitcast<f32>(cz_bits);
+    q.c = slot_centre_world(instances[slot.instance], slot);
+    return q;
+}
+
+// The winning entry's fragment at a pixel centre the splat found its quad to cover: as
+// `fragment_at` there.
+fn winner_fragment(slot: VoxelSlot, q: Quad, px: vec2<f32>) -> Fragment {
+    if RAY_BOX {
+        return ray_box_fragment(slot, px);
+    }
+    // A near-field fragment intersects its ray with the box and ignores the plane point.
+    return flat_fragment(slot, q, px, quad_point_world(q.cz, px));
 }
 
 // Pixels of slack around a quad's pixel bounds: far more than the f32 rounding of the
@@ -91,9 +136,27 @@ fn pixel_bounds(q: Quad) -> vec4<i32> {
     return vec4(a, b);
 }
 
-// Entry index of a thread of a 2D dispatch of 64-thread workgroups.
+// Entry index of a thread of a dispatch of 64-thread workgroups (every layer covers entries).
 fn entry_index(wg: vec3<u32>, nwg: vec3<u32>, li: u32) -> u32 {
-    return (wg.y * nwg.x + wg.x) * 64u + li;
+    return ((wg.z * nwg.y + wg.y) * nwg.x + wg.x) * 64u + li;
+}
+
+// A grid of `layers` layers with at least `groups` workgroups in all, x at most 65535
+// (WebGPU's default limit per dimension); no workgroup when `groups` is 0.
+fn splat_grid(groups: u32, layers: u32) -> vec3<u32> {
+    let per_layer = (groups + layers - 1u) / layers;
+    let x = min(per_layer, 65535u);
+    let y = select(0u, (per_layer + x - 1u) / x, x > 0u);
+    return vec3(x, y, layers);
+}
+
+@compute @workgroup_size(1)
+fn args_main() {
+    let entries = min(billboard_draw[1], arrayLength(&ssbvb));
+    let groups = (entries + 63u) / 64u;
+    let depths = splat_grid(groups, 1u);
+    let winners = splat_grid(groups, 2u);
+    splat_dispatch = array(depths.x, depths.y, depths.z, winners.x, winners.y, winners.z);
 }
 
 // Splats entry `e` (pass 0: depths; pass 1: entries at the winning depth).
@@ -105,6 +168,9 @@ fn splat(e: u32, pass_kind: u32) {
     let q = billboard_quad(slot);
     if !q.valid {
         return;
+    }
+    if pass_kind == 0u {
+        atomicStore(&splat_pixels[entry_word(e)], select(bitcast<u32>(q.cz), NEAR_FIELD_WORD, q.near_field));
     }
     let b = pixel_bounds(q);
     let width = u32(frame.screen.x);
@@ -125,20 +191,16 @@ fn splat(e: u32, pass_kind: u32) {
     }
 }
 
-// Both steps are this one pipeline, dispatched twice: with one layer of workgroups (z = 1)
-// it splats depths, with two (z = 2) its second layer splats entries and the first does
-// nothing. One compiled shader, so the depth a pixel is compared with in the second step
-// is bit for bit the one written in the first (two pipelines could contract floating-point
-// operations differently).
+// Both steps are this one pipeline, dispatched twice: a grid of one layer (z = 1) splats
+// depths, one of two layers (z = 2) entries. One compiled shader, so the depth a pixel is
+// compared with in the second step is bit for bit the one written in the first (two
+// pipelines could contract floating-point operations differently).
 @compute @workgroup_size(64)
 fn splat_main(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) li: u32,
 ) {
-    if wg.z + 1u != nwg.z {
-        return;
-    }
     splat(entry_index(wg, nwg, li), nwg.z - 1u);
 }
 
@@ -147,22 +209,24 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     let pix = vec2<u32>(frag.xy);
     let p = pix.y * u32(frame.screen.x) + pix.x;
     let inverted = atomicLoad(&splat_pixels[2u * p + 1u]);
+    var out: GBufferDepth;
     if inverted == 0u {
-        discard;
+        // Depth 0 fails `Greater` against any depth: nothing is written (see step 3).
+        out.depth = 0.0;
+        return out;
     }
     let e = ~inverted;
     let slot = ssbvb[e];
-    let q = billboard_quad(slot);
-    var f = fragment_at(slot, q, frag.xy);
+    let q = winner_quad(slot, e);
+    var f = winner_fragment(slot, q, frag.xy);
     if !f.covered {
         // The splat found this pixel covered; a recomputation here (another pipeline) may
-        // round a pixel on the quad's or the box's edge the other way. Never a hole: the
-        // voxel's colour and stored normal at its centre.
+        // round a pixel on the box's edge the other way. Never a hole: the voxel's colour
+        // and stored normal at its centre.
         var flat_q = q;
         flat_q.near_field = false;
         f = flat_fragment(slot, flat_q, frag.xy, q.c);
     }
-    var out: GBufferDepth;
     out.albedo = pack4x8unorm(f.albedo);
     out.normal = f.normal;
     out.position = f.position;

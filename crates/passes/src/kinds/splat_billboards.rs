@@ -5,13 +5,17 @@
 //! shading as [`crate::kinds::billboards`] (`shaders/billboard_quad.inc.wgsl`), so the G-buffer is
 //! the same and smoothing and composite run unchanged.
 //!
-//! Per frame: the per-pixel words (depth bits and entry, interleaved) are cleared; a first dispatch (one thread per SSBVB
-//! entry, 64 per workgroup, a 2D grid over the SSBVB's capacity) takes the nearest depth of
+//! Per frame: the per-pixel words (depth bits and entry, interleaved) are cleared; one
+//! thread turns the filter's entry count into the splat's indirect dispatch arguments (no
+//! workgroup for an empty slot: the SSBVB's capacity is the screen, its entries a fraction
+//! of it); a first dispatch (one thread per SSBVB entry, 64 per workgroup) takes the nearest depth of
 //! every pixel its billboard covers by `atomicMax` on the reversed-Z depth's bits; a second
 //! dispatch of the same pipeline keeps, where that depth is its own, the lowest entry (as
 //! the rasterizer's strict depth test keeps the first of equal-depth quads); a fullscreen
 //! resolve writes the winning billboard's fragment with its depth, depth-tested against
-//! what is already in the G-buffer (the triangles), stencil = voxel. Both splat steps are
+//! what is already in the G-buffer (the triangles), stencil = voxel; a pixel without a
+//! winner writes depth 0 instead of discarding (the same pixels, and on a CPU adapter the
+//! resolve then costs a twentieth: docs/benchmarks.md). Both splat steps are
 //! one compiled shader so that the depths they compute agree bit for bit.
 //!
 //! Why two 32-bit passes and not one 64-bit `atomicMin` of (depth, entry): the 64-bit
@@ -34,22 +38,34 @@ use crate::runtime::registry::{KindNeeds, PassImpl, PassInit};
 use crate::error::PassError;
 use crate::runtime::node::PassNode;
 
-/// Threads per workgroup of both splat entry points.
-const WORKGROUP: u64 = 64;
-
 /// What the splat binds itself: per pixel the nearest depth's bits and the winning entry,
-/// interleaved in one buffer (the pass then fits WebGPU's 8 storage buffers per stage).
+/// interleaved, then per SSBVB entry its quad's view depth, in one buffer (the pass then
+/// fits WebGPU's 8 storage buffers per stage).
 pub const OWN: &[OwnBinding] = &[OwnBinding {
     name: "splat_pixels",
     kind: OwnKind::StorageReadWrite,
 }];
 
-/// The compiled splat: two compute pipelines and the resolve.
+/// `args_main`'s own group 1 (WGSL bindings 0, 1 and 3): the SSBVB and its entry count
+/// read, the splat's dispatch arguments written. Kept out of the splat's group, which may
+/// not hold a buffer that its own dispatch reads as indirect arguments.
+const ARGS_BINDINGS: [(u32, bool); 3] = [(0, true), (1, true), (3, false)];
+
+/// Bytes of the dispatch arguments: two grids of three `u32`.
+const DISPATCH_BYTES: u64 = 24;
+
+/// The compiled splat: the arguments, the splat steps and the resolve.
 pub struct SplatBillboards {
+    /// Writes the splat steps' indirect dispatch arguments.
+    args: wgpu::ComputePipeline,
+    args_layout: wgpu::BindGroupLayout,
     /// Both splat steps (dispatched with one, then two layers of workgroups).
     splat: wgpu::ComputePipeline,
     resolve: PulledPipeline,
-    /// The per-pixel words (depth bits, entry) and the pixels they hold.
+    /// The splat steps' indirect dispatch arguments.
+    dispatch: wgpu::Buffer,
+    /// The per-pixel words (depth bits, entry), then one per entry (its quad's depth),
+    /// and how many words that is.
     pixels: Option<(wgpu::Buffer, u64)>,
 }
 
@@ -95,32 +111,76 @@ impl PassImpl for SplatBillboards {
                 cache: None,
             })
         })?;
+        let (args, args_layout) = args_pipeline(ctx, scene, &module, &label)?;
+        let dispatch = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("splat dispatch arguments"),
+            size: DISPATCH_BYTES,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+            mapped_at_creation: false,
+        });
         Ok(Self {
+            args,
+            args_layout,
             splat,
             resolve,
+            dispatch,
             pixels: None,
         })
     }
 }
 
-/// Workgroups for `entries` threads of 64 as a 2D grid (x at most 65535).
-pub fn splat_grid(entries: u64) -> (u32, u32) {
-    let groups = entries.div_ceil(WORKGROUP).max(1);
-    let x = groups.min(65_535);
-    (x as u32, groups.div_ceil(x) as u32)
+/// `args_main`'s pipeline and its group-1 layout ([`ARGS_BINDINGS`]).
+fn args_pipeline(
+    ctx: &GpuContext,
+    scene: &ssbvb_gpu::scene::GpuScene,
+    module: &wgpu::ShaderModule,
+    label: &str,
+) -> Result<(wgpu::ComputePipeline, wgpu::BindGroupLayout), PassError> {
+    Ok(ctx.validated(label, |d| {
+        let entries = ARGS_BINDINGS.map(|(binding, read_only)| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        });
+        let group = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("splat arguments"),
+            entries: &entries,
+        });
+        let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("splat arguments"),
+            bind_group_layouts: &[Some(&scene.layout), Some(&group)],
+            immediate_size: 0,
+        });
+        let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("args_main"),
+            layout: Some(&layout),
+            module,
+            entry_point: Some("args_main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        (pipeline, group)
+    })?)
 }
 
 impl SplatBillboards {
-    /// Makes the per-pixel words for `pixels` pixels unless they exist at that size.
-    fn buffers(&mut self, ctx: &GpuContext, pixels: u64) {
-        if self.pixels.as_ref().is_none_or(|p| p.1 != pixels) {
+    /// Makes the words for `pixels` pixels (two each) and `entries` SSBVB entries (one
+    /// each) unless they exist at that size.
+    fn buffers(&mut self, ctx: &GpuContext, pixels: u64, entries: u64) {
+        let words = 2 * pixels + entries;
+        if self.pixels.as_ref().is_none_or(|p| p.1 != words) {
             let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("splat pixels"),
-                size: (pixels * 8).max(16),
+                size: (words * 4).max(16),
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
-            self.pixels = Some((buffer, pixels));
+            self.pixels = Some((buffer, words));
         }
     }
 }
@@ -133,14 +193,26 @@ impl PassNode for SplatBillboards {
     ) -> Result<(), PassError> {
         let (w, h) = rec.screen;
         let entries = rec.buffer("ssbvb").size() / 32;
-        self.buffers(rec.gpu, w as u64 * h as u64);
+        self.buffers(rec.gpu, w as u64 * h as u64, entries);
         let (words, _) = self.pixels.as_ref().expect("made above");
         let bind_group = self
             .resolve
             .bindings
             .bind_group(rec, &[("splat_pixels", words.as_entire_binding())])?;
+        let args_group = rec.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("splat arguments"),
+            layout: &self.args_layout,
+            entries: &[
+                (0, rec.buffer("ssbvb")),
+                (1, rec.buffer("billboard_draw")),
+                (3, &self.dispatch),
+            ]
+            .map(|(binding, buffer)| wgpu::BindGroupEntry {
+                binding,
+                resource: buffer.as_entire_binding(),
+            }),
+        });
         encoder.clear_buffer(words, 0, None);
-        let (gx, gy) = splat_grid(entries);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some(&rec.pass.name),
@@ -148,30 +220,18 @@ impl PassNode for SplatBillboards {
                 timestamp_writes: rec.span_begin_timestamps(),
             });
             pass.set_bind_group(0, &rec.scene.bind_group, &[]);
+            pass.set_bind_group(1, &args_group, &[]);
+            pass.set_pipeline(&self.args);
+            pass.dispatch_workgroups(1, 1, 1);
             pass.set_bind_group(1, &bind_group, &[]);
-            // wgpu orders the dispatches: every depth is in before entries are chosen. One
-            // pipeline for both (see the WGSL): z = 1 splats depths, z = 2 entries.
+            // wgpu orders the dispatches: the arguments are in before the splat reads them,
+            // every depth before entries are chosen. One pipeline for both splat steps (see
+            // the WGSL): z = 1 splats depths, z = 2 entries.
             pass.set_pipeline(&self.splat);
-            pass.dispatch_workgroups(gx, gy, 1);
-            pass.dispatch_workgroups(gx, gy, 2);
+            pass.dispatch_workgroups_indirect(&self.dispatch, 0);
+            pass.dispatch_workgroups_indirect(&self.dispatch, DISPATCH_BYTES / 2);
         }
         self.resolve.record_resolve(encoder, rec, Some(&bind_group));
         Ok(())
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_grid_covers_every_entry_within_the_dispatch_limit() {
-        for n in [0u64, 1, 64, 65, 640 * 480, 3840 * 2160, 65_535 * 64 + 1] {
-            let (x, y) = splat_grid(n);
-            assert!(x <= 65_535 && y >= 1, "{n}: {x} x {y}");
-            assert!(x as u64 * y as u64 * WORKGROUP >= n, "{n}: {x} x {y}");
-            // No more than one row of workgroups beyond what is needed.
-            assert!((x as u64 * (y as u64 - 1)) * WORKGROUP < n.max(1), "{n}: {x} x {y}");
-        }
     }
 }
