@@ -19,9 +19,7 @@
 //    strict depth test keeps the first of equal-depth quads, drawn in entry order.
 // 3. `vs_main`/`fs_main` (a fullscreen triangle into the G-buffer): a pixel with a winner
 //    writes what that billboard's fragment writes, with its depth, depth-tested against
-//    the triangles already there; a pixel without one writes depth 0, which fails the
-//    depth test (reversed Z, `Greater`) as a discard would, and costs a CPU adapter far
-//    less than a shader that may discard.
+//    the triangles already there; a pixel without one is discarded.
 //
 // The per-pixel words are cleared to 0 every frame (0 = no depth, no entry).
 
@@ -209,11 +207,8 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     let pix = vec2<u32>(frag.xy);
     let p = pix.y * u32(frame.screen.x) + pix.x;
     let inverted = atomicLoad(&splat_pixels[2u * p + 1u]);
-    var out: GBufferDepth;
     if inverted == 0u {
-        // Depth 0 fails `Greater` against any depth: nothing is written (see step 3).
-        out.depth = 0.0;
-        return out;
+        discard;
     }
     let e = ~inverted;
     let slot = ssbvb[e];
@@ -227,6 +222,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
         flat_q.near_field = false;
         f = flat_fragment(slot, flat_q, frag.xy, q.c);
     }
+    var out: GBufferDepth;
     out.albedo = pack4x8unorm(f.albedo);
     out.normal = f.normal;
     out.position = f.position;

@@ -17,7 +17,7 @@ fn bench_paper_preset_compares_ssbvb_with_the_ray_casters() {
                 "--frames",
                 "1",
                 "--techniques",
-                "ssbvb-unique,esvo,esvo-compute",
+                "ssbvb-unique,esvo,esvo-compute,ssbvb-splat",
                 "--json",
                 "--out",
             ])
@@ -78,6 +78,11 @@ fn bench_paper_preset_compares_ssbvb_with_the_ray_casters() {
         let best = r["ssbvb_unique_over_best_esvo"].as_f64().unwrap();
         let expected = ssbvb / esvo.min(esvo_compute);
         assert!((best - expected).abs() < 1e-3 * best, "{r}");
+        // The faster SSBVB form (rasterized or splatted billboards) over the faster ESVO.
+        let splat = r["ssbvb_splat_ms"].as_f64().unwrap();
+        let best_both = r["best_ssbvb_over_best_esvo"].as_f64().unwrap();
+        let expected = ssbvb.min(splat) / esvo.min(esvo_compute);
+        assert!((best_both - expected).abs() < 1e-3 * best_both, "{r}");
         assert!(r["esvo_gpu_ms"].is_null(), "{r}");
         // Not measured: no number.
         assert!(

@@ -13,9 +13,9 @@
 //! dispatch of the same pipeline keeps, where that depth is its own, the lowest entry (as
 //! the rasterizer's strict depth test keeps the first of equal-depth quads); a fullscreen
 //! resolve writes the winning billboard's fragment with its depth, depth-tested against
-//! what is already in the G-buffer (the triangles), stencil = voxel; a pixel without a
-//! winner writes depth 0 instead of discarding (the same pixels, and on a CPU adapter the
-//! resolve then costs a twentieth: docs/benchmarks.md). Both splat steps are
+//! what is already in the G-buffer (the triangles), stencil = voxel, from the winner's
+//! quad depth that the first dispatch kept per entry (rebuilding the quad at every pixel
+//! cost the resolve most of its time). Both splat steps are
 //! one compiled shader so that the depths they compute agree bit for bit.
 //!
 //! Why two 32-bit passes and not one 64-bit `atomicMin` of (depth, entry): the 64-bit

@@ -196,8 +196,9 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
     },
 ];
 
-/// The techniques of `--preset paper`: SSBVB (the default pipeline, fast march) and the same
-/// with the exact march, and every ray caster (the octree casters in both forms).
+/// The techniques of `--preset paper`: SSBVB (the default pipeline, fast march), the same
+/// with the exact march, and every ray caster (the octree casters in both forms); then the
+/// SSBVB frame with splatted billboards (appended: earlier columns keep their order).
 pub(crate) const PAPER_TECHNIQUES: &[&str] = &[
     "ssbvb-unique",
     "ssbvb-exact",
@@ -206,6 +207,7 @@ pub(crate) const PAPER_TECHNIQUES: &[&str] = &[
     "dense-dda",
     "esvo-compute",
     "octree-compute",
+    "ssbvb-splat",
 ];
 
 /// Techniques left out unless named: the default pipeline by another name, the compute

@@ -72,14 +72,18 @@ impl PaperRow {
         Some(self.compared_time(num)? / self.compared_time(den)?)
     }
 
-    /// `num`'s time over the fastest of `dens` that was measured (the strongest form of a
-    /// baseline).
-    fn ratio_to_best(&self, num: &str, dens: &[&str]) -> Option<f64> {
-        let best = dens
+    /// The fastest of `techniques` that was measured.
+    fn best_time(&self, techniques: &[&str]) -> Option<f64> {
+        techniques
             .iter()
-            .filter_map(|d| self.compared_time(d))
-            .min_by(f64::total_cmp)?;
-        Some(self.compared_time(num)? / best)
+            .filter_map(|t| self.compared_time(t))
+            .min_by(f64::total_cmp)
+    }
+
+    /// The fastest of `nums` over the fastest of `dens` that were measured (each side's
+    /// strongest form).
+    fn best_ratio(&self, nums: &[&str], dens: &[&str]) -> Option<f64> {
+        Some(self.best_time(nums)? / self.best_time(dens)?)
     }
 }
 
@@ -245,7 +249,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
 }
 
 /// JSON and CSV key of each technique's time, in [`PAPER_TECHNIQUES`] order.
-const MS_KEYS: [&str; 7] = [
+const MS_KEYS: [&str; 8] = [
     "ssbvb_unique_ms",
     "ssbvb_exact_ms",
     "esvo_ms",
@@ -253,10 +257,11 @@ const MS_KEYS: [&str; 7] = [
     "dense_dda_ms",
     "esvo_compute_ms",
     "octree_compute_ms",
+    "ssbvb_splat_ms",
 ];
 
 /// JSON and CSV key of each technique's GPU time, in [`PAPER_TECHNIQUES`] order.
-const GPU_MS_KEYS: [&str; 7] = [
+const GPU_MS_KEYS: [&str; 8] = [
     "ssbvb_unique_gpu_ms",
     "ssbvb_exact_gpu_ms",
     "esvo_gpu_ms",
@@ -264,6 +269,7 @@ const GPU_MS_KEYS: [&str; 7] = [
     "dense_dda_gpu_ms",
     "esvo_compute_gpu_ms",
     "octree_compute_gpu_ms",
+    "ssbvb_splat_gpu_ms",
 ];
 
 /// The GPU-time table of `paper.md` (where the adapter has timestamps).
@@ -282,27 +288,47 @@ fn gpu_table(rows: &[PaperRow]) -> Table<'_, PaperRow> {
 }
 
 /// The ratios reported: (key, SSBVB technique, ray caster).
-const RATIOS: [(&str, &str, &str); 4] = [
+const RATIOS: [(&str, &str, &str); 5] = [
     ("ssbvb_unique_over_esvo", "ssbvb-unique", "esvo"),
     ("ssbvb_exact_over_esvo", "ssbvb-exact", "esvo"),
     ("ssbvb_unique_over_octree", "ssbvb-unique", "octree"),
     ("ssbvb_exact_over_octree", "ssbvb-exact", "octree"),
+    ("ssbvb_splat_over_esvo", "ssbvb-splat", "esvo"),
 ];
 
-/// The ratios against the faster form of a ray caster (fragment or compute): (key, SSBVB
-/// technique, the caster's forms, Markdown name).
-const BEST_RATIOS: [(&str, &str, &[&str], &str); 2] = [
+/// The forms of ESVO and of the octree caster (fragment, compute).
+const ESVO_FORMS: &[&str] = &["esvo", "esvo-compute"];
+const OCTREE_FORMS: &[&str] = &["octree", "octree-compute"];
+/// The SSBVB frames that draw the same image with the fast march: billboards rasterized
+/// (the default pipeline) or splatted in compute.
+const SSBVB_FORMS: &[&str] = &["ssbvb-unique", "ssbvb-splat"];
+
+/// The ratios of the faster of some SSBVB forms over the faster form of a ray caster
+/// (fragment or compute): (key, SSBVB forms, the caster's forms, Markdown name).
+const BEST_RATIOS: [(&str, &[&str], &[&str], &str); 4] = [
     (
         "ssbvb_unique_over_best_esvo",
-        "ssbvb-unique",
-        &["esvo", "esvo-compute"],
+        &["ssbvb-unique"],
+        ESVO_FORMS,
         "ssbvb-unique / best ESVO",
     ),
     (
         "ssbvb_unique_over_best_octree",
-        "ssbvb-unique",
-        &["octree", "octree-compute"],
+        &["ssbvb-unique"],
+        OCTREE_FORMS,
         "ssbvb-unique / best octree",
+    ),
+    (
+        "best_ssbvb_over_best_esvo",
+        SSBVB_FORMS,
+        ESVO_FORMS,
+        "**best SSBVB / best ESVO**",
+    ),
+    (
+        "best_ssbvb_over_best_octree",
+        SSBVB_FORMS,
+        OCTREE_FORMS,
+        "best SSBVB / best octree",
     ),
 ];
 
@@ -334,9 +360,9 @@ fn table(rows: &[PaperRow]) -> Table<'_, PaperRow> {
                 .md(format!("{num} / {den}"), Fmt::fixed(2).or("-")),
         );
     }
-    for (key, num, dens, name) in BEST_RATIOS {
+    for (key, nums, dens, name) in BEST_RATIOS {
         columns.push(
-            Column::new(key, move |r: &PaperRow| r.ratio_to_best(num, dens))
+            Column::new(key, move |r: &PaperRow| r.best_ratio(nums, dens))
                 .csv(Fmt::fixed(4))
                 .md(name, Fmt::fixed(2).or("-")),
         );
@@ -372,8 +398,9 @@ fn markdown(r: &PaperReport, rows: &[PaperRow]) -> String {
     s.push_str(
         "\nMedian frame ms of each technique's whole frame in the same run; ratios are SSBVB \
          frame over ray-caster frame (below 1: SSBVB faster); \"best\" is the faster of a \
-         caster's fragment and compute forms. The paper's ratio is its render times (GTX \
-         660).\n",
+         caster's fragment and compute forms, and of the SSBVB frame's rasterized \
+         (`ssbvb-unique`) and splatted (`ssbvb-splat`) billboards, which draw the same \
+         G-buffer. The paper's ratio is its render times (GTX 660).\n",
     );
     let f = &r.figure8;
     s.push_str(&format!(
@@ -423,8 +450,9 @@ mod tests {
                 None,
                 Some(6.0),
                 None,
+                Some(2.5),
             ],
-            gpu_ms: vec![None; 7],
+            gpu_ms: vec![None; 8],
             paper_ssbvb_over_esvo: Some(PAPER_BUNNY_L9_720P),
         };
         assert_eq!(row.ratio("ssbvb-exact", "esvo"), Some(0.25));
@@ -432,14 +460,18 @@ mod tests {
         assert_eq!(row.ratio("ssbvb-unique", "dense-dda"), None);
         // The faster form of ESVO (compute, 6 ms) and the only octree form measured.
         assert_eq!(
-            row.ratio_to_best("ssbvb-unique", &["esvo", "esvo-compute"]),
+            row.best_ratio(&["ssbvb-unique"], &["esvo", "esvo-compute"]),
             Some(0.5)
         );
         assert_eq!(
-            row.ratio_to_best("ssbvb-unique", &["octree", "octree-compute"]),
+            row.best_ratio(&["ssbvb-unique"], &["octree", "octree-compute"]),
             Some(0.75)
         );
-        assert_eq!(row.ratio_to_best("ssbvb-unique", &["dense-dda"]), None);
+        assert_eq!(row.best_ratio(&["ssbvb-unique"], &["dense-dda"]), None);
+        // The faster SSBVB form (splat, 2.5 ms) over the faster ESVO form (6 ms).
+        assert_eq!(row.best_ratio(SSBVB_FORMS, ESVO_FORMS), Some(2.5 / 6.0));
+        assert_eq!(row.best_ratio(SSBVB_FORMS, OCTREE_FORMS), Some(2.5 / 4.0));
+        assert_eq!(row.ratio("ssbvb-splat", "esvo"), Some(2.5 / 8.0));
         let csv = table(std::slice::from_ref(&row)).csv();
         assert!(
             csv.starts_with("scene,level,width,height,ssbvb_unique_ms"),
@@ -456,21 +488,30 @@ mod tests {
             level: 9,
             width: 1280,
             height: 720,
-            ms: vec![Some(3.0), None, Some(8.0), None, None, Some(5.0), None],
-            gpu_ms: vec![Some(1.0), None, esvo_gpu, None, None, Some(2.0), None],
+            ms: vec![
+                Some(3.0),
+                None,
+                Some(8.0),
+                None,
+                None,
+                Some(5.0),
+                None,
+                None,
+            ],
+            gpu_ms: vec![Some(1.0), None, esvo_gpu, None, None, Some(2.0), None, None],
             paper_ssbvb_over_esvo: None,
         };
         let gpu = row(Some(4.0));
         assert_eq!(gpu.ratio("ssbvb-unique", "esvo"), Some(0.25));
         assert_eq!(
-            gpu.ratio_to_best("ssbvb-unique", &["esvo", "esvo-compute"]),
+            gpu.best_ratio(&["ssbvb-unique"], &["esvo", "esvo-compute"]),
             Some(0.5)
         );
         // ESVO's frame has no GPU time: the whole row compares wall times.
         let wall = row(None);
         assert_eq!(wall.ratio("ssbvb-unique", "esvo"), Some(3.0 / 8.0));
         assert_eq!(
-            wall.ratio_to_best("ssbvb-unique", &["esvo", "esvo-compute"]),
+            wall.best_ratio(&["ssbvb-unique"], &["esvo", "esvo-compute"]),
             Some(0.6)
         );
         let csv = table(std::slice::from_ref(&gpu)).csv();
