@@ -73,9 +73,12 @@ impl PassImpl for SplatBillboards {
     type Params = SplatBillboardsParams;
     const SHADER: &'static str = "splat_billboards.wgsl";
     const OWN: &'static [OwnBinding] = OWN;
-    // Compute splats, and a fragment shader that reads the atomics it wrote.
+    // Compute splats dispatched indirectly, and a fragment shader that reads the atomics
+    // they wrote.
     const NEEDS: KindNeeds = KindNeeds::new(
-        wgpu::DownlevelFlags::COMPUTE_SHADERS.union(wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE),
+        wgpu::DownlevelFlags::COMPUTE_SHADERS
+            .union(wgpu::DownlevelFlags::INDIRECT_EXECUTION)
+            .union(wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE),
         3,
     );
 
