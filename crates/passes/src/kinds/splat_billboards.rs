@@ -32,7 +32,8 @@ use ssbvb_graph::{BillboardMode, SplatBillboardsParams};
 
 use crate::runtime::registry::{OwnBinding, OwnKind};
 use crate::runtime::recorder::Recorder;
-use crate::kinds::gbuffer::PulledPipeline;
+use crate::kinds::gbuffer::{PulledPipeline, Specialized};
+use crate::runtime::bindings::PassBindings;
 use crate::runtime::pipelines::pipeline_layout;
 use crate::runtime::registry::{KindNeeds, PassImpl, PassInit};
 use crate::error::PassError;
@@ -40,16 +41,25 @@ use crate::runtime::node::PassNode;
 
 /// What the splat binds itself: per pixel the nearest depth's bits and the winning entry,
 /// interleaved, then per SSBVB entry its quad's view depth, in one buffer (the pass then
-/// fits WebGPU's 8 storage buffers per stage).
-pub const OWN: &[OwnBinding] = &[OwnBinding {
-    name: "splat_pixels",
-    kind: OwnKind::StorageReadWrite,
-}];
+/// fits WebGPU's 8 storage buffers per stage); and the splat steps' indirect dispatch
+/// arguments, which only `args_main` binds (a dispatch may not bind the buffer it reads
+/// its arguments from).
+pub const OWN: &[OwnBinding] = &[
+    OwnBinding {
+        name: "splat_pixels",
+        kind: OwnKind::StorageReadWrite,
+    },
+    OwnBinding {
+        name: "splat_dispatch",
+        kind: OwnKind::StorageReadWrite,
+    },
+];
 
-/// `args_main`'s own group 1 (WGSL bindings 0, 1 and 3): the SSBVB and its entry count
-/// read, the splat's dispatch arguments written. Kept out of the splat's group, which may
-/// not hold a buffer that its own dispatch reads as indirect arguments.
-const ARGS_BINDINGS: [(u32, bool); 3] = [(0, true), (1, true), (3, false)];
+/// Group-1 bindings of the splat steps and the resolve: the SSBVB, its entry count and
+/// the per-pixel words.
+const SPLAT_BINDINGS: [u32; 3] = [0, 1, 2];
+/// Group-1 bindings of `args_main`: the SSBVB, its entry count and the arguments.
+const ARGS_BINDINGS: [u32; 3] = [0, 1, 3];
 
 /// Bytes of the dispatch arguments: two grids of three `u32`.
 const DISPATCH_BYTES: u64 = 24;
@@ -58,7 +68,7 @@ const DISPATCH_BYTES: u64 = 24;
 pub struct SplatBillboards {
     /// Writes the splat steps' indirect dispatch arguments.
     args: wgpu::ComputePipeline,
-    args_layout: wgpu::BindGroupLayout,
+    args_bindings: PassBindings,
     /// Both splat steps (dispatched with one, then two layers of workgroups).
     splat: wgpu::ComputePipeline,
     resolve: PulledPipeline,
@@ -84,7 +94,7 @@ impl PassImpl for SplatBillboards {
 
     /// Compiles the splat and the resolve; `mode` becomes the WGSL override `RAY_BOX`.
     fn new(init: &PassInit<'_>, params: &SplatBillboardsParams) -> Result<Self, PassError> {
-        let (ctx, scene, _, pass) = init.parts();
+        let (ctx, scene, pipeline, pass) = init.parts();
         let constants = [
             ("SIZE_SCALE", f64::from(params.size_scale)),
             ("CULL_COS", f64::from(crate::kinds::billboards::DEFAULT_CULL_COS)),
@@ -94,11 +104,12 @@ impl PassImpl for SplatBillboards {
                 f64::from(u8::from(params.mode == BillboardMode::RayBox)),
             ),
         ];
-        let resolve = PulledPipeline::new::<Self>(init, &constants)?;
-        let module = ctx.shader(
-            Self::SHADER,
-            &ssbvb_gpu::shaders::source_for(Self::SHADER, &scene.bindings)?,
-        )?;
+        let special = Specialized {
+            source: ssbvb_gpu::shaders::source_for(Self::SHADER, &scene.bindings)?,
+            used: SPLAT_BINDINGS.to_vec(),
+        };
+        let resolve = PulledPipeline::with_fragment_for::<Self>(init, &constants, "fs_main", &special)?;
+        let module = ctx.shader(Self::SHADER, &special.source)?;
         let label = format!("pass `{}`: splat pipelines", pass.name);
         let splat = ctx.validated(&label, |d| {
             let layout = pipeline_layout(d, &label, scene, Some(&resolve.bindings));
@@ -114,7 +125,17 @@ impl PassImpl for SplatBillboards {
                 cache: None,
             })
         })?;
-        let (args, args_layout) = args_pipeline(ctx, scene, &module, &label)?;
+        let args_bindings = PassBindings::used_only(ctx, pipeline, pass, OWN, Some(&ARGS_BINDINGS));
+        let args = ctx.validated(&label, |d| {
+            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("args_main"),
+                layout: Some(&pipeline_layout(d, &label, scene, Some(&args_bindings))),
+                module: &module,
+                entry_point: Some("args_main"),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        })?;
         let dispatch = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("splat dispatch arguments"),
             size: DISPATCH_BYTES,
@@ -123,52 +144,13 @@ impl PassImpl for SplatBillboards {
         });
         Ok(Self {
             args,
-            args_layout,
+            args_bindings,
             splat,
             resolve,
             dispatch,
             pixels: None,
         })
     }
-}
-
-/// `args_main`'s pipeline and its group-1 layout ([`ARGS_BINDINGS`]).
-fn args_pipeline(
-    ctx: &GpuContext,
-    scene: &ssbvb_gpu::scene::GpuScene,
-    module: &wgpu::ShaderModule,
-    label: &str,
-) -> Result<(wgpu::ComputePipeline, wgpu::BindGroupLayout), PassError> {
-    Ok(ctx.validated(label, |d| {
-        let entries = ARGS_BINDINGS.map(|(binding, read_only)| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        });
-        let group = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("splat arguments"),
-            entries: &entries,
-        });
-        let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("splat arguments"),
-            bind_group_layouts: &[Some(&scene.layout), Some(&group)],
-            immediate_size: 0,
-        });
-        let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("args_main"),
-            layout: Some(&layout),
-            module,
-            entry_point: Some("args_main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        (pipeline, group)
-    })?)
 }
 
 impl SplatBillboards {
@@ -202,19 +184,9 @@ impl PassNode for SplatBillboards {
             .resolve
             .bindings
             .bind_group(rec, &[("splat_pixels", words.as_entire_binding())])?;
-        let args_group = rec.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("splat arguments"),
-            layout: &self.args_layout,
-            entries: &[
-                (0, rec.buffer("ssbvb")),
-                (1, rec.buffer("billboard_draw")),
-                (3, &self.dispatch),
-            ]
-            .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                binding,
-                resource: buffer.as_entire_binding(),
-            }),
-        });
+        let args_group = self
+            .args_bindings
+            .bind_group(rec, &[("splat_dispatch", self.dispatch.as_entire_binding())])?;
         encoder.clear_buffer(words, 0, None);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
