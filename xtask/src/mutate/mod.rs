@@ -79,6 +79,7 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
             "empty_space::",
             "scale::counters",
             "scale::a_grid",
+            "scale::models_of",
         ],
     ),
     (
