@@ -31,6 +31,7 @@ use ssbvb_voxel::model::cell_size;
 use crate::empty_space::{hollow_box, prefilter_pipeline, synthetic_asset};
 
 mod harness;
+mod snapped;
 
 pub(crate) use harness::{FilterRun, check_against_reference, run_filter};
 use harness::{cell_sizes, check_pipeline_against_reference, diff_png, run_filter_with};

@@ -74,17 +74,38 @@ pub(super) fn run_filter_with(
     for e in entries(&frame) {
         assert!(e.iter().all(|v| v.is_finite()), "entry {e:?}");
     }
+    let hits = hits_of_slots(scene, camera, size, &frame.scene.visible, &slots, pixels);
+    FilterRun {
+        frame,
+        slots,
+        fill,
+        hits,
+    }
+}
+
+/// Per pixel of a `pixels`-texel grid, the hit of the SSBVB `slots` in the reference's
+/// numbering (`visible`: the scene's visible instances of that frame).
+pub(super) fn hits_of_slots(
+    scene: &Scene,
+    camera: &Camera,
+    size: (u32, u32),
+    visible: &[ssbvb_gpu::scene::VisibleInstance],
+    slots: &[VoxelSlot],
+    pixels: usize,
+) -> Vec<Option<GpuHit>> {
     let inst = placed(scene, camera, size);
     let mut hits = vec![None; pixels];
-    for s in &slots {
+    for s in slots {
         assert!((s.pixel as usize) < pixels, "{s:?}");
         assert!(s.t.is_finite() && s.t >= 0.0, "{s:?}");
         assert!(s.face < 6, "{s:?}");
-        let vis = frame.scene.visible[s.instance as usize];
+        let vis = visible[s.instance as usize];
         let (xf, level, _) = inst[vis.scene_index as usize];
         assert_eq!(vis.level, level);
         let n = s.face_normal().map(f64::from);
         let nw = (xf.matrix3.inverse().transpose() * DVec3::from(n)).normalize();
+        // The voxel's grid level rides in the slot: the instance's, every page resident.
+        assert_eq!(s.voxel.uv, level, "{s:?}");
         let cell = s.voxel.cell();
         let max = 1u32 << level;
         assert!(cell.iter().all(|&c| c < max), "{s:?}");
@@ -97,12 +118,7 @@ pub(super) fn run_filter_with(
             normal: nw.as_vec3().to_array(),
         });
     }
-    FilterRun {
-        frame,
-        slots,
-        fill,
-        hits,
-    }
+    hits
 }
 
 /// Whether the reference's hit/miss at pixel `(x, y)` changes within `eps` pixels.
