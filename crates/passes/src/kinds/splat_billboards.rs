@@ -155,18 +155,20 @@ impl PassImpl for SplatBillboards {
 
 impl SplatBillboards {
     /// Makes the words for `pixels` pixels (two each) and `entries` SSBVB entries (one
-    /// each) unless they exist at that size.
-    fn buffers(&mut self, ctx: &GpuContext, pixels: u64, entries: u64) {
+    /// each) unless they exist at that size; out of memory is an error (12 bytes a pixel:
+    /// 100 MB at 4K).
+    fn buffers(&mut self, ctx: &GpuContext, pixels: u64, entries: u64) -> Result<(), PassError> {
         let words = 2 * pixels + entries;
         if self.pixels.as_ref().is_none_or(|p| p.1 != words) {
-            let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            let buffer = ctx.checked_buffer(&wgpu::BufferDescriptor {
                 label: Some("splat pixels"),
                 size: (words * 4).max(16),
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
-            });
+            })?;
             self.pixels = Some((buffer, words));
         }
+        Ok(())
     }
 }
 
@@ -178,7 +180,7 @@ impl PassNode for SplatBillboards {
     ) -> Result<(), PassError> {
         let (w, h) = rec.screen;
         let entries = rec.buffer("ssbvb").size() / 32;
-        self.buffers(rec.gpu, w as u64 * h as u64, entries);
+        self.buffers(rec.gpu, w as u64 * h as u64, entries)?;
         let (words, _) = self.pixels.as_ref().expect("made above");
         let bind_group = self
             .resolve
