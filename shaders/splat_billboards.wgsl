@@ -5,11 +5,11 @@
 // splat_billboards: the billboards of the SSBVB as a compute splat (Schütz, Kerbl and
 // Wimmer's compute rasterization of point clouds), for adapters whose raster units are
 // weak (a CPU adapter; data-centre GPUs such as the H100/H200). Same quads and the same
-// pixel shading as billboards.wgsl (billboard_quad.inc.wgsl), three steps:
+// pixel shading as billboards.wgsl (billboard_quad.inc.wgsl), in four steps:
 //
 // 0. Arguments (compute, `args_main`, one thread): the two splat dispatches' workgroup
-//    counts from the filter's entry count, so that no workgroup starts for an empty slot
-//    of the SSBVB (on a CPU adapter an empty workgroup still costs about a microsecond).
+//    counts from the filter's entry count: no workgroup for an empty slot of the SSBVB
+//    (one slot per pixel; an empty workgroup still costs its launch, docs/benchmarks.md).
 // 1. Depths (compute, `splat_main`, one thread per SSBVB entry): every pixel centre inside the
 //    entry's quad (the whole screen for a near-field quad) that the billboard covers takes
 //    the larger of its reversed-Z depth and the pixel's (`atomicMax` on the depth's bits:
@@ -21,7 +21,7 @@
 //    writes what that billboard's fragment writes, with its depth, depth-tested against
 //    the triangles already there; a pixel without one is discarded.
 //
-// The per-pixel words are cleared to 0 every frame (0 = no depth, no entry).
+// The words are cleared to 0 every frame (0 = no depth, no entry).
 
 // Whether the fragment intersects the pixel's ray with the voxel box (RayBox) or is the
 // flat quad (Flat, the paper).
