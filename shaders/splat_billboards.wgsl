@@ -1,232 +1,45 @@
 //#include "common.inc.wgsl"
 //#include "billboard_quad.inc.wgsl"
 //#include "fullscreen.inc.wgsl"
+//#include "splat_billboards.inc.wgsl"
 
-// splat_billboards: the billboards of the SSBVB as a compute splat (Schütz, Kerbl and
-// Wimmer's compute rasterization of point clouds), for adapters whose raster units are
-// weak (a CPU adapter; data-centre GPUs such as the H100/H200). Same quads and the same
-// pixel shading as billboards.wgsl (billboard_quad.inc.wgsl), in four steps:
-//
-// 0. Arguments (compute, `args_main`, one thread): the two splat dispatches' workgroup
-//    counts from the filter's entry count: no workgroup for an empty slot of the SSBVB
-//    (one slot per pixel; an empty workgroup still costs its launch, docs/benchmarks.md).
-// 1. Depths (compute, `splat_main`, one thread per SSBVB entry): every pixel centre inside the
-//    entry's quad (the whole screen for a near-field quad) that the billboard covers takes
-//    the larger of its reversed-Z depth and the pixel's (`atomicMax` on the depth's bits:
-//    non-negative floats order like their bits).
-// 2. Entries (`splat_main` again, same threads and pixels): where the pixel's depth is this entry's,
-//    the lowest entry wins (`atomicMax` of the inverted index) — as the rasterizer's
-//    strict depth test keeps the first of equal-depth quads, drawn in entry order.
-// 3. `vs_main`/`fs_main` (a fullscreen triangle into the G-buffer): a pixel with a winner
-//    writes what that billboard's fragment writes, with its depth, depth-tested against
-//    the triangles already there; a pixel without one is discarded.
-//
-// The words are cleared to 0 every frame (0 = no depth, no entry).
+// splat_billboards: the compute splat with 32-bit atomics, for every adapter with compute
+// shaders (splat_billboards.inc.wgsl has the steps). The splat takes two steps over the
+// same pixels: step 0 takes each pixel's nearest depth (`atomicMax` on its bits), step 1,
+// where that depth is the entry's own, the lowest entry (`atomicMax` of the inverted
+// index). Where the adapter has 64-bit atomics, splat_billboards_wide.wgsl does both in
+// one step.
 
-// Whether the fragment intersects the pixel's ray with the voxel box (RayBox) or is the
-// flat quad (Flat, the paper).
-override RAY_BOX: bool = false;
-
-@group(1) @binding(0) var<storage, read> ssbvb: array<VoxelSlot>;
-// Written by the filter: `instance_count` = the number of valid SSBVB entries.
-@group(1) @binding(1) var<storage, read> billboard_draw: array<u32, 4>;
 // Per pixel p = y * width + x: word 2p the nearest depth's bits, word 2p + 1 the winning
 // entry, inverted; after the pixels, per entry e: word `entry_word(e)` its quad plane's
-// view depth (bits; `NEAR_FIELD_WORD` for a near-field quad), written by the depth step so
-// that the resolve need not rebuild the winner's quad at every pixel. One buffer: WebGPU
-// allows 8 storage buffers per stage.
+// view depth (bits; `NEAR_FIELD_WORD` for a near-field quad), written by step 0 so that the
+// resolve need not rebuild the winner's quad at every pixel. One buffer: WebGPU allows 8
+// storage buffers per stage.
 @group(1) @binding(2) var<storage, read_write> splat_pixels: array<atomic<u32>>;
-// `args_main`'s output, the splat dispatches' indirect arguments: words 0..3 the depth
-// step's grid (z = 1), words 3..6 the entry step's (z = 2). Bound only to `args_main`.
-@group(1) @binding(3) var<storage, read_write> splat_dispatch: array<u32, 6>;
-
-// A non-near-field quad's plane has a negative view depth: +0.0's bits mark a near field.
-const NEAR_FIELD_WORD: u32 = 0u;
 
 // The word of entry `e`'s quad depth, after the per-pixel words.
 fn entry_word(e: u32) -> u32 {
     return 2u * u32(frame.screen.x) * u32(frame.screen.y) + e;
 }
 
-// The quad plane's point under pixel centre `px`: view space (s * -cz, cz), taken to world.
-fn quad_point_world(cz: f32, px: vec2<f32>) -> vec3<f32> {
-    let s = pixel_slope(px);
-    let view3 = mat3x3(frame.view[0].xyz, frame.view[1].xyz, frame.view[2].xyz);
-    return transpose(view3) * vec3(s * -cz, cz);
+fn store_plane(e: u32, bits: u32) {
+    atomicStore(&splat_pixels[entry_word(e)], bits);
 }
 
-// The fragment of entry `slot` at pixel centre `px` (screen pixels).
-fn fragment_at(slot: VoxelSlot, q: Quad, px: vec2<f32>) -> Fragment {
-    if RAY_BOX {
-        return ray_box_fragment(slot, px);
-    }
-    if q.near_field {
-        return flat_fragment(slot, q, px, vec3(0.0));
-    }
-    var f: Fragment;
-    f.covered = false;
-    if !quad_covers(q, px) {
-        return f;
-    }
-    return flat_fragment(slot, q, px, quad_point_world(q.cz, px));
+fn plane_bits(e: u32) -> u32 {
+    return atomicLoad(&splat_pixels[entry_word(e)]);
 }
 
-// The parts of entry `e`'s quad that its fragments read, without rebuilding the quad (a
-// CPU adapter runs both sides of a branch: a rebuild on a rare path costs every pixel):
-// the plane's depth from the depth step, the centre.
-fn winner_quad(slot: VoxelSlot, e: u32) -> Quad {
-    let cz_bits = atomicLoad(&splat_pixels[entry_word(e)]);
-    var q: Quad;
-    q.valid = true;
-    q.near_field = cz_bits == NEAR_FIELD_WORD;
-    q.cz = bitcast<f32>(cz_bits);
-    q.c = slot_centre_world(instances[slot.instance], slot);
-    return q;
-}
-
-// The winning entry's fragment at a pixel centre the splat found its quad to cover: as
-// `fragment_at` there.
-fn winner_fragment(slot: VoxelSlot, q: Quad, px: vec2<f32>) -> Fragment {
-    if RAY_BOX {
-        return ray_box_fragment(slot, px);
-    }
-    // A near-field fragment intersects its ray with the box and ignores the plane point.
-    return flat_fragment(slot, q, px, quad_point_world(q.cz, px));
-}
-
-// Pixels of slack around a quad's pixel bounds: far more than the f32 rounding of the
-// slope-to-pixel mapping (about 1e-3 px at 4K), far less than the whole pixel it once was
-// (a quad a pixel wide then looped over 16 pixels for 1 to 4 centres; docs/benchmarks.md).
-const BOUNDS_SLACK: f32 = 1.0 / 64.0;
-
-// The pixel rectangle (min x, min y, max x, max y; inclusive) whose centres may lie in the
-// quad: the screen for a near-field quad or a ray-box fragment's quad... the quad's
-// corners otherwise.
-fn pixel_bounds(q: Quad) -> vec4<i32> {
-    let size = vec2<i32>(frame.screen.xy);
-    let all_px = vec4(0, 0, size.x - 1, size.y - 1);
-    if q.near_field {
-        return all_px;
-    }
-    let tan_xy = vec2(length(frame.cam_right.xyz), length(frame.cam_up.xyz));
-    var lo = vec2(3.0e38);
-    var hi = vec2(-3.0e38);
-    for (var k = 0u; k < 4u; k++) {
-        let uv = vec2(f32(k & 1u), f32(k >> 1u));
-        let p = q.mid + (uv * 2.0 - 1.0) * q.half;
-        let s = p.x * q.axis + p.y * vec2(-q.axis.y, q.axis.x);
-        let ndc = s / tan_xy;
-        let pix = vec2((ndc.x + 1.0) * 0.5, (1.0 - ndc.y) * 0.5) * frame.screen.xy;
-        lo = min(lo, pix);
-        hi = max(hi, pix);
-    }
-    if !(all(lo == lo) && all(hi == hi)) {
-        return all_px;
-    }
-    // Clamped in f32 first: a quad far off screen (slopes of a very narrow lens) must not
-    // convert out of i32's range. Pixel x covers centre x + 0.5: the centres in [lo, hi],
-    // with BOUNDS_SLACK for the rounding of this mapping (quad_covers decides exactly).
-    let sz = frame.screen.xy;
-    let lo_c = clamp(lo, vec2(-2.0), sz + 2.0);
-    let hi_c = clamp(hi, vec2(-2.0), sz + 2.0);
-    let a = clamp(vec2<i32>(ceil(lo_c - 0.5 - BOUNDS_SLACK)), vec2(0), size - 1);
-    let b = clamp(vec2<i32>(floor(hi_c - 0.5 + BOUNDS_SLACK)), vec2(-1), size - 1);
-    return vec4(a, b);
-}
-
-// Entry index of a thread of a dispatch of 64-thread workgroups (every layer covers entries).
-fn entry_index(wg: vec3<u32>, nwg: vec3<u32>, li: u32) -> u32 {
-    return ((wg.z * nwg.y + wg.y) * nwg.x + wg.x) * 64u + li;
-}
-
-// A grid of `layers` layers with at least `groups` workgroups in all, x at most 65535
-// (WebGPU's default limit per dimension); no workgroup when `groups` is 0.
-fn splat_grid(groups: u32, layers: u32) -> vec3<u32> {
-    let per_layer = (groups + layers - 1u) / layers;
-    let x = min(per_layer, 65535u);
-    let y = select(0u, (per_layer + x - 1u) / x, x > 0u);
-    return vec3(x, y, layers);
-}
-
-@compute @workgroup_size(1)
-fn args_main() {
-    let entries = min(billboard_draw[1], arrayLength(&ssbvb));
-    let groups = (entries + 63u) / 64u;
-    let depths = splat_grid(groups, 1u);
-    let winners = splat_grid(groups, 2u);
-    splat_dispatch = array(depths.x, depths.y, depths.z, winners.x, winners.y, winners.z);
-}
-
-// Splats entry `e` (pass 0: depths; pass 1: entries at the winning depth).
-fn splat(e: u32, pass_kind: u32) {
-    if e >= min(billboard_draw[1], arrayLength(&ssbvb)) {
-        return;
-    }
-    let slot = ssbvb[e];
-    let q = billboard_quad(slot);
-    if !q.valid {
-        return;
-    }
-    if pass_kind == 0u {
-        atomicStore(&splat_pixels[entry_word(e)], select(bitcast<u32>(q.cz), NEAR_FIELD_WORD, q.near_field));
-    }
-    let b = pixel_bounds(q);
-    let width = u32(frame.screen.x);
-    for (var y = b.y; y <= b.w; y++) {
-        for (var x = b.x; x <= b.z; x++) {
-            let f = fragment_at(slot, q, vec2<f32>(f32(x), f32(y)) + 0.5);
-            if !f.covered {
-                continue;
-            }
-            let p = u32(y) * width + u32(x);
-            let bits = bitcast<u32>(clamp(f.depth, 0.0, 1.0));
-            if pass_kind == 0u {
-                atomicMax(&splat_pixels[2u * p], bits);
-            } else if atomicLoad(&splat_pixels[2u * p]) == bits {
-                atomicMax(&splat_pixels[2u * p + 1u], ~e);
-            }
-        }
+// Step 0: the nearest depth; step 1: the lowest entry at that depth.
+fn splat_pixel(p: u32, depth_bits: u32, e: u32, splat_step: u32) {
+    if splat_step == 0u {
+        atomicMax(&splat_pixels[2u * p], depth_bits);
+    } else if atomicLoad(&splat_pixels[2u * p]) == depth_bits {
+        atomicMax(&splat_pixels[2u * p + 1u], ~e);
     }
 }
 
-// Both steps are this one pipeline, dispatched twice: a grid of one layer (z = 1) splats
-// depths, one of two layers (z = 2) entries. One compiled shader, so the depth a pixel is
-// compared with in the second step is bit for bit the one written in the first (two
-// pipelines could contract floating-point operations differently).
-@compute @workgroup_size(64)
-fn splat_main(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) li: u32,
-) {
-    splat(entry_index(wg, nwg, li), nwg.z - 1u);
-}
-
-@fragment
-fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
-    let pix = vec2<u32>(frag.xy);
-    let p = pix.y * u32(frame.screen.x) + pix.x;
-    let inverted = atomicLoad(&splat_pixels[2u * p + 1u]);
-    if inverted == 0u {
-        discard;
-    }
-    let e = ~inverted;
-    let slot = ssbvb[e];
-    let q = winner_quad(slot, e);
-    var f = winner_fragment(slot, q, frag.xy);
-    if !f.covered {
-        // The splat found this pixel covered; a recomputation here (another pipeline) may
-        // round a pixel on the box's edge the other way. Never a hole: the voxel's colour
-        // and stored normal at its centre.
-        var flat_q = q;
-        flat_q.near_field = false;
-        f = flat_fragment(slot, flat_q, frag.xy, q.c);
-    }
-    var out: GBufferDepth;
-    out.albedo = pack4x8unorm(f.albedo);
-    out.normal = f.normal;
-    out.position = f.position;
-    out.geometric_normal = f.geometric;
-    out.depth = bitcast<f32>(atomicLoad(&splat_pixels[2u * p]));
-    return out;
+// x: the winning entry, inverted (0: none); y: its depth's bits.
+fn pixel_winner(p: u32) -> vec2<u32> {
+    return vec2(atomicLoad(&splat_pixels[2u * p + 1u]), atomicLoad(&splat_pixels[2u * p]));
 }

@@ -109,11 +109,16 @@ pub fn check_kind(file: &str, module: &naga::Module, kind: &PassKind) -> Vec<Str
 /// A registered pass kind (default parameters), its WGSL file and its own bindings.
 pub type Registered = (PassKind, &'static str, &'static [OwnBinding]);
 
-/// Every registered pass kind.
+/// Every registered pass kind, once per WGSL file it may compile (its own and its variants).
 pub fn registered() -> Vec<Registered> {
     ssbvb_passes::registered_kinds()
         .into_iter()
-        .filter_map(|k| ssbvb_passes::kinds::registration(&k).map(|r| (k, r.shader, r.own)))
+        .filter_map(|k| ssbvb_passes::kinds::registration(&k).map(|r| (k, r)))
+        .flat_map(|(k, r)| {
+            std::iter::once(r.shader)
+                .chain(r.variants.iter().copied())
+                .map(move |shader| (k.clone(), shader, r.own))
+        })
         .collect()
 }
 
@@ -194,7 +199,7 @@ pub fn validate_dir(dir: &Path, kinds: &[Registered]) -> Result<Report> {
         mirrored.extend(found);
     }
     // Only when the project's shaders are checked (a test folder holds a few files).
-    if kinds.len() == ssbvb_passes::REGISTRY.len() {
+    if kinds.len() >= ssbvb_passes::REGISTRY.len() {
         for l in &layouts {
             if !mirrored.contains(l.wgsl) {
                 report.errors.push(format!(

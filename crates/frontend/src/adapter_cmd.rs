@@ -30,8 +30,8 @@ pub enum LimitsArg {
     #[default]
     Adapter,
     /// WebGPU's default limits and no optional feature (what a browser guarantees): no
-    /// per-pass GPU times, no exact GPU voxelization; pipelines that need more are refused
-    /// up front, naming what they need.
+    /// per-pass GPU times, no exact GPU voxelization, the compute splat in two steps;
+    /// pipelines that need more are refused up front, naming what they need.
     Webgpu,
 }
 
@@ -128,11 +128,14 @@ pub fn run(args: &AdapterArgs) -> Result<ExitCode> {
 }
 
 /// The format substitutions the device took, what a device without read-only depth-stencil
-/// attachments or depth-to-buffer copies does instead (GL), and the exact GPU voxelization
-/// of animated objects given up where the device has no f64 shaders (WebGPU's limits, most
-/// mobile and browser adapters): they are voxelized by conservative rasterization instead.
+/// attachments or depth-to-buffer copies does instead (GL), the compute splat's two-step
+/// form where `pipeline` has one and the device no 64-bit atomics, and the exact GPU
+/// voxelization of animated objects given up where the device has no f64 shaders (WebGPU's
+/// limits, most mobile and browser adapters): they are voxelized by conservative
+/// rasterization instead.
 pub fn gpu_fallbacks(
     ctx: &ssbvb_gpu::GpuContext,
+    pipeline: &ssbvb_graph::ResolvedPipeline,
     animation: Option<&crate::animation::AnimationReport>,
 ) -> Vec<String> {
     let mut fallbacks = ctx.report().fallbacks.clone();
@@ -149,6 +152,14 @@ pub fn gpu_fallbacks(
             "voxel pixels counted by a stencil-tested draw (no depth texture to buffer copies)"
                 .into(),
         );
+    }
+    let splats = pipeline
+        .passes
+        .iter()
+        .any(|p| matches!(p.kind, ssbvb_graph::PassKind::SplatBillboards(_)));
+    if splats && !ssbvb_passes::kinds::splat_billboards::has_wide_atomics(ctx) {
+        fallbacks
+            .push("the compute splat takes two 32-bit steps, not one (no 64-bit atomics)".into());
     }
     let raster = animation
         .is_some_and(|a| a.method == Some(ssbvb_gpu_build::voxelize::GpuVoxelizeMethod::Raster));

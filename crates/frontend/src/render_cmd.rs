@@ -550,7 +550,7 @@ fn render_gpu(
         adapter: Some(ctx.report().to_string()),
         adapter_is_software: Some(ctx.report().is_software),
         limits: Some(ctx.report().limits),
-        fallbacks: crate::adapter_cmd::gpu_fallbacks(&ctx, animation.as_ref()),
+        fallbacks: crate::adapter_cmd::gpu_fallbacks(&ctx, &renderer.pipeline, animation.as_ref()),
         size: [w, h],
         camera,
         pipeline: Some(pipeline_path.display().to_string()),

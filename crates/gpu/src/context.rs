@@ -484,7 +484,10 @@ impl GpuContext {
             // Counters (fragments shaded per pass) where the adapter has them.
             | wgpu::Features::PIPELINE_STATISTICS_QUERY
             // The exact GPU voxelization (f64 separating-axis test) where present.
-            | wgpu::Features::SHADER_F64;
+            | wgpu::Features::SHADER_F64
+            // The compute splat's one-step form (64-bit atomics) where present.
+            | wgpu::Features::SHADER_INT64
+            | wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS;
         let features = match limits {
             DeviceLimits::Adapter => adapter.features() & wanted,
             DeviceLimits::WebGpuDefaults => wgpu::Features::empty(),

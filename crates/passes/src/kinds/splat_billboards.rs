@@ -5,23 +5,29 @@
 //! shading as [`crate::kinds::billboards`] (`shaders/billboard_quad.inc.wgsl`), so the G-buffer is
 //! the same and smoothing and composite run unchanged.
 //!
-//! Per frame: the per-pixel words (depth bits and entry, interleaved) are cleared; one
-//! thread turns the filter's entry count into the splat's indirect dispatch arguments (no
-//! workgroup for an empty slot: the SSBVB's capacity is the screen, its entries a fraction
-//! of it); a first dispatch (one thread per SSBVB entry, 64 per workgroup) takes the nearest depth of
-//! every pixel its billboard covers by `atomicMax` on the reversed-Z depth's bits; a second
-//! dispatch of the same pipeline keeps, where that depth is its own, the lowest entry (as
-//! the rasterizer's strict depth test keeps the first of equal-depth quads); a fullscreen
-//! resolve writes the winning billboard's fragment with its depth, depth-tested against
-//! what is already in the G-buffer (the triangles), stencil = voxel, from the winner's
-//! quad depth that the first dispatch kept per entry (rebuilding the quad at every pixel
-//! cost the resolve most of its time). Both splat steps are
-//! one compiled shader so that the depths they compute agree bit for bit.
+//! Per frame: the per-pixel words are cleared; one thread turns the filter's entry count
+//! into the splat's indirect dispatch arguments (no workgroup for an empty slot: the
+//! SSBVB's capacity is the screen, its entries a fraction of it); the splat (one thread per
+//! SSBVB entry, 64 per workgroup) offers every pixel its billboard covers the entry and
+//! its reversed-Z depth, and keeps the nearest depth and, at equal depths, the lowest
+//! entry (as the rasterizer's strict depth test keeps the first of equal-depth quads); a
+//! fullscreen resolve writes the winning billboard's fragment with its depth, depth-tested
+//! against what is already in the G-buffer (the triangles), stencil = voxel, from the
+//! winner's quad depth that the splat kept per entry (rebuilding the quad at every pixel
+//! cost the resolve most of its time).
 //!
-//! Why two 32-bit passes and not one 64-bit `atomicMin` of (depth, entry): the 64-bit
-//! form needs `SHADER_INT64_ATOMIC_MIN_MAX`, which Metal and older drivers lack; two
-//! passes over the same pixels need only core atomics, cost a second walk of each quad,
-//! and give the same winner.
+//! Two forms of the splat, the same winners (`shaders/splat_billboards.inc.wgsl` holds what
+//! they share):
+//!
+//! - **One step** (`splat_billboards_wide.wgsl`), where the device has 64-bit atomics
+//!   (`SHADER_INT64_ATOMIC_ALL_OPS`: Vulkan and DX12 on most GPUs, lavapipe): one
+//!   `atomicMax` of (depth bits << 32 | inverted entry) per covered pixel.
+//! - **Two steps** (`splat_billboards.wgsl`) elsewhere (GL, Metal, WebGPU, a device made
+//!   with WebGPU's defaults): a first dispatch takes each pixel's nearest depth by
+//!   `atomicMax` on its bits, a second dispatch of the same pipeline keeps the lowest entry
+//!   where that depth is its own: core 32-bit atomics only, at the price of a second walk
+//!   of each quad. One compiled shader for both steps, so that the depths they compute
+//!   agree bit for bit.
 //!
 //! A thread walks its quad's pixel rectangle: cheap for the default pipeline (one
 //! billboard per visible voxel), costly where quads are large and many (the per-pixel Flat
@@ -39,8 +45,9 @@ use crate::runtime::registry::{KindNeeds, PassImpl, PassInit};
 use crate::error::PassError;
 use crate::runtime::node::PassNode;
 
-/// What the splat binds itself: per pixel the nearest depth's bits and the winning entry,
-/// interleaved, then per SSBVB entry its quad's view depth, in one buffer (the pass then
+/// What the splat binds itself: per pixel the nearest depth's bits and the winning entry
+/// (two 32-bit words, or one 64-bit word), then per SSBVB entry its quad's view depth, in
+/// one buffer (the pass then
 /// fits WebGPU's 8 storage buffers per stage); and the splat steps' indirect dispatch
 /// arguments, which only `args_main` binds (a dispatch may not bind the buffer it reads
 /// its arguments from).
@@ -64,24 +71,36 @@ const ARGS_BINDINGS: [u32; 3] = [0, 1, 3];
 /// Bytes of the dispatch arguments: two grids of three `u32`.
 const DISPATCH_BYTES: u64 = 24;
 
+/// The one-step form's file.
+const WIDE_SHADER: &str = "splat_billboards_wide.wgsl";
+
+/// Whether the device can run the one-step form (64-bit atomics).
+pub fn has_wide_atomics(ctx: &GpuContext) -> bool {
+    ctx.has(wgpu::Features::SHADER_INT64) && ctx.has(wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS)
+}
+
 /// The compiled splat: the arguments, the splat steps and the resolve.
 pub struct SplatBillboards {
     /// Writes the splat steps' indirect dispatch arguments.
     args: wgpu::ComputePipeline,
     args_bindings: PassBindings,
-    /// Both splat steps (dispatched with one, then two layers of workgroups).
+    /// The splat: the one step, or both steps (dispatched with one, then two layers of
+    /// workgroups).
     splat: wgpu::ComputePipeline,
+    /// Whether it is the one-step form (64-bit words).
+    one_step: bool,
     resolve: PulledPipeline,
     /// The splat steps' indirect dispatch arguments.
     dispatch: wgpu::Buffer,
     /// The per-pixel words (depth bits, entry), then one per entry (its quad's depth),
-    /// and how many words that is.
+    /// and how many 32-bit words that is.
     pixels: Option<(wgpu::Buffer, u64)>,
 }
 
 impl PassImpl for SplatBillboards {
     type Params = SplatBillboardsParams;
     const SHADER: &'static str = "splat_billboards.wgsl";
+    const VARIANTS: &'static [&'static str] = &[WIDE_SHADER];
     const OWN: &'static [OwnBinding] = OWN;
     // Compute splats dispatched indirectly, and a fragment shader that reads the atomics
     // they wrote.
@@ -104,12 +123,14 @@ impl PassImpl for SplatBillboards {
                 f64::from(u8::from(params.mode == BillboardMode::RayBox)),
             ),
         ];
+        let one_step = has_wide_atomics(ctx);
+        let shader = if one_step { WIDE_SHADER } else { Self::SHADER };
         let special = Specialized {
-            source: ssbvb_gpu::shaders::source_for(Self::SHADER, &scene.bindings)?,
+            source: ssbvb_gpu::shaders::source_for(shader, &scene.bindings)?,
             used: SPLAT_BINDINGS.to_vec(),
         };
         let resolve = PulledPipeline::with_fragment_for::<Self>(init, &constants, "fs_main", &special)?;
-        let module = ctx.shader(Self::SHADER, &special.source)?;
+        let module = ctx.shader(shader, &special.source)?;
         let label = format!("pass `{}`: splat pipelines", pass.name);
         let splat = ctx.validated(&label, |d| {
             let layout = pipeline_layout(d, &label, scene, Some(&resolve.bindings));
@@ -146,6 +167,7 @@ impl PassImpl for SplatBillboards {
             args,
             args_bindings,
             splat,
+            one_step,
             resolve,
             dispatch,
             pixels: None,
@@ -155,10 +177,11 @@ impl PassImpl for SplatBillboards {
 
 impl SplatBillboards {
     /// Makes the words for `pixels` pixels (two each) and `entries` SSBVB entries (one
-    /// each) unless they exist at that size; out of memory is an error (12 bytes a pixel:
-    /// 100 MB at 4K).
+    /// each, two in the one-step form's 64-bit words) unless they exist at that size; out
+    /// of memory is an error (12 or 16 bytes a pixel: 100 or 133 MB at 4K).
     fn buffers(&mut self, ctx: &GpuContext, pixels: u64, entries: u64) -> Result<(), PassError> {
-        let words = 2 * pixels + entries;
+        let per_entry = if self.one_step { 2 } else { 1 };
+        let words = 2 * pixels + per_entry * entries;
         if self.pixels.as_ref().is_none_or(|p| p.1 != words) {
             let buffer = ctx.checked_buffer(&wgpu::BufferDescriptor {
                 label: Some("splat pixels"),
@@ -202,11 +225,13 @@ impl PassNode for SplatBillboards {
             pass.dispatch_workgroups(1, 1, 1);
             pass.set_bind_group(1, &bind_group, &[]);
             // wgpu orders the dispatches: the arguments are in before the splat reads them,
-            // every depth before entries are chosen. One pipeline for both splat steps (see
-            // the WGSL): z = 1 splats depths, z = 2 entries.
+            // and in the two-step form every depth before entries are chosen. One pipeline
+            // for both steps (see the WGSL): z = 1 is the first, z = 2 the second.
             pass.set_pipeline(&self.splat);
             pass.dispatch_workgroups_indirect(&self.dispatch, 0);
-            pass.dispatch_workgroups_indirect(&self.dispatch, DISPATCH_BYTES / 2);
+            if !self.one_step {
+                pass.dispatch_workgroups_indirect(&self.dispatch, DISPATCH_BYTES / 2);
+            }
         }
         self.resolve.record_resolve(encoder, rec, Some(&bind_group));
         Ok(())

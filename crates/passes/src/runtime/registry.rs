@@ -105,6 +105,9 @@ pub trait PassImpl: PassNode + Sized + 'static {
     type Params: OfKind;
     /// Its WGSL file under `shaders/` (same name as its module).
     const SHADER: &'static str;
+    /// Other forms of that file it may compile instead (chosen by what the device has;
+    /// same entry points and bindings: `cargo xtask validate-shaders` checks each).
+    const VARIANTS: &'static [&'static str] = &[];
     /// The resources it binds itself, after its slots in group 1 ([`super::bindings`]).
     const OWN: &'static [OwnBinding] = &[];
     /// What it needs from an adapter.
@@ -123,6 +126,8 @@ pub struct Registration {
     pub kind: &'static str,
     /// Its WGSL file under `shaders/` (same name as its module).
     pub shader: &'static str,
+    /// Other forms of that file ([`PassImpl::VARIANTS`]).
+    pub variants: &'static [&'static str],
     /// Builds the pass.
     pub create: fn(&PassInit<'_>) -> Result<Box<dyn PassNode>, PassError>,
     /// What it needs from an adapter.
@@ -159,6 +164,7 @@ pub const fn register<P: PassImpl>() -> Registration {
     Registration {
         kind: <P::Params as KindSpec>::NAME,
         shader: P::SHADER,
+        variants: P::VARIANTS,
         create: create::<P>,
         needs: P::NEEDS,
         own: P::OWN,
