@@ -129,6 +129,8 @@ fn begin_gbuffer_pass_timed<'e>(
 /// A pass's shader specialized for its data: the WGSL text, and the group-1 bindings its
 /// pipelines read (the layout holds only those).
 pub(crate) struct Specialized {
+    /// The WGSL file it comes from (the pass's own or one of its variants), for errors.
+    pub file: &'static str,
     /// The WGSL, includes expanded.
     pub source: String,
     /// Group-1 bindings in the layout.
@@ -197,7 +199,7 @@ impl PulledPipeline {
         special: Option<&Specialized>,
     ) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
-        let (shader, own) = (P::SHADER, P::OWN);
+        let (shader, own) = (special.map_or(P::SHADER, |s| s.file), P::OWN);
         let module = match special {
             Some(s) => ctx.shader(shader, &s.source)?,
             None => ctx.shader(shader, &shaders::source_for(shader, &scene.bindings)?)?,

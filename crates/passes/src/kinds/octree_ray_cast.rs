@@ -363,7 +363,11 @@ fn specialize<P: PassImpl>(
             if chunks == 1 { "" } else { "s" },
         )));
     }
-    Ok(Specialized { source, used })
+    Ok(Specialized {
+        file: P::SHADER,
+        source,
+        used,
+    })
 }
 
 /// Every asset's octree in one node array (child indices shifted by where each starts)

@@ -126,6 +126,7 @@ impl PassImpl for SplatBillboards {
         let one_step = has_wide_atomics(ctx);
         let shader = if one_step { WIDE_SHADER } else { Self::SHADER };
         let special = Specialized {
+            file: shader,
             source: ssbvb_gpu::shaders::source_for(shader, &scene.bindings)?,
             used: SPLAT_BINDINGS.to_vec(),
         };
