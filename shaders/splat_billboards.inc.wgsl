@@ -14,17 +14,24 @@
 //    equal depths the lowest entry, as the rasterizer's strict depth test keeps the first
 //    of equal-depth quads, drawn in entry order. Non-negative floats order like their
 //    bits, so the including file decides with integer atomics (`splat_pixel`).
-// 2. `vs_main`/`fs_main` (a fullscreen triangle into the G-buffer): a pixel with a winner
-//    writes what that billboard's fragment writes, with its depth, depth-tested against
-//    the triangles already there; a pixel without one is discarded.
+// 2. `vs_main`/`fs_main` (the resolve, into the G-buffer): a pixel with a winner writes
+//    what that billboard's fragment writes, with its depth, depth-tested against the
+//    triangles already there; a pixel without one is discarded. The resolve draws only
+//    the screen's tiles of TILE_PX² pixels that some quad's pixel range touched (the
+//    splat marks them): a pass over the whole screen cost llvmpipe as much as the splat
+//    itself, mostly for pixels without a quad (docs/benchmarks.md).
 //
 // The including file declares the words (`splat_pixels`, cleared to 0 every frame: no
-// depth, no entry) and defines how they are read and written: `store_plane(e, bits)`,
-// `plane_bits(e)`, `splat_pixel(p, depth_bits, e, step)` and `pixel_winner(p)`.
+// depth, no entry, no tile touched) and defines how they are read and written:
+// `store_plane(e, bits)`, `plane_bits(e)`, `splat_pixel(p, depth_bits, e, step)`,
+// `pixel_winner(p)` and `mark_tile(t)`.
 
 // Whether the fragment intersects the pixel's ray with the voxel box (RayBox) or is the
 // flat quad (Flat, the paper).
 override RAY_BOX: bool = false;
+// Pixels per side of a resolve tile (the pass sets it; its vertex buffer has a word pair
+// per tile).
+override TILE_PX: u32 = 16u;
 
 @group(1) @binding(0) var<storage, read> ssbvb: array<VoxelSlot>;
 // Written by the filter: `instance_count` = the number of valid SSBVB entries.
@@ -157,10 +164,11 @@ fn splat(e: u32, splat_step: u32) {
     if !q.valid {
         return;
     }
+    let b = pixel_bounds(q);
     if splat_step == 0u {
         store_plane(e, select(bitcast<u32>(q.cz), NEAR_FIELD_WORD, q.near_field));
+        mark_tiles(b);
     }
-    let b = pixel_bounds(q);
     let width = u32(frame.screen.x);
     for (var y = b.y; y <= b.w; y++) {
         for (var x = b.x; x <= b.z; x++) {
@@ -172,6 +180,47 @@ fn splat(e: u32, splat_step: u32) {
             splat_pixel(p, bitcast<u32>(clamp(f.depth, 0.0, 1.0)), e, splat_step);
         }
     }
+}
+
+// Tiles across the screen.
+fn tiles_across() -> u32 {
+    return (u32(frame.screen.x) + TILE_PX - 1u) / TILE_PX;
+}
+
+// Marks the tiles that pixel range `b` (min x, min y, max x, max y; inclusive) touches.
+fn mark_tiles(b: vec4<i32>) {
+    if b.x > b.z || b.y > b.w {
+        return;
+    }
+    let lo = vec2<u32>(b.xy) / TILE_PX;
+    let hi = vec2<u32>(b.zw) / TILE_PX;
+    let across = tiles_across();
+    for (var ty = lo.y; ty <= hi.y; ty++) {
+        for (var tx = lo.x; tx <= hi.x; tx++) {
+            mark_tile(ty * across + tx);
+        }
+    }
+}
+
+// The resolve's vertices: six per tile (two triangles), instance `t` being tile `t`, whose
+// word pair the splat's tile words fill (`seen`, copied into the vertex buffer). A tile no
+// quad touched collapses to a point outside the screen: no fragment.
+@vertex
+fn vs_main(
+    @builtin(vertex_index) v: u32,
+    @builtin(instance_index) t: u32,
+    @location(0) seen: vec2<u32>,
+) -> @builtin(position) vec4<f32> {
+    if seen.x == 0u {
+        return vec4(2.0, 2.0, 0.0, 1.0);
+    }
+    let corner = vec2(
+        select(0u, 1u, v == 1u || v == 4u || v == 5u),
+        select(0u, 1u, v == 2u || v == 3u || v == 5u),
+    );
+    let across = tiles_across();
+    let px = vec2<f32>((vec2(t % across, t / across) + corner) * TILE_PX);
+    return vec4(px.x * frame.screen.z * 2.0 - 1.0, 1.0 - px.y * frame.screen.w * 2.0, 0.0, 1.0);
 }
 
 // The splat steps are this one pipeline: a grid of one layer (z = 1) is step 0, one of

@@ -1,6 +1,5 @@
 //#include "common.inc.wgsl"
 //#include "billboard_quad.inc.wgsl"
-//#include "fullscreen.inc.wgsl"
 //#include "splat_billboards.inc.wgsl"
 
 // splat_billboards: the compute splat with 32-bit atomics, for every adapter with compute
@@ -13,13 +12,26 @@
 // Per pixel p = y * width + x: word 2p the nearest depth's bits, word 2p + 1 the winning
 // entry, inverted; after the pixels, per entry e: word `entry_word(e)` its quad plane's
 // view depth (bits; `NEAR_FIELD_WORD` for a near-field quad), written by step 0 so that the
-// resolve need not rebuild the winner's quad at every pixel. One buffer: WebGPU allows 8
-// storage buffers per stage.
+// resolve need not rebuild the winner's quad at every pixel; after the entries, per
+// resolve tile a pair of words, the first 1 where a quad touched the tile. One buffer:
+// WebGPU allows 8 storage buffers per stage.
 @group(1) @binding(2) var<storage, read_write> splat_pixels: array<atomic<u32>>;
 
 // The word of entry `e`'s quad depth, after the per-pixel words.
 fn entry_word(e: u32) -> u32 {
     return 2u * u32(frame.screen.x) * u32(frame.screen.y) + e;
+}
+
+// The first word of tile `t`'s pair, after the entry words.
+fn tile_word(t: u32) -> u32 {
+    return 2u * u32(frame.screen.x) * u32(frame.screen.y) + arrayLength(&ssbvb) + 2u * t;
+}
+
+fn mark_tile(t: u32) {
+    // Most quads share their tile with others: a load before the store spares the write.
+    if atomicLoad(&splat_pixels[tile_word(t)]) == 0u {
+        atomicStore(&splat_pixels[tile_word(t)], 1u);
+    }
 }
 
 fn store_plane(e: u32, bits: u32) {

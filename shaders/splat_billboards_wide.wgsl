@@ -1,6 +1,5 @@
 //#include "common.inc.wgsl"
 //#include "billboard_quad.inc.wgsl"
-//#include "fullscreen.inc.wgsl"
 //#include "splat_billboards.inc.wgsl"
 
 // splat_billboards_wide: the compute splat in one step, for adapters with 64-bit atomics
@@ -11,12 +10,21 @@
 
 // Per pixel p = y * width + x: word p (depth bits << 32) | inverted entry; after the
 // pixels, per entry e: word `pixels + e` its quad plane's view depth in the low half
-// (bits; `NEAR_FIELD_WORD` for a near-field quad).
+// (bits; `NEAR_FIELD_WORD` for a near-field quad); after the entries, per resolve tile a
+// word, 1 where a quad touched the tile.
 @group(1) @binding(2) var<storage, read_write> splat_pixels: array<atomic<u64>>;
 
 // The word of entry `e`'s quad depth, after the per-pixel words.
 fn entry_word(e: u32) -> u32 {
     return u32(frame.screen.x) * u32(frame.screen.y) + e;
+}
+
+fn mark_tile(t: u32) {
+    let w = u32(frame.screen.x) * u32(frame.screen.y) + arrayLength(&ssbvb) + t;
+    // Most quads share their tile with others: a load before the store spares the write.
+    if atomicLoad(&splat_pixels[w]) == u64(0u) {
+        atomicStore(&splat_pixels[w], u64(1u));
+    }
 }
 
 fn store_plane(e: u32, bits: u32) {

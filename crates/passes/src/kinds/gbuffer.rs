@@ -131,6 +131,8 @@ fn begin_gbuffer_pass_timed<'e>(
 pub(crate) struct Specialized {
     /// The WGSL file it comes from (the pass's own or one of its variants), for errors.
     pub file: &'static str,
+    /// The vertex buffers `vs_main` reads (none: it pulls its vertices).
+    pub buffers: &'static [Option<wgpu::VertexBufferLayout<'static>>],
     /// The WGSL, includes expanded.
     pub source: String,
     /// Group-1 bindings in the layout.
@@ -218,6 +220,7 @@ impl PulledPipeline {
                         constants,
                         depth_stencil: Some(depth_stencil.clone()),
                         fs_entry,
+                        buffers: special.map_or(&[][..], |s| s.buffers),
                         ..RenderSpec::new(&label, &module, &layout, &targets)
                     },
                 )
@@ -257,6 +260,27 @@ impl PulledPipeline {
         bind_group: Option<&wgpu::BindGroup>,
     ) {
         self.draw_fullscreen(encoder, rec, bind_group, rec.span_end_timestamps());
+    }
+
+    /// [`PulledPipeline::record_resolve`] drawing `vs_main`'s `vertices` for each of
+    /// `instances`, with vertex buffer `vertex_buffer` (a resolve that draws only parts of
+    /// the screen).
+    pub fn record_resolve_instanced(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &Recorder<'_>,
+        bind_group: &wgpu::BindGroup,
+        vertex_buffer: &wgpu::Buffer,
+        vertices: std::ops::Range<u32>,
+        instances: std::ops::Range<u32>,
+    ) {
+        let mut pass =
+            begin_gbuffer_pass_timed(encoder, rec, STENCIL_VOXEL, rec.span_end_timestamps());
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &rec.scene.bind_group, &[]);
+        pass.set_bind_group(1, bind_group, &[]);
+        pass.set_vertex_buffer(0, vertex_buffer.slice(..));
+        pass.draw(vertices, instances);
     }
 
     fn draw_fullscreen(

@@ -365,6 +365,7 @@ fn specialize<P: PassImpl>(
     }
     Ok(Specialized {
         file: P::SHADER,
+        buffers: &[],
         source,
         used,
     })

@@ -10,11 +10,14 @@
 //! SSBVB's capacity is the screen, its entries a fraction of it); the splat (one thread per
 //! SSBVB entry, 64 per workgroup) offers every pixel its billboard covers the entry and
 //! its reversed-Z depth, and keeps the nearest depth and, at equal depths, the lowest
-//! entry (as the rasterizer's strict depth test keeps the first of equal-depth quads); a
-//! fullscreen resolve writes the winning billboard's fragment with its depth, depth-tested
-//! against what is already in the G-buffer (the triangles), stencil = voxel, from the
-//! winner's quad depth that the splat kept per entry (rebuilding the quad at every pixel
-//! cost the resolve most of its time).
+//! entry (as the rasterizer's strict depth test keeps the first of equal-depth quads), and
+//! marks the screen tiles (16 × 16 pixels) its quad's pixel range touches; the tiles'
+//! words are copied into a vertex buffer, and the resolve draws two triangles per touched
+//! tile (an untouched one collapses), writing the winning billboard's fragment with its
+//! depth, depth-tested against what is already in the G-buffer (the triangles), stencil =
+//! voxel, from the winner's quad depth that the splat kept per entry (rebuilding the quad
+//! at every pixel cost the resolve most of its time; a resolve over the whole screen cost
+//! as much again for pixels without a quad).
 //!
 //! Two forms of the splat, the same winners (`shaders/splat_billboards.inc.wgsl` holds what
 //! they share):
@@ -74,6 +77,26 @@ const DISPATCH_BYTES: u64 = 24;
 /// The one-step form's file.
 const WIDE_SHADER: &str = "splat_billboards_wide.wgsl";
 
+/// Pixels per side of the resolve's tiles (WGSL override `TILE_PX`).
+const TILE_PX: u32 = 16;
+
+/// The resolve's vertex buffer: per tile (instance) the pair of words the splat marks.
+const TILE_VERTICES: [Option<wgpu::VertexBufferLayout<'static>>; 1] =
+    [Some(wgpu::VertexBufferLayout {
+        array_stride: 8,
+        step_mode: wgpu::VertexStepMode::Instance,
+        attributes: &[wgpu::VertexAttribute {
+            format: wgpu::VertexFormat::Uint32x2,
+            offset: 0,
+            shader_location: 0,
+        }],
+    })];
+
+/// Resolve tiles of a `w` × `h` screen.
+fn tile_count(w: u32, h: u32) -> u64 {
+    u64::from(w.div_ceil(TILE_PX)) * u64::from(h.div_ceil(TILE_PX))
+}
+
 /// Whether the device can run the one-step form (64-bit atomics).
 pub fn has_wide_atomics(ctx: &GpuContext) -> bool {
     ctx.has(wgpu::Features::SHADER_INT64) && ctx.has(wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS)
@@ -93,8 +116,10 @@ pub struct SplatBillboards {
     /// The splat steps' indirect dispatch arguments.
     dispatch: wgpu::Buffer,
     /// The per-pixel words (depth bits, entry), then one per entry (its quad's depth),
-    /// and how many 32-bit words that is.
+    /// then two per resolve tile (touched or not), and how many 32-bit words that is.
     pixels: Option<(wgpu::Buffer, u64)>,
+    /// The tiles' words, copied from the splat's for the resolve's vertex buffer.
+    tiles: Option<wgpu::Buffer>,
 }
 
 impl PassImpl for SplatBillboards {
@@ -118,6 +143,7 @@ impl PassImpl for SplatBillboards {
             ("SIZE_SCALE", f64::from(params.size_scale)),
             ("CULL_COS", f64::from(crate::kinds::billboards::DEFAULT_CULL_COS)),
             ("BOX_FOOTPRINT", 1.0),
+            ("TILE_PX", f64::from(TILE_PX)),
             (
                 "RAY_BOX",
                 f64::from(u8::from(params.mode == BillboardMode::RayBox)),
@@ -127,6 +153,7 @@ impl PassImpl for SplatBillboards {
         let shader = if one_step { WIDE_SHADER } else { Self::SHADER };
         let special = Specialized {
             file: shader,
+            buffers: &TILE_VERTICES,
             source: ssbvb_gpu::shaders::source_for(shader, &scene.bindings)?,
             used: SPLAT_BINDINGS.to_vec(),
         };
@@ -172,27 +199,46 @@ impl PassImpl for SplatBillboards {
             resolve,
             dispatch,
             pixels: None,
+            tiles: None,
         })
     }
 }
 
 impl SplatBillboards {
-    /// Makes the words for `pixels` pixels (two each) and `entries` SSBVB entries (one
-    /// each, two in the one-step form's 64-bit words) unless they exist at that size; out
-    /// of memory is an error (12 or 16 bytes a pixel: 100 or 133 MB at 4K).
-    fn buffers(&mut self, ctx: &GpuContext, pixels: u64, entries: u64) -> Result<(), PassError> {
+    /// Makes the words for `pixels` pixels (two each), `entries` SSBVB entries (one each,
+    /// two in the one-step form's 64-bit words) and `tiles` resolve tiles (two each) unless
+    /// they exist at that size, and the tiles' vertex buffer; out of memory is an error
+    /// (12 or 16 bytes a pixel: 100 or 133 MB at 4K). Returns the byte offset of the tiles'
+    /// words.
+    fn buffers(
+        &mut self,
+        ctx: &GpuContext,
+        pixels: u64,
+        entries: u64,
+        tiles: u64,
+    ) -> Result<u64, PassError> {
         let per_entry = if self.one_step { 2 } else { 1 };
-        let words = 2 * pixels + per_entry * entries;
+        let tiles_at = 2 * pixels + per_entry * entries;
+        let words = tiles_at + 2 * tiles;
         if self.pixels.as_ref().is_none_or(|p| p.1 != words) {
             let buffer = ctx.checked_buffer(&wgpu::BufferDescriptor {
                 label: Some("splat pixels"),
                 size: (words * 4).max(16),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                // COPY_SRC: the tiles' words go to the resolve's vertex buffer.
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             })?;
             self.pixels = Some((buffer, words));
+            self.tiles = Some(ctx.checked_buffer(&wgpu::BufferDescriptor {
+                label: Some("splat resolve tiles"),
+                size: 8 * tiles,
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })?);
         }
-        Ok(())
+        Ok(4 * tiles_at)
     }
 }
 
@@ -204,8 +250,10 @@ impl PassNode for SplatBillboards {
     ) -> Result<(), PassError> {
         let (w, h) = rec.screen;
         let entries = rec.buffer("ssbvb").size() / 32;
-        self.buffers(rec.gpu, w as u64 * h as u64, entries)?;
+        let tiles = tile_count(w, h);
+        let tiles_at = self.buffers(rec.gpu, w as u64 * h as u64, entries, tiles)?;
         let (words, _) = self.pixels.as_ref().expect("made above");
+        let tile_words = self.tiles.as_ref().expect("made above");
         let bind_group = self
             .resolve
             .bindings
@@ -234,7 +282,16 @@ impl PassNode for SplatBillboards {
                 pass.dispatch_workgroups_indirect(&self.dispatch, DISPATCH_BYTES / 2);
             }
         }
-        self.resolve.record_resolve(encoder, rec, Some(&bind_group));
+        encoder.copy_buffer_to_buffer(words, tiles_at, tile_words, 0, 8 * tiles);
+        // Six vertices (two triangles) per tile; untouched tiles collapse (see the WGSL).
+        self.resolve.record_resolve_instanced(
+            encoder,
+            rec,
+            &bind_group,
+            tile_words,
+            0..6,
+            0..tiles as u32,
+        );
         Ok(())
     }
 }
