@@ -23,8 +23,8 @@
 //! they share):
 //!
 //! - **One step** (`splat_billboards_wide.wgsl`), where the device has 64-bit atomics
-//!   (`SHADER_INT64_ATOMIC_ALL_OPS`: Vulkan and DX12 on most GPUs, lavapipe): one
-//!   `atomicMax` of (depth bits << 32 | inverted entry) per covered pixel.
+//!   (`SHADER_INT64_ATOMIC_ALL_OPS`: lavapipe, and Vulkan and DX12 GPUs whose drivers
+//!   report it): one `atomicMax` of (depth bits << 32 | inverted entry) per covered pixel.
 //! - **Two steps** (`splat_billboards.wgsl`) elsewhere (GL, Metal, WebGPU, a device made
 //!   with WebGPU's defaults): a first dispatch takes each pixel's nearest depth by
 //!   `atomicMax` on its bits, a second dispatch of the same pipeline keeps the lowest entry
