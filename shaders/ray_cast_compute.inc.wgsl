@@ -1,57 +1,29 @@
 // The compute form of a ray-casting baseline (the pass parameter `compute`): `cs_main`
 // casts each pixel's ray (ray_cast.inc.wgsl's `cast_pixel`, the same code the fragment
-// form runs) in 8×8 workgroups and keeps its hit in `cast_hits`, and whether any pixel of
-// the workgroup's tile hit; `vs_tiles`/`fs_resolve` draw the tiles with a hit
-// (resolve_tiles.inc.wgsl) and write the G-buffer of each pixel's hit
-// (`gbuffer_of_best`), so both forms write the same G-buffer. Why: a GPU whose fragment
-// work is slow (the H200 of docs/benchmarks.md) traces the same rays faster in compute.
+// form runs) in 8×8 workgroups and keeps its hit in `cast_hits`; `fs_resolve`, one
+// fullscreen triangle, writes the G-buffer of that hit (`gbuffer_of_best`), so both forms
+// write the same G-buffer. Why: a GPU whose fragment work is slow (the H200 of
+// docs/benchmarks.md) traces the same rays faster in compute.
 // Needs ray_cast.inc.wgsl before it; the includer puts `cast_hits` at the binding after
 // its others.
 
-//#include "resolve_tiles.inc.wgsl"
-
 // Per pixel (row-major): the hit instance + 1 (0: no hit), the voxel id, the entered face
-// and the bits of the hit distance; after the pixels, per 8×8 tile (a workgroup) x = 1
-// where one of its pixels hit.
+// and the bits of the hit distance.
 @group(1) @binding(10) var<storage, read_write> cast_hits: array<vec4<u32>>;
 
-// Whether a pixel of this workgroup's tile hit.
-var<workgroup> tile_hit: atomic<u32>;
-
 @compute @workgroup_size(8, 8)
-fn cs_main(
-    @builtin(global_invocation_id) gid: vec3<u32>,
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) li: u32,
-) {
+fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let w = u32(frame.screen.x);
-    let h = u32(frame.screen.y);
-    if gid.x < w && gid.y < h {
-        // The pixel's centre, as the fragment form's `frag.xy`.
-        cast_pixel(vec2(f32(gid.x) + 0.5, f32(gid.y) + 0.5));
-        var record = vec4(0u);
-        if best.hit {
-            record = vec4(best_inst + 1u, best.id, best.face, bitcast<u32>(best.t));
-            atomicStore(&tile_hit, 1u);
-        }
-        cast_hits[gid.y * w + gid.x] = record;
+    if gid.x >= w || gid.y >= u32(frame.screen.y) {
+        return;
     }
-    workgroupBarrier();
-    if li == 0u {
-        cast_hits[w * h + wg.y * nwg.x + wg.x] = vec4(atomicLoad(&tile_hit), 0u, 0u, 0u);
+    // The pixel's centre, as the fragment form's `frag.xy`.
+    cast_pixel(vec2(f32(gid.x) + 0.5, f32(gid.y) + 0.5));
+    var record = vec4(0u);
+    if best.hit {
+        record = vec4(best_inst + 1u, best.id, best.face, bitcast<u32>(best.t));
     }
-}
-
-// The resolve's vertices: instance `t` is the 8×8 tile `t`, `seen` its word (copied from
-// the tiles' records into the vertex buffer).
-@vertex
-fn vs_tiles(
-    @builtin(vertex_index) v: u32,
-    @builtin(instance_index) t: u32,
-    @location(0) seen: vec2<u32>,
-) -> @builtin(position) vec4<f32> {
-    return tile_vertex(v, t, seen.x, 8u);
+    cast_hits[gid.y * w + gid.x] = record;
 }
 
 @fragment

@@ -202,15 +202,25 @@ fn mark_tiles(b: vec4<i32>) {
     }
 }
 
-// The resolve's vertices (resolve_tiles.inc.wgsl): instance `t` is tile `t`, `seen` its
-// word pair, copied from the splat's tile words into the vertex buffer.
+// The resolve's vertices: six per tile (two triangles), instance `t` being tile `t`, whose
+// word pair the splat's tile words fill (`seen`, copied into the vertex buffer). A tile no
+// quad touched collapses to a point outside the screen: no fragment.
 @vertex
 fn vs_main(
     @builtin(vertex_index) v: u32,
     @builtin(instance_index) t: u32,
     @location(0) seen: vec2<u32>,
 ) -> @builtin(position) vec4<f32> {
-    return tile_vertex(v, t, seen.x, TILE_PX);
+    if seen.x == 0u {
+        return vec4(2.0, 2.0, 0.0, 1.0);
+    }
+    let corner = vec2(
+        select(0u, 1u, v == 1u || v == 4u || v == 5u),
+        select(0u, 1u, v == 2u || v == 3u || v == 5u),
+    );
+    let across = tiles_across();
+    let px = vec2<f32>((vec2(t % across, t / across) + corner) * TILE_PX);
+    return vec4(px.x * frame.screen.z * 2.0 - 1.0, 1.0 - px.y * frame.screen.w * 2.0, 0.0, 1.0);
 }
 
 // The splat steps are this one pipeline: a grid of one layer (z = 1) is step 0, one of

@@ -1,6 +1,5 @@
 //#include "common.inc.wgsl"
 //#include "billboard_quad.inc.wgsl"
-//#include "resolve_tiles.inc.wgsl"
 //#include "splat_billboards.inc.wgsl"
 
 // splat_billboards: the compute splat with 32-bit atomics, for every adapter with compute

@@ -1,6 +1,5 @@
 //#include "common.inc.wgsl"
 //#include "billboard_quad.inc.wgsl"
-//#include "resolve_tiles.inc.wgsl"
 //#include "splat_billboards.inc.wgsl"
 
 // splat_billboards_wide: the compute splat in one step, for adapters with 64-bit atomics

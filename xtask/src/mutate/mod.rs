@@ -118,7 +118,6 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
     // holds it to the one-step form makes one.
     ("splat_billboards.wgsl", &["splat::the_two_step"]),
     ("splat_billboards_wide.wgsl", &["splat::"]),
-    ("resolve_tiles.inc.wgsl", &["ray_cast_compute::", "splat::"]),
     ("smooth.wgsl", &["smooth_composite::"]),
     ("composite.wgsl", &["smooth_composite::"]),
     ("composite.inc.wgsl", &["smooth_composite::"]),

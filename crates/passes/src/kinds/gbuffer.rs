@@ -128,13 +128,10 @@ fn begin_gbuffer_pass_timed<'e>(
 
 /// A pass's shader specialized for its data: the WGSL text, and the group-1 bindings its
 /// pipelines read (the layout holds only those).
-#[derive(Clone)]
 pub(crate) struct Specialized {
     /// The WGSL file it comes from (the pass's own or one of its variants), for errors.
     pub file: &'static str,
-    /// The render pipeline's vertex entry point.
-    pub vs_entry: &'static str,
-    /// The vertex buffers it reads (none: it pulls its vertices).
+    /// The vertex buffers `vs_main` reads (none: it pulls its vertices).
     pub buffers: &'static [Option<wgpu::VertexBufferLayout<'static>>],
     /// The WGSL, includes expanded.
     pub source: String,
@@ -223,7 +220,6 @@ impl PulledPipeline {
                         constants,
                         depth_stencil: Some(depth_stencil.clone()),
                         fs_entry,
-                        vs_entry: special.map_or("vs_main", |s| s.vs_entry),
                         buffers: special.map_or(&[][..], |s| s.buffers),
                         ..RenderSpec::new(&label, &module, &layout, &targets)
                     },

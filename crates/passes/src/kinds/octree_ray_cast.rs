@@ -207,7 +207,7 @@ impl OctreeCaster {
         self.check_levels(rec.scene)?;
         if let Some(c) = &mut self.compute {
             let (w, h) = rec.screen;
-            if c.hits(rec.gpu, self.kind, (w, h))?.1 {
+            if c.hits(rec.gpu, self.kind, u64::from(w) * u64::from(h))?.1 {
                 self.octrees = None;
             }
         }
@@ -365,7 +365,6 @@ fn specialize<P: PassImpl>(
     }
     Ok(Specialized {
         file: P::SHADER,
-        vs_entry: "vs_main",
         buffers: &[],
         source,
         used,

@@ -1,11 +1,8 @@
 //! The compute form of the octree ray casters (`OctreeRayCast(compute: true)`,
 //! `EsvoRayCast(compute: true)`; `shaders/ray_cast_compute.inc.wgsl`): one compute thread
 //! per pixel casts the pixel's ray with the same WGSL as the fragment form and keeps its
-//! hit in a per-pixel buffer (`cast_hits`), and per 8 × 8 tile whether a pixel of it hit;
-//! the tiles' words are copied into a vertex buffer, and the resolve draws two triangles
-//! per tile with a hit (an empty tile collapses) to write the G-buffer of each pixel's hit,
-//! so that, like the compute splat's resolve, it shades only where there is something to
-//! write. The image is the fragment form's bit for bit (a GPU test holds it to that);
+//! hit in a per-pixel buffer (`cast_hits`); a fullscreen resolve writes the G-buffer of
+//! that hit. The image is the fragment form's bit for bit (a GPU test holds it to that);
 //! what changes is the stage the traversal runs in, which on GPUs with slow fragment work
 //! (the H200 of docs/benchmarks.md) is the strongest form of the baseline.
 
@@ -21,25 +18,8 @@ use crate::runtime::registry::{PassImpl, PassInit};
 /// Threads per workgroup side (`@workgroup_size(8, 8)` in the WGSL).
 const TILE: u32 = 8;
 
-/// Bytes of one pixel's hit record (`vec4<u32>`), and of one tile's.
+/// Bytes of one pixel's hit record (`vec4<u32>`).
 const RECORD_BYTES: u64 = 16;
-
-/// The resolve's vertex buffer: per tile (instance) the first two words of its record.
-const TILE_RECORDS: [Option<wgpu::VertexBufferLayout<'static>>; 1] =
-    [Some(wgpu::VertexBufferLayout {
-        array_stride: RECORD_BYTES,
-        step_mode: wgpu::VertexStepMode::Instance,
-        attributes: &[wgpu::VertexAttribute {
-            format: wgpu::VertexFormat::Uint32x2,
-            offset: 0,
-            shader_location: 0,
-        }],
-    })];
-
-/// Tiles (workgroups) of a `w` × `h` screen.
-fn tile_count(w: u32, h: u32) -> u64 {
-    u64::from(w.div_ceil(TILE)) * u64::from(h.div_ceil(TILE))
-}
 
 /// The compute pipelines and the resolve of one ray-casting pass.
 pub(crate) struct ComputeCast {
@@ -47,10 +27,8 @@ pub(crate) struct ComputeCast {
     /// form's pipelines.
     trace: [wgpu::ComputePipeline; 2],
     resolve: PulledPipeline,
-    /// The per-pixel hit records, then the tiles', and the pixels they hold.
+    /// The per-pixel hit records and the pixels they hold.
     hits: Option<(wgpu::Buffer, u64)>,
-    /// The tiles' records, copied for the resolve's vertex buffer.
-    tiles: Option<wgpu::Buffer>,
 }
 
 impl ComputeCast {
@@ -63,13 +41,8 @@ impl ComputeCast {
         special: &Specialized,
     ) -> Result<Self, PassError> {
         let (ctx, scene, _, pass) = init.parts();
-        let tiled = Specialized {
-            vs_entry: "vs_tiles",
-            buffers: &TILE_RECORDS,
-            ..special.clone()
-        };
         let resolve =
-            PulledPipeline::with_fragment_for::<P>(init, constants, "fs_resolve", &tiled)?;
+            PulledPipeline::with_fragment_for::<P>(init, constants, "fs_resolve", special)?;
         let module = ctx.shader(P::SHADER, &special.source)?;
         let label = format!("pass `{}`: {} compute trace", pass.name, P::SHADER);
         let trace = ctx.validated(&label, |d| {
@@ -97,24 +70,21 @@ impl ComputeCast {
             trace,
             resolve,
             hits: None,
-            tiles: None,
         })
     }
 
-    /// The hit buffer for a `w` × `h` screen, and whether it was made anew (bind groups
-    /// that hold the old one must be made again). A screen whose hits exceed the device's
+    /// The hit buffer for `pixels` pixels, and whether it was made anew (bind groups that
+    /// hold the old one must be made again). A screen whose hits exceed the device's
     /// storage-binding or buffer size is refused as too large.
     pub(crate) fn hits(
         &mut self,
         ctx: &GpuContext,
         kind: &str,
-        (w, h): (u32, u32),
+        pixels: u64,
     ) -> Result<(&wgpu::Buffer, bool), PassError> {
-        let pixels = u64::from(w) * u64::from(h);
-        let tiles = tile_count(w, h);
         let fresh = self.hits.as_ref().is_none_or(|h| h.1 != pixels);
         if fresh {
-            let size = ((pixels + tiles) * RECORD_BYTES).max(RECORD_BYTES);
+            let size = (pixels * RECORD_BYTES).max(RECORD_BYTES);
             let limits = ctx.device.limits();
             let most = limits
                 .max_storage_buffer_binding_size
@@ -133,21 +103,11 @@ impl ComputeCast {
                 d.create_buffer(&wgpu::BufferDescriptor {
                     label: Some(&label),
                     size,
-                    // COPY_SRC: the tiles' records go to the resolve's vertex buffer.
-                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                })
-            })?;
-            let tiles = ctx.validated(&label, |d| {
-                d.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(&format!("{kind} hit tiles")),
-                    size: tiles * RECORD_BYTES,
-                    usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                    usage: wgpu::BufferUsages::STORAGE,
                     mapped_at_creation: false,
                 })
             })?;
             self.hits = Some((buffer, pixels));
-            self.tiles = Some(tiles);
         }
         Ok((&self.hits.as_ref().expect("made above").0, fresh))
     }
@@ -178,28 +138,6 @@ impl ComputeCast {
                 pass.dispatch_workgroups(w.div_ceil(TILE), h.div_ceil(TILE), 1);
             }
         }
-        match (bind_group, &self.hits, &self.tiles) {
-            (Some(bg), Some((hits, pixels)), Some(tiles)) => {
-                let count = tile_count(w, h);
-                encoder.copy_buffer_to_buffer(
-                    hits,
-                    pixels * RECORD_BYTES,
-                    tiles,
-                    0,
-                    count * RECORD_BYTES,
-                );
-                // Six vertices (two triangles) per tile; empty tiles collapse (WGSL).
-                self.resolve.record_resolve_instanced(
-                    encoder,
-                    rec,
-                    bg,
-                    tiles,
-                    0..6,
-                    0..count as u32,
-                );
-            }
-            // Nothing visible: the G-buffer pass still begins (its clears).
-            _ => self.resolve.record_resolve(encoder, rec, None),
-        }
+        self.resolve.record_resolve(encoder, rec, bind_group);
     }
 }

@@ -153,7 +153,6 @@ impl PassImpl for SplatBillboards {
         let shader = if one_step { WIDE_SHADER } else { Self::SHADER };
         let special = Specialized {
             file: shader,
-            vs_entry: "vs_main",
             buffers: &TILE_VERTICES,
             source: ssbvb_gpu::shaders::source_for(shader, &scene.bindings)?,
             used: SPLAT_BINDINGS.to_vec(),
