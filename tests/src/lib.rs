@@ -34,6 +34,40 @@ pub fn ctx() -> &'static GpuContext {
     })
 }
 
+/// Errors wgpu reported outside error scopes on a device of [`device_on_shared_adapter`].
+pub type UncapturedErrors = Arc<Mutex<Vec<String>>>;
+
+/// A second device on the shared adapter (a test of what another device does: fewer
+/// features, WebGPU's limits) with `features` and `limits`, and the errors it reports
+/// outside error scopes.
+pub fn device_on_shared_adapter(
+    label: &str,
+    features: wgpu::Features,
+    limits: wgpu::Limits,
+) -> (GpuContext, UncapturedErrors) {
+    let shared = ctx();
+    let (device, queue) =
+        pollster::block_on(shared.adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some(label),
+            required_features: features,
+            required_limits: limits,
+            ..Default::default()
+        }))
+        .unwrap_or_else(|e| panic!("a device `{label}` on the shared adapter: {e}"));
+    let errors: UncapturedErrors = Arc::new(Mutex::new(Vec::new()));
+    let sink = errors.clone();
+    device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+        sink.lock().unwrap().push(e.to_string());
+    }));
+    let ctx = GpuContext::from_parts(
+        shared.instance.clone(),
+        shared.adapter.clone(),
+        device,
+        queue,
+    );
+    (ctx, errors)
+}
+
 /// The repository's test models, `assets/models` (fails the test when it is missing).
 pub fn models_dir() -> PathBuf {
     let p = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/models"));

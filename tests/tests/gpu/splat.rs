@@ -286,30 +286,14 @@ fn the_splat_draws_the_rasterized_gbuffer() {
 /// A device on the shared adapter with the shared device's features but no 64-bit atomics,
 /// and its limits: its splat takes the two-step form. Errors outside error scopes are
 /// collected in the second value.
-fn device_without_wide_atomics() -> (GpuContext, std::sync::Arc<std::sync::Mutex<Vec<String>>>) {
+fn device_without_wide_atomics() -> (GpuContext, ssbvb_tests::UncapturedErrors) {
     let shared = ssbvb_tests::ctx();
-    let features = shared.device.features()
-        - (wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS);
-    let (device, queue) =
-        pollster::block_on(shared.adapter.request_device(&wgpu::DeviceDescriptor {
-            label: Some("no 64-bit atomics"),
-            required_features: features,
-            required_limits: shared.device.limits(),
-            ..Default::default()
-        }))
-        .expect("a device without 64-bit atomics");
-    let errors = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
-    let sink = errors.clone();
-    device.on_uncaptured_error(std::sync::Arc::new(move |e: wgpu::Error| {
-        sink.lock().unwrap().push(e.to_string());
-    }));
-    let ctx = GpuContext::from_parts(
-        shared.instance.clone(),
-        shared.adapter.clone(),
-        device,
-        queue,
-    );
-    (ctx, errors)
+    ssbvb_tests::device_on_shared_adapter(
+        "no 64-bit atomics",
+        shared.device.features()
+            - (wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS),
+        shared.device.limits(),
+    )
 }
 
 /// The G-buffer of `pipeline`'s frame on `ctx`: each texture's bytes (the depth aspect for

@@ -7,8 +7,6 @@
 //! (the octree casters' compute form) is refused when its pass is built. The outcome per
 //! pipeline is the table in `docs/architecture.md` ("What each pass needs").
 
-use std::sync::{Arc, Mutex};
-
 use glam::DVec3;
 use ssbvb_gpu::scene::{GpuScene, SceneBindings};
 use ssbvb_gpu::{GpuContext, wgpu};
@@ -17,28 +15,12 @@ use ssbvb_voxel::camera::Camera;
 
 /// A device on the shared adapter with WebGPU's default limits and no optional feature, and
 /// the errors wgpu reports outside error scopes.
-fn minimal_device() -> (GpuContext, Arc<Mutex<Vec<String>>>) {
-    let shared = ssbvb_tests::ctx();
-    let (device, queue) =
-        pollster::block_on(shared.adapter.request_device(&wgpu::DeviceDescriptor {
-            label: Some("webgpu defaults"),
-            required_features: wgpu::Features::empty(),
-            required_limits: wgpu::Limits::default(),
-            ..Default::default()
-        }))
-        .expect("a device with WebGPU's default limits");
-    let errors = Arc::new(Mutex::new(Vec::new()));
-    let sink = errors.clone();
-    device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
-        sink.lock().unwrap().push(e.to_string());
-    }));
-    let ctx = GpuContext::from_parts(
-        shared.instance.clone(),
-        shared.adapter.clone(),
-        device,
-        queue,
-    );
-    (ctx, errors)
+fn minimal_device() -> (GpuContext, ssbvb_tests::UncapturedErrors) {
+    ssbvb_tests::device_on_shared_adapter(
+        "webgpu defaults",
+        wgpu::Features::empty(),
+        wgpu::Limits::default(),
+    )
 }
 
 /// The output of `pipeline` (RON text) over `scene` on `ctx`, 64 × 48.
