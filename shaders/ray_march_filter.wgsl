@@ -2,7 +2,7 @@
 
 // ray_march_filter: the voxel filter (docs/architecture.md, "A frame", step 2).
 //
-// One thread per pixel. From the empty-space prepass's entry point on, it marches the
+// One thread per pixel with a proxy. From the empty-space prepass's entry point on, it marches the
 // pixel's ray through the sparse lookup of the pixel's instance with a hierarchical voxel
 // DDA to the first voxel, and
 // appends that voxel to the SSBVB (`ssbvb`), counting hits into the indirect draw
@@ -20,6 +20,15 @@
 // beyond the best hit so far, and marches the instances of the boxes it reaches up to that
 // hit: a pixel's cost follows the instances its ray meets. Exact ties go to the lower
 // instance index (as the reference, which walks the same hierarchy).
+//
+// # Only the tiles with a proxy
+//
+// `mark_tiles` (one thread per texel) flags the 16 × 16 tiles of `entry` in which the
+// prepass drew some proxy, `list_tiles` lists them and makes the list `main`'s indirect
+// dispatch, and `main` runs one workgroup per listed tile. A workgroup without a ray costs a software
+// adapter what one with rays costs: llvmpipe runs every branch of the shader under a lane
+// mask, so its early return skips nothing (docs/benchmarks.md); most of a frame's tiles
+// have no proxy.
 //
 // # Counters
 //
@@ -58,8 +67,9 @@ override COUNT_WORK: bool = true;
 @group(1) @binding(2) var<storage, read_write> billboard_draw: DrawArgs;
 // Pass-private, one buffer (WebGPU allows 8 storage buffers per stage; ray_march_filter.rs,
 // `FilterWords`):
-// - words 0 .. CLAIM_HEADER: the frame's counters (layout below), cleared every counted
-//   frame;
+// - words 0 .. TILE_AT: the frame's counters (layout below), cleared every counted frame;
+// - word TILE_AT: where the tile words start: the count of listed tiles, then a flag per
+//   tile of `entry`, then the list (the count and the flags cleared every frame);
 // - (UNIQUE_VOXELS) word CLAIM_HEADER: where the claim table starts; CLAIM_HEADER + 1: its
 //   size - 1 (a power of two); from CLAIM_HEADER + 2: instance k's first key. The table is
 //   the set of (instance, voxel) keys appended this frame, an open-addressing hash table of
@@ -67,7 +77,17 @@ override COUNT_WORK: bool = true;
 //   the scene. Instance k's keys are its first key + voxel id (NO_DEDUP: its keys do not
 //   fit 32 bits; each of its pixels appends).
 @group(1) @binding(3) var<storage, read_write> filter_words: array<atomic<u32>>;
-override CLAIM_HEADER: u32 = 0u;
+override TILE_AT: u32 = 0u;
+override CLAIM_HEADER: u32 = 1u;
+// `main`'s indirect dispatch, written by `list_tiles` (the only entry point binding it:
+// a dispatch may not bind the buffer it reads its arguments from).
+@group(1) @binding(4) var<storage, read_write> filter_dispatch: array<u32, 3>;
+
+// Texels per side of a tile: `main`'s workgroup.
+const TILE: u32 = 16u;
+// Most workgroups per dimension of a dispatch (the device's limit, at least 65535 unless a
+// device asks for fewer): longer tile lists take more rows.
+override MAX_GRID: u32 = 65535u;
 
 // Words of the counters: rays, then (low, high) pairs of sums, then the histogram.
 const C_RAYS: u32 = 0u;
@@ -220,6 +240,17 @@ fn claim(key: u32) -> bool {
     return true;
 }
 
+// Whether a prepass texel names a visible instance: w = instance + 1, an exact small
+// integer (NaN or stale values are ignored).
+fn has_proxy(e: vec4<f32>, count: u32) -> bool {
+    return e.w >= 1.0 && e.w < f32(count) + 0.5;
+}
+
+// The visible instances of the frame.
+fn visible_count() -> u32 {
+    return u32(max(frame.misc.w, 0.0));
+}
+
 // Filters one pixel; returns whether it cast a ray.
 fn filter_pixel(px: vec2<i32>) -> bool {
     let size = vec2<i32>(textureDimensions(entry));
@@ -227,9 +258,8 @@ fn filter_pixel(px: vec2<i32>) -> bool {
         return false;
     }
     let e = textureLoad(entry, px, 0);
-    let count = u32(max(frame.misc.w, 0.0));
-    // w = instance + 1, an exact small integer; NaN or stale values are ignored.
-    if !(e.w >= 1.0 && e.w < f32(count) + 0.5) {
+    let count = visible_count();
+    if !has_proxy(e, count) {
         return false;
     }
     let k = u32(e.w) - 1u;
@@ -300,13 +330,84 @@ fn add_wide(word: u32, v: u32) {
     }
 }
 
+// Tiles per row of `entry`, and in all.
+fn tiles_x() -> u32 {
+    return (textureDimensions(entry).x + TILE - 1u) / TILE;
+}
+
+fn tile_count() -> u32 {
+    return tiles_x() * ((textureDimensions(entry).y + TILE - 1u) / TILE);
+}
+
+// Flags the tile of a texel with a proxy (workgroup = tile).
 @compute @workgroup_size(16, 16)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn mark_tiles(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>) {
+    let size = textureDimensions(entry);
+    if any(gid.xy >= size) || !has_proxy(textureLoad(entry, vec2<i32>(gid.xy), 0), visible_count()) {
+        return;
+    }
+    let flag = atomicLoad(&filter_words[TILE_AT]) + 1u + wg.y * tiles_x() + wg.x;
+    // Read first, so that a tile costs one store, not one per texel.
+    if atomicLoad(&filter_words[flag]) == 0u {
+        atomicStore(&filter_words[flag], 1u);
+    }
+}
+
+const LIST_GROUP: u32 = 256u;
+var<workgroup> flagged_before: array<u32, LIST_GROUP>;
+
+// One workgroup: lists the flagged tiles in raster order (a prefix sum over the flags, a
+// group of LIST_GROUP at a time), as x | y << 16 (no division to undo: llvmpipe has no
+// vector integer division), their count, and `main`'s grid: one workgroup per listed tile,
+// in rows of at most MAX_GRID. The order is the screen's, so a frame's SSBVB order does
+// not depend on which tile was flagged first.
+@compute @workgroup_size(256)
+fn list_tiles(@builtin(local_invocation_index) li: u32) {
+    let at = atomicLoad(&filter_words[TILE_AT]);
+    let n = tile_count();
+    let per_row = tiles_x();
+    var listed = 0u;
+    for (var first = 0u; first < n; first += LIST_GROUP) {
+        let tile = first + li;
+        let flagged = tile < n && atomicLoad(&filter_words[at + 1u + tile]) != 0u;
+        flagged_before[li] = u32(flagged);
+        workgroupBarrier();
+        // Inclusive prefix sum (Hillis–Steele).
+        for (var o = 1u; o < LIST_GROUP; o <<= 1u) {
+            let v = select(0u, flagged_before[max(li, o) - o], li >= o);
+            workgroupBarrier();
+            flagged_before[li] += v;
+            workgroupBarrier();
+        }
+        if flagged {
+            let packed = (tile % per_row) | ((tile / per_row) << 16u);
+            atomicStore(&filter_words[at + 1u + n + listed + flagged_before[li] - 1u], packed);
+        }
+        listed += flagged_before[LIST_GROUP - 1u];
+        workgroupBarrier();
+    }
+    if li == 0u {
+        atomicStore(&filter_words[at], listed);
+        filter_dispatch[0] = min(listed, MAX_GRID);
+        filter_dispatch[1] = (listed + MAX_GRID - 1u) / MAX_GRID;
+        filter_dispatch[2] = 1u;
+    }
+}
+
+@compute @workgroup_size(16, 16)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
+    let at = atomicLoad(&filter_words[TILE_AT]);
+    let i = wg.y * MAX_GRID + wg.x;
+    if i >= atomicLoad(&filter_words[at]) {
+        return;
+    }
+    let tile = atomicLoad(&filter_words[at + 1u + tile_count() + i]);
+    let px = vec2(tile & 0xffffu, tile >> 16u) * TILE + lid.xy;
     march_steps = 0u;
     march_words = 0u;
     boxes_tested = 0u;
     marches = 0u;
-    if filter_pixel(vec2<i32>(gid.xy)) && COUNT_WORK {
+    if filter_pixel(vec2<i32>(px)) && COUNT_WORK {
         atomicAdd(&filter_words[C_RAYS], 1u);
         add_wide(C_STEPS, march_steps);
         add_wide(C_BOXES, boxes_tested);

@@ -32,6 +32,7 @@ use crate::empty_space::{hollow_box, prefilter_pipeline, synthetic_asset};
 
 mod harness;
 mod snapped;
+mod tiles;
 
 pub(crate) use harness::{FilterRun, check_against_reference, run_filter};
 use harness::{cell_sizes, check_pipeline_against_reference, diff_png, run_filter_with};

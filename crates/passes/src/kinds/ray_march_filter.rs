@@ -18,9 +18,14 @@
 //!
 //! [`RayMarchFilter`]'s [`PassNode::counters`] are a few global atomics per ray with no
 //! workgroup reduction, whose barriers cost the software adapter more (docs/benchmarks.md).
-//! `clear_draw` resets the draw, then `main` runs workgroups of 16 × 16 (cheaper than 8 × 8
-//! there; 256 invocations is every adapter's minimum). A prepass and filter at a fraction of
-//! the screen (`ScreenScaled`) cast one ray per texel centre.
+//! `clear_draw` resets the draw, `mark_tiles` flags the 16 × 16 tiles of the prepass with a
+//! proxy, `list_tiles` lists them in screen order (so the SSBVB's order, which decides
+//! exact depth ties between billboards, does not depend on thread timing) and makes the
+//! list an indirect dispatch, and `main` runs a workgroup
+//! of 16 × 16 per listed tile (cheaper than 8 × 8 on the software adapter; 256 invocations
+//! is every adapter's minimum): a tile without a ray is not launched, which a software
+//! adapter would otherwise run at nearly the cost of one with rays. A prepass and filter at
+//! a fraction of the screen (`ScreenScaled`) cast one ray per texel centre.
 
 use bytemuck::{Pod, Zeroable};
 use ssbvb_gpu::requirements::max_compute_invocations_per_workgroup;
@@ -38,8 +43,6 @@ use crate::error::PassError;
 use crate::runtime::node::{CounterSource, PassNode};
 use ssbvb_gpu::shaders;
 
-/// Workgroup edge of `main` (`@workgroup_size(16, 16)`).
-pub const WORKGROUP: u32 = 16;
 
 /// Mirror of WGSL `VoxelSlot` (32 bytes): one SSBVB entry.
 #[repr(C)]
@@ -87,6 +90,14 @@ pub struct DrawArgs {
 /// The compiled filter.
 pub struct RayMarchFilter {
     clear: wgpu::ComputePipeline,
+    /// Flags the tiles with a proxy (`mark_tiles`).
+    mark_tiles: wgpu::ComputePipeline,
+    /// Lists them in screen order and writes `main`'s indirect dispatch (`list_tiles`),
+    /// with its own bindings.
+    list_tiles: wgpu::ComputePipeline,
+    list_bindings: PassBindings,
+    /// `main`'s indirect dispatch arguments.
+    dispatch: wgpu::Buffer,
     /// `main`, one pipeline per variant a frame has needed.
     mains: MainPipelines,
     /// Whether the last recorded frame counted.
@@ -107,19 +118,49 @@ const COUNTER_WORDS: usize = HISTOGRAM_WORD + crate::runtime::counters::STEP_BIN
 const HISTOGRAM_WORD: usize = 9;
 
 /// What the filter binds itself: one buffer of words (`FilterWords`), so that the
-/// filter fits WebGPU's default 8 storage buffers per stage with the scene's and its slots.
-pub const OWN: &[OwnBinding] = &[OwnBinding {
-    name: "filter_words",
-    kind: OwnKind::StorageReadWrite,
-}];
+/// filter fits WebGPU's default 8 storage buffers per stage with the scene's and its slots;
+/// and `main`'s indirect dispatch arguments, which only `list_tiles` binds (a dispatch may
+/// not bind the buffer it reads its arguments from).
+pub const OWN: &[OwnBinding] = &[
+    OwnBinding {
+        name: "filter_words",
+        kind: OwnKind::StorageReadWrite,
+    },
+    OwnBinding {
+        name: "filter_dispatch",
+        kind: OwnKind::StorageReadWrite,
+    },
+];
 
-/// The filter's own words: the frame's counters (`COUNTER_WORDS`), then (`CLAIM_HEADER` in
-/// the WGSL) where the claim table starts and its size − 1, the first key of each of up to
-/// `key_capacity` visible instances, then the claim table.
+/// Group-1 bindings of `clear_draw`, `mark_tiles` and `main`: the slots and the words.
+const MAIN_BINDINGS: [u32; 4] = [0, 1, 2, 3];
+/// Group-1 bindings of `list_tiles`: the prepass (for its size), the words and the
+/// arguments.
+const LIST_BINDINGS: [u32; 3] = [0, 3, 4];
+
+/// The word holding where the tile words start (`TILE_AT` in the WGSL).
+const TILE_AT: u64 = COUNTER_WORDS as u64;
+/// The first word of the claim header (`CLAIM_HEADER`).
+const CLAIM_HEADER: u64 = TILE_AT + 1;
+
+/// Texels per side of `main`'s tiles, its workgroup (`TILE` and `@workgroup_size(16, 16)`
+/// in the WGSL).
+pub const TILE: u32 = 16;
+
+/// The tiles of `main` over a `w` × `h` prepass.
+pub fn tile_count(w: u32, h: u32) -> u64 {
+    u64::from(w.div_ceil(TILE)) * u64::from(h.div_ceil(TILE))
+}
+
+/// The filter's own words: the frame's counters (`COUNTER_WORDS`), then (`TILE_AT` in the
+/// WGSL) where the tile words start, then (`CLAIM_HEADER`) where the claim table starts and
+/// its size − 1, the first key of each of up to `key_capacity` visible instances, the claim
+/// table, and the tile words: the count of listed tiles, a flag per tile, the list.
 struct FilterWords {
     buffer: wgpu::Buffer,
     key_capacity: u64,
     table_words: u64,
+    tiles: u64,
 }
 
 /// Marks an instance whose keys do not fit 32 bits (`NO_DEDUP` in the WGSL).
@@ -127,9 +168,9 @@ const NO_DEDUP: u32 = u32::MAX;
 
 impl FilterWords {
     /// `table_words` must be a power of two (the shader masks the hash with it).
-    fn new(ctx: &GpuContext, table_words: u64, key_capacity: u64) -> Self {
+    fn new(ctx: &GpuContext, table_words: u64, key_capacity: u64, tiles: u64) -> Self {
         debug_assert!(table_words.is_power_of_two());
-        let words = Self::table_start(key_capacity) + table_words;
+        let words = Self::words(table_words, key_capacity, tiles);
         Self {
             buffer: ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("filter words"),
@@ -141,18 +182,29 @@ impl FilterWords {
             }),
             key_capacity,
             table_words,
+            tiles,
         }
+    }
+
+    /// Words of the whole buffer.
+    fn words(table_words: u64, key_capacity: u64, tiles: u64) -> u64 {
+        Self::table_start(key_capacity) + table_words + 1 + 2 * tiles
     }
 
     /// The first word of the claim table.
     fn table_start(key_capacity: u64) -> u64 {
-        COUNTER_WORDS as u64 + 2 + key_capacity
+        CLAIM_HEADER + 2 + key_capacity
+    }
+
+    /// The first tile word (the count of listed tiles).
+    fn tiles_start(&self) -> u64 {
+        Self::table_start(self.key_capacity) + self.table_words
     }
 
     /// The header and the first keys, as written before a frame.
     fn header(&self, keys: &[u32]) -> Vec<u32> {
         let start = Self::table_start(self.key_capacity) as u32;
-        [start, self.table_words as u32 - 1]
+        [self.tiles_start() as u32, start, self.table_words as u32 - 1]
             .into_iter()
             .chain(keys.iter().copied())
             .collect()
@@ -222,7 +274,7 @@ struct MainPipelines {
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
     /// The pass's own overrides (from its parameters).
-    constants: [(&'static str, f64); 4],
+    constants: [(&'static str, f64); 6],
     label: String,
     built: Vec<(MainVariant, wgpu::ComputePipeline)>,
 }
@@ -298,14 +350,32 @@ impl PassImpl for RayMarchFilter {
             ("MAX_STEPS", f64::from(max_steps)),
             ("UNIQUE_VOXELS", flag(unique_voxels)),
             ("FAST_MARCH", flag(march == MarchMode::Fast)),
-            ("CLAIM_HEADER", COUNTER_WORDS as f64),
+            ("TILE_AT", TILE_AT as f64),
+            ("CLAIM_HEADER", CLAIM_HEADER as f64),
+            (
+                "MAX_GRID",
+                f64::from(ctx.device.limits().max_compute_workgroups_per_dimension),
+            ),
         ];
-        let (clear, layout, bindings) = ctx.validated(&label, |d| {
-            let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
+        let (clear, mark_tiles, layout, bindings) = ctx.validated(&label, |d| {
+            let bindings = PassBindings::used_only(ctx, pipeline, pass, OWN, Some(&MAIN_BINDINGS));
             let layout = pipeline_layout(d, "ray_march_filter", scene, Some(&bindings));
             let clear = compute_pipeline(d, &layout, &module, "clear_draw", &constants);
-            (clear, layout, bindings)
+            let mark_tiles = compute_pipeline(d, &layout, &module, "mark_tiles", &constants);
+            (clear, mark_tiles, layout, bindings)
         })?;
+        let (list_tiles, list_bindings) = ctx.validated(&label, |d| {
+            let bindings = PassBindings::used_only(ctx, pipeline, pass, OWN, Some(&LIST_BINDINGS));
+            let layout = pipeline_layout(d, "ray_march_filter list", scene, Some(&bindings));
+            let list = compute_pipeline(d, &layout, &module, "list_tiles", &constants);
+            (list, bindings)
+        })?;
+        let dispatch = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("filter dispatch arguments"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+            mapped_at_creation: false,
+        });
         let mains = MainPipelines {
             module,
             layout,
@@ -314,9 +384,14 @@ impl PassImpl for RayMarchFilter {
             built: Vec::new(),
         };
         // Without unique_voxels the shader never touches the claims: the smallest table.
-        let words = FilterWords::new(ctx, 16, 4);
+        // The tiles are sized by the first frame.
+        let words = FilterWords::new(ctx, 16, 4, 0);
         Ok(Self {
             clear,
+            mark_tiles,
+            list_tiles,
+            list_bindings,
+            dispatch,
             mains,
             counted: false,
             bindings,
@@ -332,12 +407,17 @@ impl PassNode for RayMarchFilter {
         encoder: &mut wgpu::CommandEncoder,
         rec: &mut Recorder<'_>,
     ) -> Result<(), PassError> {
-        if self.unique_voxels {
-            self.prepare_claims(rec, encoder)?;
-        }
+        self.prepare_words(rec, encoder)?;
         let bind_group = self
             .bindings
             .bind_group(rec, &[("filter_words", self.words.buffer.as_entire_binding())])?;
+        let list_group = self.list_bindings.bind_group(
+            rec,
+            &[
+                ("filter_words", self.words.buffer.as_entire_binding()),
+                ("filter_dispatch", self.dispatch.as_entire_binding()),
+            ],
+        )?;
         self.counted = rec.counting;
         let variant = MainVariant {
             count_work: self.counted,
@@ -358,9 +438,16 @@ impl PassNode for RayMarchFilter {
         pass.set_bind_group(1, &bind_group, &[]);
         pass.set_pipeline(&self.clear);
         pass.dispatch_workgroups(1, 1, 1);
-        // wgpu orders the two dispatches (the draw arguments are written, then counted).
+        // wgpu orders the dispatches: the draw arguments are written before `main` counts,
+        // the tiles flagged before they are listed, and listed before `main` reads them.
+        pass.set_pipeline(&self.mark_tiles);
+        pass.dispatch_workgroups(w.div_ceil(TILE), h.div_ceil(TILE), 1);
+        pass.set_bind_group(1, &list_group, &[]);
+        pass.set_pipeline(&self.list_tiles);
+        pass.dispatch_workgroups(1, 1, 1);
+        pass.set_bind_group(1, &bind_group, &[]);
         pass.set_pipeline(main);
-        pass.dispatch_workgroups(w.div_ceil(WORKGROUP), h.div_ceil(WORKGROUP), 1);
+        pass.dispatch_workgroups_indirect(&self.dispatch, 0);
         Ok(())
     }
 
@@ -410,38 +497,50 @@ impl PassNode for RayMarchFilter {
 }
 
 impl RayMarchFilter {
-    /// Lays out the keys of the visible instances, sizes the claim table for the filter's
-    /// texels (reallocated when that changes; the offsets grow by half again when the
-    /// visible instances outgrow them), uploads the offsets and records the table's clear.
-    fn prepare_claims(
+    /// Sizes the words for the prepass's tiles and, with `unique_voxels`, lays out the
+    /// keys of the visible instances and sizes the claim table for the filter's texels
+    /// (reallocated when that changes; the offsets grow by half again when the visible
+    /// instances outgrow them); uploads the header and records the clears of the tile
+    /// count and flags and of the claim table.
+    fn prepare_words(
         &mut self,
         rec: &Recorder<'_>,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), PassError> {
         let scene = rec.scene;
-        let offsets = claim_offsets(
-            scene
-                .visible
-                .iter()
-                .map(|v| scene.voxel_key_range(v.object, v.level)),
-        );
+        let offsets = if self.unique_voxels {
+            claim_offsets(
+                scene
+                    .visible
+                    .iter()
+                    .map(|v| scene.voxel_key_range(v.object, v.level)),
+            )
+        } else {
+            Vec::new()
+        };
         let entry = &rec.texture("entry").texture;
-        let words = claim_table_words(entry.width() as u64 * entry.height() as u64);
+        let tiles = tile_count(entry.width(), entry.height());
+        // Without unique_voxels the shader never touches the claims: the smallest table.
+        let words = if self.unique_voxels {
+            claim_table_words(entry.width() as u64 * entry.height() as u64)
+        } else {
+            16
+        };
         let max = rec.gpu.device.limits().max_storage_buffer_binding_size;
         let instances = offsets.len().max(1) as u64;
-        let bytes = (FilterWords::table_start(instances + instances / 2) + words) * 4;
+        let bytes = FilterWords::words(words, instances + instances / 2, tiles) * 4;
         if bytes > max {
             return Err(PassError::TooLarge(format!(
-                "unique_voxels needs a {bytes}-byte claim table for {}x{} pixels and {} \
-                 instances; the device binds at most {max}: use a smaller screen or turn \
-                 unique_voxels off",
+                "the filter needs {bytes} bytes of words (claim table and tile list) for \
+                 {}x{} pixels and {} instances; the device binds at most {max}: use a \
+                 smaller screen or turn unique_voxels off",
                 entry.width(),
                 entry.height(),
                 offsets.len()
             )));
         }
         let (table_fits, keys_fit) = (
-            self.words.table_words == words,
+            self.words.table_words == words && self.words.tiles == tiles,
             self.words.key_capacity >= instances,
         );
         if !table_fits || !keys_fit {
@@ -450,16 +549,19 @@ impl RayMarchFilter {
             } else {
                 instances + instances / 2
             };
-            self.words = FilterWords::new(rec.gpu, words, cap);
+            self.words = FilterWords::new(rec.gpu, words, cap, tiles);
         }
         let header = self.words.header(&offsets);
-        rec.gpu.queue.write_buffer(
-            &self.words.buffer,
-            COUNTER_WORDS as u64 * 4,
-            bytemuck::cast_slice(&header),
-        );
-        let table = FilterWords::table_start(self.words.key_capacity) * 4;
-        encoder.clear_buffer(&self.words.buffer, table, Some(words * 4));
+        rec.gpu
+            .queue
+            .write_buffer(&self.words.buffer, TILE_AT * 4, bytemuck::cast_slice(&header));
+        // The tile count and flags; the list is written before it is read.
+        let tiles_at = self.words.tiles_start() * 4;
+        encoder.clear_buffer(&self.words.buffer, tiles_at, Some((1 + tiles) * 4));
+        if self.unique_voxels {
+            let table = FilterWords::table_start(self.words.key_capacity) * 4;
+            encoder.clear_buffer(&self.words.buffer, table, Some(words * 4));
+        }
         Ok(())
     }
 }
