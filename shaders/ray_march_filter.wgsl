@@ -83,12 +83,6 @@ override CLAIM_HEADER: u32 = 1u;
 // a dispatch may not bind the buffer it reads its arguments from).
 @group(1) @binding(4) var<storage, read_write> filter_dispatch: array<u32, 3>;
 
-// Texels per side of a tile: `main`'s workgroup.
-const TILE: u32 = 16u;
-// Most workgroups per dimension of a dispatch (the device's limit, at least 65535 unless a
-// device asks for fewer): longer tile lists take more rows.
-override MAX_GRID: u32 = 65535u;
-
 // Words of the counters: rays, then (low, high) pairs of sums, then the histogram.
 const C_RAYS: u32 = 0u;
 const C_STEPS: u32 = 1u;
@@ -101,6 +95,7 @@ var<private> marches: u32;
 
 //#include "sparse_march.inc.wgsl"
 //#include "instance_bvh.inc.wgsl"
+//#include "tile_list.inc.wgsl"
 
 // How far (in `t`) before the prepass entry `e` the march of the prepass instance starts:
 // one cell, plus an eighth of how much the entry moves along the ray to a neighbouring
@@ -330,15 +325,6 @@ fn add_wide(word: u32, v: u32) {
     }
 }
 
-// Tiles per row of `entry`, and in all.
-fn tiles_x() -> u32 {
-    return (textureDimensions(entry).x + TILE - 1u) / TILE;
-}
-
-fn tile_count() -> u32 {
-    return tiles_x() * ((textureDimensions(entry).y + TILE - 1u) / TILE);
-}
-
 // Flags the tile of a texel with a proxy (workgroup = tile).
 @compute @workgroup_size(16, 16)
 fn mark_tiles(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>) {
@@ -346,63 +332,46 @@ fn mark_tiles(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(workgroup_
     if any(gid.xy >= size) || !has_proxy(textureLoad(entry, vec2<i32>(gid.xy), 0), visible_count()) {
         return;
     }
-    let flag = atomicLoad(&filter_words[TILE_AT]) + 1u + wg.y * tiles_x() + wg.x;
+    let flag = atomicLoad(&filter_words[TILE_AT]) + 1u + wg.y * tiles_per_row(size) + wg.x;
     // Read first, so that a tile costs one store, not one per texel.
     if atomicLoad(&filter_words[flag]) == 0u {
         atomicStore(&filter_words[flag], 1u);
     }
 }
 
-const LIST_GROUP: u32 = 256u;
-var<workgroup> flagged_before: array<u32, LIST_GROUP>;
+// tile_list.inc.wgsl's accessors: after the count, a flag per tile, then the list.
+fn tile_flagged(tile: u32) -> bool {
+    return atomicLoad(&filter_words[atomicLoad(&filter_words[TILE_AT]) + 1u + tile]) != 0u;
+}
 
-// One workgroup: lists the flagged tiles in raster order (a prefix sum over the flags, a
-// group of LIST_GROUP at a time), as x | y << 16 (no division to undo: llvmpipe has no
-// vector integer division), their count, and `main`'s grid: one workgroup per listed tile,
-// in rows of at most MAX_GRID. The order is the screen's, so a frame's SSBVB order does
-// not depend on which tile was flagged first.
+fn store_listed(i: u32, packed: u32) {
+    let at = atomicLoad(&filter_words[TILE_AT]);
+    atomicStore(&filter_words[at + 1u + tile_total(textureDimensions(entry)) + i], packed);
+}
+
+// One workgroup: lists the flagged tiles, their count and `main`'s grid.
 @compute @workgroup_size(256)
 fn list_tiles(@builtin(local_invocation_index) li: u32) {
-    let at = atomicLoad(&filter_words[TILE_AT]);
-    let n = tile_count();
-    let per_row = tiles_x();
-    var listed = 0u;
-    for (var first = 0u; first < n; first += LIST_GROUP) {
-        let tile = first + li;
-        let flagged = tile < n && atomicLoad(&filter_words[at + 1u + tile]) != 0u;
-        flagged_before[li] = u32(flagged);
-        workgroupBarrier();
-        // Inclusive prefix sum (Hillis–Steele).
-        for (var o = 1u; o < LIST_GROUP; o <<= 1u) {
-            let v = select(0u, flagged_before[max(li, o) - o], li >= o);
-            workgroupBarrier();
-            flagged_before[li] += v;
-            workgroupBarrier();
-        }
-        if flagged {
-            let packed = (tile % per_row) | ((tile / per_row) << 16u);
-            atomicStore(&filter_words[at + 1u + n + listed + flagged_before[li] - 1u], packed);
-        }
-        listed += flagged_before[LIST_GROUP - 1u];
-        workgroupBarrier();
-    }
+    let size = textureDimensions(entry);
+    let listed = list_flagged_tiles(li, tile_total(size), tiles_per_row(size));
     if li == 0u {
-        atomicStore(&filter_words[at], listed);
-        filter_dispatch[0] = min(listed, MAX_GRID);
-        filter_dispatch[1] = (listed + MAX_GRID - 1u) / MAX_GRID;
-        filter_dispatch[2] = 1u;
+        atomicStore(&filter_words[atomicLoad(&filter_words[TILE_AT])], listed);
+        let grid = tile_grid(listed);
+        filter_dispatch[0] = grid.x;
+        filter_dispatch[1] = grid.y;
+        filter_dispatch[2] = grid.z;
     }
 }
 
 @compute @workgroup_size(16, 16)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
     let at = atomicLoad(&filter_words[TILE_AT]);
-    let i = wg.y * MAX_GRID + wg.x;
+    let i = listed_index(wg);
     if i >= atomicLoad(&filter_words[at]) {
         return;
     }
-    let tile = atomicLoad(&filter_words[at + 1u + tile_count() + i]);
-    let px = vec2(tile & 0xffffu, tile >> 16u) * TILE + lid.xy;
+    let n = tile_total(textureDimensions(entry));
+    let px = tile_origin(atomicLoad(&filter_words[at + 1u + n + i])) + lid.xy;
     march_steps = 0u;
     march_words = 0u;
     boxes_tested = 0u;
