@@ -2,10 +2,12 @@
 //! `EsvoRayCast`; `shaders/ray_cast_compute.inc.wgsl`) against their fragment form, which
 //! the other GPU tests hold to the CPU reference: the same G-buffer bit for bit (every
 //! attachment, depth and stencil) and the same counters, on one object, on overlapping
-//! mirrored instances and at a size that is no multiple of the 8×8 workgroup. A frame that
-//! does not count draws the same too.
+//! mirrored instances and at a size that is no multiple of the 16 × 16 workgroup. A frame
+//! that does not count draws the same too. The compute form launches only the tiles some
+//! instance's box may cover: boxes around, behind and beside the camera on a screen of
+//! more tiles than the listing takes at a time draw what the fragment form draws.
 
-use glam::DVec3;
+use glam::{DAffine3, DVec3};
 use ssbvb_gpu::scene::Scene;
 use ssbvb_voxel::camera::Camera;
 
@@ -137,5 +139,38 @@ fn compute_casters_draw_what_the_fragment_casters_draw() {
             let covered = same_gbuffer(&what, pipeline, kind, scene, cam, *size);
             assert!(covered > 800, "{what}: {covered} px");
         }
+    }
+}
+
+/// Instances around the camera on a 337 × 203 screen (286 tiles: the listing takes two
+/// groups; the last column and row of tiles are cut): a box holding the camera (every
+/// tile), boxes behind it (none), boxes cut by the screen's edges and far ones.
+#[test]
+fn compute_casters_launch_every_tile_a_box_may_cover() {
+    let level = 5;
+    let asset = ssbvb_tests::model_asset("bunny.obj", level);
+    let mut scene = ssbvb_tests::single_object_scene(asset, level);
+    scene.objects[0].instances = [
+        // Holds the camera.
+        (0.2, 0.1, 0.4),
+        // Behind it.
+        (0.0, 0.0, 5.0),
+        (3.0, 1.0, 4.0),
+        // Ahead, beside and cut by the screen's edges.
+        (-2.6, -0.4, -4.0),
+        (3.1, 0.6, -3.5),
+        (0.5, -1.9, -3.0),
+        (-0.4, 1.8, -5.0),
+        // Far.
+        (6.0, 2.0, -30.0),
+    ]
+    .iter()
+    .map(|&(x, y, z)| DAffine3::from_translation(DVec3::new(x, y, z)))
+    .collect();
+    let camera = Camera::new(DVec3::ZERO, DVec3::new(0.0, 0.0, -1.0));
+    for (pipeline, kind) in [(ESVO, "EsvoRayCast"), (OCTREE, "OctreeRayCast")] {
+        let what = format!("{kind} around the camera, 337×203");
+        let covered = same_gbuffer(&what, pipeline, kind, &scene, &camera, (337, 203));
+        assert!(covered > 10_000, "{what}: {covered} px");
     }
 }

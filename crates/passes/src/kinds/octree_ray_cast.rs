@@ -137,6 +137,12 @@ pub const OWN: &[OwnBinding] = &[
         name: "cast_hits",
         kind: OwnKind::StorageReadWrite,
     },
+    // The compute form's indirect dispatch, bound only to its listing of tiles (a
+    // dispatch may not bind the buffer it reads its arguments from).
+    OwnBinding {
+        name: "cast_dispatch",
+        kind: OwnKind::StorageReadWrite,
+    },
 ];
 
 impl OctreeCaster {
@@ -207,7 +213,7 @@ impl OctreeCaster {
         self.check_levels(rec.scene)?;
         if let Some(c) = &mut self.compute {
             let (w, h) = rec.screen;
-            if c.hits(rec.gpu, self.kind, u64::from(w) * u64::from(h))?.1 {
+            if c.hits(rec.gpu, self.kind, (w, h))?.1 {
                 self.octrees = None;
             }
         }
