@@ -34,7 +34,11 @@ fn bvh_enter(i: u32, dir: vec3<f32>) -> f32 {
 }
 
 // Visits the instances whose boxes the ray enters at or before the limit, starting from
-// `limit`; `count` is the number of visible instances (2 count - 1 nodes).
+// `limit`; `count` is the number of visible instances (2 count - 1 nodes). The walk to the
+// next leaf is a loop of its own, and the visit comes after it: a SIMD CPU adapter runs a
+// loop's whole body, under a lane mask, on every pass that any lane takes (llvmpipe skips
+// no branch that no lane takes), so a visit inside the box tests' loop would cost a march
+// per box tested (docs/benchmarks.md).
 fn bvh_walk(dir: vec3<f32>, limit_in: f32, count: u32) {
     if count == 0u {
         return;
@@ -50,34 +54,46 @@ fn bvh_walk(dir: vec3<f32>, limit_in: f32, count: u32) {
         sp = 1u;
     }
     // Each node is pushed at most once; the bound only guards against a corrupt buffer.
-    for (var guard = 0u; sp > 0u && guard < 2u * count; guard++) {
-        sp -= 1u;
-        if stack_t[sp] > limit {
-            continue;
-        }
-        let node = instance_bvh[stack[sp]];
-        if (node.left & BVH_LEAF) != 0u {
-            let j = node.left & ~BVH_LEAF;
-            if j < count {
-                limit = min(limit, bvh_visit(j, dir));
+    var popped = 0u;
+    loop {
+        var leaf = count;
+        loop {
+            if sp == 0u || popped >= 2u * count {
+                break;
             }
-            continue;
+            popped += 1u;
+            sp -= 1u;
+            if stack_t[sp] > limit {
+                continue;
+            }
+            let node = instance_bvh[stack[sp]];
+            if (node.left & BVH_LEAF) != 0u {
+                leaf = node.left & ~BVH_LEAF;
+                if leaf < count {
+                    break;
+                }
+                continue;
+            }
+            let tl = bvh_enter(node.left, dir);
+            let tr = bvh_enter(node.right, dir);
+            // The farther child goes on the stack first, so the nearer one is popped first.
+            let near_is_left = tl <= tr;
+            let t_far = select(tl, tr, near_is_left);
+            let t_near = select(tr, tl, near_is_left);
+            if t_far < BIG && sp < BVH_STACK {
+                stack[sp] = select(node.left, node.right, near_is_left);
+                stack_t[sp] = t_far;
+                sp += 1u;
+            }
+            if t_near < BIG && sp < BVH_STACK {
+                stack[sp] = select(node.right, node.left, near_is_left);
+                stack_t[sp] = t_near;
+                sp += 1u;
+            }
         }
-        let tl = bvh_enter(node.left, dir);
-        let tr = bvh_enter(node.right, dir);
-        // The farther child goes on the stack first, so the nearer one is popped first.
-        let near_is_left = tl <= tr;
-        let t_far = select(tl, tr, near_is_left);
-        let t_near = select(tr, tl, near_is_left);
-        if t_far < BIG && sp < BVH_STACK {
-            stack[sp] = select(node.left, node.right, near_is_left);
-            stack_t[sp] = t_far;
-            sp += 1u;
+        if leaf >= count {
+            break;
         }
-        if t_near < BIG && sp < BVH_STACK {
-            stack[sp] = select(node.right, node.left, near_is_left);
-            stack_t[sp] = t_near;
-            sp += 1u;
-        }
+        limit = min(limit, bvh_visit(leaf, dir));
     }
 }
