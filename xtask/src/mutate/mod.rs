@@ -91,6 +91,7 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
             "ray_march_filter::many",
             "scale::",
             "ray_casters::",
+            "ray_cast_compute::",
         ],
     ),
     (
@@ -161,6 +162,10 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
         ],
     ),
     ("ray_cast_compute.inc.wgsl", &["ray_cast_compute::"]),
+    (
+        "tile_list.inc.wgsl",
+        &["ray_march_filter::tiles", "ray_cast_compute::", "ray_march_filter::"],
+    ),
     ("edge_aa.wgsl", &["edge_aa::"]),
 ];
 
