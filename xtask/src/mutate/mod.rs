@@ -164,7 +164,11 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
     ("ray_cast_compute.inc.wgsl", &["ray_cast_compute::"]),
     (
         "tile_list.inc.wgsl",
-        &["ray_march_filter::tiles", "ray_cast_compute::", "ray_march_filter::"],
+        &[
+            "ray_march_filter::tiles",
+            "ray_cast_compute::",
+            "ray_march_filter::",
+        ],
     ),
     ("edge_aa.wgsl", &["edge_aa::"]),
 ];
