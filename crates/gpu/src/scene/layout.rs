@@ -129,6 +129,9 @@ pub struct VisibleInstance {
     pub level: u32,
     /// Its proxy in the proxy buffers.
     pub proxy: ProxyRange,
+    /// The level whose proxy that is: its own, or a coarser one under a budget or where
+    /// the view does not resolve its bricks (`visibility::proxy_detail`).
+    pub proxy_level: u32,
     /// The camera is inside its proxy (the prepass draws back faces).
     pub camera_inside: bool,
 }

@@ -161,8 +161,9 @@ pub(crate) fn visible_instances(
             };
             let inv = rel.inverse();
             let cam_obj = inv.transform_point3(DVec3::ZERO);
-            // The proxy drawn is that of `proxy_level` (a coarser one under a budget).
-            let proxy_level = level.min(caps.proxy);
+            // The proxy drawn is that of `proxy_level`: a coarser one under a budget, and
+            // one no finer than the view resolves (`proxy_detail`).
+            let proxy_level = level.min(caps.proxy).min(proxy_detail(xf, camera, screen));
             let camera_inside =
                 inside_resident_page(&obj.asset.lods[proxy_level as usize].lookup, cam_obj);
             let cell_world = 2.0 * scale_of(xf) / (1u64 << level) as f64;
@@ -185,7 +186,8 @@ pub(crate) fn visible_instances(
                 scene_index: si,
                 object: oi,
                 level,
-                proxy: proxies[oi][level as usize],
+                proxy: proxies[oi][proxy_level as usize],
+                proxy_level,
                 camera_inside,
             });
         }
@@ -321,6 +323,33 @@ fn auto_detail(xf: &DAffine3, camera: &Camera, screen: (u32, u32), pixel_error: 
     let dist = ((xf.translation - camera.position).length() - radius).max(camera.near.max(1e-9));
     let box_px = 2.0 * scale * h / (dist * 2.0 * tan_y);
     (box_px / pixel_error).log2()
+}
+
+/// Pixels a proxy brick (16 cells, [`ssbvb_voxel::asset::PAGE_SIZE`]) must span at most
+/// for a finer proxy to be drawn: below it the finer proxy's triangles, four times as many
+/// per level, cost the prepass more than its tighter entries save the filter (bunny at
+/// level 12, 1280×720, lavapipe: its own proxy 254–268 ms a frame, level 10's 186–193;
+/// docs/benchmarks.md, "Proxies no finer than the view").
+pub const PROXY_BRICK_PX: f64 = 16.0;
+
+/// Levels up to this one always draw their own proxy (cheap: about 10⁵ triangles for the
+/// bundled models at level 9, and the tests' views keep theirs).
+pub const PROXY_LEVEL_FLOOR: u32 = 9;
+
+/// The finest level whose proxy bricks span at least [`PROXY_BRICK_PX`] pixels at the
+/// instance's nearest (the bounding sphere's near side, as Auto LOD measures), and at
+/// least [`PROXY_LEVEL_FLOOR`]; any proxy encloses every finer level's voxels (a coarse
+/// cell is occupied when a finer one is), so the choice moves where rays start, never
+/// what they hit.
+pub fn proxy_detail(xf: &DAffine3, camera: &Camera, screen: (u32, u32)) -> u32 {
+    let brick = ssbvb_voxel::asset::PAGE_SIZE as f64;
+    let ideal = auto_detail(xf, camera, screen, PROXY_BRICK_PX / brick);
+    if ideal.is_nan() {
+        return u32::MAX;
+    }
+    ideal
+        .floor()
+        .clamp(f64::from(PROXY_LEVEL_FLOOR), f64::from(u32::MAX)) as u32
 }
 
 /// Uniform scale of an instance transform (cube root of |det|).
