@@ -111,18 +111,15 @@ fn store_listed(i: u32, packed: u32) {
     atomicStore(&cast_hits[tile_words_at() + 1u + tile_total(screen_size()) + i], packed);
 }
 
+fn store_listing(count: u32, grid: vec3<u32>) {
+    atomicStore(&cast_hits[tile_words_at()], count);
+    cast_dispatch = array(grid.x, grid.y, grid.z);
+}
+
 // One workgroup: lists the flagged tiles, their count and `cs_main`'s grid.
 @compute @workgroup_size(256)
 fn list_cast_tiles(@builtin(local_invocation_index) li: u32) {
-    let size = screen_size();
-    let listed = list_flagged_tiles(li, tile_total(size), tiles_per_row(size));
-    if li == 0u {
-        atomicStore(&cast_hits[tile_words_at()], listed);
-        let grid = tile_grid(listed);
-        cast_dispatch[0] = grid.x;
-        cast_dispatch[1] = grid.y;
-        cast_dispatch[2] = grid.z;
-    }
+    list_screen_tiles(li, screen_size());
 }
 
 // One workgroup per listed tile.

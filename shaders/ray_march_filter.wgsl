@@ -349,18 +349,15 @@ fn store_listed(i: u32, packed: u32) {
     atomicStore(&filter_words[at + 1u + tile_total(textureDimensions(entry)) + i], packed);
 }
 
+fn store_listing(count: u32, grid: vec3<u32>) {
+    atomicStore(&filter_words[atomicLoad(&filter_words[TILE_AT])], count);
+    filter_dispatch = array(grid.x, grid.y, grid.z);
+}
+
 // One workgroup: lists the flagged tiles, their count and `main`'s grid.
 @compute @workgroup_size(256)
 fn list_tiles(@builtin(local_invocation_index) li: u32) {
-    let size = textureDimensions(entry);
-    let listed = list_flagged_tiles(li, tile_total(size), tiles_per_row(size));
-    if li == 0u {
-        atomicStore(&filter_words[atomicLoad(&filter_words[TILE_AT])], listed);
-        let grid = tile_grid(listed);
-        filter_dispatch[0] = grid.x;
-        filter_dispatch[1] = grid.y;
-        filter_dispatch[2] = grid.z;
-    }
+    list_screen_tiles(li, textureDimensions(entry));
 }
 
 @compute @workgroup_size(16, 16)

@@ -5,11 +5,11 @@
 // filter over tiles with a proxy"). A GPU skips such branches; the list costs it a
 // dispatch of one workgroup.
 //
-// The includer flags tiles (row-major index), then calls `list_flagged_tiles` from one
+// The includer flags tiles (row-major index), then calls `list_screen_tiles` from one
 // workgroup of LIST_GROUP invocations, and dispatches its main entry point indirectly on
-// `tile_grid` of the count; a workgroup finds its tile with `listed_index` and
-// `tile_origin`. It defines `fn tile_flagged(tile: u32) -> bool` and
-// `fn store_listed(i: u32, packed: u32)`.
+// the grid that stores; a workgroup finds its tile with `listed_index` and `tile_origin`.
+// It defines `fn tile_flagged(tile: u32) -> bool`, `fn store_listed(i: u32, packed: u32)`
+// and `fn store_listing(count: u32, grid: vec3<u32>)`.
 
 // Pixels per side of a tile (the includer's main workgroup is TILE × TILE).
 const TILE: u32 = 16u;
@@ -49,6 +49,16 @@ fn list_flagged_tiles(li: u32, n: u32, per_row: u32) -> u32 {
         workgroupBarrier();
     }
     return listed;
+}
+
+// Lists the flagged tiles of a `size` screen, then stores their count and the main
+// dispatch's grid (`store_listing`, from the first invocation). Called by every invocation
+// of one workgroup of LIST_GROUP (`li`: its local index).
+fn list_screen_tiles(li: u32, size: vec2<u32>) {
+    let listed = list_flagged_tiles(li, tile_total(size), tiles_per_row(size));
+    if li == 0u {
+        store_listing(listed, tile_grid(listed));
+    }
 }
 
 // The main dispatch's grid for `n` listed tiles: one workgroup each, in rows of MAX_GRID.

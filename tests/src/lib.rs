@@ -167,6 +167,31 @@ pub fn render_with_chunks(
     }
 }
 
+/// One uncounted frame of `scene` with the pipeline text `pipeline` at `size` on `ctx` (a
+/// second device on the shared adapter, whose errors its maker collects; read the frame's
+/// resources with `ctx`, not with [`Frame::read`], which reads the shared device's).
+pub fn render_on(
+    ctx: &GpuContext,
+    pipeline: &str,
+    scene: Scene,
+    camera: &Camera,
+    size: (u32, u32),
+) -> Frame {
+    let resolved =
+        ssbvb_graph::resolve_str(pipeline, "test pipeline").unwrap_or_else(|e| panic!("{e}"));
+    let mut gpu_scene = GpuScene::new(ctx, scene).unwrap_or_else(|e| panic!("{e}"));
+    let mut renderer =
+        Renderer::new(ctx, &gpu_scene, resolved, size).unwrap_or_else(|e| panic!("{e}"));
+    renderer
+        .render(ctx, &mut gpu_scene, camera, Profiling::Off)
+        .unwrap_or_else(|e| panic!("{e}"));
+    ctx.wait_idle().unwrap();
+    Frame {
+        renderer,
+        scene: gpu_scene,
+    }
+}
+
 impl Frame {
     /// Bytes of a live resource (texture: tightly packed rows; depth-stencil: depth aspect).
     pub fn read(&self, name: &str) -> Vec<u8> {

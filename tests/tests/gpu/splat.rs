@@ -7,10 +7,9 @@
 //! bit.
 
 use glam::{DAffine3, DVec3};
-use ssbvb_gpu::scene::{GpuScene, Scene, TriangleObject};
+use ssbvb_gpu::scene::{Scene, TriangleObject};
 use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_passes::kinds::splat_billboards::has_wide_atomics;
-use ssbvb_passes::{Profiling, Renderer};
 use ssbvb_tests::{Frame, model_asset, render, single_object_scene};
 use ssbvb_voxel::camera::Camera;
 
@@ -305,14 +304,7 @@ fn gbuffer_on(
     camera: &Camera,
     size: (u32, u32),
 ) -> Vec<(&'static str, Vec<u8>)> {
-    let resolved = ssbvb_graph::resolve_str(pipeline, "splat").unwrap_or_else(|e| panic!("{e}"));
-    let mut gpu_scene = GpuScene::new(ctx, scene).unwrap_or_else(|e| panic!("{e}"));
-    let mut renderer =
-        Renderer::new(ctx, &gpu_scene, resolved, size).unwrap_or_else(|e| panic!("{e}"));
-    renderer
-        .render(ctx, &mut gpu_scene, camera, Profiling::Off)
-        .unwrap_or_else(|e| panic!("{e}"));
-    ctx.wait_idle().unwrap();
+    let renderer = ssbvb_tests::render_on(ctx, pipeline, scene, camera, size).renderer;
     let read = |name: &str, aspect| {
         let i = renderer.resource(name).unwrap();
         let t = renderer.resources.texture(i);

@@ -6,11 +6,9 @@
 //! dispatches the list in.
 
 use glam::DVec3;
-use ssbvb_gpu::scene::GpuScene;
 use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_passes::kinds::ray_march_filter::{VoxelSlot, tile_count};
 use ssbvb_passes::measure::ssbvb::read_slots;
-use ssbvb_passes::{Profiling, Renderer};
 use ssbvb_tests::reference_of;
 use ssbvb_voxel::camera::Camera;
 
@@ -60,16 +58,8 @@ fn slots_on(
     camera: &Camera,
     size: (u32, u32),
 ) -> Vec<VoxelSlot> {
-    let resolved = ssbvb_graph::resolve_str(&prefilter_pipeline(1024), "tiles")
-        .unwrap_or_else(|e| panic!("{e}"));
-    let mut gpu_scene = GpuScene::new(ctx, scene).unwrap_or_else(|e| panic!("{e}"));
-    let mut renderer =
-        Renderer::new(ctx, &gpu_scene, resolved, size).unwrap_or_else(|e| panic!("{e}"));
-    renderer
-        .render(ctx, &mut gpu_scene, camera, Profiling::Off)
-        .unwrap_or_else(|e| panic!("{e}"));
-    ctx.wait_idle().unwrap();
-    let mut slots = read_slots(ctx, &renderer).unwrap();
+    let frame = ssbvb_tests::render_on(ctx, &prefilter_pipeline(1024), scene, camera, size);
+    let mut slots = read_slots(ctx, &frame.renderer).unwrap();
     slots.sort_by_key(|s| s.pixel);
     slots
 }
