@@ -325,9 +325,9 @@ fn auto_detail(xf: &DAffine3, camera: &Camera, screen: (u32, u32), pixel_error: 
     (box_px / pixel_error).log2()
 }
 
-/// Pixels a proxy brick (16 cells, [`ssbvb_voxel::asset::PAGE_SIZE`]) must span at most
-/// for a finer proxy to be drawn: below it the finer proxy's triangles, four times as many
-/// per level, cost the prepass more than its tighter entries save the filter (bunny at
+/// Pixels a proxy brick (16 cells, [`ssbvb_voxel::asset::PAGE_SIZE`]) must span for its
+/// level's proxy to be drawn: where a finer proxy's bricks span fewer, its triangles, four
+/// times as many per level, cost the prepass more than its tighter entries save the filter (bunny at
 /// level 12, 1280×720, lavapipe: its own proxy 254–268 ms a frame, level 10's 186–193;
 /// docs/benchmarks.md, "Proxies no finer than the view").
 pub const PROXY_BRICK_PX: f64 = 16.0;
