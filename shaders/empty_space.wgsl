@@ -14,7 +14,7 @@
 // 1. front faces (`vs_main` + `fs_main`): the interpolated object-space position;
 // 2. back faces (`vs_main` + `fs_back`): a back face is nearest only where the ray starts
 //    inside a proxy (or the front face was clipped by the near plane): the entry is the
-//    camera itself (`t = 0`);
+//    camera itself (`t = 0`). Drawn only for the instances where that can happen;
 // 3. for instances whose proxy holds the camera, a full-screen triangle at the farthest
 //    depth (`vs_fill` + `fs_back`, test `GreaterEqual`, no depth write): it fills the pixels
 //    where the proxy's own back faces were clipped by the near or far plane.

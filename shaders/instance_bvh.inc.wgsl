@@ -9,27 +9,29 @@
 // Boxes tested by this invocation (for the includer's counters).
 var<private> boxes_tested: u32;
 
-// Entry time (t >= 0) of the camera-relative ray `t * dir` into node `i`'s box, or BIG when
-// it misses. Direction components below 1e-20 are treated as 0 (boxes are clamped to 1e37
-// and widened, so nothing overflows or is missed).
-fn bvh_enter(i: u32, dir: vec3<f32>) -> f32 {
+// The walk's ray, set once per walk: the reciprocal of each direction component, and which
+// components are below 1e-20 (treated as 0; their reciprocal is unused). A box test is then
+// six products and no division, in vector form (a ray tests dozens of boxes in a crowd;
+// docs/benchmarks.md, "The walk's box test").
+var<private> walk_inv_dir: vec3<f32>;
+var<private> walk_flat: vec3<bool>;
+
+// Entry time (t >= 0) of the camera-relative ray `t * dir` (the walk's) into node `i`'s
+// box, or BIG when it misses. Boxes are clamped to 1e37 and widened, so nothing overflows
+// or is missed.
+fn bvh_enter(i: u32) -> f32 {
     boxes_tested += 1u;
     let n = instance_bvh[i];
-    var enter = 0.0;
-    var exit = BIG;
-    for (var a = 0u; a < 3u; a++) {
-        if abs(dir[a]) < 1e-20 {
-            if !(n.lo[a] <= 0.0 && 0.0 <= n.hi[a]) {
-                return BIG;
-            }
-            continue;
-        }
-        let inv = 1.0 / dir[a];
-        let t0 = n.lo[a] * inv;
-        let t1 = n.hi[a] * inv;
-        enter = max(enter, min(t0, t1));
-        exit = min(exit, max(t0, t1));
+    // Parallel to a slab and outside it: missed.
+    if any(walk_flat & !(n.lo <= vec3(0.0) & vec3(0.0) <= n.hi)) {
+        return BIG;
     }
+    let t0 = n.lo * walk_inv_dir;
+    let t1 = n.hi * walk_inv_dir;
+    let near = select(min(t0, t1), vec3(0.0), walk_flat);
+    let far = select(max(t0, t1), vec3(BIG), walk_flat);
+    let enter = max(max(near.x, near.y), max(near.z, 0.0));
+    let exit = min(min(far.x, far.y), min(far.z, BIG));
     return select(BIG, enter, enter <= exit);
 }
 
@@ -44,10 +46,12 @@ fn bvh_walk(dir: vec3<f32>, limit_in: f32, count: u32) {
         return;
     }
     var limit = limit_in;
+    walk_flat = abs(dir) < vec3(1e-20);
+    walk_inv_dir = 1.0 / select(dir, vec3(1.0), walk_flat);
     var stack: array<u32, BVH_STACK>;
     var stack_t: array<f32, BVH_STACK>;
     var sp = 0u;
-    let root_t = bvh_enter(0u, dir);
+    let root_t = bvh_enter(0u);
     if root_t < BIG {
         stack[0] = 0u;
         stack_t[0] = root_t;
@@ -74,8 +78,8 @@ fn bvh_walk(dir: vec3<f32>, limit_in: f32, count: u32) {
                 }
                 continue;
             }
-            let tl = bvh_enter(node.left, dir);
-            let tr = bvh_enter(node.right, dir);
+            let tl = bvh_enter(node.left);
+            let tr = bvh_enter(node.right);
             // The farther child goes on the stack first, so the nearer one is popped first.
             let near_is_left = tl <= tr;
             let t_far = select(tl, tr, near_is_left);

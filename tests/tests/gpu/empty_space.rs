@@ -285,6 +285,8 @@ fn near_plane_clipping_of_front_faces_starts_at_the_camera() {
         ..Camera::new(DVec3::new(0.1, 0.2, 1.02), DVec3::new(0.1, 0.2, 0.0))
     };
     let frame = render(&prefilter_pipeline(1024), scene, &camera, (32, 24));
+    let v = &frame.scene.visible[0];
+    assert!(v.back_faces && !v.camera_inside);
     for v in entries(&frame) {
         assert_eq!(v[3], 1.0);
         assert!((v[2] - 1.02).abs() < 1e-6, "{v:?}");
@@ -309,6 +311,9 @@ fn instances_write_their_own_index() {
     let size = (80, 40);
     let camera = Camera::new(DVec3::new(0.0, 0.0, 6.0), DVec3::ZERO);
     let frame = render(&prefilter_pipeline(1024), scene, &camera, size);
+    // Both proxies lie wholly beyond the near plane: their back faces are not drawn (they
+    // could win no depth test), and the front faces alone give every entry.
+    assert!(frame.scene.visible.iter().all(|v| !v.back_faces));
     let e = entries(&frame);
     for y in 0..size.1 {
         for x in 0..size.0 {

@@ -132,8 +132,11 @@ pub struct VisibleInstance {
     /// The level whose proxy that is: its own, or a coarser one under a budget or where
     /// the view does not resolve its bricks (`visibility::proxy_detail`).
     pub proxy_level: u32,
-    /// The camera is inside its proxy (the prepass draws back faces).
+    /// The camera is inside its proxy (the prepass fills the screen behind it).
     pub camera_inside: bool,
+    /// The prepass draws its proxy's back faces: the camera is inside the proxy or the
+    /// near plane may cut it (elsewhere a back face never wins the depth test).
+    pub back_faces: bool,
 }
 
 /// GPU bytes of one object's asset (all LODs), for reports.

@@ -166,6 +166,10 @@ pub(crate) fn visible_instances(
             let proxy_level = level.min(caps.proxy).min(proxy_detail(xf, camera, screen));
             let camera_inside =
                 inside_resident_page(&obj.asset.lods[proxy_level as usize].lookup, cam_obj);
+            // A closed proxy wholly beyond the near plane, seen from outside, hides each of
+            // its back faces behind one of its front faces: only a proxy the near plane may
+            // cut, or one holding the camera, needs its back faces drawn.
+            let back_faces = camera_inside || center.dot(forward) - radius <= camera.near * 1.001;
             let cell_world = 2.0 * scale_of(xf) / (1u64 << level) as f64;
             uniforms.push(InstanceUniform {
                 object_to_world: mat(DMat4::from(rel)),
@@ -189,6 +193,7 @@ pub(crate) fn visible_instances(
                 proxy: proxies[oi][proxy_level as usize],
                 proxy_level,
                 camera_inside,
+                back_faces,
             });
         }
     }

@@ -15,7 +15,10 @@
 //!    position;
 //! 2. back faces (cull front faces) write the camera's object-space position: a back face is
 //!    the nearest surface only where the ray starts inside a proxy or where the front face
-//!    was clipped by the near plane, and there the ray starts at the camera (`t = 0`);
+//!    was clipped by the near plane, and there the ray starts at the camera (`t = 0`). Only
+//!    the instances where that can happen draw them (`VisibleInstance::back_faces`: the
+//!    camera inside, or the bounding sphere reaching the near plane); the others' back
+//!    faces would all fail the depth test, at the price of rasterizing them;
 //! 3. for instances whose proxy holds the camera, a full-screen triangle at the far end of
 //!    the depth range (`GreaterEqual`, no depth write) writes the camera too: it fills the
 //!    pixels where that proxy's back faces were clipped by the near or far plane, so a
@@ -149,11 +152,11 @@ impl PassNode for EmptySpace {
         pass.set_bind_group(0, &scene.bind_group, &[]);
         pass.set_vertex_buffer(0, scene.proxy_vertices.slice(..));
         pass.set_index_buffer(scene.proxy_indices.slice(..), wgpu::IndexFormat::Uint32);
-        for pipeline in [&self.front, &self.back] {
+        for (pipeline, back) in [(&self.front, false), (&self.back, true)] {
             pass.set_pipeline(pipeline);
             for (i, v) in scene.visible.iter().enumerate() {
                 let p = v.proxy;
-                if p.index_count == 0 {
+                if p.index_count == 0 || (back && !v.back_faces) {
                     continue;
                 }
                 // instance_index = i: the instance's entry in `instances`.
