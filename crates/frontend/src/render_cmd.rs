@@ -713,6 +713,9 @@ fn print_report(r: &Report) {
             c.instances_marched_per_ray.unwrap_or(0.0)
         );
     }
+    if let Some(t) = c.filter_tiles {
+        println!("filter: {t} tiles of 16x16 launched");
+    }
     if let Some(rays) = c.ray_cast_rays {
         let (what, v) = match (c.dda_steps_per_ray, c.octree_nodes_per_ray) {
             (Some(v), _) => ("DDA cells", v),
@@ -720,6 +723,9 @@ fn print_report(r: &Report) {
             _ => ("steps", 0.0),
         };
         println!("ray casting: {rays} rays, {v:.1} {what} per ray");
+    }
+    if let Some(t) = c.ray_cast_tiles {
+        println!("ray casting: {t} tiles of 16x16 launched");
     }
     if let Some(f) = c.fragments_per_covered_pixel {
         println!("billboard fragment invocations per covered pixel: {f:.2}");

@@ -240,6 +240,9 @@ impl OctreeCaster {
             out.ray_cast_rays = Some(c.rays);
             out.octree_nodes_per_ray = c.steps_per_ray;
             out.node_words_per_step = c.words_per_step;
+            if let Some(compute) = &self.compute {
+                out.ray_cast_tiles = Some(compute.tiles_launched(frame.gpu)?);
+            }
         }
         Ok(())
     }

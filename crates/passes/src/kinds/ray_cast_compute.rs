@@ -152,8 +152,11 @@ impl ComputeCast {
                 let buffer = d.create_buffer(&wgpu::BufferDescriptor {
                     label: Some(&label),
                     size,
-                    // COPY_DST: the tile flags are cleared every frame.
-                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                    // COPY_DST: the tile flags are cleared every frame; COPY_SRC: the
+                    // tile count is read back for the counters.
+                    usage: wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_DST
+                        | wgpu::BufferUsages::COPY_SRC,
                     mapped_at_creation: false,
                 });
                 let group = self.list_bindings.own_bind_group(
@@ -176,6 +179,16 @@ impl ComputeCast {
         self.hits.as_ref().map(|h| &h.0)
     }
 
+    /// The tiles the last recorded frame listed and traced (0 before any frame).
+    pub(crate) fn tiles_launched(&self, ctx: &GpuContext) -> Result<u64, PassError> {
+        let Some((buffer, (w, h), _)) = &self.hits else {
+            return Ok(0);
+        };
+        let at = u64::from(*w) * u64::from(*h) * RECORD_BYTES / 4;
+        let words = ssbvb_gpu::kernels::read_words(ctx, buffer, at, 1)?;
+        Ok(words.first().map_or(0, |&t| u64::from(t)))
+    }
+
     /// Records the trace of the listed tiles (when `bind_group` is given: something is
     /// visible; [`ComputeCast::hits`] was called for this screen) and the resolve, the
     /// pass's time spanning both.
@@ -186,12 +199,13 @@ impl ComputeCast {
         bind_group: Option<&wgpu::BindGroup>,
     ) {
         let (w, h) = rec.screen;
-        let hits = self.hits.as_ref().filter(|_| bind_group.is_some());
-        if let Some((buffer, _, _)) = hits {
-            // The tile count and flags; the records and the list are written before read.
+        if let Some((buffer, _, _)) = &self.hits {
+            // The tile count and flags (a frame with nothing visible lists no tile); the
+            // records and the list are written before read.
             let at = u64::from(w) * u64::from(h) * RECORD_BYTES;
             encoder.clear_buffer(buffer, at, Some((1 + tile_count(w, h)) * 4));
         }
+        let hits = self.hits.as_ref().filter(|_| bind_group.is_some());
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some(&rec.pass.name),

@@ -491,6 +491,13 @@ impl PassNode for RayMarchFilter {
             )));
         }
         out.march_steps_p99 = histogram_quantile(histogram, 0.99);
+        let tiles = ssbvb_gpu::kernels::read_words(
+            frame.gpu,
+            &self.words.buffer,
+            self.words.tiles_start(),
+            1,
+        )?;
+        out.filter_tiles = tiles.first().map(|&t| u64::from(t));
         out.node_words_per_step = (steps > 0).then(|| wide(7) as f64 / steps as f64);
         Ok(())
     }

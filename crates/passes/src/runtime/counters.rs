@@ -17,6 +17,10 @@ pub struct FrameCounters {
     /// above 32 steps (from a histogram).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub march_steps_p99: Option<u64>,
+    /// Tiles of 16 × 16 prepass texels the filter launched (those holding a proxy): its
+    /// workgroups. A software adapter pays for every pixel of a launched tile.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub filter_tiles: Option<u64>,
     /// Mean instance-hierarchy boxes tested per filter ray (0 with one visible instance).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub instance_boxes_per_ray: Option<f64>,
@@ -36,6 +40,10 @@ pub struct FrameCounters {
     /// Pixels whose ray a ray-casting baseline traced into at least one instance.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ray_cast_rays: Option<u64>,
+    /// Tiles of 16 × 16 pixels the compute form of a ray caster launched (those some
+    /// visible instance's box may cover); `None` for the fragment form.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ray_cast_tiles: Option<u64>,
     /// Dense DDA: mean cells stepped per traced ray (over every instance it traced).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dda_steps_per_ray: Option<f64>,

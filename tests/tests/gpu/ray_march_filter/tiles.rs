@@ -104,6 +104,9 @@ fn a_tile_list_longer_than_a_dispatch_row_fills_the_same_slots() {
         "{listed} tiles with a proxy (the first: {first}): the view must leave the last \
          row short and cover the first tile"
     );
+    // The filter launched those tiles and no others.
+    let counters = wide.frame.renderer.counters(shared).unwrap();
+    assert_eq!(counters.filter_tiles, Some(listed as u64));
     let wide_slots = wide.slots;
     let mut expected = wide_slots.clone();
     expected.sort_by_key(|s| s.pixel);
