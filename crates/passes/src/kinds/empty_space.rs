@@ -27,6 +27,9 @@
 //! The ray-march filter only uses the entry to choose where to start; it never trusts it
 //! for the hit itself (see `ray_march_filter`).
 
+use std::ops::Range;
+
+use ssbvb_gpu::scene::{ProxyRange, VisibleInstance};
 use ssbvb_gpu::wgpu;
 use ssbvb_graph::EmptySpacePrepassKind;
 
@@ -123,6 +126,30 @@ impl PassImpl for EmptySpace {
     }
 }
 
+/// The draws of the proxies of the visible instances that `drawn` keeps: runs of
+/// consecutive instances sharing one proxy as one instanced draw (its proxy, its range of
+/// instance indices). Instances are rasterized in order within an instanced draw as across
+/// draws, so the depth test sees the same fragments in the same order; in a crowd, where
+/// neighbours share a level, this is a draw per run instead of one per instance (each
+/// draw costs a software rasterizer its setup).
+fn proxy_runs(
+    visible: &[VisibleInstance],
+    drawn: impl Fn(&VisibleInstance) -> bool,
+) -> Vec<(ProxyRange, Range<u32>)> {
+    let mut runs: Vec<(ProxyRange, Range<u32>)> = Vec::new();
+    for (i, v) in visible.iter().enumerate() {
+        if v.proxy.index_count == 0 || !drawn(v) {
+            continue;
+        }
+        let i = i as u32;
+        match runs.last_mut() {
+            Some((p, r)) if *p == v.proxy && r.end == i => r.end = i + 1,
+            _ => runs.push((v.proxy, i..i + 1)),
+        }
+    }
+    runs
+}
+
 impl PassNode for EmptySpace {
     fn record(
         &mut self,
@@ -154,17 +181,13 @@ impl PassNode for EmptySpace {
         pass.set_index_buffer(scene.proxy_indices.slice(..), wgpu::IndexFormat::Uint32);
         for (pipeline, back) in [(&self.front, false), (&self.back, true)] {
             pass.set_pipeline(pipeline);
-            for (i, v) in scene.visible.iter().enumerate() {
-                let p = v.proxy;
-                if p.index_count == 0 || (back && !v.back_faces) {
-                    continue;
-                }
-                // instance_index = i: the instance's entry in `instances`.
-                let i = i as u32;
+            let runs = proxy_runs(&scene.visible, |v| !back || v.back_faces);
+            for (p, instances) in runs {
+                // instance_index = the instance's entry in `instances`.
                 pass.draw_indexed(
                     p.first_index..p.first_index + p.index_count,
                     p.base_vertex,
-                    i..i + 1,
+                    instances,
                 );
             }
         }
@@ -176,5 +199,59 @@ impl PassNode for EmptySpace {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn instance(first_index: u32, index_count: u32, back_faces: bool) -> VisibleInstance {
+        VisibleInstance {
+            scene_index: 0,
+            object: 0,
+            level: 0,
+            proxy: ProxyRange {
+                first_index,
+                index_count,
+                base_vertex: 0,
+            },
+            proxy_level: 0,
+            camera_inside: false,
+            back_faces,
+        }
+    }
+
+    #[test]
+    fn consecutive_instances_of_one_proxy_are_one_draw() {
+        let visible = [
+            instance(0, 36, false),
+            instance(0, 36, true),
+            instance(0, 36, false),
+            instance(36, 12, false),
+            // No triangles: no draw, and the run it splits does not continue across it.
+            instance(36, 0, false),
+            instance(36, 12, true),
+            instance(0, 36, true),
+        ];
+        let proxy = |first_index, index_count| ProxyRange {
+            first_index,
+            index_count,
+            base_vertex: 0,
+        };
+        assert_eq!(
+            proxy_runs(&visible, |_| true),
+            vec![
+                (proxy(0, 36), 0..3),
+                (proxy(36, 12), 3..4),
+                (proxy(36, 12), 5..6),
+                (proxy(0, 36), 6..7),
+            ]
+        );
+        // The back faces' draws: only the instances that draw them, a gap ending a run.
+        assert_eq!(
+            proxy_runs(&visible, |v| v.back_faces),
+            vec![(proxy(0, 36), 1..2), (proxy(36, 12), 5..6), (proxy(0, 36), 6..7)]
+        );
     }
 }
