@@ -363,161 +363,187 @@ fn march(r: Ray, lod: LodInfo, t_from: f32, t_limit: f32, record: bool) -> Hit {
     var grand = 0u;
     let root = lookup_node(lod, lod.node_offset);
     march_words += 3u;
-    for (var step = 0u; step < MAX_STEPS; step++) {
-        march_steps += 1u;
-        let co = orig_cell(r, c);
-        // Descend: an absent child of 2^shift cells per axis is an empty region to skip,
-        // twice as wide when its whole 2^3 octant of children is absent (the octant's eight
-        // bits are one byte of the mask); an absent single cell is an ordinary DDA step; a
-        // present cell is the hit.
-        // log2 of the width in cells of the empty region the ray is in (0: none).
-        var region_log = 0u;
-        if any(co >> vec3(2u) != leaf_key) {
-            var node = lod.node_offset;
-            var k = 0u;
-            if depth >= 2u && all(co >> vec3(4u) == parent_key) {
-                node = parent;
-                k = depth - 2u;
-            } else if depth >= 3u && all(co >> vec3(6u) == grand_key) {
-                node = grand;
-                k = depth - 3u;
+    // A crossing through an edge or corner (the exact march) leaves the step loop with the
+    // axes crossed in `tie_crossed`; the cells it touches are tested after that loop, which
+    // then goes on. In the loop, that test would cost llvmpipe (which runs a branch no lane
+    // takes, masked) a lookup descent per step of every ray (docs/benchmarks.md).
+    var step = 0u;
+    loop {
+        var tie_crossed = 0u;
+        loop {
+            if step >= MAX_STEPS {
+                break;
             }
-            loop {
-                var n = root;
-                if k != 0u {
-                    n = lookup_node(lod, node);
-                    march_words += 3u;
+            step += 1u;
+            march_steps += 1u;
+            let co = orig_cell(r, c);
+            // Descend: an absent child of 2^shift cells per axis is an empty region to skip,
+            // twice as wide when its whole 2^3 octant of children is absent (the octant's eight
+            // bits are one byte of the mask); an absent single cell is an ordinary DDA step; a
+            // present cell is the hit.
+            // log2 of the width in cells of the empty region the ray is in (0: none).
+            var region_log = 0u;
+            if any(co >> vec3(2u) != leaf_key) {
+                var node = lod.node_offset;
+                var k = 0u;
+                if depth >= 2u && all(co >> vec3(4u) == parent_key) {
+                    node = parent;
+                    k = depth - 2u;
+                } else if depth >= 3u && all(co >> vec3(6u) == grand_key) {
+                    node = grand;
+                    k = depth - 3u;
                 }
-                if k + 2u == depth && PAGED && lod.page_base != NO_PAGES && n.base == PAGE_MISSING {
-                    if !(missing_t >= 0.0) {
-                        missing_t = cell_entry_t(r, c, t0);
+                loop {
+                    var n = root;
+                    if k != 0u {
+                        n = lookup_node(lod, node);
+                        march_words += 3u;
                     }
-                    if !record {
-                        return missing_hit(missing_t);
+                    let paged = PAGED && lod.page_base != NO_PAGES;
+                    if k + 2u == depth && paged && n.base == PAGE_MISSING {
+                        if !(missing_t >= 0.0) {
+                            missing_t = cell_entry_t(r, c, t0);
+                        }
+                        if !record {
+                            return missing_hit(missing_t);
+                        }
+                        // Request it, and look past it (as if it were empty) for the next
+                        // missing pages of this ray, so that the pages a ray needs arrive in
+                        // fewer frames; what lies past it is not a hit.
+                        let which = select(FB_AHEAD, FB_MISSING, missing_pages == 0u);
+                        note_page(which, page_of(lod, node));
+                        missing_pages += 1u;
+                        if missing_pages >= MISSING_LOOKAHEAD {
+                            return missing_hit(missing_t);
+                        }
+                        region_log = 4u;
+                        break;
                     }
-                    // Request it, and look past it (as if it were empty) for the next
-                    // missing pages of this ray, so that the pages a ray needs arrive in
-                    // fewer frames; what lies past it is not a hit.
-                    note_page(select(FB_AHEAD, FB_MISSING, missing_pages == 0u), page_of(lod, node));
-                    missing_pages += 1u;
-                    if missing_pages >= MISSING_LOOKAHEAD {
-                        return missing_hit(missing_t);
+                    if k + 1u == depth {
+                        leaf = n;
+                        leaf_key = co >> vec3(2u);
+                        break;
                     }
-                    region_log = 4u;
-                    break;
-                }
-                if k + 1u == depth {
-                    leaf = n;
-                    leaf_key = co >> vec3(2u);
-                    break;
-                }
-                let shift = 2u * (depth - 1u - k);
-                let b = child_bit((co >> vec3(shift)) & vec3(3u));
-                if !node_has(n, b) {
-                    let octant_empty = ((select(n.lo, n.hi, b >= 32u) >> (b & 24u)) & 0xffu) == 0u;
-                    region_log = select(shift, shift + 1u, octant_empty);
-                    break;
-                }
-                node = lod.node_offset + node_child(n, b);
-                k += 1u;
-                if k + 3u == depth {
-                    grand = node;
-                    grand_key = co >> vec3(6u);
-                }
-                if k + 2u == depth {
-                    parent = node;
-                    parent_key = co >> vec3(4u);
-                    if PAGED && lod.page_base != NO_PAGES {
-                        note_page(FB_TOUCHED, page_of(lod, node));
+                    let shift = 2u * (depth - 1u - k);
+                    let b = child_bit((co >> vec3(shift)) & vec3(3u));
+                    if !node_has(n, b) {
+                        let octant = select(n.lo, n.hi, b >= 32u) >> (b & 24u);
+                        let octant_empty = (octant & 0xffu) == 0u;
+                        region_log = select(shift, shift + 1u, octant_empty);
+                        break;
+                    }
+                    node = lod.node_offset + node_child(n, b);
+                    k += 1u;
+                    if k + 3u == depth {
+                        grand = node;
+                        grand_key = co >> vec3(6u);
+                    }
+                    if k + 2u == depth {
+                        parent = node;
+                        parent_key = co >> vec3(4u);
+                        if PAGED && lod.page_base != NO_PAGES {
+                            note_page(FB_TOUCHED, page_of(lod, node));
+                        }
                     }
                 }
             }
-        }
-        if region_log == 0u {
-            let b = child_bit(co & vec3(3u));
-            if node_has(leaf, b) {
-                return found_or_missing(cell_hit(r, c, node_child(leaf, b)), missing_t);
+            if region_log == 0u {
+                let b = child_bit(co & vec3(3u));
+                if node_has(leaf, b) {
+                    return found_or_missing(cell_hit(r, c, node_child(leaf, b)), missing_t);
+                }
+                let octant = select(leaf.lo, leaf.hi, b >= 32u) >> (b & 24u);
+                let octant_empty = (octant & 0xffu) == 0u;
+                region_log = select(0u, 1u, octant_empty);
             }
-            let octant_empty = ((select(leaf.lo, leaf.hi, b >= 32u) >> (b & 24u)) & 0xffu) == 0u;
-            region_log = select(0u, 1u, octant_empty);
-        }
-        if region_log != 0u && FAST_MARCH {
-            // The same on all three axes at once (no per-axis branches); the cell after
-            // the region is the position estimate (`first_plane`'s fast form).
-            let lg = vec3(region_log);
-            let u = vec3<i32>(co >> lg);
-            let far = select(min((u + 1) << lg, vec3(r.n)), vec3(r.n) - (u << lg), r.mirrored);
-            let t_far = select(vec3(BIG), plane_t_all(r, far), r.moving);
-            let t_out = min(t_far.x, min(t_far.y, t_far.z));
-            if t_out > t_end {
+            if region_log != 0u && FAST_MARCH {
+                // The same on all three axes at once (no per-axis branches); the cell after
+                // the region is the position estimate (`first_plane`'s fast form).
+                let lg = vec3(region_log);
+                let u = vec3<i32>(co >> lg);
+                let far = select(min((u + 1) << lg, vec3(r.n)), vec3(r.n) - (u << lg), r.mirrored);
+                let t_far = select(vec3(BIG), plane_t_all(r, far), r.moving);
+                let t_out = min(t_far.x, min(t_far.y, t_far.z));
+                if t_out > t_end {
+                    return found_or_missing(no_hit(), missing_t);
+                }
+                let x = (r.o + t_out * r.d + 1.0) * r.cells_per_unit;
+                let lo = c + 1;
+                let xs = select(vec3<f32>(lo), x, x == x);
+                let k = vec3<i32>(clamp(ceil(xs), vec3<f32>(lo), vec3<f32>(far)));
+                c = select(c, max(c, k - 1), r.moving);
+                t_next = select(t_next, plane_t_all(r, k), r.moving);
+            } else if region_log != 0u {
+                // Empty region: its far plane per moving axis (mirrored frame), the first time
+                // the ray reaches one of them, and the state just before that event.
+                var far = vec3(0);
+                var t_out = BIG;
+                for (var a = 0u; a < 3u; a++) {
+                    if r.moving[a] {
+                        let u = i32(co[a] >> region_log);
+                        let up = min((u + 1) << region_log, r.n);
+                        far[a] = select(up, r.n - (u << region_log), r.mirrored[a]);
+                        t_out = min(t_out, plane_t(r, a, far[a]));
+                    }
+                }
+                if t_out > t_end {
+                    return found_or_missing(no_hit(), missing_t);
+                }
+                for (var a = 0u; a < 3u; a++) {
+                    if r.moving[a] {
+                        let k = first_plane(r, a, t_out, c[a] + 1, far[a], false);
+                        c[a] = max(c[a], k - 1);
+                        t_next[a] = plane_t(r, a, k);
+                    }
+                }
+            }
+            // Step to the next event: every axis whose next plane is crossed first.
+            let tm = min(t_next.x, min(t_next.y, t_next.z));
+            if tm > t_end {
                 return found_or_missing(no_hit(), missing_t);
             }
-            let x = (r.o + t_out * r.d + 1.0) * r.cells_per_unit;
-            let lo = c + 1;
-            let xs = select(vec3<f32>(lo), x, x == x);
-            let k = vec3<i32>(clamp(ceil(xs), vec3<f32>(lo), vec3<f32>(far)));
-            c = select(c, max(c, k - 1), r.moving);
-            t_next = select(t_next, plane_t_all(r, k), r.moving);
-        } else if region_log != 0u {
-            // Empty region: its far plane per moving axis (mirrored frame), the first time
-            // the ray reaches one of them, and the state just before that event.
-            var far = vec3(0);
-            var t_out = BIG;
-            for (var a = 0u; a < 3u; a++) {
-                if r.moving[a] {
-                    let u = i32(co[a] >> region_log);
-                    far[a] = select(min((u + 1) << region_log, r.n), r.n - (u << region_log), r.mirrored[a]);
-                    t_out = min(t_out, plane_t(r, a, far[a]));
+            let cross = r.moving & (t_next == vec3(tm));
+            c += select(vec3(0), vec3(1), cross);
+            if FAST_MARCH {
+                let t_after = select(vec3(BIG), plane_t_all(r, c + 1), c + 1 <= vec3(r.n));
+                t_next = select(t_next, t_after, cross);
+            } else {
+                for (var a = 0u; a < 3u; a++) {
+                    if cross[a] {
+                        t_next[a] = select(BIG, plane_t(r, a, c[a] + 1), c[a] + 1 <= r.n);
+                    }
                 }
             }
-            if t_out > t_end {
+            if !FAST_MARCH && u32(cross.x) + u32(cross.y) + u32(cross.z) > 1u {
+                tie_crossed = select(0u, 1u, cross.x) | select(0u, 2u, cross.y)
+                    | select(0u, 4u, cross.z);
+                break;
+            }
+            if any(c >= vec3(r.n)) {
                 return found_or_missing(no_hit(), missing_t);
             }
-            for (var a = 0u; a < 3u; a++) {
-                if r.moving[a] {
-                    let k = first_plane(r, a, t_out, c[a] + 1, far[a], false);
-                    c[a] = max(c[a], k - 1);
-                    t_next[a] = plane_t(r, a, k);
-                }
+        }
+        if tie_crossed == 0u {
+            break;
+        }
+        // Through an edge or corner: the diagonal cell, then the cells touched only along
+        // the edge, in the reference's rank order (differ on x, y, z, xy, xz, yz). Masks 0,
+        // 1, 2, 4, 3, 5, 6: i with 3 and 4 swapped (no array: llvmpipe would zero a
+        // per-lane copy of it for every invocation of the includer).
+        let crossed = tie_crossed;
+        for (var i = 0u; i < 7u; i++) {
+            let mask = select(i, 7u - i, i == 3u || i == 4u);
+            if (mask & crossed) != mask {
+                continue;
             }
-        }
-        // Step to the next event: every axis whose next plane is crossed first.
-        let tm = min(t_next.x, min(t_next.y, t_next.z));
-        if tm > t_end {
-            return found_or_missing(no_hit(), missing_t);
-        }
-        let cross = r.moving & (t_next == vec3(tm));
-        c += select(vec3(0), vec3(1), cross);
-        if FAST_MARCH {
-            let t_after = select(vec3(BIG), plane_t_all(r, c + 1), c + 1 <= vec3(r.n));
-            t_next = select(t_next, t_after, cross);
-        } else {
-            for (var a = 0u; a < 3u; a++) {
-                if cross[a] {
-                    t_next[a] = select(BIG, plane_t(r, a, c[a] + 1), c[a] + 1 <= r.n);
-                }
-            }
-        }
-        if !FAST_MARCH && u32(cross.x) + u32(cross.y) + u32(cross.z) > 1u {
-            // Through an edge or corner: the diagonal cell, then the cells touched only
-            // along the edge, in the reference's rank order (differ on x, y, z, xy, xz, yz).
-            // Masks 0, 1, 2, 4, 3, 5, 6: i with 3 and 4 swapped (no array: llvmpipe would
-            // zero a per-lane copy of it for every invocation of the includer).
-            let crossed = select(0u, 1u, cross.x) | select(0u, 2u, cross.y) | select(0u, 4u, cross.z);
-            for (var i = 0u; i < 7u; i++) {
-                let mask = select(i, 7u - i, i == 3u || i == 4u);
-                if (mask & crossed) != mask {
-                    continue;
-                }
-                let back = vec3(i32(mask & 1u), i32((mask >> 1u) & 1u), i32((mask >> 2u) & 1u));
-                let cand = c - back;
-                if all(cand < vec3(r.n)) {
-                    let v = march_cell(lod, orig_cell(r, cand), record);
-                    if v != 0u {
-                        var h = cell_hit(r, cand, v - 1u);
-                        h.rank = mask;
-                        return found_or_missing(h, missing_t);
-                    }
+            let back = vec3(i32(mask & 1u), i32((mask >> 1u) & 1u), i32((mask >> 2u) & 1u));
+            let cand = c - back;
+            if all(cand < vec3(r.n)) {
+                let v = march_cell(lod, orig_cell(r, cand), record);
+                if v != 0u {
+                    var h = cell_hit(r, cand, v - 1u);
+                    h.rank = mask;
+                    return found_or_missing(h, missing_t);
                 }
             }
         }
