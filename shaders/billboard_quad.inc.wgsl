@@ -273,6 +273,13 @@ struct Fragment {
     depth: f32,
 }
 
+// The depth of a (not near-field) quad's plane: one depth for the whole quad, as the
+// rasterizer interpolates it.
+fn flat_quad_depth(q: Quad) -> f32 {
+    let clip = frame.proj * vec4(0.0, 0.0, q.cz, 1.0);
+    return clamp(clip.z / clip.w, 0.0, 1.0);
+}
+
 // A Flat billboard's pixel (the paper): on the quad at `world` (camera-relative; the quad
 // plane's point under the pixel), or for a near-field quad the pixel's ray against the box
 // (depth: the quad's, at the voxel centre).
@@ -280,9 +287,7 @@ fn flat_fragment(slot: VoxelSlot, q: Quad, px: vec2<f32>, world_on_quad: vec3<f3
     var f: Fragment;
     f.covered = true;
     var world = world_on_quad;
-    // The quad's plane: one depth for the whole quad, as the rasterizer interpolates it.
-    let clip = frame.proj * vec4(0.0, 0.0, q.cz, 1.0);
-    f.depth = clamp(clip.z / clip.w, 0.0, 1.0);
+    f.depth = flat_quad_depth(q);
     let h = slot_ray_box(slot, px);
     if q.near_field {
         if !h.hit {

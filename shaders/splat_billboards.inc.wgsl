@@ -170,14 +170,28 @@ fn splat(e: u32, splat_step: u32) {
         mark_tiles(b);
     }
     let width = u32(frame.screen.x);
+    // A near-field quad (rare) intersects each pixel's ray with its box: a loop of its own,
+    // so that the flat quads' loop holds only the rectangle test (llvmpipe would run the
+    // ray-box test, masked, at every pixel of every quad; docs/benchmarks.md).
+    if RAY_BOX || q.near_field {
+        for (var y = b.y; y <= b.w; y++) {
+            for (var x = b.x; x <= b.z; x++) {
+                let f = fragment_at(slot, q, vec2<f32>(f32(x), f32(y)) + 0.5);
+                if !f.covered {
+                    continue;
+                }
+                let p = u32(y) * width + u32(x);
+                splat_pixel(p, bitcast<u32>(clamp(f.depth, 0.0, 1.0)), e, splat_step);
+            }
+        }
+        return;
+    }
+    let depth_bits = bitcast<u32>(clamp(flat_quad_depth(q), 0.0, 1.0));
     for (var y = b.y; y <= b.w; y++) {
         for (var x = b.x; x <= b.z; x++) {
-            let f = fragment_at(slot, q, vec2<f32>(f32(x), f32(y)) + 0.5);
-            if !f.covered {
-                continue;
+            if quad_covers(q, vec2<f32>(f32(x), f32(y)) + 0.5) {
+                splat_pixel(u32(y) * width + u32(x), depth_bits, e, splat_step);
             }
-            let p = u32(y) * width + u32(x);
-            splat_pixel(p, bitcast<u32>(clamp(f.depth, 0.0, 1.0)), e, splat_step);
         }
     }
 }
