@@ -273,8 +273,8 @@ struct Fragment {
     depth: f32,
 }
 
-// The depth of a (not near-field) quad's plane: one depth for the whole quad, as the
-// rasterizer interpolates it.
+// The depth of a (not near-field) quad's plane, in [0, 1]: one depth for the whole quad,
+// as the rasterizer interpolates it.
 fn flat_quad_depth(q: Quad) -> f32 {
     let clip = frame.proj * vec4(0.0, 0.0, q.cz, 1.0);
     return clamp(clip.z / clip.w, 0.0, 1.0);

@@ -12,7 +12,7 @@ var<private> boxes_tested: u32;
 // The walk's ray, set once per walk: the reciprocal of each direction component, and which
 // components are below 1e-20 (treated as 0; their reciprocal is unused). A box test is then
 // six products and no division, in vector form (a ray tests dozens of boxes in a crowd;
-// docs/benchmarks.md, "The walk's box test").
+// docs/benchmarks.md, "The crowd's walk, taken apart").
 var<private> walk_inv_dir: vec3<f32>;
 var<private> walk_flat: vec3<bool>;
 

@@ -186,7 +186,7 @@ fn splat(e: u32, splat_step: u32) {
         }
         return;
     }
-    let depth_bits = bitcast<u32>(clamp(flat_quad_depth(q), 0.0, 1.0));
+    let depth_bits = bitcast<u32>(flat_quad_depth(q));
     for (var y = b.y; y <= b.w; y++) {
         for (var x = b.x; x <= b.z; x++) {
             if quad_covers(q, vec2<f32>(f32(x), f32(y)) + 0.5) {
