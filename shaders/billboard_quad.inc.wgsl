@@ -323,3 +323,20 @@ fn ray_box_fragment(slot: VoxelSlot, px: vec2<f32>) -> Fragment {
     f.depth = ndc_depth(p);
     return f;
 }
+
+// A Pixel entry's fragment at its own pixel `px`: the filter's hit, at its distance along
+// the pixel's ray with its entered face, as the ray casters' resolve writes a hit (no box
+// test: the march found the face).
+fn pixel_fragment(slot: VoxelSlot, px: vec2<f32>) -> Fragment {
+    var f: Fragment;
+    f.covered = true;
+    let inst = instances[slot.instance];
+    let dir = pixel_ray(px);
+    let p = dir * slot.t;
+    f.albedo = vec4(voxel_color(slot.voxel).rgb, 1.0);
+    f.normal = vec4(voxel_normal_world(inst, slot.voxel), 1.0);
+    f.position = vec4(p, slot.t * dot(dir, frame.cam_forward.xyz));
+    f.geometric = oct_encode(face_normal_world(inst, slot.face));
+    f.depth = ndc_depth(p);
+    return f;
+}

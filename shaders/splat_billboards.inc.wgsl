@@ -29,6 +29,10 @@
 // Whether the fragment intersects the pixel's ray with the voxel box (RayBox) or is the
 // flat quad (Flat, the paper).
 override RAY_BOX: bool = false;
+// `mode: Pixel`: no quad; each entry is its own pixel's hit (the filter appended every
+// pixel), splatted at that pixel alone and written as the ray casters' resolve writes a
+// hit (`pixel_fragment`).
+override PIXEL: bool = false;
 // Pixels per side of a resolve tile (the pass sets it; its vertex buffer has a word pair
 // per tile).
 override TILE_PX: u32 = 16u;
@@ -160,6 +164,10 @@ fn splat(e: u32, splat_step: u32) {
         return;
     }
     let slot = ssbvb[e];
+    if PIXEL {
+        splat_own_pixel(slot, e, splat_step);
+        return;
+    }
     let q = billboard_quad(slot);
     if !q.valid {
         return;
@@ -194,6 +202,25 @@ fn splat(e: u32, splat_step: u32) {
             }
         }
     }
+}
+
+// The pixel whose ray found entry `slot` (at the screen's resolution: the pipeline check).
+fn own_pixel(slot: VoxelSlot) -> vec2<u32> {
+    let width = u32(frame.screen.x);
+    return vec2(slot.pixel % width, slot.pixel / width);
+}
+
+// A Pixel entry: its hit's depth at its own pixel, and that pixel's tile marked.
+fn splat_own_pixel(slot: VoxelSlot, e: u32, splat_step: u32) {
+    let p = own_pixel(slot);
+    if slot.instance >= u32(frame.misc.w) || p.y >= u32(frame.screen.y) {
+        return;
+    }
+    if splat_step == 0u {
+        mark_tile(p.y / TILE_PX * tiles_across() + p.x / TILE_PX);
+    }
+    let f = pixel_fragment(slot, vec2<f32>(p) + 0.5);
+    splat_pixel(slot.pixel, bitcast<u32>(f.depth), e, splat_step);
 }
 
 // Tiles across the screen.
@@ -260,15 +287,20 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     }
     let e = ~winner.x;
     let slot = ssbvb[e];
-    let q = winner_quad(slot, e);
-    var f = winner_fragment(slot, q, frag.xy);
-    if !f.covered {
-        // The splat found this pixel covered; a recomputation here (another pipeline) may
-        // round a pixel on the box's edge the other way. Never a hole: the voxel's colour
-        // and stored normal at its centre.
-        var flat_q = q;
-        flat_q.near_field = false;
-        f = flat_fragment(slot, flat_q, frag.xy, q.c);
+    var f: Fragment;
+    if PIXEL {
+        f = pixel_fragment(slot, frag.xy);
+    } else {
+        let q = winner_quad(slot, e);
+        f = winner_fragment(slot, q, frag.xy);
+        if !f.covered {
+            // The splat found this pixel covered; a recomputation here (another pipeline)
+            // may round a pixel on the box's edge the other way. Never a hole: the voxel's
+            // colour and stored normal at its centre.
+            var flat_q = q;
+            flat_q.near_field = false;
+            f = flat_fragment(slot, flat_q, frag.xy, q.c);
+        }
     }
     var out: GBufferDepth;
     out.albedo = pack4x8unorm(f.albedo);

@@ -1,8 +1,10 @@
 //! Project tasks: `cargo xtask validate-shaders [--dir DIR]`, `cargo xtask test [ARGS]`,
 //! `cargo xtask imports`, `cargo xtask fuzz [TARGET ...] [--seconds N]`,
-//! `cargo xtask mutate-shaders [FILE ...] [--tests FILTER] [--report FILE]`.
+//! `cargo xtask mutate-shaders [FILE ...] [--tests FILTER] [--report FILE]`,
+//! `cargo xtask gpu-bench [--bin PATH] [--out DIR] ...`.
 
 mod fuzz;
+mod gpu_bench;
 mod imports;
 mod layout_check;
 mod mutate;
@@ -30,7 +32,11 @@ const USAGE: &str = "usage:
   cargo xtask mutate-shaders [FILE ...] [--tests FILTER] [--report FILE] [--timeout S] [--lines A-B]
                              [--every N] [--list] [--test-binary PATH]
                                              mutation testing of the WGSL shaders against the GPU tests
-                                             that exercise them (see `cargo xtask mutate-shaders --help`)";
+                                             that exercise them (see `cargo xtask mutate-shaders --help`)
+  cargo xtask gpu-bench [--bin PATH] [--out DIR] [--frames N] [--skip-paper] [--allow-software] [--dry-run]
+                                             on a machine with a GPU: the per-pass breakdown of every
+                                             SSBVB form and ray caster, then the paper preset, into
+                                             docs/bench/<gpu>/ (see `cargo xtask gpu-bench --help`)";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -40,6 +46,7 @@ fn main() -> ExitCode {
         Some("fuzz") => fuzz::run(&workspace_root(), &args[1..]),
         Some("imports") => imports::run(&workspace_root(), &args[1..]),
         Some("mutate-shaders") => mutate::run(&workspace_root(), &args[1..]),
+        Some("gpu-bench") => gpu_bench::run(&run_root(), &args[1..]),
         Some("-h" | "--help") | None => {
             println!("{USAGE}");
             Ok(true)
@@ -57,6 +64,15 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// The checkout a task runs in: the current folder where it is one (an xtask binary carried
+/// to another machine), else the one this xtask was built from.
+fn run_root() -> PathBuf {
+    std::env::current_dir()
+        .ok()
+        .filter(|d| d.join("assets/scenes/default.ron").is_file())
+        .unwrap_or_else(workspace_root)
 }
 
 fn workspace_root() -> PathBuf {

@@ -10,12 +10,11 @@ use clap::Args;
 use ssbvb_gpu::{ContextOptions, DeviceLimits, GpuContext, Requirements};
 use ssbvb_graph::ResolvedPipeline;
 
-use crate::bundled::assets_dir;
-
 /// Arguments of `ssbvb adapter`.
 #[derive(Args, Debug)]
 pub struct AdapterArgs {
-    /// The pipeline to check adapters against (default: the bundled SSBVB pipeline).
+    /// The pipeline to check adapters against (default: the SSBVB form `render` would
+    /// choose on the best adapter).
     #[arg(long)]
     pub pipeline: Option<PathBuf>,
     /// Check against these limits (`webgpu`: WebGPU's defaults and no optional feature).
@@ -85,10 +84,8 @@ pub fn resolve(path: &Path) -> Result<ResolvedPipeline> {
 /// Runs `ssbvb adapter`: every adapter, best first, with what it lacks for the pipeline;
 /// then the one `render` would use. Fails when none fits.
 pub fn run(args: &AdapterArgs) -> Result<ExitCode> {
-    let path = args
-        .pipeline
-        .clone()
-        .unwrap_or_else(|| assets_dir().join("pipelines/ssbvb.ron"));
+    let choice = crate::pipeline_choice::choose(args.pipeline.clone(), None)?;
+    let path = choice.path();
     let pipeline = resolve(&path)?;
     let req = requirements_of(&[&pipeline]);
     let list = GpuContext::list_adapters(&req, limits());
@@ -124,6 +121,7 @@ pub fn run(args: &AdapterArgs) -> Result<ExitCode> {
         ..Default::default()
     })?;
     println!("chosen: {}", ctx.report());
+    println!("{}", choice.line());
     Ok(ExitCode::SUCCESS)
 }
 

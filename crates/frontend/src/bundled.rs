@@ -27,6 +27,10 @@ const FILES: &[(&str, &[u8])] = &[
         include_bytes!("../../../assets/pipelines/ssbvb_splat.ron"),
     ),
     (
+        "pipelines/ssbvb_pixel.ron",
+        include_bytes!("../../../assets/pipelines/ssbvb_pixel.ron"),
+    ),
+    (
         "pipelines/ssbvb_aa.ron",
         include_bytes!("../../../assets/pipelines/ssbvb_aa.ron"),
     ),
@@ -91,9 +95,6 @@ const FILES: &[(&str, &[u8])] = &[
         include_bytes!("../../../assets/models/bunny.obj"),
     ),
 ];
-
-/// The default pipeline, relative to the assets folder.
-pub const DEFAULT_PIPELINE: &str = "pipelines/ssbvb.ron";
 
 /// The default scene, relative to the assets folder.
 pub const DEFAULT_SCENE: &str = "scenes/default.ron";

@@ -7,6 +7,7 @@ mod budget;
 mod bundled;
 mod faults;
 mod flip;
+mod pipeline_choice;
 mod pipeline_cmd;
 mod progress;
 mod render_cmd;

@@ -50,7 +50,8 @@ pub struct RenderArgs {
     /// projection; 0 also means none).
     #[arg(long, allow_hyphen_values = true)]
     pub far: Option<f64>,
-    /// Pipeline file (default: the scene's, or assets/pipelines/ssbvb.ron).
+    /// Pipeline file (default: the scene's, else the SSBVB form fastest on this adapter:
+    /// `pipeline_choice` in `--json` says which and why).
     #[arg(long)]
     pub pipeline: Option<PathBuf>,
     /// Render with the exact CPU reference ray caster instead of the GPU.
@@ -153,6 +154,9 @@ struct Report {
     samples: u32,
     camera: Camera,
     pipeline: Option<String>,
+    /// How the pipeline was chosen: `--pipeline`, the scene, or the rule for this adapter
+    /// (`null` for the reference).
+    pipeline_choice: Option<crate::pipeline_choice::PipelineChoice>,
     passes: Vec<ssbvb_passes::PassTiming>,
     frame_wall_ms: f64,
     ssbvb_fill_count: Option<u32>,
@@ -200,7 +204,7 @@ pub struct LoadedInput {
     pub scene: Scene,
     /// The scene's camera (the default camera for a model).
     pub camera: Camera,
-    /// The scene's pipeline file (`None` for a model).
+    /// The scene's pipeline file (`None` for a model or a scene that names none).
     pub pipeline: Option<PathBuf>,
     /// One line per asset about the cache.
     pub notes: Vec<String>,
@@ -230,7 +234,7 @@ pub fn load_input(
         return Ok(LoadedInput {
             scene: s.scene,
             camera: s.camera,
-            pipeline: Some(s.pipeline),
+            pipeline: s.pipeline,
             notes: s.notes,
             gpu_budget_mib: s.gpu_budget_mib,
             page_sources: s.page_sources,
@@ -412,6 +416,7 @@ fn render_reference(
         size: [w, h],
         camera,
         pipeline: None,
+        pipeline_choice: None,
         passes: Vec::new(),
         frame_wall_ms: start.elapsed().as_secs_f64() * 1e3,
         ssbvb_fill_count: None,
@@ -462,11 +467,8 @@ fn render_gpu(
         animated,
     } = input;
     let (w, h) = args.size;
-    let pipeline_path = args
-        .pipeline
-        .clone()
-        .or(scene_pipeline)
-        .unwrap_or_else(|| assets_dir().join("pipelines/ssbvb.ron"));
+    let choice = crate::pipeline_choice::choose(args.pipeline.clone(), scene_pipeline)?;
+    let pipeline_path = choice.path();
     let mut source = SessionSource {
         scene,
         pipeline: crate::adapter_cmd::resolve(&pipeline_path)?,
@@ -554,6 +556,7 @@ fn render_gpu(
         size: [w, h],
         camera,
         pipeline: Some(pipeline_path.display().to_string()),
+        pipeline_choice: Some(choice),
         passes: stats.passes,
         frame_wall_ms: stats.frame_wall_ms,
         ssbvb_fill_count: fill,
@@ -665,8 +668,10 @@ fn print_report(r: &Report) {
             println!("format fallback: {f}");
         }
     }
-    if let Some(p) = &r.pipeline {
-        println!("pipeline: {p}");
+    match (&r.pipeline, &r.pipeline_choice) {
+        (Some(p), Some(c)) => println!("pipeline: {p} ({})", c.reason),
+        (Some(p), None) => println!("pipeline: {p}"),
+        _ => {}
     }
     for n in &r.asset_notes {
         println!("asset: {n}");

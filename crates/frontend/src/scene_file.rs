@@ -28,8 +28,9 @@ pub struct LoadedScene {
     pub scene: Scene,
     /// The camera.
     pub camera: Camera,
-    /// The pipeline file.
-    pub pipeline: PathBuf,
+    /// The pipeline file the scene names (`None`: the adapter's default SSBVB form,
+    /// [`crate::pipeline_choice`]).
+    pub pipeline: Option<PathBuf>,
     /// One line per object about its asset cache (hit or rebuilt and why).
     pub notes: Vec<String>,
     /// The scene's GPU budget (MiB), if it sets one.
@@ -149,10 +150,7 @@ fn load_with_cache(
     Ok(LoadedScene {
         scene,
         camera: file.camera.camera(),
-        pipeline: match &file.pipeline {
-            Some(p) => dir.join(p),
-            None => crate::bundled::assets_dir().join(crate::bundled::DEFAULT_PIPELINE),
-        },
+        pipeline: file.pipeline.as_ref().map(|p| dir.join(p)),
         notes,
         gpu_budget_mib: file.gpu_budget_mib,
         page_sources,
@@ -217,11 +215,7 @@ mod tests {
         assert_eq!(s.scene.objects.len(), 1);
         assert_eq!(s.scene.objects[0].lod, LodPolicy::Fixed(3));
         assert_eq!(s.scene.objects[0].instances, vec![DAffine3::IDENTITY]);
-        assert!(
-            s.pipeline.ends_with("pipelines/ssbvb.ron"),
-            "{:?}",
-            s.pipeline
-        );
+        assert_eq!(s.pipeline, None);
         assert_eq!(s.camera.position, DVec3::new(0.0, 0.0, 3.0));
     }
 

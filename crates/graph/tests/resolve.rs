@@ -761,3 +761,54 @@ fn a_binding_list_of_the_wrong_type_says_what_is_expected() {
         Some(line_of(&src, "reads: 5"))
     );
 }
+
+/// `SplatBillboards(mode: Pixel)` draws each entry at its own pixel only: the filter that
+/// writes its SSBVB must append every pixel at the screen's resolution, and rasterized
+/// billboards have no Pixel mode. Each refusal names the pass, the filter and the line.
+#[test]
+fn pixel_entries_need_a_filter_that_appends_every_pixel_at_full_resolution() {
+    let pixel = include_str!("../../../assets/pipelines/ssbvb_pixel.ron");
+    let p = ok(pixel);
+    assert!(
+        p.passes.iter().any(|s| matches!(
+            &s.kind,
+            ssbvb_graph::PassKind::SplatBillboards(b) if b.mode == ssbvb_graph::BillboardMode::Pixel
+        )),
+        "the bundled Pixel pipeline splats in Pixel mode"
+    );
+    let unique = pixel.replace("unique_voxels: false", "unique_voxels: true");
+    assert_ne!(unique, pixel);
+    let e = err(&unique);
+    assert_mentions(
+        &e,
+        &[
+            "pass `billboards`",
+            "filter `filter`",
+            "unique_voxels: true",
+        ],
+    );
+    assert_eq!(e.errors.len(), 1, "{e}");
+    assert_eq!(
+        e.errors[0].loc().pos.map(|p| p.line),
+        Some(line_of(&unique, "kind: SplatBillboards(mode: Pixel)"))
+    );
+    let scaled = pixel.replace(
+        "\"entry\":            Texture(format: Rgba32Float, size: Screen)",
+        "\"entry\":            Texture(format: Rgba32Float, size: ScreenScaled(0.5))",
+    );
+    assert_ne!(scaled, pixel);
+    assert_mentions(
+        &err(&scaled),
+        &["`entry` texture `entry` is not of size Screen"],
+    );
+    let raster = pixel.replace("SplatBillboards(mode: Pixel)", "Billboards(mode: Pixel)");
+    assert_mentions(
+        &err(&raster),
+        &["(Billboards): mode: Pixel", "SplatBillboards"],
+    );
+    // The other modes do not care how the filter appends.
+    ok(&unique.replace(
+        "SplatBillboards(mode: Pixel)",
+        "SplatBillboards(mode: RayBox)",
+    ));
+}

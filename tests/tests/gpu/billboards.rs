@@ -306,6 +306,7 @@ fn end_to_end_after_the_filter_matches_the_reference() {
                         assert!(a.iou >= 0.99, "{model} {name}: {a:?}");
                         assert_flat_depth(&a, &format!("{model} {name}"));
                     }
+                    BillboardMode::Pixel => unreachable!("not a rasterized mode"),
                 }
             }
         }

@@ -21,6 +21,7 @@ mod gpu_voxelize;
 mod local_edit;
 mod octree_ray_cast;
 mod pipeline;
+mod pixel_splat;
 mod rastavox;
 mod ray_cast_compute;
 mod ray_casters;

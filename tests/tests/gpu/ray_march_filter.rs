@@ -34,8 +34,10 @@ mod harness;
 mod snapped;
 mod tiles;
 
-pub(crate) use harness::{FilterRun, check_against_reference, run_filter};
-use harness::{cell_sizes, check_pipeline_against_reference, diff_png, run_filter_with};
+pub(crate) use harness::{
+    FilterRun, cell_sizes, check_against_reference, run_filter, run_filter_with,
+};
+use harness::{check_pipeline_against_reference, diff_png};
 
 const SIZE: (u32, u32) = (160, 120);
 

@@ -4,7 +4,8 @@
 //! close (near-field quads), with overlapping instances and with voxels under a pixel
 //! alone in their resolve tiles. And the splat's two forms
 //! (one step with 64-bit atomics, two steps without) must draw the same G-buffer bit for
-//! bit.
+//! bit, in each mode (Flat, RayBox, and Pixel, whose entries `pixel_splat` holds to the
+//! reference).
 
 use glam::{DAffine3, DVec3};
 use ssbvb_gpu::scene::{Scene, TriangleObject};
@@ -15,6 +16,7 @@ use ssbvb_voxel::camera::Camera;
 
 const DEFAULT: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
 const SPLAT: &str = include_str!("../../../assets/pipelines/ssbvb_splat.ron");
+const PIXEL: &str = include_str!("../../../assets/pipelines/ssbvb_pixel.ron");
 
 /// Voxel pixels (stencil 1 in both frames' `sa`, `sb`) whose camera-relative positions
 /// (`gbuffer_position` xyz) differ by more than 1e-4 of their length: the splat computes a
@@ -113,8 +115,8 @@ fn differing(a: &Frame, b: &Frame, name: &str, size: (u32, u32)) -> usize {
         .count()
 }
 
-/// The views both tests draw: (name, scene, camera).
-fn views() -> Vec<(&'static str, Scene, Camera)> {
+/// The views both tests draw (and the Pixel mode's, `pixel_splat`): (name, scene, camera).
+pub(crate) fn views() -> Vec<(&'static str, Scene, Camera)> {
     let mut scene = single_object_scene(model_asset("bunny.obj", 5), 5);
     scene.triangles = vec![TriangleObject::ground_plane(
         DVec3::new(0.0, -0.3, 0.0),
@@ -341,11 +343,15 @@ fn the_two_step_splat_draws_what_the_one_step_splat_draws() {
     );
     let (two, errors) = device_without_wide_atomics();
     assert!(!has_wide_atomics(&two));
-    for mode in ["Flat", "RayBox"] {
-        let src = SPLAT.replace(
-            "SplatBillboards(mode: Flat",
-            &format!("SplatBillboards(mode: {mode}"),
-        );
+    for mode in ["Flat", "RayBox", "Pixel"] {
+        let src = if mode == "Pixel" {
+            PIXEL.to_string()
+        } else {
+            SPLAT.replace(
+                "SplatBillboards(mode: Flat",
+                &format!("SplatBillboards(mode: {mode}"),
+            )
+        };
         assert!(src.contains(&format!("SplatBillboards(mode: {mode}")));
         for (name, scene, camera) in views() {
             let a = gbuffer_on(one, &src, scene.clone(), &camera, size);

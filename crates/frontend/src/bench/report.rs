@@ -253,6 +253,9 @@ struct Report<'a> {
     adapter: String,
     adapter_is_software: bool,
     timing: &'static str,
+    /// The pipeline of technique `ssbvb` (the SSBVB form `render` chooses on this adapter)
+    /// and why; `null` where the run has no `ssbvb` row.
+    pipeline_choice: Option<crate::pipeline_choice::PipelineChoice>,
     preset: String,
     camera: Camera,
     rows: Table<'a, Row>,
@@ -299,6 +302,11 @@ pub(crate) fn write(
         adapter: ctx.report().to_string(),
         adapter_is_software: software,
         timing: timing(software),
+        pipeline_choice: if results.rows.iter().any(|r| r.technique == "ssbvb") {
+            Some(crate::pipeline_choice::default_for_adapter()?)
+        } else {
+            None
+        },
         preset: format!("{:?}", args.preset),
         camera,
         rows: rows_table(&results.rows),
@@ -373,7 +381,11 @@ fn fastest(rows: &[Row]) -> Vec<Fastest> {
 /// `bench.md`: the results table, the skipped cells, the fastest technique per cell, the
 /// sweeps and the plots.
 fn markdown(r: &Report) -> String {
-    let mut s = format!("adapter: {}\ntiming: {}\n\n", r.adapter, r.timing);
+    let mut s = format!("adapter: {}\ntiming: {}\n", r.adapter, r.timing);
+    if let Some(c) = &r.pipeline_choice {
+        s.push_str(&format!("technique `ssbvb`: {}\n", c.line()));
+    }
+    s.push('\n');
     s.push_str(&r.rows.markdown());
     for k in r.skipped {
         s.push_str(&format!("\nskipped: {k}"));

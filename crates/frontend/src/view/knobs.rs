@@ -39,8 +39,9 @@ pub fn with_fields(name: &str, fields: Map<String, Value>) -> Result<PassKind, S
 }
 
 /// The names an enum-valued field accepts, found by asking serde with a name no enum has:
-/// its "unknown variant `…`, expected `A` or `B`" message lists them. Empty when the field
-/// is not an enum.
+/// its "unknown variant `…`, expected `A` or `B`" message lists them; those the kind's
+/// parameter check refuses (rasterized billboards in `Pixel` mode) are left out. Empty when
+/// the field is not an enum.
 pub fn enum_choices(name: &str, fields: &Map<String, Value>, field: &str) -> Vec<String> {
     const PROBE: &str = "\u{1}probe";
     let mut probe = fields.clone();
@@ -55,6 +56,11 @@ pub fn enum_choices(name: &str, fields: &Map<String, Value>, field: &str) -> Vec
         .split('`')
         .skip(1)
         .step_by(2)
+        .filter(|choice| {
+            let mut f = fields.clone();
+            f.insert(field.to_string(), Value::String(choice.to_string()));
+            with_fields(name, f).is_ok_and(|k| k.parameter_problems().is_empty())
+        })
         .map(str::to_string)
         .collect()
 }
@@ -106,5 +112,11 @@ mod tests {
         let (name, f) = fields(&kind);
         assert_eq!(enum_choices(&name, &f, "mode"), vec!["Flat", "RayBox"]);
         assert!(enum_choices(&name, &f, "size_scale").is_empty());
+        // The compute splat has the Pixel mode the rasterized billboards refuse.
+        let (name, f) = fields(&PassKind::SplatBillboards(Default::default()));
+        assert_eq!(
+            enum_choices(&name, &f, "mode"),
+            vec!["Flat", "RayBox", "Pixel"]
+        );
     }
 }

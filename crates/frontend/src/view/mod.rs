@@ -50,8 +50,8 @@ pub struct ViewArgs {
     /// Voxelization level for a model file (2^level cells per axis).
     #[arg(long)]
     pub level: Option<u32>,
-    /// Pipeline file (default: the scene's, or assets/pipelines/ssbvb.ron). Watched: edits
-    /// are reloaded while the viewer runs.
+    /// Pipeline file (default: the scene's, else the SSBVB form fastest on this adapter,
+    /// printed with why). Watched: edits are reloaded while the viewer runs.
     #[arg(long)]
     pub pipeline: Option<PathBuf>,
     /// Window size in pixels.
@@ -185,11 +185,9 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     for n in &notes {
         eprintln!("asset: {n}");
     }
-    let pipeline_path = args
-        .pipeline
-        .clone()
-        .or(pipeline)
-        .unwrap_or_else(|| assets_dir().join("pipelines/ssbvb.ron"));
+    let choice = crate::pipeline_choice::choose(args.pipeline.clone(), pipeline)?;
+    eprintln!("{}", choice.line());
+    let pipeline_path = choice.path();
     // Canonical, so the overlay shows a plain path and the technique list can mark it.
     let pipeline_path = pipeline_path.canonicalize().unwrap_or(pipeline_path);
     let watcher = ssbvb_graph::PipelineWatcher::new(&pipeline_path)

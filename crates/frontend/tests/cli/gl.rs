@@ -1,7 +1,8 @@
 //! The GL backend (issue 34): on Mesa's GL driver (llvmpipe, which wgpu drives as OpenGL
 //! ES 3.2: `ssbvb_gpu::context::prefer_gles_on_mesa`), `WGPU_BACKEND=gl ssbvb render` draws
-//! what Vulkan (lavapipe) draws: the SSBVB frame with triangles mixed in (the default
-//! scene), 64 instances, the compute splat and a ray caster, byte for byte (as measured;
+//! what Vulkan (lavapipe) draws: the default SSBVB frame (the compute splat on both) with
+//! triangles mixed in (the default scene), 64 instances, rasterized billboards and a ray
+//! caster, byte for byte (as measured;
 //! the Vulkan frames are held to the CPU reference by the GPU tests). What GL lacks and
 //! what the renderer does instead is listed in `render --json` `fallbacks`. The test fails,
 //! never skips, where Mesa's GL is missing (`.ci/run` and `cargo xtask test` install it).
@@ -16,7 +17,7 @@ fn gl_draws_what_vulkan_draws() {
         ("assets/scenes/bunnies_64.ron", None),
         (
             "assets/scenes/default.ron",
-            Some("assets/pipelines/ssbvb_splat.ron"),
+            Some("assets/pipelines/ssbvb.ron"),
         ),
         (
             "assets/scenes/default.ron",

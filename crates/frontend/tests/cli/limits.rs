@@ -19,7 +19,46 @@ fn webgpu_limits_are_checked_up_front_and_named() {
             ])
             .arg(&png),
     );
-    assert_eq!(stdout_json(&out)["limits"], "adapter");
+    let json = stdout_json(&out);
+    assert_eq!(json["limits"], "adapter");
+    // No `--pipeline` and none in the default scene: the rule's form for this adapter
+    // (lavapipe runs the frame without billboards), with the adapter and why in
+    // `pipeline_choice`.
+    let choice = &json["pipeline_choice"];
+    assert_eq!(choice["by"], "adapter", "{json}");
+    assert_eq!(choice["pipeline"], json["pipeline"], "{json}");
+    assert!(
+        choice["pipeline"]
+            .as_str()
+            .unwrap()
+            .ends_with("pipelines/ssbvb_pixel.ron")
+            && choice["reason"]
+                .as_str()
+                .unwrap()
+                .contains("at its pixel (no billboard) on llvmpipe")
+            && !choice["reason"].as_str().unwrap().contains("WebGPU"),
+        "{json}"
+    );
+    // The paper's raster form is one flag away.
+    let out = succeeded(
+        ssbvb()
+            .args(["render", "--size", "32x24", "--json", "--pipeline"])
+            .arg(
+                std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                    .join("../../assets/pipelines/ssbvb.ron"),
+            )
+            .arg("-o")
+            .arg(&png),
+    );
+    let json = stdout_json(&out);
+    assert_eq!(json["pipeline_choice"]["by"], "flag", "{json}");
+    assert!(
+        json["pipeline"]
+            .as_str()
+            .unwrap()
+            .ends_with("pipelines/ssbvb.ron"),
+        "{json}"
+    );
 
     // `adapter --limits webgpu`: every adapter's verdict under WebGPU's defaults; the
     // default pipeline fits them (issue 34).
@@ -53,6 +92,17 @@ fn webgpu_limits_are_checked_up_front_and_named() {
             );
             let json = stdout_json(&out);
             assert_eq!(json["limits"], limits);
+            // A scene without `pipeline:` gets the rule's form, which must fit the limits
+            // the device is created with (it drew), and the reason names them.
+            let choice = &json["pipeline_choice"];
+            if choice["by"] == "adapter" {
+                let reason = choice["reason"].as_str().unwrap();
+                assert_eq!(
+                    reason.contains("under WebGPU's default limits"),
+                    limits == "webgpu",
+                    "{json}"
+                );
+            }
             (image::open(&png).unwrap().to_rgba8().into_raw(), json)
         };
         let ((webgpu, json), (adapter, _)) = (frame("webgpu"), frame("adapter"));

@@ -219,8 +219,8 @@ fn render_json_and_bench_quick() {
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     let rows: Vec<&str> = csv.lines().skip(1).collect();
-    // 13 techniques x 2 levels.
-    assert_eq!(rows.len(), 26, "{csv}");
+    // 15 techniques x 2 levels.
+    assert_eq!(rows.len(), 30, "{csv}");
     let flip_of = |technique: &str, level: &str| -> f64 {
         let r: Vec<&str> = csv
             .lines()
@@ -452,13 +452,15 @@ fn relocated_binary_renders_the_bundled_scene_quietly() {
         "-o",
         "other.png",
     ]);
+    // No `pipeline:` in the scene: the adapter's default form, from the bundled copy too.
     assert!(
         json["pipeline"]
             .as_str()
             .unwrap()
-            .ends_with("pipelines/ssbvb.ron"),
+            .ends_with("pipelines/ssbvb_pixel.ron"),
         "{json}"
     );
+    assert_eq!(json["pipeline_choice"]["by"], "adapter", "{json}");
 }
 
 /// `ssbvb adapter` gives every adapter a verdict (lavapipe and Mesa's GL both fit: the GL

@@ -16,6 +16,12 @@ pub enum BillboardMode {
     Flat,
     /// Per fragment, the exact ray–voxel-box intersection (depth and face normal).
     RayBox,
+    /// No quad: each entry writes only the pixel whose ray found it, with that ray's hit
+    /// (its distance and entered face), as the ray casters' resolve does. Exact, and the
+    /// cheapest where voxels are about a pixel or smaller. `SplatBillboards` only, and the
+    /// filter writing its SSBVB must append every pixel (`unique_voxels: false`) at the
+    /// screen's resolution.
+    Pixel,
 }
 
 /// Parameters of `Billboards`, and of `SplatBillboards` through
@@ -61,6 +67,21 @@ impl KindSpec for BillboardsParams {
     const SLOTS: &'static [SlotDesc] =
         &billboard_slots(SlotClass::IndirectBuffer(BufferLayout::DrawIndirect));
     fn problems(&self) -> Vec<String> {
+        let mut p = self.shared_problems();
+        if self.mode == BillboardMode::Pixel {
+            p.push(
+                "mode: Pixel writes each entry at its own pixel in compute; it is \
+                 `SplatBillboards`' (rasterized billboards take Flat or RayBox)"
+                    .into(),
+            );
+        }
+        p
+    }
+}
+
+impl BillboardsParams {
+    /// The problems of the parameters both billboard kinds share.
+    pub(crate) fn shared_problems(&self) -> Vec<String> {
         if self.size_scale.is_finite() && self.size_scale > 0.0 {
             Vec::new()
         } else {

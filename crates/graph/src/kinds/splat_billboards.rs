@@ -31,6 +31,6 @@ impl KindSpec for SplatBillboardsParams {
     const SLOTS: &'static [SlotDesc] =
         &billboard_slots(SlotClass::StorageBuffer(BufferLayout::DrawIndirect));
     fn problems(&self) -> Vec<String> {
-        self.0.problems()
+        self.0.shared_problems()
     }
 }

@@ -5,7 +5,9 @@
 //! 2. check declarations (duplicates, sizes, parameters) and every pass's bindings against
 //!    the slots its kind declares (class, format, layout, attachment sizes);
 //! 3. build a petgraph DAG: an edge from each writer of a resource to each reader, and one
-//!    for each `after`; writers of one resource must be ordered; cycles are named;
+//!    for each `after`; writers of one resource must be ordered; cycles are named; a pass
+//!    that needs something of the passes writing what it reads is checked against them
+//!    (`pixel_entries`);
 //! 4. prune what does not reach the output, walking back from the output's writers;
 //! 5. schedule topologically (file order breaks ties, so schedules are stable);
 //! 6. allocate: first/last use per resource, and resources with one descriptor whose
@@ -22,6 +24,7 @@ mod bind;
 mod ctx;
 mod dag;
 mod declare;
+mod pixel_entries;
 mod resolved;
 mod schedule;
 
@@ -154,6 +157,7 @@ impl Ctx<'_> {
         let declared = self.declare();
         let bindings = self.bind(&declared.resources);
         let dag = self.build_dag(&bindings, &declared.passes);
+        self.check_pixel_entries(&dag, &bindings);
         let roots = self.roots(&declared.resources, &dag.writers);
         if !self.errors.is_empty() || dag.cyclic {
             return None;

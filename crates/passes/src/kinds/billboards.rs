@@ -89,10 +89,13 @@ impl BillboardOptions {
         }
     }
 
-    fn fragment_entry(&self) -> &'static str {
+    /// The fragment entry point of the mode; `None` for a mode the raster pass has not
+    /// (Pixel, the compute splat's: the pipeline check refuses it first).
+    fn fragment_entry(&self) -> Option<&'static str> {
         match self.mode {
-            BillboardMode::Flat => "fs_main",
-            BillboardMode::RayBox => "fs_ray_box",
+            BillboardMode::Flat => Some("fs_main"),
+            BillboardMode::RayBox => Some("fs_ray_box"),
+            BillboardMode::Pixel => None,
         }
     }
 }
@@ -116,6 +119,12 @@ impl Billboards {
                 pass.name, options.size_scale
             )));
         }
+        let Some(fs_entry) = options.fragment_entry() else {
+            return Err(PassError::BadScene(format!(
+                "pass `{}`: rasterized billboards have no mode {:?} (SplatBillboards has)",
+                pass.name, options.mode
+            )));
+        };
         let d = &ctx.device;
         let module = ctx.shader("billboards.wgsl", &shaders::source_for("billboards.wgsl", &scene.bindings)?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, &[]);
@@ -134,7 +143,7 @@ impl Billboards {
         let pipeline = render_pipeline(
             d,
             &RenderSpec {
-                fs_entry: options.fragment_entry(),
+                fs_entry,
                 topology: wgpu::PrimitiveTopology::TriangleStrip,
                 constants: &constants,
                 depth_stencil: Some(gbuffer_depth_stencil(ctx, pipeline, pass)),
@@ -232,7 +241,7 @@ mod tests {
         assert_eq!(o.size_scale, 1.5);
         assert_eq!(o.footprint, Footprint::Box);
         assert!(o.cull_cos < -1.0, "culling is off by default");
-        assert_eq!(o.fragment_entry(), "fs_ray_box");
+        assert_eq!(o.fragment_entry(), Some("fs_ray_box"));
     }
 
     #[test]

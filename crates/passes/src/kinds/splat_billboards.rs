@@ -32,9 +32,12 @@
 //!   of each quad. One compiled shader for both steps, so that the depths they compute
 //!   agree bit for bit.
 //!
-//! A thread walks its quad's pixel rectangle: cheap for the default pipeline (one
-//! billboard per visible voxel), costly where quads are large and many (the per-pixel Flat
-//! frame seen from up close, as for the rasterizer).
+//! A thread walks its quad's pixel rectangle: cheap for one billboard per visible voxel,
+//! costly where quads are large and many (the per-pixel Flat frame seen from up close, as
+//! for the rasterizer). In `mode: Pixel` there is no quad: the filter appends every pixel,
+//! and each entry is splatted at its own pixel with its ray's hit (the pipeline check
+//! makes sure the filter does append every pixel, at the screen's resolution), which the
+//! resolve writes as the ray casters' resolve writes theirs.
 
 use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_graph::{BillboardMode, SplatBillboardsParams};
@@ -136,7 +139,8 @@ impl PassImpl for SplatBillboards {
         3,
     );
 
-    /// Compiles the splat and the resolve; `mode` becomes the WGSL override `RAY_BOX`.
+    /// Compiles the splat and the resolve; `mode` becomes the WGSL overrides `RAY_BOX` and
+    /// `PIXEL`.
     fn new(init: &PassInit<'_>, params: &SplatBillboardsParams) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
         let constants = [
@@ -147,6 +151,10 @@ impl PassImpl for SplatBillboards {
             (
                 "RAY_BOX",
                 f64::from(u8::from(params.mode == BillboardMode::RayBox)),
+            ),
+            (
+                "PIXEL",
+                f64::from(u8::from(params.mode == BillboardMode::Pixel)),
             ),
         ];
         let one_step = has_wide_atomics(ctx);

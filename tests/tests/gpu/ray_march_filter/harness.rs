@@ -52,7 +52,7 @@ pub(crate) fn run_filter(
 
 /// Renders `pipeline` at `size`; its filter runs on a `grid` of texels (the screen, or a
 /// fraction of it), in whose numbering the hits are returned.
-pub(super) fn run_filter_with(
+pub(crate) fn run_filter_with(
     pipeline: &str,
     scene: &Scene,
     camera: &Camera,
@@ -160,7 +160,7 @@ pub(super) fn grazes(
 }
 
 /// World size of one cell of every instance (uniform scale assumed: cube root of |det|).
-pub(super) fn cell_sizes(scene: &Scene, camera: &Camera, screen: (u32, u32)) -> Vec<f64> {
+pub(crate) fn cell_sizes(scene: &Scene, camera: &Camera, screen: (u32, u32)) -> Vec<f64> {
     placed(scene, camera, screen)
         .iter()
         .map(|(xf, l, _)| cell_size(*l) * xf.matrix3.determinant().abs().cbrt())

@@ -3,7 +3,7 @@
 use anyhow::{Result, bail};
 use ssbvb_graph::{CountDesc, PassKind, ResolvedPipeline, ResourceDesc, SizeDesc};
 
-use super::techniques::Technique;
+use super::techniques::{PipelineSource, Technique};
 use crate::bundled::assets_dir;
 
 /// The bundled pipeline `file` (in `assets/pipelines`), resolved.
@@ -29,9 +29,17 @@ pub(crate) fn with_kind_edit(
     Ok(p)
 }
 
-/// The pipeline of technique `t`: its bundled file with its edit, if any.
+/// The pipeline of technique `t`: its bundled file (or the adapter's default SSBVB form)
+/// with its edit, if any.
 pub(crate) fn technique_pipeline(t: &Technique) -> Result<ResolvedPipeline> {
-    let p = bundled_pipeline(t.pipeline)?;
+    let p = match t.pipeline {
+        PipelineSource::File(f) => bundled_pipeline(f)?,
+        PipelineSource::AdapterDefault => {
+            let choice = crate::pipeline_choice::default_for_adapter()?;
+            log::info!("bench: technique `{}`: {}", t.name, choice.line());
+            crate::adapter_cmd::resolve(&choice.path())?
+        }
+    };
     match t.edit {
         Some(e) => with_kind_edit(&p, t.name, e),
         None => Ok(p),

@@ -7,13 +7,22 @@ use ssbvb_graph::{BillboardMode, MarchMode, PassKind};
 
 use crate::bench::args::{BenchArgs, Preset};
 
+/// Where a technique's pipeline comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum PipelineSource {
+    /// A bundled pipeline file (in `assets/pipelines`).
+    File(&'static str),
+    /// The SSBVB form `render` chooses on this adapter ([`crate::pipeline_choice`]).
+    AdapterDefault,
+}
+
 /// One benchmarked technique.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Technique {
     /// Name in reports and in `--techniques`.
     pub(crate) name: &'static str,
-    /// Bundled pipeline file.
-    pub(crate) pipeline: &'static str,
+    /// Its pipeline.
+    pub(crate) pipeline: PipelineSource,
     /// A parameter changed from the file's (returns whether it changed the kind).
     pub(crate) edit: Option<fn(&mut PassKind) -> bool>,
     /// Highest level the technique supports.
@@ -22,16 +31,23 @@ pub(crate) struct Technique {
 
 /// Every technique, in report order.
 pub(crate) const TECHNIQUES: &[Technique] = &[
+    // What a user gets: the SSBVB form `render` chooses on this adapter.
+    Technique {
+        name: "ssbvb",
+        pipeline: PipelineSource::AdapterDefault,
+        edit: None,
+        max_level: 16,
+    },
     // The paper's frame: one billboard per covered pixel.
     Technique {
         name: "ssbvb-flat",
-        pipeline: "ssbvb_flat.ron",
+        pipeline: PipelineSource::File("ssbvb_flat.ron"),
         edit: None,
         max_level: 16,
     },
     Technique {
         name: "ssbvb-raybox",
-        pipeline: "ssbvb_flat.ron",
+        pipeline: PipelineSource::File("ssbvb_flat.ron"),
         edit: Some(|k| match k {
             PassKind::Billboards(b) => {
                 b.mode = BillboardMode::RayBox;
@@ -45,7 +61,7 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
     // (same voxel, depth, coverage) against `ssbvb-raybox`'s.
     Technique {
         name: "ssbvb-raybox-fast",
-        pipeline: "ssbvb_flat.ron",
+        pipeline: PipelineSource::File("ssbvb_flat.ron"),
         edit: Some(|k| match k {
             PassKind::Billboards(b) => {
                 b.mode = BillboardMode::RayBox;
@@ -59,17 +75,18 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         }),
         max_level: 16,
     },
-    // The default pipeline: each visible voxel appended once.
+    // The paper's frame with rasterized billboards (`ssbvb.ron`): each visible voxel
+    // appended once.
     Technique {
         name: "ssbvb-unique",
-        pipeline: "ssbvb.ron",
+        pipeline: PipelineSource::File("ssbvb.ron"),
         edit: None,
         max_level: 16,
     },
-    // The default pipeline with the exact march (the CPU reference's rules).
+    // The raster form with the exact march (the CPU reference's rules).
     Technique {
         name: "ssbvb-exact",
-        pipeline: "ssbvb.ron",
+        pipeline: PipelineSource::File("ssbvb.ron"),
         edit: Some(|k| match k {
             PassKind::RayMarchFilter(f) => {
                 f.march = MarchMode::Exact;
@@ -79,11 +96,11 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         }),
         max_level: 16,
     },
-    // The default pipeline with the fast march (the default file's own since the fast
+    // The raster form with the fast march (the file's own since the fast
     // march became the default; kept by name, left out of runs that name no technique).
     Technique {
         name: "ssbvb-fast",
-        pipeline: "ssbvb.ron",
+        pipeline: PipelineSource::File("ssbvb.ron"),
         edit: Some(|k| match k {
             PassKind::RayMarchFilter(f) => {
                 f.march = MarchMode::Fast;
@@ -93,46 +110,53 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         }),
         max_level: 16,
     },
-    // The default pipeline with temporal anti-aliasing (jittered frames blended into the
+    // The raster form with temporal anti-aliasing (jittered frames blended into the
     // reprojected history) and ray-box billboards: its FLIP against the supersampled
     // reference is the point.
     Technique {
         name: "ssbvb-aa",
-        pipeline: "ssbvb_aa.ron",
+        pipeline: PipelineSource::File("ssbvb_aa.ron"),
         edit: None,
         max_level: 16,
     },
-    // The default pipeline with single-frame anti-aliasing (`EdgeAa`, FXAA-style): the
+    // The raster form with single-frame anti-aliasing (`EdgeAa`, FXAA-style): the
     // option for stills.
     Technique {
         name: "ssbvb-edge-aa",
-        pipeline: "ssbvb_edge_aa.ron",
+        pipeline: PipelineSource::File("ssbvb_edge_aa.ron"),
         edit: None,
         max_level: 16,
     },
-    // The default pipeline with the billboards splatted in compute.
+    // The SSBVB frame with the billboards splatted in compute.
     Technique {
         name: "ssbvb-splat",
-        pipeline: "ssbvb_splat.ron",
+        pipeline: PipelineSource::File("ssbvb_splat.ron"),
+        edit: None,
+        max_level: 16,
+    },
+    // No billboard: each pixel's hit written at its pixel (`SplatBillboards(mode: Pixel)`).
+    Technique {
+        name: "ssbvb-pixel",
+        pipeline: PipelineSource::File("ssbvb_pixel.ron"),
         edit: None,
         max_level: 16,
     },
     Technique {
         name: "dense-dda",
-        pipeline: "dense_dda.ron",
+        pipeline: PipelineSource::File("dense_dda.ron"),
         edit: None,
         max_level: 8,
     },
     Technique {
         name: "octree",
-        pipeline: "octree_ray_cast.ron",
+        pipeline: PipelineSource::File("octree_ray_cast.ron"),
         edit: None,
         max_level: 16,
     },
     // The same octree traversed the ESVO way (Laine & Karras 2010, no contours).
     Technique {
         name: "esvo",
-        pipeline: "esvo.ron",
+        pipeline: PipelineSource::File("esvo.ron"),
         edit: None,
         max_level: 16,
     },
@@ -140,7 +164,7 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
     // form of the baseline where fragment work is slow (docs/benchmarks.md, the H200).
     Technique {
         name: "octree-compute",
-        pipeline: "octree_ray_cast.ron",
+        pipeline: PipelineSource::File("octree_ray_cast.ron"),
         edit: Some(|k| match k {
             PassKind::OctreeRayCast(o) => {
                 o.compute = true;
@@ -152,7 +176,7 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
     },
     Technique {
         name: "esvo-compute",
-        pipeline: "esvo.ron",
+        pipeline: PipelineSource::File("esvo.ron"),
         edit: Some(|k| match k {
             PassKind::EsvoRayCast(e) => {
                 e.compute = true;
@@ -164,13 +188,13 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
     },
     Technique {
         name: "cube-raster",
-        pipeline: "cube_raster.ron",
+        pipeline: PipelineSource::File("cube_raster.ron"),
         edit: None,
         max_level: 16,
     },
     Technique {
         name: "cube-raster-array",
-        pipeline: "cube_raster.ron",
+        pipeline: PipelineSource::File("cube_raster.ron"),
         edit: Some(|k| match k {
             PassKind::CubeRaster(c) => {
                 c.merge_full_nodes = false;
@@ -184,7 +208,7 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
     // exact techniques); `--preset rastavox` sweeps the pixel error.
     Technique {
         name: "rastavox",
-        pipeline: "rastavox.ron",
+        pipeline: PipelineSource::File("rastavox.ron"),
         edit: Some(|k| match k {
             PassKind::RastaVox(r) => {
                 r.pixel_error = 0.0;
@@ -196,9 +220,10 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
     },
 ];
 
-/// The techniques of `--preset paper`: SSBVB (the default pipeline, fast march), the same
+/// The techniques of `--preset paper`: SSBVB with rasterized billboards (fast march), the same
 /// with the exact march, and every ray caster (the octree casters in both forms); then the
-/// SSBVB frame with splatted billboards (appended: earlier columns keep their order).
+/// SSBVB frame with splatted billboards and the default SSBVB frame `render` chooses on
+/// this adapter (appended: earlier columns keep their order).
 pub(crate) const PAPER_TECHNIQUES: &[&str] = &[
     "ssbvb-unique",
     "ssbvb-exact",
@@ -208,9 +233,10 @@ pub(crate) const PAPER_TECHNIQUES: &[&str] = &[
     "esvo-compute",
     "octree-compute",
     "ssbvb-splat",
+    "ssbvb",
 ];
 
-/// Techniques left out unless named: the default pipeline by another name, the compute
+/// Techniques left out unless named: the raster form by another name, the compute
 /// forms of the octree casters (their fragment forms' images; the paper preset runs them)
 /// and the still-image anti-aliasing (the quality preset runs it).
 const ALIASES: &[&str] = &[

@@ -19,8 +19,8 @@ use ssbvb_voxel::camera::Camera;
 use crate::bench::args::{BenchArgs, Preset};
 use crate::bench::harness::techniques::{self, Technique};
 use crate::bench::harness::{
-    Setup, bench_camera, bundled_pipeline, measure, median, reference_at,
-    supersampled_reference_at, technique_pipeline,
+    Setup, bench_camera, measure, median, reference_at, supersampled_reference_at,
+    technique_pipeline,
 };
 use crate::bench::report::{Results, Row};
 use crate::bundled::assets_dir;
@@ -69,7 +69,7 @@ struct Device<'a> {
 fn open_context(techniques: &[&Technique]) -> Result<GpuContext> {
     let pipelines = techniques
         .iter()
-        .map(|t| bundled_pipeline(t.pipeline))
+        .map(|t| technique_pipeline(t))
         .collect::<Result<Vec<_>>>()?;
     crate::adapter_cmd::headless_context(&pipelines.iter().collect::<Vec<_>>())
 }
@@ -485,10 +485,12 @@ fn run_one(ctx: &GpuContext, t: &Technique, c: &Cell) -> Result<Row> {
         // (one slot per voxel, at the pixel that claimed it) over those pixels only.
         same_voxel_rate: if matches!(
             t.name,
-            "ssbvb-unique"
+            "ssbvb"
+                | "ssbvb-unique"
                 | "ssbvb-exact"
                 | "ssbvb-fast"
                 | "ssbvb-splat"
+                | "ssbvb-pixel"
                 | "ssbvb-aa"
                 | "ssbvb-edge-aa"
         ) {

@@ -1,0 +1,301 @@
+//! The default SSBVB pipeline for the adapter at hand: what `render`, `view` and the bench's
+//! `ssbvb` technique use when neither `--pipeline` nor the scene names one.
+//!
+//! The rule takes the adapter a command would run on (the best allowed adapter that fits
+//! some SSBVB form, as [`crate::adapter_cmd::headless_context`] ranks them) and, on it, the
+//! first form of [`FORMS`] whose needs it meets under the process's limits. The forms are
+//! ordered by what the bench measured on every adapter class measured so far (a CPU adapter,
+//! lavapipe; a data-centre GPU, the H200; `docs/benchmarks.md`): the frame without
+//! billboards (each pixel's hit written at its pixel) before rasterized billboards. The
+//! splatted billboards (`ssbvb_splat.ron`) need what the first form needs, so they are no
+//! fallback. The paper's rasterized form stays one flag away (`--pipeline
+//! assets/pipelines/ssbvb.ron`).
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use serde::Serialize;
+use ssbvb_gpu::{AdapterVerdict, GpuContext, Requirements};
+
+use crate::adapter_cmd::{limits, requirements_of, resolve};
+use crate::bundled::assets_dir;
+
+/// One SSBVB form the rule can choose.
+#[derive(Debug, Clone, Copy)]
+pub struct Form {
+    /// Pipeline file, relative to the assets folder.
+    pub file: &'static str,
+    /// What it is, in a reason.
+    pub name: &'static str,
+    /// Why it stands where it does in [`FORMS`].
+    pub why: &'static str,
+}
+
+/// The SSBVB forms, fastest first on the adapters measured.
+pub const FORMS: [Form; 2] = [
+    Form {
+        file: "pipelines/ssbvb_pixel.ron",
+        name: "each pixel's hit written at its pixel (no billboard)",
+        why: "the fastest SSBVB frame measured (lavapipe, bunny level 9 at 1280x720: ~0.85x \
+              the splatted billboards' frame, ~0.35x the rasterized ones'; on the NVIDIA \
+              H200 the billboards were the frame's costliest stage, and this form has none; \
+              docs/benchmarks.md)",
+    },
+    Form {
+        file: "pipelines/ssbvb.ron",
+        name: "rasterized billboards",
+        why: "the paper's frame",
+    },
+];
+
+/// How the pipeline of a command was chosen (`pipeline_choice` in `render --json`).
+#[derive(Debug, Clone, Serialize, PartialEq, Eq)]
+pub struct PipelineChoice {
+    /// The pipeline file used.
+    pub pipeline: String,
+    /// Who chose it: `flag` (`--pipeline`), `scene` (the scene file's `pipeline:`) or
+    /// `adapter` (the rule of this module).
+    pub by: &'static str,
+    /// Why, in words.
+    pub reason: String,
+    /// The adapter the rule looked at (`name [backend, type]`); `None` unless `by` is
+    /// `adapter` and one fits.
+    pub adapter: Option<String>,
+}
+
+impl PipelineChoice {
+    /// The pipeline file as a path.
+    pub fn path(&self) -> PathBuf {
+        PathBuf::from(&self.pipeline)
+    }
+
+    /// One line for a report.
+    pub fn line(&self) -> String {
+        format!("pipeline {} ({})", self.pipeline, self.reason)
+    }
+}
+
+/// The pipeline of a command: `flag` (`--pipeline`), else the scene's, else the rule's
+/// choice for this process's adapter and limits.
+pub fn choose(flag: Option<PathBuf>, scene: Option<PathBuf>) -> Result<PipelineChoice> {
+    if let Some(p) = flag {
+        return Ok(PipelineChoice {
+            pipeline: p.display().to_string(),
+            by: "flag",
+            reason: "named with --pipeline".into(),
+            adapter: None,
+        });
+    }
+    if let Some(p) = scene {
+        return Ok(PipelineChoice {
+            pipeline: p.display().to_string(),
+            by: "scene",
+            reason: "named by the scene file's `pipeline:`".into(),
+            adapter: None,
+        });
+    }
+    default_for_adapter()
+}
+
+/// The rule's choice for this process's adapter and limits (made once per process: the
+/// limits are set once, and the adapters do not change under a running command).
+pub fn default_for_adapter() -> Result<PipelineChoice> {
+    static CHOICE: std::sync::OnceLock<PipelineChoice> = std::sync::OnceLock::new();
+    if let Some(c) = CHOICE.get() {
+        return Ok(c.clone());
+    }
+    let c = rule_for_adapter()?;
+    Ok(CHOICE.get_or_init(|| c).clone())
+}
+
+fn rule_for_adapter() -> Result<PipelineChoice> {
+    let under = match limits() {
+        ssbvb_gpu::DeviceLimits::Adapter => "",
+        ssbvb_gpu::DeviceLimits::WebGpuDefaults => " under WebGPU's default limits",
+    };
+    choose_among(&FORMS, under, |_, req| {
+        GpuContext::list_adapters(req, limits())
+    })
+}
+
+/// The rule over `forms`, with `list` giving every adapter's verdict on the `k`th form's
+/// requirements (best first, the same adapters in the same order for every form): the first adapter
+/// that fits any form, and on it the first form that fits. With none, the last form, whose
+/// device creation then fails naming what every adapter lacks.
+pub(crate) fn choose_among(
+    forms: &[Form],
+    under: &str,
+    list: impl Fn(usize, &Requirements) -> Vec<AdapterVerdict>,
+) -> Result<PipelineChoice> {
+    let mut per_form = Vec::with_capacity(forms.len());
+    for (k, f) in forms.iter().enumerate() {
+        let pipeline = resolve(&assets_dir().join(f.file))?;
+        per_form.push(list(k, &requirements_of(&[&pipeline])));
+    }
+    let adapters = per_form.iter().map(Vec::len).max().unwrap_or(0);
+    for a in 0..adapters {
+        let verdicts: Vec<Option<&AdapterVerdict>> = per_form.iter().map(|v| v.get(a)).collect();
+        if !verdicts.iter().flatten().any(|v| v.allowed) {
+            continue;
+        }
+        let Some(k) = verdicts
+            .iter()
+            .position(|v| v.is_some_and(|v| v.allowed && v.verdict.fits()))
+        else {
+            continue;
+        };
+        let adapter = verdicts[k].expect("found above");
+        let name = format!(
+            "{} [{}, {}]",
+            adapter.name, adapter.backend, adapter.device_type
+        );
+        let mut reason = format!("{} on {name}{under}: {}", forms[k].name, forms[k].why);
+        for (f, v) in forms[..k].iter().zip(&verdicts) {
+            let lacks = v.map_or_else(
+                || "not listed".to_string(),
+                |v| v.verdict.missing.join("; "),
+            );
+            reason.push_str(&format!("; not {}: the adapter lacks {lacks}", f.name));
+        }
+        return Ok(PipelineChoice {
+            pipeline: assets_dir().join(forms[k].file).display().to_string(),
+            by: "adapter",
+            reason,
+            adapter: Some(name),
+        });
+    }
+    let last = forms.last().expect("at least one form");
+    Ok(PipelineChoice {
+        pipeline: assets_dir().join(last.file).display().to_string(),
+        by: "adapter",
+        reason: format!("no adapter fits any SSBVB form{under}"),
+        adapter: None,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ssbvb_gpu::Verdict;
+
+    fn verdict(name: &str, allowed: bool, missing: &[&str]) -> AdapterVerdict {
+        AdapterVerdict {
+            name: name.into(),
+            backend: "Vulkan".into(),
+            device_type: "DiscreteGpu".into(),
+            allowed,
+            verdict: Verdict {
+                missing: missing.iter().map(|s| s.to_string()).collect(),
+                ..Default::default()
+            },
+        }
+    }
+
+    /// A lister that answers the pixel form (listed first) from `pixel` and the raster
+    /// form from `raster`.
+    fn lister(
+        pixel: Vec<AdapterVerdict>,
+        raster: Vec<AdapterVerdict>,
+    ) -> impl Fn(usize, &Requirements) -> Vec<AdapterVerdict> {
+        move |k, _| {
+            if k == 0 {
+                pixel.clone()
+            } else {
+                raster.clone()
+            }
+        }
+    }
+
+    #[test]
+    fn the_pixel_form_is_chosen_where_it_fits() {
+        let c = choose_among(
+            &FORMS,
+            "",
+            lister(
+                vec![verdict("gpu", true, &[])],
+                vec![verdict("gpu", true, &[])],
+            ),
+        )
+        .unwrap();
+        assert!(c.pipeline.ends_with("ssbvb_pixel.ron"), "{c:?}");
+        assert_eq!(c.by, "adapter");
+        assert!(
+            c.reason.contains("at its pixel (no billboard) on gpu"),
+            "{c:?}"
+        );
+        assert_eq!(c.adapter.as_deref(), Some("gpu [Vulkan, DiscreteGpu]"));
+    }
+
+    #[test]
+    fn an_adapter_that_lacks_the_pixel_forms_needs_gets_raster_billboards_and_says_why() {
+        let c = choose_among(
+            &FORMS,
+            " under WebGPU's default limits",
+            lister(
+                vec![verdict("gpu", true, &["9 storage buffers per stage"])],
+                vec![verdict("gpu", true, &[])],
+            ),
+        )
+        .unwrap();
+        assert!(c.pipeline.ends_with("pipelines/ssbvb.ron"), "{c:?}");
+        assert!(
+            c.reason
+                .contains("not each pixel's hit written at its pixel")
+                && c.reason.contains("9 storage buffers per stage")
+                && c.reason.contains("under WebGPU's default limits"),
+            "{c:?}"
+        );
+    }
+
+    #[test]
+    fn the_best_adapter_wins_over_a_better_form_on_a_worse_one() {
+        // The first adapter runs only the raster form, the second (software) the pixel one:
+        // the command runs on the first, so the raster form is its default.
+        let c = choose_among(
+            &FORMS,
+            "",
+            lister(
+                vec![verdict("gpu", true, &["x"]), verdict("cpu", true, &[])],
+                vec![verdict("gpu", true, &[]), verdict("cpu", true, &[])],
+            ),
+        )
+        .unwrap();
+        assert!(c.pipeline.ends_with("pipelines/ssbvb.ron"), "{c:?}");
+        assert_eq!(c.adapter.as_deref(), Some("gpu [Vulkan, DiscreteGpu]"));
+    }
+
+    #[test]
+    fn adapters_not_allowed_are_passed_over_and_none_fitting_says_so() {
+        let c = choose_among(
+            &FORMS,
+            "",
+            lister(
+                vec![verdict("gpu", false, &[]), verdict("cpu", true, &[])],
+                vec![verdict("gpu", false, &[]), verdict("cpu", true, &[])],
+            ),
+        )
+        .unwrap();
+        assert!(c.pipeline.ends_with("ssbvb_pixel.ron"), "{c:?}");
+        assert!(c.reason.contains("on cpu"), "{c:?}");
+        let none = choose_among(
+            &FORMS,
+            "",
+            lister(
+                vec![verdict("gpu", true, &["a"])],
+                vec![verdict("gpu", true, &["b"])],
+            ),
+        )
+        .unwrap();
+        assert!(none.pipeline.ends_with("pipelines/ssbvb.ron"), "{none:?}");
+        assert!(none.reason.contains("no adapter fits"), "{none:?}");
+        assert_eq!(none.adapter, None);
+    }
+
+    #[test]
+    fn a_flag_or_a_scene_wins_over_the_rule() {
+        let c = choose(Some("a.ron".into()), Some("b.ron".into())).unwrap();
+        assert_eq!((c.pipeline.as_str(), c.by), ("a.ron", "flag"));
+        let c = choose(None, Some("b.ron".into())).unwrap();
+        assert_eq!((c.pipeline.as_str(), c.by), ("b.ron", "scene"));
+    }
+}
