@@ -82,6 +82,12 @@ override CLAIM_HEADER: u32 = 1u;
 // `main`'s indirect dispatch, written by `list_tiles` (the only entry point binding it:
 // a dispatch may not bind the buffer it reads its arguments from).
 @group(1) @binding(4) var<storage, read_write> filter_dispatch: array<u32, 3>;
+// `RayMarchFilter(peel: true)`: the second proxy layer (`vs_peel`, `fs_peel`, drawn by the
+// pass before `main`): per texel the bits of the eye distance to the nearest proxy of an
+// instance other than the texel's prepass instance; +inf where there is none, 0 where no
+// layer was drawn (then no ray skips its walk). A 1 × 1 texture without `peel`.
+@group(1) @binding(5) var peel_t: texture_2d<u32>;
+override PEEL: bool = false;
 
 // Words of the counters: rays, then (low, high) pairs of sums, then the histogram.
 const C_RAYS: u32 = 0u;
@@ -145,6 +151,63 @@ fn march_prepass(k: u32, e: vec4<f32>, px: vec2<i32>, size: vec2<i32>, dir: vec3
     var h = march_resident(ray.o, ray.d, inst.lod, t_from, BIG);
     h.t += ray.t_base;
     return h;
+}
+
+// The second layer's distance at texel `q` (+inf: no other proxy; 0: no layer drawn).
+fn peel_at(q: vec2<i32>) -> f32 {
+    return bitcast<f32>(textureLoad(peel_t, q, 0).x);
+}
+
+// A distance below which no other instance's proxy lies on texel `px`'s ray: the least
+// second-layer distance over the texel and its four neighbours (a proxy edge that vertex
+// snapping moved past this texel's centre still covers a neighbour), less an eighth of
+// the spread of the finite ones (how far snapping can move a face along the ray, as in
+// `entry_margin`) and 1e-4 of itself for the f32 rounding of the interpolated distance.
+fn peel_bound(px: vec2<i32>, size: vec2<i32>) -> f32 {
+    var lo = peel_at(px);
+    var hi = select(0.0, lo, lo < BIG);
+    var offsets = array(vec2(1, 0), vec2(-1, 0), vec2(0, 1), vec2(0, -1));
+    for (var i = 0u; i < 4u; i++) {
+        let q = px + offsets[i];
+        if all(q >= vec2(0)) && all(q < size) {
+            let v = peel_at(q);
+            lo = min(lo, v);
+            hi = select(hi, max(hi, v), v < BIG);
+        }
+    }
+    if !(lo < BIG) {
+        return lo;
+    }
+    return lo - 0.125 * (hi - lo) - 1e-4 * lo;
+}
+
+struct PeelOut {
+    @builtin(position) clip: vec4<f32>,
+    // View-space position on the proxy (its length is the eye distance).
+    @location(0) view_pos: vec3<f32>,
+    @location(1) @interpolate(flat) instance: u32,
+}
+
+// The second layer's vertices: the prepass's proxies, as `empty_space.wgsl` draws them.
+@vertex
+fn vs_peel(@location(0) position: vec4<f32>, @builtin(instance_index) instance: u32) -> PeelOut {
+    let view = instances[instance].object_to_view * vec4(position.xyz, 1.0);
+    var out: PeelOut;
+    out.clip = frame.proj * view;
+    out.view_pos = view.xyz;
+    out.instance = instance;
+    return out;
+}
+
+// A proxy fragment of an instance other than the texel's prepass instance: its eye
+// distance (the nearest wins the depth test).
+@fragment
+fn fs_peel(in: PeelOut) -> @location(0) u32 {
+    let e = textureLoad(entry, vec2<i32>(in.clip.xy), 0);
+    if e.w == f32(in.instance + 1u) {
+        discard;
+    }
+    return bitcast<u32>(length(in.view_pos));
 }
 
 // The slot's voxel: `packed_voxel` with the grid level of its cell in `uv` (the billboard
@@ -270,7 +333,10 @@ fn filter_pixel(px: vec2<i32>) -> bool {
     best = march_prepass(k, e, px, size, dir);
     best_inst = k;
     prepass_inst = k;
-    if SEVERAL_INSTANCES && count > 1u {
+    // Every voxel of another instance lies behind that instance's proxy: a hit before the
+    // second layer needs no walk.
+    let before_others = PEEL && best.found && best.t < peel_bound(px, size);
+    if SEVERAL_INSTANCES && count > 1u && !before_others {
         bvh_walk(dir, best.t, count);
     }
     if !best.found {

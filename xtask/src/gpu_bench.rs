@@ -8,6 +8,8 @@
 //! - `forms/`: every SSBVB form beside the ray casters' fragment and compute forms at the
 //!   paper's view (bunny, level 9; 1280×720 and 1920×1080), whose `bench.json` rows carry
 //!   each pass's GPU time (the per-pass breakdown);
+//! - `crowd/`: `bench --preset scale` at 4096 instances, the SSBVB forms (the filter's
+//!   second proxy layer too) beside ESVO's and the octree caster's compute forms;
 //! - `render/`: `render --json` of the default scene and of the 4096-bunny grid with the
 //!   default form and each SSBVB form (each pass's GPU time and the work counters);
 //! - `paper/`: `bench --preset paper` (every model, the 4096-bunny grid, Figure 8);
@@ -128,7 +130,7 @@ fn steps(out: &Path, frames: u32, skip_paper: bool) -> Vec<Step> {
             "--sizes",
             "1280x720,1920x1080",
             "--techniques",
-            "ssbvb,ssbvb-unique,ssbvb-splat,esvo,esvo-compute,octree,octree-compute",
+            "ssbvb,ssbvb-pixel,ssbvb-unique,ssbvb-splat,esvo,esvo-compute,octree,octree-compute",
             "--frames",
             &f,
             "--out",
@@ -147,6 +149,27 @@ fn steps(out: &Path, frames: u32, skip_paper: bool) -> Vec<Step> {
         ("raster", Some("assets/pipelines/ssbvb.ron")),
         ("splat", Some("assets/pipelines/ssbvb_splat.ron")),
     ];
+    v.push(Step {
+        name: "crowd".into(),
+        args: [
+            "bench",
+            "--preset",
+            "scale",
+            "--instances",
+            "4096",
+            "--sizes",
+            "1280x720",
+            "--techniques",
+            "ssbvb,ssbvb-pixel,ssbvb-peel,ssbvb-splat,esvo,esvo-compute,octree-compute",
+            "--frames",
+            &f,
+            "--out",
+            &o("crowd"),
+        ]
+        .map(String::from)
+        .to_vec(),
+        stdout: "crowd/scale.log".into(),
+    });
     for (scene_name, scene) in scenes {
         for (form_name, pipeline) in forms {
             let name = format!("{scene_name}_{form_name}");
@@ -265,7 +288,7 @@ pub fn run(root: &Path, args: &[String]) -> Result<bool> {
         .out
         .clone()
         .unwrap_or_else(|| root.join("docs/bench").join(slug(name)));
-    for sub in ["forms", "render", "paper"] {
+    for sub in ["forms", "crowd", "render", "paper"] {
         std::fs::create_dir_all(out.join(sub))
             .with_context(|| format!("creating {}", out.join(sub).display()))?;
     }
@@ -375,11 +398,12 @@ mod tests {
     fn the_breakdown_runs_before_the_paper_preset_and_every_form_is_rendered() {
         let s = steps(Path::new("/o"), 5, false);
         assert_eq!(s.first().unwrap().name, "forms");
+        assert_eq!(s[1].name, "crowd");
         assert_eq!(s.last().unwrap().name, "paper");
         assert!(
             s[0].args
                 .join(" ")
-                .contains("ssbvb,ssbvb-unique,ssbvb-splat,esvo,esvo-compute")
+                .contains("ssbvb,ssbvb-pixel,ssbvb-unique,ssbvb-splat,esvo,esvo-compute")
         );
         let renders: Vec<&Step> = s.iter().filter(|s| s.args[0] == "render").collect();
         assert_eq!(renders.len(), 6);

@@ -81,12 +81,11 @@ pub fn resolve(path: &Path) -> Result<ResolvedPipeline> {
     ssbvb_graph::resolve_file(path).map_err(|e| anyhow::anyhow!("{e}"))
 }
 
-/// Runs `ssbvb adapter`: every adapter, best first, with what it lacks for the pipeline;
-/// then the one `render` would use. Fails when none fits.
-pub fn run(args: &AdapterArgs) -> Result<ExitCode> {
-    let choice = crate::pipeline_choice::choose(args.pipeline.clone(), None)?;
-    let path = choice.path();
-    let pipeline = resolve(&path)?;
+/// Runs `ssbvb adapter`: every adapter, best first, with what it lacks for the pipeline
+/// `path` (`--pipeline`, else the default form, chosen as `chosen_because` says); then the
+/// one `render` would use. Fails when none fits.
+pub fn run(path: &Path, chosen_because: &str) -> Result<ExitCode> {
+    let pipeline = resolve(path)?;
     let req = requirements_of(&[&pipeline]);
     let list = GpuContext::list_adapters(&req, limits());
     let under = match limits() {
@@ -121,7 +120,7 @@ pub fn run(args: &AdapterArgs) -> Result<ExitCode> {
         ..Default::default()
     })?;
     println!("chosen: {}", ctx.report());
-    println!("{}", choice.line());
+    println!("{chosen_because}");
     Ok(ExitCode::SUCCESS)
 }
 

@@ -68,7 +68,8 @@ fn main() -> ExitCode {
     }
     let result = match cli.command {
         Command::Pipeline(c) => pipeline_cmd::run(&c),
-        Command::Adapter(a) => adapter_cmd::run(&a),
+        Command::Adapter(a) => pipeline_choice::choose(a.pipeline.clone(), None)
+            .and_then(|c| adapter_cmd::run(&c.path(), &c.line())),
         Command::Bench(a) => bench::run(&a).map(|_| ExitCode::SUCCESS),
         Command::Render(a) => render_cmd::run(&a).map(|_| ExitCode::SUCCESS),
         Command::View(a) => view::run(&a).map(|_| ExitCode::SUCCESS),

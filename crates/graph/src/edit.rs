@@ -98,6 +98,7 @@ mod tests {
                 max_steps: 7,
                 unique_voxels: true,
                 march: crate::MarchMode::Fast,
+                peel: false,
             })
         );
         // An invalid edit is refused with the pass named.

@@ -20,6 +20,7 @@ mod gpu_sort;
 mod gpu_voxelize;
 mod local_edit;
 mod octree_ray_cast;
+mod peel;
 mod pipeline;
 mod pixel_splat;
 mod rastavox;

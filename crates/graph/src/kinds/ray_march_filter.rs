@@ -23,6 +23,13 @@ pub struct RayMarchFilterParams {
     /// How plane crossing times are computed (default `Exact`).
     #[serde(default)]
     pub march: MarchMode,
+    /// Draw a second proxy layer before marching: per pixel, the nearest proxy of an
+    /// instance other than the prepass's. A ray whose prepass instance is hit before that
+    /// layer (with a margin) skips the walk over the other instances' boxes, since every
+    /// voxel of theirs lies behind their proxies. Same hits; pays where many instances
+    /// are visible (a crowd), costs a proxy pass there, and nothing with one instance.
+    #[serde(default)]
+    pub peel: bool,
 }
 
 /// The arithmetic of the filter's march (`RayMarchFilter(march: ...)`).
@@ -49,6 +56,7 @@ impl Default for RayMarchFilterParams {
             max_steps: default_max_steps(),
             unique_voxels: false,
             march: MarchMode::Exact,
+            peel: false,
         }
     }
 }

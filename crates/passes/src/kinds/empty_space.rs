@@ -132,7 +132,7 @@ impl PassImpl for EmptySpace {
 /// draws, so the depth test sees the same fragments in the same order; in a crowd, where
 /// neighbours share a level, this is a draw per run instead of one per instance (each
 /// draw costs a software rasterizer its setup).
-fn proxy_runs(
+pub(crate) fn proxy_runs(
     visible: &[VisibleInstance],
     drawn: impl Fn(&VisibleInstance) -> bool,
 ) -> Vec<(ProxyRange, Range<u32>)> {

@@ -141,6 +141,20 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         edit: None,
         max_level: 16,
     },
+    // The same with the filter's second proxy layer (`RayMarchFilter(peel: true)`): rays hit
+    // before any other instance's proxy skip the walk over the instances' boxes.
+    Technique {
+        name: "ssbvb-peel",
+        pipeline: PipelineSource::File("ssbvb_pixel.ron"),
+        edit: Some(|k| match k {
+            PassKind::RayMarchFilter(f) => {
+                f.peel = true;
+                true
+            }
+            _ => false,
+        }),
+        max_level: 16,
+    },
     Technique {
         name: "dense-dda",
         pipeline: PipelineSource::File("dense_dda.ron"),
@@ -236,11 +250,13 @@ pub(crate) const PAPER_TECHNIQUES: &[&str] = &[
     "ssbvb",
 ];
 
-/// Techniques left out unless named: the raster form by another name, the compute
-/// forms of the octree casters (their fragment forms' images; the paper preset runs them)
-/// and the still-image anti-aliasing (the quality preset runs it).
+/// Techniques left out unless named: the raster form by another name, the pixel form with
+/// the filter's second proxy layer (its image; a crowd's knob), the compute forms of the
+/// octree casters (their fragment forms' images; the paper preset runs them) and the
+/// still-image anti-aliasing (the quality preset runs it).
 const ALIASES: &[&str] = &[
     "ssbvb-fast",
+    "ssbvb-peel",
     "octree-compute",
     "esvo-compute",
     "ssbvb-edge-aa",
