@@ -15,10 +15,14 @@ var<private> boxes_tested: u32;
 // docs/benchmarks.md, "The crowd's walk, taken apart").
 var<private> walk_inv_dir: vec3<f32>;
 var<private> walk_flat: vec3<bool>;
+// A distance before which the includer knows the walk can find nothing (0: none known):
+// a box the ray leaves before it is passed over with its subtree (the filter's second
+// proxy layer; ray_march_filter.wgsl).
+var<private> walk_t_min: f32 = 0.0;
 
 // Entry time (t >= 0) of the camera-relative ray `t * dir` (the walk's) into node `i`'s
-// box, or BIG when it misses. Boxes are clamped to 1e37 and widened, so nothing overflows
-// or is missed.
+// box, or BIG when it misses or leaves it before `walk_t_min`. Boxes are clamped to 1e37
+// and widened, so nothing overflows or is missed.
 fn bvh_enter(i: u32) -> f32 {
     boxes_tested += 1u;
     let n = instance_bvh[i];
@@ -32,7 +36,7 @@ fn bvh_enter(i: u32) -> f32 {
     let far = select(max(t0, t1), vec3(BIG), walk_flat);
     let enter = max(max(near.x, near.y), max(near.z, 0.0));
     let exit = min(min(far.x, far.y), min(far.z, BIG));
-    return select(BIG, enter, enter <= exit);
+    return select(BIG, enter, enter <= exit && exit >= walk_t_min);
 }
 
 // Visits the instances whose boxes the ray enters at or before the limit, starting from

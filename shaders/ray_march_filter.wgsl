@@ -334,8 +334,11 @@ fn filter_pixel(px: vec2<i32>) -> bool {
     best_inst = k;
     prepass_inst = k;
     // Every voxel of another instance lies behind that instance's proxy: a hit before the
-    // second layer needs no walk.
-    let before_others = PEEL && best.found && best.t < peel_bound(px, size);
+    // second layer needs no walk, and the walk passes over boxes the ray leaves before it.
+    if PEEL {
+        walk_t_min = max(peel_bound(px, size), 0.0);
+    }
+    let before_others = PEEL && best.found && best.t < walk_t_min;
     if SEVERAL_INSTANCES && count > 1u && !before_others {
         bvh_walk(dir, best.t, count);
     }

@@ -5,7 +5,8 @@
 //! (64 bunnies, Auto LOD), nine overlapping rotated and scaled instances, two bunnies
 //! 10⁶ units away through a narrow lens (f32 distances), and with the camera inside one
 //! instance's proxy (the layer is then cleared and no ray skips). Where it may skip, it
-//! must: the crowd tests fewer boxes per ray.
+//! must: fewer boxes are tested per ray (skipped walks, and boxes the ray leaves before
+//! the layer passed over).
 
 use glam::{DAffine3, DQuat, DVec3};
 use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject};
@@ -122,10 +123,10 @@ fn the_second_proxy_layer_keeps_every_hit_and_spares_walks_in_a_crowd() {
         match name {
             // The camera inside a proxy: the layer is cleared, every ray walks.
             "inside" => assert_eq!(boxes.0, boxes.1, "{name}"),
-            // Measured on lavapipe: 15.0 against 19.7 boxes a ray in the crowd, 7.1 against
-            // 10.7 for the nine instances, 2.4 against 3.0 far away.
-            "crowd" => assert!(boxes.0 < 0.85 * boxes.1, "{name}: {boxes:?}"),
-            "nine" => assert!(boxes.0 < 0.8 * boxes.1, "{name}: {boxes:?}"),
+            // Measured on lavapipe: 13.5 against 19.7 boxes a ray in the crowd, 5.1 against
+            // 10.7 for the nine instances, 1.8 against 3.0 far away.
+            "crowd" => assert!(boxes.0 < 0.8 * boxes.1, "{name}: {boxes:?}"),
+            "nine" => assert!(boxes.0 < 0.6 * boxes.1, "{name}: {boxes:?}"),
             _ => assert!(boxes.0 < boxes.1, "{name}: {boxes:?}"),
         }
     }

@@ -7,7 +7,8 @@
 //! instance. A proxy encloses its instance's voxels exactly, so no voxel of another
 //! instance lies before that distance: a ray whose prepass instance is hit before it
 //! (less a margin for rasterization, `peel_bound`) skips the walk over the instances'
-//! boxes, which in a crowd was most of the filter's time (docs/benchmarks.md). The layer
+//! boxes, which in a crowd was most of the filter's time (docs/benchmarks.md), and a ray
+//! that walks passes over the boxes it leaves before the layer. The layer
 //! is drawn by the filter because only the filter reads it (no pipeline declares it).
 //!
 //! A frame where some visible instance's proxy holds the camera or may be cut by the near
