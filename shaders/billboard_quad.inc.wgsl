@@ -326,10 +326,9 @@ fn ray_box_fragment(slot: VoxelSlot, px: vec2<f32>) -> Fragment {
 
 // A Pixel entry's fragment at its own pixel `px`: the filter's hit, at its distance along
 // the pixel's ray with its entered face, as the ray casters' resolve writes a hit (no box
-// test: the march found the face).
+// test: the march found the face; `covered` is not read for such entries).
 fn pixel_fragment(slot: VoxelSlot, px: vec2<f32>) -> Fragment {
     var f: Fragment;
-    f.covered = true;
     let inst = instances[slot.instance];
     let dir = pixel_ray(px);
     let p = dir * slot.t;

@@ -210,12 +210,10 @@ fn own_pixel(slot: VoxelSlot) -> vec2<u32> {
     return vec2(slot.pixel % width, slot.pixel / width);
 }
 
-// A Pixel entry: its hit's depth at its own pixel, and that pixel's tile marked.
+// A Pixel entry (the filter's, on this screen: the pipeline check): its hit's depth at its
+// own pixel, and that pixel's tile marked.
 fn splat_own_pixel(slot: VoxelSlot, e: u32, splat_step: u32) {
     let p = own_pixel(slot);
-    if slot.instance >= u32(frame.misc.w) || p.y >= u32(frame.screen.y) {
-        return;
-    }
     if splat_step == 0u {
         mark_tile(p.y / TILE_PX * tiles_across() + p.x / TILE_PX);
     }
