@@ -5,6 +5,8 @@
 //! adapter `ssbvb` would use is a real GPU, then writes `docs/bench/<gpu>/`:
 //!
 //! - `env.txt`: the adapter listing, `nvidia-smi`'s line where there is one, the commit;
+//! - `calibrate.log`: `ssbvb calibrate`, each SSBVB form's frame on this GPU (the default
+//!   scene at 1280×720; it also makes the measured fastest this machine's default);
 //! - `forms/`: every SSBVB form beside the ray casters' fragment and compute forms at the
 //!   paper's view (bunny, level 9; 1280×720 and 1920×1080), whose `bench.json` rows carry
 //!   each pass's GPU time (the per-pass breakdown);
@@ -122,6 +124,13 @@ fn steps(out: &Path, frames: u32, skip_paper: bool) -> Vec<Step> {
     let o = |sub: &str| out.join(sub).display().to_string();
     let f = frames.to_string();
     let mut v = vec![Step {
+        name: "calibrate".into(),
+        args: ["calibrate", "--size", "1280x720", "--frames", &f]
+            .map(String::from)
+            .to_vec(),
+        stdout: "calibrate.log".into(),
+    }];
+    v.push(Step {
         name: "forms".into(),
         args: [
             "bench",
@@ -139,7 +148,7 @@ fn steps(out: &Path, frames: u32, skip_paper: bool) -> Vec<Step> {
         .map(String::from)
         .to_vec(),
         stdout: "forms/bench.log".into(),
-    }];
+    });
     let scenes = [
         ("bunny", "assets/scenes/default.ron"),
         ("grid4096", "assets/scenes/bunnies_4096.ron"),
@@ -397,11 +406,12 @@ mod tests {
     #[test]
     fn the_breakdown_runs_before_the_paper_preset_and_every_form_is_rendered() {
         let s = steps(Path::new("/o"), 5, false);
-        assert_eq!(s.first().unwrap().name, "forms");
-        assert_eq!(s[1].name, "crowd");
+        assert_eq!(s.first().unwrap().name, "calibrate");
+        assert_eq!(s[1].name, "forms");
+        assert_eq!(s[2].name, "crowd");
         assert_eq!(s.last().unwrap().name, "paper");
         assert!(
-            s[0].args
+            s[1].args
                 .join(" ")
                 .contains("ssbvb,ssbvb-pixel,ssbvb-unique,ssbvb-splat,esvo,esvo-compute")
         );

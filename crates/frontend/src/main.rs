@@ -5,6 +5,8 @@ mod animation;
 mod bench;
 mod budget;
 mod bundled;
+mod calibrate_cmd;
+mod calibration;
 mod faults;
 mod flip;
 mod pipeline_choice;
@@ -44,6 +46,10 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Voxelize a model: every LOD, sparse lookup pages, proxy meshes; cached on disk.
     Voxelize(voxelize_cmd::VoxelizeArgs),
+    /// Measure each SSBVB form on this adapter (the bundled default scene) and keep the
+    /// fastest as the default pipeline for this adapter, driver and limits
+    /// (`calibration.json` beside the asset cache).
+    Calibrate(calibrate_cmd::CalibrateArgs),
     /// Open a window on a scene or model: orbit/fly camera, overlay with per-pass timings,
     /// knobs, LOD and technique switch, hot reload of the pipeline file (needs a display).
     View(view::ViewArgs),
@@ -64,6 +70,7 @@ fn main() -> ExitCode {
         Command::Bench(a) => adapter_cmd::set_limits(a.limits),
         Command::Render(a) => adapter_cmd::set_limits(a.limits),
         Command::View(a) => adapter_cmd::set_limits(a.limits),
+        Command::Calibrate(a) => adapter_cmd::set_limits(a.limits),
         Command::Pipeline(_) | Command::Voxelize(_) => {}
     }
     let result = match cli.command {
@@ -74,6 +81,7 @@ fn main() -> ExitCode {
         Command::Render(a) => render_cmd::run(&a).map(|_| ExitCode::SUCCESS),
         Command::View(a) => view::run(&a).map(|_| ExitCode::SUCCESS),
         Command::Voxelize(a) => voxelize_cmd::run(&a).map(|_| ExitCode::SUCCESS),
+        Command::Calibrate(a) => calibrate_cmd::run(&a).map(|_| ExitCode::SUCCESS),
     };
     match result {
         Ok(code) => code,

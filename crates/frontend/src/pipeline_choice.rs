@@ -53,8 +53,9 @@ pub const FORMS: [Form; 2] = [
 pub struct PipelineChoice {
     /// The pipeline file used.
     pub pipeline: String,
-    /// Who chose it: `flag` (`--pipeline`), `scene` (the scene file's `pipeline:`) or
-    /// `adapter` (the rule of this module).
+    /// Who chose it: `flag` (`--pipeline`), `scene` (the scene file's `pipeline:`),
+    /// `calibration` (`ssbvb calibrate`'s fastest on this adapter) or `adapter` (the rule
+    /// of this module).
     pub by: &'static str,
     /// Why, in words.
     pub reason: String,
@@ -97,36 +98,113 @@ pub fn choose(flag: Option<PathBuf>, scene: Option<PathBuf>) -> Result<PipelineC
     default_for_adapter()
 }
 
-/// The rule's choice for this process's adapter and limits (made once per process: the
-/// limits are set once, and the adapters do not change under a running command).
+/// The choice for this process's adapter and limits (made once per process: the limits
+/// are set once, and the adapters do not change under a running command): the form
+/// `ssbvb calibrate` measured fastest on this adapter, driver and limits, else the rule's.
 pub fn default_for_adapter() -> Result<PipelineChoice> {
     static CHOICE: std::sync::OnceLock<PipelineChoice> = std::sync::OnceLock::new();
     if let Some(c) = CHOICE.get() {
         return Ok(c.clone());
     }
-    let c = rule_for_adapter()?;
+    let (rule, picked) = choose_among(&FORMS, under(), list_for)?;
+    let c = match picked {
+        Some((a, adapter)) => calibrated(rule, a, &adapter, &crate::calibration::path())?,
+        None => rule,
+    };
     Ok(CHOICE.get_or_init(|| c).clone())
 }
 
-fn rule_for_adapter() -> Result<PipelineChoice> {
-    let under = match limits() {
+/// `render`'s adapters' verdicts on some requirements under this process's limits.
+fn list_for(_: usize, req: &Requirements) -> Vec<AdapterVerdict> {
+    GpuContext::list_adapters(req, limits())
+}
+
+/// How a reason names the limits.
+fn under() -> &'static str {
+    match limits() {
         ssbvb_gpu::DeviceLimits::Adapter => "",
         ssbvb_gpu::DeviceLimits::WebGpuDefaults => " under WebGPU's default limits",
+    }
+}
+
+/// `rule` unless the calibration file at `file` has an entry for `adapter` (the `a`th
+/// listed) under this process's limits whose fastest form the adapter fits. An unreadable
+/// calibration is ignored with a warning (printed, and said in the reason).
+fn calibrated(
+    mut rule: PipelineChoice,
+    a: usize,
+    adapter: &AdapterVerdict,
+    file: &std::path::Path,
+) -> Result<PipelineChoice> {
+    let key = crate::calibration::AdapterKey::of(adapter, limits().name());
+    let entry = match crate::calibration::load(file) {
+        Ok(f) => f.and_then(|f| crate::calibration::lookup(&f, &key).cloned()),
+        Err(e) => {
+            let w =
+                format!("the calibration was ignored ({e:#}); `ssbvb calibrate` measures again");
+            eprintln!("warning: {w}");
+            rule.reason.push_str(&format!("; {w}"));
+            None
+        }
     };
-    choose_among(&FORMS, under, |_, req| {
-        GpuContext::list_adapters(req, limits())
+    let Some((entry, fastest)) = entry.and_then(|e| Some((e.clone(), e.fastest()?.to_string())))
+    else {
+        return Ok(rule);
+    };
+    let pipeline = resolve(&assets_dir().join(&fastest))?;
+    let fits = list_for(0, &requirements_of(&[&pipeline]))
+        .get(a)
+        .is_some_and(|v| v.allowed && v.verdict.fits());
+    if !fits {
+        return Ok(rule);
+    }
+    Ok(PipelineChoice {
+        pipeline: assets_dir().join(&fastest).display().to_string(),
+        by: "calibration",
+        reason: format!(
+            "measured fastest on {} [{}, {}]{} by `ssbvb calibrate` ({})",
+            adapter.name,
+            adapter.backend,
+            adapter.device_type,
+            under(),
+            entry.summary()
+        ),
+        adapter: rule.adapter,
     })
 }
 
+/// The adapter the rule picks (the best allowed one that fits any of its forms) and which
+/// of `files` (pipeline files relative to the assets folder) it fits, in their order.
+pub fn adapter_and_fitting_forms(
+    files: &[&'static str],
+) -> Result<(AdapterVerdict, Vec<&'static str>)> {
+    let (_, picked) = choose_among(&FORMS, under(), list_for)?;
+    let Some((a, adapter)) = picked else {
+        anyhow::bail!("no adapter fits any SSBVB form{}", under());
+    };
+    let mut fitting = Vec::new();
+    for f in files {
+        let pipeline = resolve(&assets_dir().join(f))?;
+        if list_for(0, &requirements_of(&[&pipeline]))
+            .get(a)
+            .is_some_and(|v| v.allowed && v.verdict.fits())
+        {
+            fitting.push(*f);
+        }
+    }
+    Ok((adapter, fitting))
+}
+
 /// The rule over `forms`, with `list` giving every adapter's verdict on the `k`th form's
-/// requirements (best first, the same adapters in the same order for every form): the first adapter
-/// that fits any form, and on it the first form that fits. With none, the last form, whose
-/// device creation then fails naming what every adapter lacks.
+/// requirements (best first, the same adapters in the same order for every form): the
+/// first adapter that fits any form, and on it the first form that fits; with the
+/// adapter's position and verdict. With none, the last form, whose device creation then
+/// fails naming what every adapter lacks.
 pub(crate) fn choose_among(
     forms: &[Form],
     under: &str,
     list: impl Fn(usize, &Requirements) -> Vec<AdapterVerdict>,
-) -> Result<PipelineChoice> {
+) -> Result<(PipelineChoice, Option<(usize, AdapterVerdict)>)> {
     let mut per_form = Vec::with_capacity(forms.len());
     for (k, f) in forms.iter().enumerate() {
         let pipeline = resolve(&assets_dir().join(f.file))?;
@@ -157,20 +235,22 @@ pub(crate) fn choose_among(
             );
             reason.push_str(&format!("; not {}: the adapter lacks {lacks}", f.name));
         }
-        return Ok(PipelineChoice {
+        let choice = PipelineChoice {
             pipeline: assets_dir().join(forms[k].file).display().to_string(),
             by: "adapter",
             reason,
             adapter: Some(name),
-        });
+        };
+        return Ok((choice, Some((a, adapter.clone()))));
     }
     let last = forms.last().expect("at least one form");
-    Ok(PipelineChoice {
+    let choice = PipelineChoice {
         pipeline: assets_dir().join(last.file).display().to_string(),
         by: "adapter",
         reason: format!("no adapter fits any SSBVB form{under}"),
         adapter: None,
-    })
+    };
+    Ok((choice, None))
 }
 
 #[cfg(test)]
@@ -183,6 +263,7 @@ mod tests {
             name: name.into(),
             backend: "Vulkan".into(),
             device_type: "DiscreteGpu".into(),
+            driver: "test 1.0".into(),
             allowed,
             verdict: Verdict {
                 missing: missing.iter().map(|s| s.to_string()).collect(),
@@ -216,7 +297,8 @@ mod tests {
                 vec![verdict("gpu", true, &[])],
             ),
         )
-        .unwrap();
+        .unwrap()
+        .0;
         assert!(c.pipeline.ends_with("ssbvb_pixel.ron"), "{c:?}");
         assert_eq!(c.by, "adapter");
         assert!(
@@ -236,7 +318,8 @@ mod tests {
                 vec![verdict("gpu", true, &[])],
             ),
         )
-        .unwrap();
+        .unwrap()
+        .0;
         assert!(c.pipeline.ends_with("pipelines/ssbvb.ron"), "{c:?}");
         assert!(
             c.reason
@@ -259,14 +342,15 @@ mod tests {
                 vec![verdict("gpu", true, &[]), verdict("cpu", true, &[])],
             ),
         )
-        .unwrap();
+        .unwrap()
+        .0;
         assert!(c.pipeline.ends_with("pipelines/ssbvb.ron"), "{c:?}");
         assert_eq!(c.adapter.as_deref(), Some("gpu [Vulkan, DiscreteGpu]"));
     }
 
     #[test]
     fn adapters_not_allowed_are_passed_over_and_none_fitting_says_so() {
-        let c = choose_among(
+        let (c, picked) = choose_among(
             &FORMS,
             "",
             lister(
@@ -275,9 +359,13 @@ mod tests {
             ),
         )
         .unwrap();
+        assert_eq!(
+            picked.map(|(a, v)| (a, v.name)),
+            Some((1, "cpu".to_string()))
+        );
         assert!(c.pipeline.ends_with("ssbvb_pixel.ron"), "{c:?}");
         assert!(c.reason.contains("on cpu"), "{c:?}");
-        let none = choose_among(
+        let (none, picked) = choose_among(
             &FORMS,
             "",
             lister(
@@ -289,6 +377,7 @@ mod tests {
         assert!(none.pipeline.ends_with("pipelines/ssbvb.ron"), "{none:?}");
         assert!(none.reason.contains("no adapter fits"), "{none:?}");
         assert_eq!(none.adapter, None);
+        assert!(picked.is_none());
     }
 
     #[test]

@@ -108,9 +108,7 @@ impl AdapterReport {
             name: info.name.clone(),
             backend: format!("{:?}", info.backend),
             device_type: format!("{:?}", info.device_type),
-            driver: format!("{} {}", info.driver, info.driver_info)
-                .trim()
-                .to_string(),
+            driver: driver_text(info),
             is_software: is_software(info),
             timestamps: features.contains(
                 wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
@@ -119,6 +117,13 @@ impl AdapterReport {
             limits: DeviceLimits::Adapter.name(),
         }
     }
+}
+
+/// An adapter's driver and driver info, as reports name it.
+fn driver_text(info: &wgpu::AdapterInfo) -> String {
+    format!("{} {}", info.driver, info.driver_info)
+        .trim()
+        .to_string()
 }
 
 impl std::fmt::Display for AdapterReport {
@@ -200,6 +205,8 @@ pub struct AdapterVerdict {
     pub backend: String,
     /// Device type.
     pub device_type: String,
+    /// Driver and driver info.
+    pub driver: String,
     /// Whether the adapter choice (`SSBVB_ADAPTER`) allows it.
     pub allowed: bool,
     /// What it lacks and which fallbacks it would take.
@@ -449,6 +456,7 @@ impl GpuContext {
                     name: info.name.clone(),
                     backend: format!("{:?}", info.backend),
                     device_type: format!("{:?}", info.device_type),
+                    driver: driver_text(&info),
                     allowed: choice.allows(&info),
                     verdict: requirements.check_under(a, &limits.on(a)),
                 }

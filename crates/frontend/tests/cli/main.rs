@@ -2,6 +2,7 @@
 //! RastaVox's commands are in `rastavox.rs`.
 
 mod animation;
+mod calibrate;
 mod cone_trace;
 mod device_loss;
 mod gl;
