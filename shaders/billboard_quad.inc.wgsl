@@ -307,35 +307,34 @@ fn flat_fragment(slot: VoxelSlot, q: Quad, px: vec2<f32>, world_on_quad: vec3<f3
 
 // A ray-box billboard's pixel: exact coverage, depth and entered face.
 fn ray_box_fragment(slot: VoxelSlot, px: vec2<f32>) -> Fragment {
-    var f: Fragment;
     let h = slot_ray_box(slot, px);
-    f.covered = h.hit;
     if !h.hit {
+        var f: Fragment;
+        f.covered = false;
         return f;
     }
+    return hit_fragment(slot, px, h.t, h.face);
+}
+
+// What pixel `px` writes where its ray meets `slot`'s voxel at distance `t` through face
+// `face`.
+fn hit_fragment(slot: VoxelSlot, px: vec2<f32>, t: f32, face: u32) -> Fragment {
+    var f: Fragment;
+    f.covered = true;
     let inst = instances[slot.instance];
     let dir = pixel_ray(px);
-    let p = dir * h.t;
+    let p = dir * t;
     f.albedo = vec4(voxel_color(slot.voxel).rgb, 1.0);
     f.normal = vec4(voxel_normal_world(inst, slot.voxel), 1.0);
-    f.position = vec4(p, h.t * dot(dir, frame.cam_forward.xyz));
-    f.geometric = oct_encode(face_normal_world(inst, h.face));
+    f.position = vec4(p, t * dot(dir, frame.cam_forward.xyz));
+    f.geometric = oct_encode(face_normal_world(inst, face));
     f.depth = ndc_depth(p);
     return f;
 }
 
 // A Pixel entry's fragment at its own pixel `px`: the filter's hit, at its distance along
 // the pixel's ray with its entered face, as the ray casters' resolve writes a hit (no box
-// test: the march found the face; `covered` is not read for such entries).
+// test: the march found the face).
 fn pixel_fragment(slot: VoxelSlot, px: vec2<f32>) -> Fragment {
-    var f: Fragment;
-    let inst = instances[slot.instance];
-    let dir = pixel_ray(px);
-    let p = dir * slot.t;
-    f.albedo = vec4(voxel_color(slot.voxel).rgb, 1.0);
-    f.normal = vec4(voxel_normal_world(inst, slot.voxel), 1.0);
-    f.position = vec4(p, slot.t * dot(dir, frame.cam_forward.xyz));
-    f.geometric = oct_encode(face_normal_world(inst, slot.face));
-    f.depth = ndc_depth(p);
-    return f;
+    return hit_fragment(slot, px, slot.t, slot.face);
 }

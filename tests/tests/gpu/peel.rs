@@ -56,26 +56,11 @@ fn nine() -> Scene {
     }
 }
 
-/// Two bunnies 10⁶ units away, the second behind and beside the first.
-fn far_two() -> (Scene, Camera) {
-    let mut scene = ssbvb_tests::single_object_scene(model_asset("bunny.obj", 5), 5);
-    let eye = DVec3::new(309426.0, 206284.0, 928279.0);
-    let back = -eye.normalize() * 3.0;
-    let side = eye.cross(DVec3::Y).normalize() * 0.9;
-    scene.objects[0].instances = vec![DAffine3::IDENTITY, DAffine3::from_translation(back + side)];
-    let camera = Camera {
-        fov_y_deg: 0.00025,
-        far: f64::INFINITY,
-        ..Camera::new(eye, DVec3::ZERO)
-    };
-    (scene, camera)
-}
-
 #[test]
 fn the_second_proxy_layer_keeps_every_hit_and_spares_walks_in_a_crowd() {
     let size = (96, 72);
     let crowd = crate::scale::bunny_grid(8, 6, LodPolicy::AUTO);
-    let (far, far_camera) = far_two();
+    let (far, far_camera) = crate::scale::far_two_bunnies(5);
     let views = [
         (
             "crowd",

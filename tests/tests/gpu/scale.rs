@@ -273,13 +273,9 @@ fn the_far_narrow_view_matches_the_reference() {
     assert!(r.depth_error_voxels.p95 <= 8.0, "{r:?}");
 }
 
-/// The far narrow view with a second bunny behind the first, partly hidden: where the
-/// nearest proxy's instance misses, the ray goes on to the other instance through the
-/// hierarchy, and that march must be as precise as the first (`object_ray`). The default
-/// pipeline and the ray casters match the reference.
-#[test]
-fn the_far_narrow_view_of_two_bunnies_matches_the_reference() {
-    let level = 5;
+/// Two bunnies at `level` seen from 10⁶ units away through a 0.00025° lens, the second
+/// behind and beside the first, partly hidden.
+pub(crate) fn far_two_bunnies(level: u32) -> (Scene, Camera) {
     let mut scene = ssbvb_tests::single_object_scene(model_asset("bunny.obj", level), level);
     let eye = DVec3::new(309426.0, 206284.0, 928279.0);
     let back = -eye.normalize() * 3.0;
@@ -290,6 +286,17 @@ fn the_far_narrow_view_of_two_bunnies_matches_the_reference() {
         far: f64::INFINITY,
         ..Camera::new(eye, DVec3::ZERO)
     };
+    (scene, camera)
+}
+
+/// The far narrow view with a second bunny behind the first, partly hidden: where the
+/// nearest proxy's instance misses, the ray goes on to the other instance through the
+/// hierarchy, and that march must be as precise as the first (`object_ray`). The default
+/// pipeline and the ray casters match the reference.
+#[test]
+fn the_far_narrow_view_of_two_bunnies_matches_the_reference() {
+    let level = 5;
+    let (scene, camera) = far_two_bunnies(level);
     let size = (96, 72);
     let reference = ssbvb_tests::reference_of(&scene, &camera, size);
     let behind = reference
