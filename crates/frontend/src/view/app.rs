@@ -67,6 +67,15 @@ impl App {
     }
 }
 
+/// With `--frames` (a scripted run, whose screenshot must not depend on how fast frames
+/// come), the overlay's animations are off: egui times them by the wall clock, and a
+/// window fading in after a device recovery drew differently from run to run.
+fn still_overlay(v: &Viewer, options: &Options) {
+    if options.frames.is_some() {
+        v.egui_ctx.all_styles_mut(|s| s.animation_time = 0.0);
+    }
+}
+
 impl ApplicationHandler for App {
     fn resumed(&mut self, event_loop: &ActiveEventLoop) {
         let Some(loaded) = self.loaded.take() else {
@@ -74,6 +83,7 @@ impl ApplicationHandler for App {
         };
         match Viewer::new(event_loop, &self.options, loaded) {
             Ok(v) => {
+                still_overlay(&v, &self.options);
                 v.window.request_redraw();
                 self.viewer = Some(v);
             }
@@ -101,6 +111,7 @@ impl ApplicationHandler for App {
                 };
                 match viewer.recovered(fault) {
                     Ok(v) => {
+                        still_overlay(&v, &self.options);
                         v.window.request_redraw();
                         self.viewer = Some(v);
                     }
