@@ -71,3 +71,84 @@ impl Ctx<'_> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::{PipelineErrors, ResolvedPipeline, resolve_str};
+
+    fn ok(src: &str) -> ResolvedPipeline {
+        resolve_str(src, "test.ron").unwrap_or_else(|e| panic!("expected a pipeline:\n{e}"))
+    }
+
+    fn err(src: &str) -> PipelineErrors {
+        match resolve_str(src, "test.ron") {
+            Ok(_) => panic!("expected errors"),
+            Err(e) => e,
+        }
+    }
+
+    fn line_of(src: &str, needle: &str) -> usize {
+        src.lines()
+            .position(|l| l.contains(needle))
+            .expect("needle")
+            + 1
+    }
+
+    fn assert_mentions(e: &PipelineErrors, parts: &[&str]) {
+        let text = e.to_string();
+        for p in parts {
+            assert!(text.contains(p), "{p:?} not in:\n{text}");
+        }
+    }
+
+    /// `SplatBillboards(mode: Pixel)` draws each entry at its own pixel only: the filter that
+    /// writes its SSBVB must append every pixel at the screen's resolution, and rasterized
+    /// billboards have no Pixel mode. Each refusal names the pass, the filter and the line.
+    #[test]
+    fn pixel_entries_need_a_filter_that_appends_every_pixel_at_full_resolution() {
+        let pixel = include_str!("../../../../assets/pipelines/ssbvb_pixel.ron");
+        let p = ok(pixel);
+        assert!(
+            p.passes.iter().any(|s| matches!(
+                &s.kind,
+                crate::PassKind::SplatBillboards(b) if b.mode == crate::BillboardMode::Pixel
+            )),
+            "the bundled Pixel pipeline splats in Pixel mode"
+        );
+        let unique = pixel.replace("unique_voxels: false", "unique_voxels: true");
+        assert_ne!(unique, pixel);
+        let e = err(&unique);
+        assert_mentions(
+            &e,
+            &[
+                "pass `billboards`",
+                "filter `filter`",
+                "unique_voxels: true",
+            ],
+        );
+        assert_eq!(e.errors.len(), 1, "{e}");
+        assert_eq!(
+            e.errors[0].loc().pos.map(|p| p.line),
+            Some(line_of(&unique, "kind: SplatBillboards(mode: Pixel)"))
+        );
+        let scaled = pixel.replace(
+            "\"entry\":            Texture(format: Rgba32Float, size: Screen)",
+            "\"entry\":            Texture(format: Rgba32Float, size: ScreenScaled(0.5))",
+        );
+        assert_ne!(scaled, pixel);
+        assert_mentions(
+            &err(&scaled),
+            &["`entry` texture `entry` is not of size Screen"],
+        );
+        let raster = pixel.replace("SplatBillboards(mode: Pixel)", "Billboards(mode: Pixel)");
+        assert_mentions(
+            &err(&raster),
+            &["(Billboards): mode: Pixel", "SplatBillboards"],
+        );
+        // The other modes do not care how the filter appends.
+        ok(&unique.replace(
+            "SplatBillboards(mode: Pixel)",
+            "SplatBillboards(mode: RayBox)",
+        ));
+    }
+}
