@@ -11,9 +11,12 @@ use super::{ssbvb, stdout_json, succeeded};
 fn webgpu_limits_are_checked_up_front_and_named() {
     let dir = tempfile::tempdir().unwrap();
     let png = dir.path().join("x.png");
-    // The adapter's own limits: the default, and what `--json` says.
+    // The adapter's own limits: the default, and what `--json` says. A cache of its own:
+    // a calibration in the user's cache (`ssbvb calibrate`) would choose instead of the
+    // rule.
     let out = succeeded(
         ssbvb()
+            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
             .args([
                 "render", "--size", "32x24", "--json", "--limits", "adapter", "-o",
             ])
