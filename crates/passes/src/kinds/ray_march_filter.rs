@@ -380,7 +380,7 @@ impl PassImpl for RayMarchFilter {
             let list = compute_pipeline(d, &layout, &module, "list_tiles", &constants);
             (list, bindings)
         })?;
-        let peel = ctx.validated(&label, |d| peel::Peel::new(d, &scene.layout, &module, peel))?;
+        let peel = ctx.validated(&label, |d| peel::Peel::new(d, &scene.layout, &module, peel))??;
         let dispatch = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("filter dispatch arguments"),
             size: 16,

@@ -46,9 +46,14 @@ struct Targets {
 }
 
 impl Targets {
-    fn new(d: &wgpu::Device, (w, h): (u32, u32)) -> Self {
+    /// The layer and its depth attachment at `(w, h)`, allocated through `create` (the
+    /// device's checked allocation, so a refused one is an error naming its size).
+    fn new(
+        (w, h): (u32, u32),
+        create: impl Fn(&wgpu::TextureDescriptor<'_>) -> Result<wgpu::Texture, PassError>,
+    ) -> Result<Self, PassError> {
         let make = |label, format, usage| {
-            d.create_texture(&wgpu::TextureDescriptor {
+            create(&wgpu::TextureDescriptor {
                 label: Some(label),
                 size: wgpu::Extent3d {
                     width: w,
@@ -62,18 +67,18 @@ impl Targets {
                 usage,
                 view_formats: &[],
             })
-            .create_view(&Default::default())
+            .map(|t| t.create_view(&Default::default()))
         };
         let attach = wgpu::TextureUsages::RENDER_ATTACHMENT;
-        Self {
+        Ok(Self {
             size: (w, h),
             layer: make(
                 "filter peel layer",
                 LAYER_FORMAT,
                 attach | wgpu::TextureUsages::TEXTURE_BINDING,
-            ),
-            depth: make("filter peel depth", DEPTH_FORMAT, attach),
-        }
+            )?,
+            depth: make("filter peel depth", DEPTH_FORMAT, attach)?,
+        })
     }
 }
 
@@ -85,7 +90,7 @@ impl Peel {
         scene_layout: &wgpu::BindGroupLayout,
         module: &wgpu::ShaderModule,
         enabled: bool,
-    ) -> Self {
+    ) -> Result<Self, PassError> {
         let draw = enabled.then(|| {
             let entry = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("filter peel entry"),
@@ -130,10 +135,10 @@ impl Peel {
             );
             (pipeline, entry)
         });
-        Self {
+        Ok(Self {
             draw,
-            targets: Targets::new(d, (1, 1)),
-        }
+            targets: Targets::new((1, 1), |desc| Ok(d.create_texture(desc)))?,
+        })
     }
 
     /// The layer `main` reads.
@@ -157,7 +162,7 @@ impl Peel {
             return Ok(false);
         };
         if self.targets.size != size {
-            self.targets = Targets::new(&rec.gpu.device, size);
+            self.targets = Targets::new(size, |desc| Ok(rec.gpu.checked_texture(desc)?))?;
         }
         let drawn = !visible.iter().any(|v| v.back_faces || v.camera_inside);
         let entry = rec.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
