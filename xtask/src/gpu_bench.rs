@@ -139,7 +139,7 @@ fn steps(out: &Path, frames: u32, skip_paper: bool) -> Vec<Step> {
             "--sizes",
             "1280x720,1920x1080",
             "--techniques",
-            "ssbvb,ssbvb-pixel,ssbvb-unique,ssbvb-splat,esvo,esvo-compute,octree,octree-compute",
+            "ssbvb,ssbvb-pixel,ssbvb-compute,ssbvb-unique,ssbvb-splat,esvo,esvo-compute,octree,octree-compute",
             "--frames",
             &f,
             "--out",
@@ -157,6 +157,7 @@ fn steps(out: &Path, frames: u32, skip_paper: bool) -> Vec<Step> {
         ("default", None),
         ("raster", Some("assets/pipelines/ssbvb.ron")),
         ("splat", Some("assets/pipelines/ssbvb_splat.ron")),
+        ("compute", Some("assets/pipelines/ssbvb_compute.ron")),
     ];
     v.push(Step {
         name: "crowd".into(),
@@ -169,7 +170,7 @@ fn steps(out: &Path, frames: u32, skip_paper: bool) -> Vec<Step> {
             "--sizes",
             "1280x720",
             "--techniques",
-            "ssbvb,ssbvb-pixel,ssbvb-peel,ssbvb-splat,esvo,esvo-compute,octree-compute",
+            "ssbvb,ssbvb-pixel,ssbvb-compute,ssbvb-peel,ssbvb-splat,esvo,esvo-compute,octree-compute",
             "--frames",
             &f,
             "--out",
@@ -410,13 +411,11 @@ mod tests {
         assert_eq!(s[1].name, "forms");
         assert_eq!(s[2].name, "crowd");
         assert_eq!(s.last().unwrap().name, "paper");
-        assert!(
-            s[1].args
-                .join(" ")
-                .contains("ssbvb,ssbvb-pixel,ssbvb-unique,ssbvb-splat,esvo,esvo-compute")
-        );
+        assert!(s[1].args.join(" ").contains(
+            "ssbvb,ssbvb-pixel,ssbvb-compute,ssbvb-unique,ssbvb-splat,esvo,esvo-compute"
+        ));
         let renders: Vec<&Step> = s.iter().filter(|s| s.args[0] == "render").collect();
-        assert_eq!(renders.len(), 6);
+        assert_eq!(renders.len(), 8);
         assert!(
             renders
                 .iter()

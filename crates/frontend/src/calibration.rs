@@ -103,8 +103,9 @@ pub struct CalibrationFile {
 pub const VERSION: u32 = 1;
 
 /// The forms measured, in the rule's order of preference (ties go to the earlier).
-pub const FORMS: [&str; 3] = [
+pub const FORMS: [&str; 4] = [
     "pipelines/ssbvb_pixel.ron",
+    "pipelines/ssbvb_compute.ron",
     "pipelines/ssbvb_splat.ron",
     "pipelines/ssbvb.ron",
 ];

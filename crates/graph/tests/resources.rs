@@ -227,6 +227,7 @@ fn omitted_parameters_take_their_defaults() {
         let name = k.name();
         let written = match k {
             PassKind::EmptySpacePrepass
+            | PassKind::EmptySpaceCompute
             | PassKind::Triangles
             | PassKind::Composite
             | PassKind::ConeComposite => name.to_string(),

@@ -29,6 +29,27 @@ pub fn prefilter_pipeline(max_steps: u32) -> String {
     src.replace(filter, &format!("RayMarchFilter(max_steps: {max_steps})"))
 }
 
+/// `src` with the empty-space prepass in compute (`EmptySpaceCompute`, as
+/// `ssbvb_compute.ron` has it): the same `entry`, no depth attachment.
+pub fn with_compute_prepass(src: &str) -> String {
+    let raster = r#"kind: EmptySpacePrepass, writes: ["entry", "prepass_depth"]"#;
+    let depth = "    \"prepass_depth\":    Texture(format: Depth32Float, size: Screen),\n";
+    assert!(
+        src.contains(raster) && src.contains(depth),
+        "no raster prepass"
+    );
+    src.replace(raster, r#"kind: EmptySpaceCompute, writes: ["entry"]"#)
+        .replace(depth, "")
+}
+
+/// The prepass-and-filter pipeline with each form of the prepass: rasterized, and in
+/// compute.
+pub fn prefilter_forms() -> [(&'static str, String); 2] {
+    let raster = prefilter_pipeline(1024);
+    let compute = with_compute_prepass(&raster);
+    [("raster", raster), ("compute", compute)]
+}
+
 /// An asset whose finest level `level` holds exactly `cells` (normals point away from the
 /// grid centre, colours from the position); coarser levels are their parents, as the octree
 /// would build them.
@@ -142,61 +163,63 @@ fn entry_covers_every_reference_hit_and_lies_on_the_proxy_and_the_ray() {
     let asset = scene.objects[0].asset.clone();
     let lookup = &asset.lods[level as usize].lookup;
     let page = cell_size(level) * 16.0;
-    for (i, camera) in [
-        Camera::new(DVec3::new(1.6, 1.1, 2.4), DVec3::ZERO),
-        Camera::new(DVec3::new(-2.5, -0.4, -1.2), DVec3::new(0.1, 0.0, 0.0)),
-    ]
-    .iter()
-    .enumerate()
-    {
-        let reference = reference_of(&scene, camera, size);
-        let frame = render(&prefilter_pipeline(1024), scene.clone(), camera, size);
-        entry_png(&format!("empty_space_bunny_{i}"), &frame, size);
-        let e = entries(&frame);
-        let mut covered = 0;
-        for y in 0..size.1 {
-            for x in 0..size.0 {
-                let v = e[(y * size.0 + x) as usize];
-                assert!(v.iter().all(|c| c.is_finite()), "({x}, {y}): {v:?}");
-                if reference.hit(x, y).is_some() {
-                    assert_eq!(v[3], 1.0, "reference hit at ({x}, {y}) outside the proxy");
-                }
-                if v[3] == 0.0 {
-                    continue;
-                }
-                assert_eq!(v[3], 1.0);
-                covered += 1;
-                let p = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64);
-                // On the ray (f32 interpolation of positions of size ~1: 1e-4 is generous
-                // and still far below a cell, 0.03).
-                let dist = distance_to_ray(camera, size, x, y, p);
-                assert!(dist < 1e-4, "({x}, {y}): entry {p} is {dist} off the ray");
-                // On the proxy: the boundary of the union of resident pages, so on a page
-                // plane, with a resident page on one side and an empty one on the other.
-                assert!(p.abs().max_element() <= 1.0 + 1e-5, "{p}");
-                // Interpolated entries are accurate to ~1e-6 object units: 1e-5 of a page.
-                let on_proxy = (0..3).any(|a| {
-                    let u = (p[a] + 1.0) / page;
-                    if (u - u.round()).abs() > 1e-5 {
-                        return false;
+    for (form, src) in prefilter_forms() {
+        for (i, camera) in [
+            Camera::new(DVec3::new(1.6, 1.1, 2.4), DVec3::ZERO),
+            Camera::new(DVec3::new(-2.5, -0.4, -1.2), DVec3::new(0.1, 0.0, 0.0)),
+        ]
+        .iter()
+        .enumerate()
+        {
+            let reference = reference_of(&scene, camera, size);
+            let frame = render(&src, scene.clone(), camera, size);
+            entry_png(&format!("empty_space_{form}_bunny_{i}"), &frame, size);
+            let e = entries(&frame);
+            let mut covered = 0;
+            for y in 0..size.1 {
+                for x in 0..size.0 {
+                    let v = e[(y * size.0 + x) as usize];
+                    assert!(v.iter().all(|c| c.is_finite()), "({x}, {y}): {v:?}");
+                    if reference.hit(x, y).is_some() {
+                        assert_eq!(v[3], 1.0, "reference hit at ({x}, {y}) outside the proxy");
                     }
-                    let side = |s: f64| {
-                        let mut q = p;
-                        q[a] += s * page * 0.5;
-                        let c = ((q + 1.0) / page).floor();
-                        let pages = ((1u32 << lookup.level) / 16).max(1) as f64;
-                        (0..3).all(|k| c[k] >= 0.0 && c[k] < pages)
-                            && lookup.page_occupied([c.x as u32, c.y as u32, c.z as u32])
-                    };
-                    side(-1.0) != side(1.0)
-                });
-                assert!(on_proxy, "({x}, {y}): {p} not on the proxy");
+                    if v[3] == 0.0 {
+                        continue;
+                    }
+                    assert_eq!(v[3], 1.0);
+                    covered += 1;
+                    let p = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64);
+                    // On the ray (f32 interpolation of positions of size ~1: 1e-4 is generous
+                    // and still far below a cell, 0.03).
+                    let dist = distance_to_ray(camera, size, x, y, p);
+                    assert!(dist < 1e-4, "({x}, {y}): entry {p} is {dist} off the ray");
+                    // On the proxy: the boundary of the union of resident pages, so on a page
+                    // plane, with a resident page on one side and an empty one on the other.
+                    assert!(p.abs().max_element() <= 1.0 + 1e-5, "{p}");
+                    // Interpolated entries are accurate to ~1e-6 object units: 1e-5 of a page.
+                    let on_proxy = (0..3).any(|a| {
+                        let u = (p[a] + 1.0) / page;
+                        if (u - u.round()).abs() > 1e-5 {
+                            return false;
+                        }
+                        let side = |s: f64| {
+                            let mut q = p;
+                            q[a] += s * page * 0.5;
+                            let c = ((q + 1.0) / page).floor();
+                            let pages = ((1u32 << lookup.level) / 16).max(1) as f64;
+                            (0..3).all(|k| c[k] >= 0.0 && c[k] < pages)
+                                && lookup.page_occupied([c.x as u32, c.y as u32, c.z as u32])
+                        };
+                        side(-1.0) != side(1.0)
+                    });
+                    assert!(on_proxy, "({x}, {y}): {p} not on the proxy");
+                }
             }
+            assert!(
+                covered >= reference.coverage() && covered > 1000,
+                "{covered}"
+            );
         }
-        assert!(
-            covered >= reference.coverage() && covered > 1000,
-            "{covered}"
-        );
     }
 }
 
@@ -207,33 +230,35 @@ fn front_faces_win_so_the_winding_is_right() {
     // that face and the back-face pipeline would write the camera position there instead.
     let scene = single_object_scene(synthetic_asset(2, &[[1, 2, 3]]), 2);
     let size = (64, 48);
-    for (camera, axis, value) in [
-        (Camera::new(DVec3::new(0.3, 0.2, 4.0), DVec3::ZERO), 2, 1.0),
-        (
-            Camera::new(DVec3::new(-4.0, 0.5, 0.3), DVec3::ZERO),
-            0,
-            -1.0,
-        ),
-        (
-            Camera {
-                up: DVec3::Z,
-                ..Camera::new(DVec3::new(0.2, 4.0, 0.1), DVec3::ZERO)
-            },
-            1,
-            1.0,
-        ),
-    ] {
-        let frame = render(&prefilter_pipeline(1024), scene.clone(), &camera, size);
-        let e = entries(&frame);
-        let covered: Vec<_> = e.iter().filter(|v| v[3] != 0.0).collect();
-        assert!(covered.len() > 200, "{}", covered.len());
-        for v in covered {
-            assert_eq!(v[3], 1.0);
-            assert!(
-                (v[axis] - value).abs() < 1e-5,
-                "camera {}: entry {v:?} not on the face facing it",
-                camera.position
-            );
+    for (form, src) in prefilter_forms() {
+        for (camera, axis, value) in [
+            (Camera::new(DVec3::new(0.3, 0.2, 4.0), DVec3::ZERO), 2, 1.0),
+            (
+                Camera::new(DVec3::new(-4.0, 0.5, 0.3), DVec3::ZERO),
+                0,
+                -1.0,
+            ),
+            (
+                Camera {
+                    up: DVec3::Z,
+                    ..Camera::new(DVec3::new(0.2, 4.0, 0.1), DVec3::ZERO)
+                },
+                1,
+                1.0,
+            ),
+        ] {
+            let frame = render(&src, scene.clone(), &camera, size);
+            let e = entries(&frame);
+            let covered: Vec<_> = e.iter().filter(|v| v[3] != 0.0).collect();
+            assert!(covered.len() > 200, "{form}: {}", covered.len());
+            for v in covered {
+                assert_eq!(v[3], 1.0);
+                assert!(
+                    (v[axis] - value).abs() < 1e-5,
+                    "{form}, camera {}: entry {v:?} not on the face facing it",
+                    camera.position
+                );
+            }
         }
     }
 }
@@ -248,29 +273,31 @@ fn camera_inside_the_proxy_starts_at_the_camera() {
     let s = cell_size(level);
     let eye = DVec3::new(-1.0 + 12.5 * s, -1.0 + 30.5 * s, -1.0 + 33.5 * s);
     let size = (96, 64);
-    for (look, near, far) in [
-        (DVec3::new(1.0, 0.1, 0.2), 0.01, 1000.0),
-        (DVec3::new(-1.0, -0.1, 0.0), 0.01, 1000.0),
-        // The back faces around the camera all lie beyond the far plane or before the near
-        // plane: only the full-screen fill reaches the pixels.
-        (DVec3::new(-1.0, -0.1, 0.0), 0.01, 0.02),
-    ] {
-        let camera = Camera {
-            near,
-            far,
-            ..Camera::new(eye, eye + look)
-        };
-        let frame = render(&prefilter_pipeline(1024), scene.clone(), &camera, size);
-        assert!(frame.scene.visible[0].camera_inside);
-        let cam = eye.as_vec3();
-        for (i, v) in entries(&frame).iter().enumerate() {
-            assert_eq!(v[3], 1.0, "pixel {i} has no entry");
-            assert!(
-                (v[0] - cam.x).abs() < 1e-6
-                    && (v[1] - cam.y).abs() < 1e-6
-                    && (v[2] - cam.z).abs() < 1e-6,
-                "pixel {i}: {v:?} is not the camera {cam}"
-            );
+    for (form, src) in prefilter_forms() {
+        for (look, near, far) in [
+            (DVec3::new(1.0, 0.1, 0.2), 0.01, 1000.0),
+            (DVec3::new(-1.0, -0.1, 0.0), 0.01, 1000.0),
+            // The back faces around the camera all lie beyond the far plane or before the near
+            // plane: only the full-screen fill reaches the pixels.
+            (DVec3::new(-1.0, -0.1, 0.0), 0.01, 0.02),
+        ] {
+            let camera = Camera {
+                near,
+                far,
+                ..Camera::new(eye, eye + look)
+            };
+            let frame = render(&src, scene.clone(), &camera, size);
+            assert!(frame.scene.visible[0].camera_inside);
+            let cam = eye.as_vec3();
+            for (i, v) in entries(&frame).iter().enumerate() {
+                assert_eq!(v[3], 1.0, "{form}: pixel {i} has no entry");
+                assert!(
+                    (v[0] - cam.x).abs() < 1e-6
+                        && (v[1] - cam.y).abs() < 1e-6
+                        && (v[2] - cam.z).abs() < 1e-6,
+                    "pixel {i}: {v:?} is not the camera {cam}"
+                );
+            }
         }
     }
 }
@@ -284,12 +311,14 @@ fn near_plane_clipping_of_front_faces_starts_at_the_camera() {
         near: 0.05,
         ..Camera::new(DVec3::new(0.1, 0.2, 1.02), DVec3::new(0.1, 0.2, 0.0))
     };
-    let frame = render(&prefilter_pipeline(1024), scene, &camera, (32, 24));
-    let v = &frame.scene.visible[0];
-    assert!(v.back_faces && !v.camera_inside);
-    for v in entries(&frame) {
-        assert_eq!(v[3], 1.0);
-        assert!((v[2] - 1.02).abs() < 1e-6, "{v:?}");
+    for (form, src) in prefilter_forms() {
+        let frame = render(&src, scene.clone(), &camera, (32, 24));
+        let v = &frame.scene.visible[0];
+        assert!(v.back_faces && !v.camera_inside);
+        for v in entries(&frame) {
+            assert_eq!(v[3], 1.0);
+            assert!((v[2] - 1.02).abs() < 1e-6, "{form}: {v:?}");
+        }
     }
 }
 
@@ -310,19 +339,21 @@ fn instances_write_their_own_index() {
     };
     let size = (80, 40);
     let camera = Camera::new(DVec3::new(0.0, 0.0, 6.0), DVec3::ZERO);
-    let frame = render(&prefilter_pipeline(1024), scene, &camera, size);
-    // Both proxies lie wholly beyond the near plane: their back faces are not drawn (they
-    // could win no depth test), and the front faces alone give every entry.
-    assert!(frame.scene.visible.iter().all(|v| !v.back_faces));
-    let e = entries(&frame);
-    for y in 0..size.1 {
-        for x in 0..size.0 {
-            let v = e[(y * size.0 + x) as usize];
-            if v[3] != 0.0 {
-                let want = if x < size.0 / 2 { 1.0 } else { 2.0 };
-                assert_eq!(v[3], want, "({x}, {y})");
+    for (form, src) in prefilter_forms() {
+        let frame = render(&src, scene.clone(), &camera, size);
+        // Both proxies lie wholly beyond the near plane: their back faces are not drawn (they
+        // could win no depth test), and the front faces alone give every entry.
+        assert!(frame.scene.visible.iter().all(|v| !v.back_faces));
+        let e = entries(&frame);
+        for y in 0..size.1 {
+            for x in 0..size.0 {
+                let v = e[(y * size.0 + x) as usize];
+                if v[3] != 0.0 {
+                    let want = if x < size.0 / 2 { 1.0 } else { 2.0 };
+                    assert_eq!(v[3], want, "{form}: ({x}, {y})");
+                }
             }
         }
+        assert!(e.iter().any(|v| v[3] == 1.0) && e.iter().any(|v| v[3] == 2.0));
     }
-    assert!(e.iter().any(|v| v[3] == 1.0) && e.iter().any(|v| v[3] == 2.0));
 }

@@ -15,6 +15,7 @@ mod dynamic;
 mod edge_aa;
 mod embed;
 mod empty_space;
+mod empty_space_compute;
 mod esvo_ray_cast;
 mod gpu_sort;
 mod gpu_voxelize;

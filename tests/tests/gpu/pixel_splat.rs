@@ -67,7 +67,7 @@ struct Shown {
 
 /// The views of the splat's tests and 64 bunnies over the grid (many instances, levels
 /// chosen per instance).
-fn views() -> Vec<(&'static str, ssbvb_gpu::scene::Scene, Camera)> {
+pub(crate) fn views() -> Vec<(&'static str, ssbvb_gpu::scene::Scene, Camera)> {
     let mut v = crate::splat::views();
     v.push((
         "64 bunnies",

@@ -293,7 +293,8 @@ pub(super) fn proxy_buffers(
         } else {
             proxy_v
         }),
-        usage: wgpu::BufferUsages::VERTEX,
+        // STORAGE: the compute prepass reads them (EmptySpaceCompute).
+        usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
     });
     let indices = d.init_buffer(&wgpu::util::BufferInitDescriptor {
         label: Some("proxy indices"),
@@ -302,7 +303,7 @@ pub(super) fn proxy_buffers(
         } else {
             proxy_i
         }),
-        usage: wgpu::BufferUsages::INDEX,
+        usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE,
     });
     (vertices, indices)
 }

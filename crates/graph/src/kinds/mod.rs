@@ -12,6 +12,7 @@ mod cone_trace;
 mod cube_raster;
 mod dense_dda;
 mod edge_aa;
+mod empty_space_compute;
 mod empty_space_prepass;
 mod esvo_ray_cast;
 mod formats;
@@ -33,6 +34,7 @@ pub use cone_trace::{ConeTraceParams, MAX_CONES, MAX_VOLUME_RESOLUTION};
 pub use cube_raster::CubeRasterParams;
 pub use dense_dda::DenseDdaParams;
 pub use edge_aa::EdgeAaParams;
+pub use empty_space_compute::EmptySpaceComputeKind;
 pub use empty_space_prepass::EmptySpacePrepassKind;
 pub use esvo_ray_cast::EsvoRayCastParams;
 pub use formats::LIGHT;
@@ -110,6 +112,10 @@ pass_kinds! {
     /// Single-frame anti-aliasing of the output colour for stills (FXAA-style): edge
     /// pixels blended with their neighbour across the edge by the share the edge covers.
     EdgeAa(EdgeAaParams);
+    /// The empty-space prepass in compute, for adapters whose raster units are slow: the
+    /// proxy meshes rasterized in software (nearest depth, then lowest triangle, by
+    /// atomics), writing the same `entry` as `EmptySpacePrepass` into a storage texture.
+    EmptySpaceCompute = EmptySpaceComputeKind;
 }
 
 #[cfg(test)]
@@ -138,6 +144,7 @@ mod tests {
             VolumeSlicesParams::NAME,
             TemporalParams::NAME,
             EdgeAaParams::NAME,
+            EmptySpaceComputeKind::NAME,
         ];
         assert_eq!(spec_names, KIND_NAMES);
     }
@@ -170,7 +177,7 @@ mod tests {
 
     #[test]
     fn entry_points_follow_the_stage() {
-        // The ray march filter is the one compute kind and names its two kernels itself.
+        // The compute kinds (the ray march filter, the compute prepass) name their kernels.
         let filter = PassKind::RayMarchFilter(RayMarchFilterParams::default());
         assert_eq!(filter.entry_points(), ["clear_draw", "main"]);
         for kind in PassKind::all_defaults() {
@@ -183,7 +190,11 @@ mod tests {
                         kind.name()
                     )
                 }
-                PassStage::Compute => assert_eq!(kind.name(), "RayMarchFilter"),
+                PassStage::Compute => assert!(
+                    ["RayMarchFilter", "EmptySpaceCompute"].contains(&kind.name()),
+                    "{}",
+                    kind.name()
+                ),
             }
         }
         // A compute kind that lists nothing has the one `main`.

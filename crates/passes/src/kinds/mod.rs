@@ -34,6 +34,7 @@ pass_modules! {
     volume_slices::VolumeSlices,
     temporal::Temporal,
     edge_aa::EdgeAa,
+    empty_space_compute::EmptySpaceCompute,
 }
 
 /// The registration of `kind`.

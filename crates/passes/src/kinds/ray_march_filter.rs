@@ -37,7 +37,7 @@ use crate::runtime::bindings::PassBindings;
 use crate::runtime::registry::{OwnBinding, OwnKind};
 use crate::runtime::counters::{FrameCounters, check_steps_histogram, histogram_quantile};
 use crate::runtime::recorder::Recorder;
-use crate::runtime::pipelines::pipeline_layout;
+use crate::runtime::pipelines::{compute_pipeline, pipeline_layout};
 use crate::runtime::registry::{KindNeeds, PassImpl, PassInit};
 use crate::error::PassError;
 use crate::runtime::node::{CounterSource, PassNode};
@@ -307,26 +307,6 @@ impl MainPipelines {
         };
         Ok(&self.built[i].1)
     }
-}
-
-fn compute_pipeline(
-    d: &wgpu::Device,
-    layout: &wgpu::PipelineLayout,
-    module: &wgpu::ShaderModule,
-    entry: &str,
-    constants: &[(&str, f64)],
-) -> wgpu::ComputePipeline {
-    d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(entry),
-        layout: Some(layout),
-        module,
-        entry_point: Some(entry),
-        compilation_options: wgpu::PipelineCompilationOptions {
-            constants,
-            ..Default::default()
-        },
-        cache: None,
-    })
 }
 
 impl PassImpl for RayMarchFilter {

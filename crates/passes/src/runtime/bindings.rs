@@ -100,7 +100,7 @@ impl PassBindings {
                 }
                 (_, Some(ResourceDesc::Texture { format, .. })) => {
                     let format = texture_format(ctx, *format);
-                    texture_binding(ctx, slot.class, format)
+                    texture_binding(ctx, slot.class, slot.access, format)
                 }
                 // The graph bound every slot to a resource of its class.
                 _ => unreachable!("slot `{}` of pass `{}` is unbound", slot.name, pass.name),
@@ -284,11 +284,17 @@ impl PassBindings {
 fn texture_binding(
     ctx: &GpuContext,
     class: SlotClass,
+    access: Access,
     format: wgpu::TextureFormat,
 ) -> wgpu::BindingType {
     match class {
+        // Write-only where written: WebGPU allows read-write storage only for the
+        // single-channel 32-bit formats.
         SlotClass::StorageTexture(_) => wgpu::BindingType::StorageTexture {
-            access: wgpu::StorageTextureAccess::ReadWrite,
+            access: match access {
+                Access::Write => wgpu::StorageTextureAccess::WriteOnly,
+                Access::Read => wgpu::StorageTextureAccess::ReadOnly,
+            },
             format,
             view_dimension: wgpu::TextureViewDimension::D2,
         },

@@ -111,3 +111,24 @@ pub fn render_pipeline(d: &wgpu::Device, spec: &RenderSpec<'_>) -> wgpu::RenderP
         cache: None,
     })
 }
+
+/// A compute pipeline of `entry` in `module` with the WGSL overrides `constants`.
+pub fn compute_pipeline(
+    d: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    constants: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
+    d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: Some(layout),
+        module,
+        entry_point: Some(entry),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants,
+            ..Default::default()
+        },
+        cache: None,
+    })
+}

@@ -141,6 +141,14 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         edit: None,
         max_level: 16,
     },
+    // The same with the empty-space prepass in compute (`EmptySpaceCompute`): no raster
+    // work left in the SSBVB's own stages.
+    Technique {
+        name: "ssbvb-compute",
+        pipeline: PipelineSource::File("ssbvb_compute.ron"),
+        edit: None,
+        max_level: 16,
+    },
     // The same with the filter's second proxy layer (`RayMarchFilter(peel: true)`): rays hit
     // before any other instance's proxy skip the walk over the instances' boxes.
     Technique {

@@ -491,6 +491,7 @@ fn run_one(ctx: &GpuContext, t: &Technique, c: &Cell) -> Result<Row> {
                 | "ssbvb-fast"
                 | "ssbvb-splat"
                 | "ssbvb-pixel"
+                | "ssbvb-compute"
                 | "ssbvb-peel"
                 | "ssbvb-aa"
                 | "ssbvb-edge-aa"
