@@ -6,7 +6,7 @@
 // nearest proxy surface (the camera for a back face), w = instance index + 1 (0 = none).
 //
 // Proxy triangles are rasterized in software, one thread per triangle of the frame's
-// visible instances (`prepass_runs` lists them as runs, written per frame by
+// visible instances (`prepass_words` lists them as runs, written per frame by
 // empty_space_compute.rs):
 //
 // 1. `raster_depth`: each triangle is clipped against the near plane (in clip space, as
@@ -35,19 +35,20 @@
 // outside).
 @group(1) @binding(1) var<storage, read> proxy_vertices: array<vec4<f32>>;
 @group(1) @binding(2) var<storage, read> proxy_indices: array<u32>;
-// The frame's header (H_*) and runs of triangles, written by the CPU.
-@group(1) @binding(3) var<storage, read> prepass_runs: array<u32>;
-// Two words per texel (the nearest depth's bits; the inverted index of the nearest
-// triangle), then the count of large triangles and their list.
-@group(1) @binding(4) var<storage, read_write> prepass_words: array<atomic<u32>>;
+// One buffer (the pass then fits WebGPU's 8 storage buffers per stage beside the scene's
+// 5): the frame's header (H_*) and runs of triangles, written by the CPU; two words per
+// texel from H_TEXELS on (the nearest depth's bits; the inverted index and facing of the
+// nearest triangle); then the count of large triangles and their list.
+@group(1) @binding(3) var<storage, read_write> prepass_words: array<atomic<u32>>;
 // `large_depth`'s and `large_id`'s indirect dispatch, written by `large_args` (the only
 // entry point binding it).
-@group(1) @binding(5) var<storage, read_write> prepass_dispatch: array<u32, 3>;
+@group(1) @binding(4) var<storage, read_write> prepass_dispatch: array<u32, 3>;
 
 // Header words.
 const H_RUNS: u32 = 0u;
 const H_TRIANGLES: u32 = 1u;
 const H_FILL: u32 = 2u;
+const H_TEXELS: u32 = 3u;
 // Runs start here, four words each: first triangle (in the frame's numbering), first
 // index, base vertex (i32 bits), instance | BACK_FACES.
 const RUNS_AT: u32 = 4u;
@@ -86,12 +87,12 @@ struct Polygon {
 }
 
 fn word(i: u32) -> u32 {
-    return prepass_runs[i];
+    return atomicLoad(&prepass_words[i]);
 }
 
 // Where the large triangles' count is, their list following it.
 fn large_at(size: vec2<u32>) -> u32 {
-    return 2u * size.x * size.y;
+    return word(H_TEXELS) + 2u * size.x * size.y;
 }
 
 // The run holding triangle `g`: the last run whose first triangle is at most `g`.
@@ -246,7 +247,7 @@ fn depth_at(poly: Polygon, t: vec2<i32>) -> u32 {
 }
 
 fn texel_word(t: vec2<i32>, size: vec2<u32>) -> u32 {
-    return 2u * (u32(t.y) * size.x + u32(t.x));
+    return word(H_TEXELS) + 2u * (u32(t.y) * size.x + u32(t.x));
 }
 
 // Step 1 at one texel.

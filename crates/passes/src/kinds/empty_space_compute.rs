@@ -12,8 +12,8 @@
 //! first step and dispatched indirectly. Core 32-bit atomics only, so the form runs within
 //! WebGPU's limits.
 //!
-//! Its own buffers hold, per frame: a header and the runs of triangles (one per visible
-//! instance with a proxy, written here from the CPU's visible list); two words per texel,
+//! Its own buffer holds, per frame: a header and the runs of triangles (one per visible
+//! instance with a proxy, written here from the CPU's visible list); two words per texel;
 //! then the large triangles' count and list.
 
 use ssbvb_gpu::scene::VisibleInstance;
@@ -40,10 +40,6 @@ pub const OWN: &[OwnBinding] = &[
         kind: OwnKind::StorageRead,
     },
     OwnBinding {
-        name: "prepass_runs",
-        kind: OwnKind::StorageRead,
-    },
-    OwnBinding {
         name: "prepass_words",
         kind: OwnKind::StorageReadWrite,
     },
@@ -53,11 +49,10 @@ pub const OWN: &[OwnBinding] = &[
     },
 ];
 
-/// Group-1 bindings of the raster steps and the resolve: `entry`, the proxies, the runs,
-/// the words.
-const RASTER_BINDINGS: [u32; 5] = [0, 1, 2, 3, 4];
+/// Group-1 bindings of the raster steps and the resolve: `entry`, the proxies, the words.
+const RASTER_BINDINGS: [u32; 4] = [0, 1, 2, 3];
 /// Group-1 bindings of `large_args`: `entry` (its size), the words and the dispatch.
-const ARGS_BINDINGS: [u32; 3] = [0, 4, 5];
+const ARGS_BINDINGS: [u32; 3] = [0, 3, 4];
 
 /// Words per run (after the four of the header, `H_*` in the WGSL).
 const RUN_WORDS: u64 = 4;
@@ -104,7 +99,8 @@ fn frame_runs(visible: &[VisibleInstance]) -> (Vec<u32>, u64) {
         triangles += count;
     }
     let run_count = runs.len() as u64 / RUN_WORDS;
-    let mut words = vec![run_count as u32, triangles as u32, fill, 0];
+    let texels_at = 4 + runs.len() as u32;
+    let mut words = vec![run_count as u32, triangles as u32, fill, texels_at];
     words.extend(runs);
     (words, triangles)
 }
@@ -127,9 +123,8 @@ pub struct EmptySpaceCompute {
     args_bindings: PassBindings,
     /// The large triangles' indirect dispatch.
     dispatch: wgpu::Buffer,
-    /// The header and runs, and the per-texel words with the large list; each with its
-    /// count of words.
-    runs: Option<(wgpu::Buffer, u64)>,
+    /// The header and runs, the per-texel words and the large list, and the count of
+    /// words.
     words: Option<(wgpu::Buffer, u64)>,
 }
 
@@ -137,9 +132,9 @@ impl PassImpl for EmptySpaceCompute {
     type Params = EmptySpaceComputeKind;
     const SHADER: &'static str = "empty_space_compute.wgsl";
     const OWN: &'static [OwnBinding] = OWN;
-    // The large triangles' dispatch is indirect; the raster steps bind four storage
-    // buffers (the proxy's two, the runs, the words).
-    const NEEDS: KindNeeds = KindNeeds::new(wgpu::DownlevelFlags::INDIRECT_EXECUTION, 4);
+    // The large triangles' dispatch is indirect; the raster steps bind three storage
+    // buffers (the proxy's two and the words).
+    const NEEDS: KindNeeds = KindNeeds::new(wgpu::DownlevelFlags::INDIRECT_EXECUTION, 3);
 
     fn new(init: &PassInit<'_>, _params: &EmptySpaceComputeKind) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
@@ -177,7 +172,6 @@ impl PassImpl for EmptySpaceCompute {
             bindings,
             args_bindings,
             dispatch,
-            runs: None,
             words: None,
         })
     }
@@ -213,18 +207,19 @@ impl PassNode for EmptySpaceCompute {
         let (w, h) = (entry.width(), entry.height());
         let texels = u64::from(w) * u64::from(h);
         let (header, triangles) = frame_runs(&rec.scene.visible);
-        let runs = words_buffer(rec.gpu, &mut self.runs, "prepass runs", header.len() as u64)?;
-        rec.gpu
-            .queue
-            .write_buffer(&runs, 0, bytemuck::cast_slice(&header));
-        // Two words a texel, the large triangles' count, and room for every triangle.
+        // The header and runs, two words a texel, the large triangles' count, and room for
+        // every triangle.
+        let texels_at = header.len() as u64;
         let words = words_buffer(
             rec.gpu,
             &mut self.words,
             "prepass words",
-            2 * texels + 1 + triangles,
+            texels_at + 2 * texels + 1 + triangles,
         )?;
-        encoder.clear_buffer(&words, 0, Some((2 * texels + 1) * 4));
+        rec.gpu
+            .queue
+            .write_buffer(&words, 0, bytemuck::cast_slice(&header));
+        encoder.clear_buffer(&words, texels_at * 4, Some((2 * texels + 1) * 4));
         let scene = rec.scene;
         let own = [
             (
@@ -232,7 +227,6 @@ impl PassNode for EmptySpaceCompute {
                 scene.proxy_vertices.as_entire_binding(),
             ),
             ("proxy_indices", scene.proxy_indices.as_entire_binding()),
-            ("prepass_runs", runs.as_entire_binding()),
             ("prepass_words", words.as_entire_binding()),
             ("prepass_dispatch", self.dispatch.as_entire_binding()),
         ];
@@ -300,12 +294,12 @@ mod tests {
         ];
         let (words, triangles) = frame_runs(&visible);
         assert_eq!(triangles, 16);
-        // Two runs; the last instance holding the camera fills.
-        assert_eq!(&words[..4], &[2, 16, 3, 0]);
+        // Two runs; the last instance holding the camera fills; the texels after the runs.
+        assert_eq!(&words[..4], &[2, 16, 3, 12]);
         assert_eq!(&words[4..8], &[0, 36, 8, 0]);
         assert_eq!(&words[8..12], &[12, 36, 8, 2 | BACK_FACES]);
         assert_eq!(words.len(), 12);
-        assert_eq!(frame_runs(&[]).0, [0, 0, 0, 0]);
+        assert_eq!(frame_runs(&[]).0, [0, 0, 0, 4]);
     }
 
     #[test]
