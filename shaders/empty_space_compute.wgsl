@@ -9,13 +9,13 @@
 // visible instances (`prepass_words` lists them as runs, written per frame by
 // empty_space_compute.rs):
 //
-// 1. `raster_depth`: each triangle is clipped against the near plane (in clip space, as
+// 1. `raster` (step 1): each triangle is clipped against the near plane (in clip space, as
 //    the rasterizer clips), projected, and every texel centre it covers takes the nearest
 //    reversed-Z depth by `atomicMax` on its bits (depth > 0, as a `Greater` test against a
 //    cleared 0). Triangles whose pixel rectangle is large are listed instead, and
-//    `large_depth` gives each of them a workgroup (one thread walking 100,000 pixels would
+//    `large` gives each of them a workgroup (one thread walking 100,000 pixels would
 //    hold its whole wave back).
-// 2. `raster_id` / `large_id`: where a triangle's depth is the texel's nearest, it offers
+// 2. `raster` and `large` again (step 2, `ID_STEP`): where a triangle's depth is the texel's nearest, it offers
 //    its index and facing (`atomicMax` of the inverted (index, back) pair: the lowest
 //    triangle wins a tie, as the first-drawn fragment wins the rasterizer's strict test).
 // 3. `resolve`, per texel: the winner's entry point, where the texel-centre ray meets its
@@ -40,7 +40,7 @@
 // texel from H_TEXELS on (the nearest depth's bits; the inverted index and facing of the
 // nearest triangle); then the count of large triangles and their list.
 @group(1) @binding(3) var<storage, read_write> prepass_words: array<atomic<u32>>;
-// `large_depth`'s and `large_id`'s indirect dispatch, written by `large_args` (the only
+// `large`'s indirect dispatch, written by `large_args` (the only
 // entry point binding it).
 @group(1) @binding(4) var<storage, read_write> prepass_dispatch: array<u32, 3>;
 
@@ -250,19 +250,20 @@ fn texel_word(t: vec2<i32>, size: vec2<u32>) -> u32 {
     return word(H_TEXELS) + 2u * (u32(t.y) * size.x + u32(t.x));
 }
 
-// Step 1 at one texel.
-fn offer_depth(poly: Polygon, t: vec2<i32>, size: vec2<u32>) {
-    let d = depth_at(poly, t);
-    if d != 0u {
-        atomicMax(&prepass_words[texel_word(t, size)], d);
-    }
-}
+// Which step a pipeline runs (`raster` and `large` are compiled for each): false, the
+// nearest depth (step 1); true, the winning triangle at that depth (step 2).
+override ID_STEP: bool = false;
 
-// Step 2 at one texel.
-fn offer_id(poly: Polygon, g: u32, t: vec2<i32>, size: vec2<u32>) {
+// The polygon of triangle `g` offers itself at texel `t`, in this pipeline's step.
+fn offer(poly: Polygon, g: u32, t: vec2<i32>, size: vec2<u32>) {
     let d = depth_at(poly, t);
     let at = texel_word(t, size);
-    if d != 0u && d == atomicLoad(&prepass_words[at]) {
+    if d == 0u {
+        return;
+    }
+    if !ID_STEP {
+        atomicMax(&prepass_words[at], d);
+    } else if d == atomicLoad(&prepass_words[at]) {
         // The triangle and its facing: the lowest triangle wins a tie.
         atomicMax(&prepass_words[at + 1u], ~((g << 1u) | u32(poly.back)));
     }
@@ -283,8 +284,10 @@ fn thread_polygon(g: u32, size: vec2<u32>) -> Polygon {
     return polygon(g, size);
 }
 
+// Per triangle: a small one walks its rectangle; a large one is listed in step 1 (and
+// left to `large` in both steps).
 @compute @workgroup_size(64)
-fn raster_depth(
+fn raster(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) li: u32,
@@ -297,34 +300,16 @@ fn raster_depth(
         return;
     }
     if texels > LARGE_PIXELS {
-        let at = large_at(size);
-        let i = atomicAdd(&prepass_words[at], 1u);
-        atomicStore(&prepass_words[at + 1u + i], g);
-        return;
-    }
-    for (var y = poly.lo.y; y <= poly.hi.y; y++) {
-        for (var x = poly.lo.x; x <= poly.hi.x; x++) {
-            offer_depth(poly, vec2(x, y), size);
+        if !ID_STEP {
+            let at = large_at(size);
+            let i = atomicAdd(&prepass_words[at], 1u);
+            atomicStore(&prepass_words[at + 1u + i], g);
         }
-    }
-}
-
-@compute @workgroup_size(64)
-fn raster_id(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) groups: vec3<u32>,
-    @builtin(local_invocation_index) li: u32,
-) {
-    let size = textureDimensions(entry);
-    let g = group_index(wg, groups) * GROUP + li;
-    let poly = thread_polygon(g, size);
-    let texels = rect_texels(poly);
-    if texels == 0u || texels > LARGE_PIXELS {
         return;
     }
     for (var y = poly.lo.y; y <= poly.hi.y; y++) {
         for (var x = poly.lo.x; x <= poly.hi.x; x++) {
-            offer_id(poly, g, vec2(x, y), size);
+            offer(poly, g, vec2(x, y), size);
         }
     }
 }
@@ -348,7 +333,7 @@ fn large_triangle(wg: vec3<u32>, groups: vec3<u32>) -> u32 {
 }
 
 @compute @workgroup_size(64)
-fn large_depth(
+fn large(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) li: u32,
@@ -361,25 +346,7 @@ fn large_depth(
     let poly = polygon(g, size);
     let w = u32(poly.hi.x - poly.lo.x) + 1u;
     for (var i = li; i < rect_texels(poly); i += GROUP) {
-        offer_depth(poly, poly.lo + vec2(i32(i % w), i32(i / w)), size);
-    }
-}
-
-@compute @workgroup_size(64)
-fn large_id(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) groups: vec3<u32>,
-    @builtin(local_invocation_index) li: u32,
-) {
-    let g = large_triangle(wg, groups);
-    if g == 0xffffffffu {
-        return;
-    }
-    let size = textureDimensions(entry);
-    let poly = polygon(g, size);
-    let w = u32(poly.hi.x - poly.lo.x) + 1u;
-    for (var i = li; i < rect_texels(poly); i += GROUP) {
-        offer_id(poly, g, poly.lo + vec2(i32(i % w), i32(i / w)), size);
+        offer(poly, g, poly.lo + vec2(i32(i % w), i32(i / w)), size);
     }
 }
 

@@ -14,12 +14,5 @@ impl KindSpec for EmptySpaceComputeKind {
     const SLOTS: &'static [SlotDesc] =
         &[SlotDesc::write("entry", SlotClass::StorageTexture(ENTRY))];
     /// The software rasterizer's steps (`shaders/empty_space_compute.wgsl`).
-    const ENTRY_POINTS: &'static [&'static str] = &[
-        "raster_depth",
-        "large_args",
-        "large_depth",
-        "raster_id",
-        "large_id",
-        "resolve",
-    ];
+    const ENTRY_POINTS: &'static [&'static str] = &["raster", "large_args", "large", "resolve"];
 }

@@ -145,12 +145,23 @@ impl PassImpl for EmptySpaceCompute {
         let label = format!("pass `{}`: empty_space_compute pipelines", pass.name);
         let bindings = PassBindings::used_only(ctx, pipeline, pass, OWN, Some(&RASTER_BINDINGS));
         let args_bindings = PassBindings::used_only(ctx, pipeline, pass, OWN, Some(&ARGS_BINDINGS));
-        let constants = [("LARGE_PIXELS", f64::from(large_pixels(ctx)))];
+        let large = f64::from(large_pixels(ctx));
+        // `raster` and `large` once per step (`ID_STEP`), so both steps compute the same
+        // depths from one shader.
         let [raster_depth, raster_id, large_depth, large_id, resolve] =
             ctx.validated(&label, |d| {
                 let layout = pipeline_layout(d, &label, scene, Some(&bindings));
-                ["raster_depth", "raster_id", "large_depth", "large_id", "resolve"]
-                    .map(|entry| compute_pipeline(d, &layout, &module, entry, &constants))
+                [
+                    ("raster", 0.0),
+                    ("raster", 1.0),
+                    ("large", 0.0),
+                    ("large", 1.0),
+                    ("resolve", 0.0),
+                ]
+                .map(|(entry, id_step)| {
+                    let constants = [("LARGE_PIXELS", large), ("ID_STEP", id_step)];
+                    compute_pipeline(d, &layout, &module, entry, &constants)
+                })
             })?;
         let large_args = ctx.validated(&label, |d| {
             let layout = pipeline_layout(d, &label, scene, Some(&args_bindings));
