@@ -104,6 +104,40 @@ fn smoothing_from_a_copy_of_the_depth_is_bit_identical() {
     assert!(changed > 1000, "{changed} pixels smoothed");
 }
 
+#[test]
+fn smoothing_in_compute_is_bit_identical() {
+    // Eq. 1's offset from 2 down to a fraction of a pixel over the view, a ground plane
+    // (whose pixels must stay copies), and both pipelines' smoothing read from one G-buffer
+    // drawn the same way.
+    let fragment = with_smooth(2.0, 1.5);
+    let compute = fragment.replace(
+        "kind: Smooth(max_i: 2.0, min_dist: 1.5)",
+        "kind: SmoothCompute(max_i: 2.0, min_dist: 1.5)",
+    );
+    assert!(compute.contains("SmoothCompute"));
+    for level in [5, 7] {
+        let a = ssbvb_tests::render(&fragment, scene(level), &camera(), SIZE);
+        let b = ssbvb_tests::render(&compute, scene(level), &camera(), SIZE);
+        let (x, y) = (a.read("smoothed_normal"), b.read("smoothed_normal"));
+        let differ = x.chunks(8).zip(y.chunks(8)).filter(|(p, q)| p != q).count();
+        assert_eq!(differ, 0, "level {level}: {differ} smoothed normals differ");
+        assert!(
+            a.read("color") == b.read("color"),
+            "level {level}: the images differ"
+        );
+        // Not trivially: smoothing changed the voxel pixels, and triangle pixels exist.
+        let before = b.read("gbuffer_normal");
+        let changed = before
+            .chunks(8)
+            .zip(y.chunks(8))
+            .filter(|(p, q)| p != q)
+            .count();
+        let stencil = b.read_stencil("depth_stencil");
+        assert!(changed > 1000, "level {level}: {changed} pixels smoothed");
+        assert!(stencil.iter().filter(|&&v| v == 2).count() > 1000);
+    }
+}
+
 /// GL's way of counting voxel pixels (a stencil-tested draw, no stencil copy) counts what
 /// the copy counts, for the voxel value and the triangle value alike.
 #[test]

@@ -41,7 +41,7 @@ pub use formats::LIGHT;
 pub use octree_ray_cast::OctreeRayCastParams;
 pub use rastavox::{MAX_PIXEL_ERROR, RastaVoxParams};
 pub use ray_march_filter::{MarchMode, RayMarchFilterParams};
-pub use smooth::SmoothParams;
+pub use smooth::{SmoothComputeParams, SmoothParams};
 pub use spec::{Access, KindSpec, PassStage, SlotClass, SlotDesc};
 pub use splat_billboards::SplatBillboardsParams;
 pub use temporal::TemporalParams;
@@ -116,6 +116,9 @@ pass_kinds! {
     /// proxy meshes rasterized in software (nearest depth, then lowest triangle, by
     /// atomics), writing the same `entry` as `EmptySpacePrepass` into a storage texture.
     EmptySpaceCompute = EmptySpaceComputeKind;
+    /// `Smooth` as a compute pass, for adapters whose fragment work is slow: the same
+    /// image, with the stencil read as a texture instead of tested.
+    SmoothCompute(SmoothComputeParams);
 }
 
 #[cfg(test)]
@@ -145,6 +148,7 @@ mod tests {
             TemporalParams::NAME,
             EdgeAaParams::NAME,
             EmptySpaceComputeKind::NAME,
+            SmoothComputeParams::NAME,
         ];
         assert_eq!(spec_names, KIND_NAMES);
     }
@@ -191,7 +195,7 @@ mod tests {
                     )
                 }
                 PassStage::Compute => assert!(
-                    ["RayMarchFilter", "EmptySpaceCompute"].contains(&kind.name()),
+                    ["RayMarchFilter", "EmptySpaceCompute", "SmoothCompute"].contains(&kind.name()),
                     "{}",
                     kind.name()
                 ),

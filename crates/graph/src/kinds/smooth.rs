@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::formats::{DEPTH_STENCIL, NORMAL};
+use super::formats::{DEPTH_STENCIL, GBUFFER_NORMAL, NORMAL};
 use super::shared::one;
 use super::spec::{KindSpec, PassStage, SlotClass, SlotDesc};
 
@@ -50,16 +50,54 @@ impl KindSpec for SmoothParams {
         SlotDesc::write("smoothed_normal", SlotClass::ColorAttachment(NORMAL)),
     ];
     fn problems(&self) -> Vec<String> {
-        let mut out = Vec::new();
-        if !(self.max_i.is_finite() && self.max_i >= 0.0) {
-            out.push(format!("max_i must be a number >= 0, got {}", self.max_i));
+        eq1_problems(self.max_i, self.min_dist)
+    }
+}
+
+/// Problems with Eq. 1's parameters (both smoothing kinds take them).
+fn eq1_problems(max_i: f32, min_dist: f32) -> Vec<String> {
+    let mut out = Vec::new();
+    if !(max_i.is_finite() && max_i >= 0.0) {
+        out.push(format!("max_i must be a number >= 0, got {max_i}"));
+    }
+    if !(min_dist.is_finite() && min_dist >= 0.0) {
+        out.push(format!("min_dist must be a number >= 0, got {min_dist}"));
+    }
+    out
+}
+
+/// Parameters of `SmoothCompute`: `Smooth`'s, for the compute form (which samples the
+/// depth and reads the stencil as textures, so it has no depth copy to ask for).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SmoothComputeParams {
+    /// MaxI: the largest sample offset in pixels.
+    #[serde(default = "one")]
+    pub max_i: f32,
+    /// MinDist: the distance (world units) at and below which the offset is MaxI.
+    #[serde(default = "default_min_dist")]
+    pub min_dist: f32,
+}
+
+impl Default for SmoothComputeParams {
+    fn default() -> Self {
+        Self {
+            max_i: one(),
+            min_dist: default_min_dist(),
         }
-        if !(self.min_dist.is_finite() && self.min_dist >= 0.0) {
-            out.push(format!(
-                "min_dist must be a number >= 0, got {}",
-                self.min_dist
-            ));
-        }
-        out
+    }
+}
+
+impl KindSpec for SmoothComputeParams {
+    const NAME: &'static str = "SmoothCompute";
+    const STAGE: PassStage = PassStage::Compute;
+    const SLOTS: &'static [SlotDesc] = &[
+        SlotDesc::read("gbuffer_normal", SlotClass::SampledTexture(NORMAL)),
+        SlotDesc::read("depth_stencil", SlotClass::SampledTexture(DEPTH_STENCIL)),
+        // Written as a storage texture: the G-buffer's 8-byte normal.
+        SlotDesc::write("smoothed_normal", SlotClass::StorageTexture(GBUFFER_NORMAL)),
+    ];
+    fn problems(&self) -> Vec<String> {
+        eq1_problems(self.max_i, self.min_dist)
     }
 }

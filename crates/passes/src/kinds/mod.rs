@@ -35,6 +35,7 @@ pass_modules! {
     temporal::Temporal,
     edge_aa::EdgeAa,
     empty_space_compute::EmptySpaceCompute,
+    smooth_compute::SmoothCompute,
 }
 
 /// The registration of `kind`.

@@ -209,7 +209,9 @@ impl PassBindings {
             }
             let resource = match class {
                 SlotClass::StorageBuffer(_) => rec.buffer(name).as_entire_binding(),
-                SlotClass::DepthStencilAttachment(_) => {
+                // A depth(-stencil) texture is sampled through its depth aspect (only
+                // those have a depth view).
+                SlotClass::DepthStencilAttachment(_) | SlotClass::SampledTexture(_) => {
                     let t = rec.texture(name);
                     wgpu::BindingResource::TextureView(t.depth_view.as_ref().unwrap_or(&t.view))
                 }

@@ -208,6 +208,28 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         }),
         max_level: 16,
     },
+    // Every stage that can be compute in compute: the SSBVB with the compute prepass and
+    // ESVO's compute form, each with the smoothing in compute too (`SmoothCompute`; the
+    // composite and the triangles stay rasterized), for adapters whose fragment work is
+    // slow. The two are a pair: a stage both frames share changes in both.
+    Technique {
+        name: "ssbvb-all-compute",
+        pipeline: PipelineSource::File("ssbvb_compute.ron"),
+        edit: Some(smoothing_in_compute),
+        max_level: 16,
+    },
+    Technique {
+        name: "esvo-all-compute",
+        pipeline: PipelineSource::File("esvo.ron"),
+        edit: Some(|k| match k {
+            PassKind::EsvoRayCast(e) => {
+                e.compute = true;
+                true
+            }
+            _ => smoothing_in_compute(k),
+        }),
+        max_level: 16,
+    },
     Technique {
         name: "cube-raster",
         pipeline: PipelineSource::File("cube_raster.ron"),
@@ -258,16 +280,33 @@ pub(crate) const PAPER_TECHNIQUES: &[&str] = &[
     "ssbvb",
 ];
 
+/// `Smooth` made `SmoothCompute` with the same parameters (the same image).
+fn smoothing_in_compute(k: &mut PassKind) -> bool {
+    match k {
+        PassKind::Smooth(p) => {
+            *k = PassKind::SmoothCompute(ssbvb_graph::SmoothComputeParams {
+                max_i: p.max_i,
+                min_dist: p.min_dist,
+            });
+            true
+        }
+        _ => false,
+    }
+}
+
 /// Techniques left out unless named: the raster form by another name, the pixel form with
 /// the filter's second proxy layer (its image; a crowd's knob), the compute forms of the
 /// octree casters (their fragment forms' images; the paper preset runs them) and the
-/// still-image anti-aliasing (the quality preset runs it).
+/// still-image anti-aliasing (the quality preset runs it), and the all-compute pair (the
+/// images of their forms with fragment smoothing; `gpu-bench` runs them).
 const ALIASES: &[&str] = &[
     "ssbvb-fast",
     "ssbvb-peel",
     "octree-compute",
     "esvo-compute",
     "ssbvb-edge-aa",
+    "ssbvb-all-compute",
+    "esvo-all-compute",
 ];
 
 /// Technique names, for `--techniques`.
@@ -333,4 +372,48 @@ pub(crate) fn refused(e: &anyhow::Error) -> bool {
                 Some(ssbvb_gpu::ResourceError::TooLarge(_) | ssbvb_gpu::ResourceError::BadScene(_))
             )
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bench::harness::pipelines::technique_pipeline;
+
+    /// Every technique with a file of its own resolves with its edit.
+    #[test]
+    fn every_bundled_technique_resolves() {
+        for t in TECHNIQUES {
+            if matches!(t.pipeline, PipelineSource::File(_)) {
+                technique_pipeline(t).unwrap_or_else(|e| panic!("{}: {e:#}", t.name));
+            }
+        }
+    }
+
+    /// The all-compute pair smooth in compute with the bundled parameters, and ESVO casts
+    /// in compute; nothing else of their frames changes.
+    #[test]
+    fn the_all_compute_pair_differ_from_their_forms_in_the_smoothing_only() {
+        let find = |n: &str| TECHNIQUES.iter().find(|t| t.name == n).unwrap();
+        for (all, form) in [
+            ("ssbvb-all-compute", "ssbvb-compute"),
+            ("esvo-all-compute", "esvo-compute"),
+        ] {
+            let a = technique_pipeline(find(all)).unwrap();
+            let b = technique_pipeline(find(form)).unwrap();
+            assert_eq!(a.passes.len(), b.passes.len());
+            for (x, y) in a.passes.iter().zip(&b.passes) {
+                match (&x.kind, &y.kind) {
+                    (PassKind::SmoothCompute(c), PassKind::Smooth(f)) => {
+                        assert_eq!((c.max_i, c.min_dist), (f.max_i, f.min_dist));
+                    }
+                    (k, l) => assert_eq!(k, l, "{all}: pass `{}`", x.name),
+                }
+            }
+            assert!(
+                a.passes
+                    .iter()
+                    .any(|p| matches!(p.kind, PassKind::SmoothCompute(_)))
+            );
+        }
+    }
 }

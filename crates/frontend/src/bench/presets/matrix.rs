@@ -492,6 +492,7 @@ fn run_one(ctx: &GpuContext, t: &Technique, c: &Cell) -> Result<Row> {
                 | "ssbvb-splat"
                 | "ssbvb-pixel"
                 | "ssbvb-compute"
+                | "ssbvb-all-compute"
                 | "ssbvb-peel"
                 | "ssbvb-aa"
                 | "ssbvb-edge-aa"
