@@ -412,7 +412,8 @@ mod tests {
         assert_eq!(s[2].name, "crowd");
         assert_eq!(s.last().unwrap().name, "paper");
         assert!(s[1].args.join(" ").contains(
-            "ssbvb,ssbvb-pixel,ssbvb-compute,ssbvb-unique,ssbvb-splat,esvo,esvo-compute"
+            "ssbvb,ssbvb-pixel,ssbvb-compute,ssbvb-all-compute,ssbvb-unique,ssbvb-splat,esvo,\
+             esvo-compute,esvo-all-compute"
         ));
         let renders: Vec<&Step> = s.iter().filter(|s| s.args[0] == "render").collect();
         assert_eq!(renders.len(), 8);
