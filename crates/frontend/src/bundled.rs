@@ -35,6 +35,10 @@ const FILES: &[(&str, &[u8])] = &[
         include_bytes!("../../../assets/pipelines/ssbvb_compute.ron"),
     ),
     (
+        "pipelines/ssbvb_all_compute.ron",
+        include_bytes!("../../../assets/pipelines/ssbvb_all_compute.ron"),
+    ),
+    (
         "pipelines/ssbvb_aa.ron",
         include_bytes!("../../../assets/pipelines/ssbvb_aa.ron"),
     ),

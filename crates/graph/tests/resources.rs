@@ -228,6 +228,7 @@ fn omitted_parameters_take_their_defaults() {
         let written = match k {
             PassKind::EmptySpacePrepass
             | PassKind::EmptySpaceCompute
+            | PassKind::CompositeCompute
             | PassKind::Triangles
             | PassKind::Composite
             | PassKind::ConeComposite => name.to_string(),

@@ -138,6 +138,46 @@ fn smoothing_in_compute_is_bit_identical() {
     }
 }
 
+/// The all-compute frames (`SmoothCompute` and `CompositeCompute`) draw their forms' images
+/// bit for bit, the forms writing the same `Rgba8Unorm` output (the compute composite's
+/// format, sRGB-encoded in the shader), background included.
+#[test]
+fn the_all_compute_frames_draw_their_forms_images() {
+    let srgb = r#""color":            Texture(format: Rgba8UnormSrgb, size: Screen),"#;
+    let linear = r#""color":            Texture(format: Rgba8Unorm, size: Screen),"#;
+    let esvo_compute = include_str!("../../../assets/pipelines/esvo.ron").replace(
+        "EsvoRayCast(max_steps: 4096)",
+        "EsvoRayCast(max_steps: 4096, compute: true)",
+    );
+    // ESVO's compute form binds more storage buffers than WebGPU allows, so its all-compute
+    // frame is no bundled file (the bench's `esvo-all-compute` makes it the same way).
+    let esvo_all = esvo_compute
+        .replace(srgb, linear)
+        .replace("kind: Smooth(", "kind: SmoothCompute(")
+        .replace("kind: Composite,", "kind: CompositeCompute,");
+    assert_eq!(esvo_all.matches("Compute").count(), 2);
+    for (all, form) in [
+        (
+            include_str!("../../../assets/pipelines/ssbvb_all_compute.ron"),
+            include_str!("../../../assets/pipelines/ssbvb_compute.ron").to_string(),
+        ),
+        (esvo_all.as_str(), esvo_compute),
+    ] {
+        assert!(form.contains(srgb) && form.contains("compute"));
+        let form = form.replace(srgb, linear);
+        let a = ssbvb_tests::render(all, scene(6), &camera(), SIZE).read("color");
+        let b = ssbvb_tests::render(&form, scene(6), &camera(), SIZE).read("color");
+        let drawn = a.chunks(4).filter(|p| p[3] == 255).count();
+        let background = a.chunks(4).filter(|p| *p == [0, 0, 0, 0]).count();
+        assert!(
+            drawn > 5000 && background > 1000,
+            "{drawn} drawn, {background} background"
+        );
+        let differ = a.chunks(4).zip(b.chunks(4)).filter(|(p, q)| p != q).count();
+        assert_eq!(differ, 0, "{differ} pixels differ");
+    }
+}
+
 /// GL's way of counting voxel pixels (a stencil-tested draw, no stencil copy) counts what
 /// the copy counts, for the voxel value and the triangle value alike.
 #[test]

@@ -28,7 +28,7 @@ mod triangles;
 mod volume_slices;
 
 pub use billboards::{BillboardMode, BillboardsParams};
-pub use composite::CompositeKind;
+pub use composite::{CompositeComputeKind, CompositeKind};
 pub use cone_composite::ConeCompositeKind;
 pub use cone_trace::{ConeTraceParams, MAX_CONES, MAX_VOLUME_RESOLUTION};
 pub use cube_raster::CubeRasterParams;
@@ -119,6 +119,9 @@ pass_kinds! {
     /// `Smooth` as a compute pass, for adapters whose fragment work is slow: the same
     /// image, with the stencil read as a texture instead of tested.
     SmoothCompute(SmoothComputeParams);
+    /// `Composite` as a compute pass: the same lighting into an `Rgba8Unorm` storage
+    /// texture, sRGB-encoded in the shader (the bytes an `Rgba8Unorm` `Composite` writes).
+    CompositeCompute = CompositeComputeKind;
 }
 
 #[cfg(test)]
@@ -149,6 +152,7 @@ mod tests {
             EdgeAaParams::NAME,
             EmptySpaceComputeKind::NAME,
             SmoothComputeParams::NAME,
+            CompositeComputeKind::NAME,
         ];
         assert_eq!(spec_names, KIND_NAMES);
     }
@@ -195,7 +199,13 @@ mod tests {
                     )
                 }
                 PassStage::Compute => assert!(
-                    ["RayMarchFilter", "EmptySpaceCompute", "SmoothCompute"].contains(&kind.name()),
+                    [
+                        "RayMarchFilter",
+                        "EmptySpaceCompute",
+                        "SmoothCompute",
+                        "CompositeCompute"
+                    ]
+                    .contains(&kind.name()),
                     "{}",
                     kind.name()
                 ),

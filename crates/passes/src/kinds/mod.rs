@@ -36,6 +36,7 @@ pass_modules! {
     edge_aa::EdgeAa,
     empty_space_compute::EmptySpaceCompute,
     smooth_compute::SmoothCompute,
+    composite_compute::CompositeCompute,
 }
 
 /// The registration of `kind`.

@@ -1,7 +1,9 @@
 //! The bundled pipelines and the edits the presets make to them.
 
 use anyhow::{Result, bail};
-use ssbvb_graph::{CountDesc, PassKind, ResolvedPipeline, ResourceDesc, SizeDesc};
+use ssbvb_graph::{
+    CountDesc, Format, PassKind, ResolvedPipeline, ResourceDesc, SizeDesc, SmoothComputeParams,
+};
 
 use super::techniques::{PipelineSource, Technique};
 use crate::bundled::assets_dir;
@@ -34,6 +36,9 @@ pub(crate) fn with_kind_edit(
 pub(crate) fn technique_pipeline(t: &Technique) -> Result<ResolvedPipeline> {
     let p = match t.pipeline {
         PipelineSource::File(f) => bundled_pipeline(f)?,
+        PipelineSource::SharedStagesInCompute(f) => {
+            with_shared_stages_in_compute(&bundled_pipeline(f)?)?
+        }
         PipelineSource::AdapterDefault => {
             let choice = crate::pipeline_choice::default_for_adapter()?;
             log::info!("bench: technique `{}`: {}", t.name, choice.line());
@@ -44,6 +49,42 @@ pub(crate) fn technique_pipeline(t: &Technique) -> Result<ResolvedPipeline> {
         Some(e) => with_kind_edit(&p, t.name, e),
         None => Ok(p),
     }
+}
+
+/// `base` with the stages every technique shares in compute: `Smooth` made
+/// `SmoothCompute` with its parameters, `Composite` made `CompositeCompute`, and the
+/// output made `Rgba8Unorm` (a storage texture, sRGB-encoded by the composite). The same
+/// image (GPU test `smooth_composite`); a bench pair that compares two frames edits both.
+pub(crate) fn with_shared_stages_in_compute(base: &ResolvedPipeline) -> Result<ResolvedPipeline> {
+    let mut swapped = 0;
+    let p = base
+        .edited(|d| {
+            swapped = d.edit_kinds(|k| match k {
+                PassKind::Smooth(s) => {
+                    *k = PassKind::SmoothCompute(SmoothComputeParams {
+                        max_i: s.max_i,
+                        min_dist: s.min_dist,
+                    });
+                    true
+                }
+                PassKind::Composite => {
+                    *k = PassKind::CompositeCompute;
+                    true
+                }
+                _ => false,
+            });
+            if let Some(ResourceDesc::Texture { format, .. }) = d.resource_mut("color") {
+                *format = Format::Rgba8Unorm;
+            }
+        })
+        .map_err(|e| anyhow::anyhow!("{} with its shared stages in compute: {e}", base.file))?;
+    if swapped != 2 {
+        bail!(
+            "{}: not one Smooth and one Composite to make compute",
+            base.file
+        );
+    }
+    Ok(p)
 }
 
 /// The default SSBVB pipeline with the empty-space prepass and the ray-march filter at

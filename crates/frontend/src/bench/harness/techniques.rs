@@ -14,6 +14,9 @@ pub(crate) enum PipelineSource {
     File(&'static str),
     /// The SSBVB form `render` chooses on this adapter ([`crate::pipeline_choice`]).
     AdapterDefault,
+    /// A bundled pipeline file with its smoothing and composite in compute
+    /// ([`super::pipelines::with_shared_stages_in_compute`]).
+    SharedStagesInCompute(&'static str),
 }
 
 /// One benchmarked technique.
@@ -209,24 +212,24 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         max_level: 16,
     },
     // Every stage that can be compute in compute: the SSBVB with the compute prepass and
-    // ESVO's compute form, each with the smoothing in compute too (`SmoothCompute`; the
-    // composite and the triangles stay rasterized), for adapters whose fragment work is
-    // slow. The two are a pair: a stage both frames share changes in both.
+    // ESVO's compute form, each with the smoothing and the composite in compute too (only
+    // the triangles and the resolves stay rasterized), for adapters whose fragment work is
+    // slow. The two are a pair: a stage both frames share is the same pass in both.
     Technique {
         name: "ssbvb-all-compute",
-        pipeline: PipelineSource::File("ssbvb_compute.ron"),
-        edit: Some(smoothing_in_compute),
+        pipeline: PipelineSource::SharedStagesInCompute("ssbvb_compute.ron"),
+        edit: None,
         max_level: 16,
     },
     Technique {
         name: "esvo-all-compute",
-        pipeline: PipelineSource::File("esvo.ron"),
+        pipeline: PipelineSource::SharedStagesInCompute("esvo.ron"),
         edit: Some(|k| match k {
             PassKind::EsvoRayCast(e) => {
                 e.compute = true;
                 true
             }
-            _ => smoothing_in_compute(k),
+            _ => false,
         }),
         max_level: 16,
     },
@@ -279,20 +282,6 @@ pub(crate) const PAPER_TECHNIQUES: &[&str] = &[
     "ssbvb-splat",
     "ssbvb",
 ];
-
-/// `Smooth` made `SmoothCompute` with the same parameters (the same image).
-fn smoothing_in_compute(k: &mut PassKind) -> bool {
-    match k {
-        PassKind::Smooth(p) => {
-            *k = PassKind::SmoothCompute(ssbvb_graph::SmoothComputeParams {
-                max_i: p.max_i,
-                min_dist: p.min_dist,
-            });
-            true
-        }
-        _ => false,
-    }
-}
 
 /// Techniques left out unless named: the raster form by another name, the pixel form with
 /// the filter's second proxy layer (its image; a crowd's knob), the compute forms of the
@@ -383,16 +372,16 @@ mod tests {
     #[test]
     fn every_bundled_technique_resolves() {
         for t in TECHNIQUES {
-            if matches!(t.pipeline, PipelineSource::File(_)) {
+            if !matches!(t.pipeline, PipelineSource::AdapterDefault) {
                 technique_pipeline(t).unwrap_or_else(|e| panic!("{}: {e:#}", t.name));
             }
         }
     }
 
-    /// The all-compute pair smooth in compute with the bundled parameters, and ESVO casts
-    /// in compute; nothing else of their frames changes.
+    /// The all-compute pair differ from their forms in the smoothing and the composite
+    /// only, with the same parameters.
     #[test]
-    fn the_all_compute_pair_differ_from_their_forms_in_the_smoothing_only() {
+    fn the_all_compute_pair_differ_from_their_forms_in_the_shared_stages_only() {
         let find = |n: &str| TECHNIQUES.iter().find(|t| t.name == n).unwrap();
         for (all, form) in [
             ("ssbvb-all-compute", "ssbvb-compute"),
@@ -401,19 +390,18 @@ mod tests {
             let a = technique_pipeline(find(all)).unwrap();
             let b = technique_pipeline(find(form)).unwrap();
             assert_eq!(a.passes.len(), b.passes.len());
+            let mut swapped = 0;
             for (x, y) in a.passes.iter().zip(&b.passes) {
                 match (&x.kind, &y.kind) {
                     (PassKind::SmoothCompute(c), PassKind::Smooth(f)) => {
                         assert_eq!((c.max_i, c.min_dist), (f.max_i, f.min_dist));
+                        swapped += 1;
                     }
+                    (PassKind::CompositeCompute, PassKind::Composite) => swapped += 1,
                     (k, l) => assert_eq!(k, l, "{all}: pass `{}`", x.name),
                 }
             }
-            assert!(
-                a.passes
-                    .iter()
-                    .any(|p| matches!(p.kind, PassKind::SmoothCompute(_)))
-            );
+            assert_eq!(swapped, 2, "{all}");
         }
     }
 }
