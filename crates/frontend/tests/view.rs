@@ -100,17 +100,9 @@ fn view_screenshot(shot: &Path, extra: &[&str]) -> image::RgbaImage {
     read_png(shot)
 }
 
-#[test]
-fn view_under_xvfb_shows_the_scene_and_writes_a_screenshot() {
-    let dir = tempfile::tempdir().unwrap();
-    let img = view_screenshot(&dir.path().join("view.png"), &["--frames", "5"]);
-    assert_eq!(img.dimensions(), (320, 240), "the window's size");
-    let first = *img.get_pixel(0, 0);
-    assert!(img.pixels().any(|p| *p != first), "uniform screenshot");
-
-    // The same view rendered offline: where it drew the scene, the window shows the same
-    // colours (away from the overlay's title bar at the top).
-    let reference = render_default_scene(&dir.path().join("render.png"), &[]);
+/// Pixels where `reference` drew the scene (away from the overlay's title bar at the top),
+/// and how many of them `img` shows in the same colours (within 3 of 255).
+fn matching_scene_pixels(img: &image::RgbaImage, reference: &image::RgbaImage) -> (usize, usize) {
     let (mut scene, mut same) = (0usize, 0usize);
     for (x, y, r) in reference.enumerate_pixels() {
         if y < 60 || r[3] == 0 {
@@ -122,6 +114,40 @@ fn view_under_xvfb_shows_the_scene_and_writes_a_screenshot() {
             same += 1;
         }
     }
+    (scene, same)
+}
+
+/// A pipeline whose output is `Rgba8Unorm` holding sRGB-encoded bytes (the compute
+/// composite's) shows in the window as `ssbvb render` writes it, not encoded twice.
+#[test]
+fn view_shows_an_srgb_encoded_linear_output_as_render_writes_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = ["--pipeline", "assets/pipelines/ssbvb_all_compute.ron"];
+    let img = view_screenshot(
+        &dir.path().join("view.png"),
+        &[&["--frames", "5"][..], &pipeline[..]].concat(),
+    );
+    let reference = render_default_scene(&dir.path().join("render.png"), &pipeline);
+    let (scene, same) = matching_scene_pixels(&img, &reference);
+    assert!(scene > 5000, "the render covers only {scene} pixels");
+    assert!(
+        same as f64 >= 0.97 * scene as f64,
+        "only {same} of {scene} scene pixels of the window match `ssbvb render`"
+    );
+}
+
+#[test]
+fn view_under_xvfb_shows_the_scene_and_writes_a_screenshot() {
+    let dir = tempfile::tempdir().unwrap();
+    let img = view_screenshot(&dir.path().join("view.png"), &["--frames", "5"]);
+    assert_eq!(img.dimensions(), (320, 240), "the window's size");
+    let first = *img.get_pixel(0, 0);
+    assert!(img.pixels().any(|p| *p != first), "uniform screenshot");
+
+    // The same view rendered offline: where it drew the scene, the window shows the same
+    // colours (away from the overlay's title bar at the top).
+    let reference = render_default_scene(&dir.path().join("render.png"), &[]);
+    let (scene, same) = matching_scene_pixels(&img, &reference);
     assert!(
         scene > 5000,
         "the reference render covers only {scene} pixels"

@@ -70,6 +70,12 @@ impl Blit {
             .as_ref()
             .is_none_or(|(t, _)| t.size() != frame.size() || t.format() != frame.format());
         if stale {
+            // An 8-bit output without an sRGB format holds sRGB-encoded bytes (the
+            // composites encode for it, `CompositeCompute` always): read it through an sRGB
+            // view, so that it decodes as an sRGB output does.
+            let srgb = frame.format().add_srgb_suffix();
+            let decode = srgb != frame.format();
+            let view_formats = [srgb];
             let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("view frame copy"),
                 size: frame.size(),
@@ -78,9 +84,12 @@ impl Blit {
                 dimension: wgpu::TextureDimension::D2,
                 format: frame.format(),
                 usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
+                view_formats: if decode { &view_formats } else { &[] },
             });
-            let view = texture.create_view(&Default::default());
+            let view = texture.create_view(&wgpu::TextureViewDescriptor {
+                format: decode.then_some(srgb),
+                ..Default::default()
+            });
             let bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("view blit"),
                 layout: &self.layout,
