@@ -227,7 +227,6 @@ fn omitted_parameters_take_their_defaults() {
         let name = k.name();
         let written = match k {
             PassKind::EmptySpacePrepass
-            | PassKind::EmptySpaceCompute
             | PassKind::CompositeCompute
             | PassKind::Triangles
             | PassKind::Composite

@@ -38,7 +38,7 @@ pub fn with_compute_prepass(src: &str) -> String {
         src.contains(raster) && src.contains(depth),
         "no raster prepass"
     );
-    src.replace(raster, r#"kind: EmptySpaceCompute, writes: ["entry"]"#)
+    src.replace(raster, r#"kind: EmptySpaceCompute(), writes: ["entry"]"#)
         .replace(depth, "")
 }
 

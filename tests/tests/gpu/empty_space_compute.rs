@@ -105,6 +105,35 @@ fn compute_entries_are_the_rasterizers() {
     }
 }
 
+/// Both ways a triangle is walked (one thread; a workgroup striding over its rectangle)
+/// write the same entries: every triangle above one texel in workgroups, and none. The
+/// default threshold differs per adapter class (4,096 texels on lavapipe, where the tests
+/// run, 256 on GPUs), so both paths are held to it here.
+#[test]
+fn small_and_large_triangle_paths_write_the_same_entries() {
+    let size = (96, 72);
+    let [(_, _), (_, compute)] = prefilter_forms();
+    let with = |n: u32| {
+        let src = compute.replace(
+            "kind: EmptySpaceCompute()",
+            &format!("kind: EmptySpaceCompute(large_pixels: Some({n}))"),
+        );
+        assert_ne!(src, compute);
+        src
+    };
+    for (name, scene, camera) in views() {
+        let default = entries(&render(&compute, scene.clone(), &camera, size));
+        for n in [1, 1_000_000] {
+            let e = entries(&render(&with(n), scene.clone(), &camera, size));
+            let differ = e.iter().zip(&default).filter(|(a, b)| a != b).count();
+            assert_eq!(
+                differ, 0,
+                "{name}, large_pixels {n}: {differ} entries differ"
+            );
+        }
+    }
+}
+
 #[test]
 fn the_compute_prepass_draws_the_rasterized_prepass_frame() {
     let size = (96, 72);

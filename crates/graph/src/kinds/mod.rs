@@ -34,7 +34,7 @@ pub use cone_trace::{ConeTraceParams, MAX_CONES, MAX_VOLUME_RESOLUTION};
 pub use cube_raster::CubeRasterParams;
 pub use dense_dda::DenseDdaParams;
 pub use edge_aa::EdgeAaParams;
-pub use empty_space_compute::EmptySpaceComputeKind;
+pub use empty_space_compute::EmptySpaceComputeParams;
 pub use empty_space_prepass::EmptySpacePrepassKind;
 pub use esvo_ray_cast::EsvoRayCastParams;
 pub use formats::LIGHT;
@@ -115,7 +115,7 @@ pass_kinds! {
     /// The empty-space prepass in compute, for adapters whose raster units are slow: the
     /// proxy meshes rasterized in software (nearest depth, then lowest triangle, by
     /// atomics), writing the same `entry` as `EmptySpacePrepass` into a storage texture.
-    EmptySpaceCompute = EmptySpaceComputeKind;
+    EmptySpaceCompute(EmptySpaceComputeParams);
     /// `Smooth` as a compute pass, for adapters whose fragment work is slow: the same
     /// image, with the stencil read as a texture instead of tested.
     SmoothCompute(SmoothComputeParams);
@@ -150,7 +150,7 @@ mod tests {
             VolumeSlicesParams::NAME,
             TemporalParams::NAME,
             EdgeAaParams::NAME,
-            EmptySpaceComputeKind::NAME,
+            EmptySpaceComputeParams::NAME,
             SmoothComputeParams::NAME,
             CompositeComputeKind::NAME,
         ];

@@ -18,7 +18,7 @@
 
 use ssbvb_gpu::scene::VisibleInstance;
 use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_graph::EmptySpaceComputeKind;
+use ssbvb_graph::EmptySpaceComputeParams;
 
 use crate::error::PassError;
 use crate::runtime::bindings::PassBindings;
@@ -64,12 +64,15 @@ const GROUP: u64 = 64;
 const RESOLVE_TILE: u32 = 8;
 
 /// Texels of a triangle's rectangle above which it gets a workgroup of its own (WGSL
-/// override `LARGE_PIXELS`). On a CPU adapter a workgroup is a task with its own cost, and
-/// llvmpipe ran the bunny's proxy fastest with (almost) none (docs/benchmarks.md); on a
-/// GPU one thread walking thousands of texels holds its whole wave back, so there the
-/// rectangle of a few small triangles is the limit (not yet measured on one).
-fn large_pixels(ctx: &GpuContext) -> u32 {
-    if ctx.adapter.get_info().device_type == wgpu::DeviceType::Cpu {
+/// override `LARGE_PIXELS`), unless the pass names it (`large_pixels`). On a CPU adapter
+/// a workgroup is a task with its own cost, and llvmpipe ran the bunny's proxy fastest
+/// with (almost) none (docs/benchmarks.md); on a GPU one thread walking thousands of
+/// texels holds its whole wave back, so there the rectangle of a few small triangles is
+/// the limit (not yet measured on one).
+fn large_pixels(ctx: &GpuContext, param: Option<u32>) -> u32 {
+    if let Some(n) = param {
+        n
+    } else if ctx.adapter.get_info().device_type == wgpu::DeviceType::Cpu {
         4096
     } else {
         256
@@ -129,14 +132,14 @@ pub struct EmptySpaceCompute {
 }
 
 impl PassImpl for EmptySpaceCompute {
-    type Params = EmptySpaceComputeKind;
+    type Params = EmptySpaceComputeParams;
     const SHADER: &'static str = "empty_space_compute.wgsl";
     const OWN: &'static [OwnBinding] = OWN;
     // The large triangles' dispatch is indirect; the raster steps bind three storage
     // buffers (the proxy's two and the words).
     const NEEDS: KindNeeds = KindNeeds::new(wgpu::DownlevelFlags::INDIRECT_EXECUTION, 3);
 
-    fn new(init: &PassInit<'_>, _params: &EmptySpaceComputeKind) -> Result<Self, PassError> {
+    fn new(init: &PassInit<'_>, params: &EmptySpaceComputeParams) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
         let module = ctx.shader(
             Self::SHADER,
@@ -145,7 +148,7 @@ impl PassImpl for EmptySpaceCompute {
         let label = format!("pass `{}`: empty_space_compute pipelines", pass.name);
         let bindings = PassBindings::used_only(ctx, pipeline, pass, OWN, Some(&RASTER_BINDINGS));
         let args_bindings = PassBindings::used_only(ctx, pipeline, pass, OWN, Some(&ARGS_BINDINGS));
-        let large = f64::from(large_pixels(ctx));
+        let large = f64::from(large_pixels(ctx, params.large_pixels));
         // `raster` and `large` once per step (`ID_STEP`), so both steps compute the same
         // depths from one shader.
         let [raster_depth, raster_id, large_depth, large_id, resolve] =
