@@ -15,14 +15,16 @@
 //    cleared 0). Triangles whose pixel rectangle is large are listed instead, and
 //    `large` gives each of them a workgroup (one thread walking 100,000 pixels would
 //    hold its whole wave back).
-// 2. `raster` and `large` again (step 2, `ID_STEP`): where a triangle's depth is the texel's nearest, it offers
-//    its index and facing (`atomicMax` of the inverted (index, back) pair: the lowest
-//    triangle wins a tie, as the first-drawn fragment wins the rasterizer's strict test).
+// 2. `raster` and `large` again (step 2, `ID_STEP`): where a triangle's depth is the
+//    texel's nearest, it offers its facing and index (`atomicMax` of the inverted
+//    (back, index) pair). At an exact tie a front face wins over a back face, then the
+//    lower triangle, as the rasterizer's strict test keeps the first-drawn fragment (it
+//    draws every front face, in instance order, before any back face).
 // 3. `resolve`, per texel: the winner's entry point, where the texel-centre ray meets its
 //    plane; the camera for a back face; where no proxy covers the texel and the camera is
 //    inside some proxy, the camera of the last such instance (the rasterizer's full-screen
-//    fill). Every texel takes one path of plain arithmetic: a software adapter runs every
-//    branch under a lane mask, so a rare costly branch would cost every texel.
+//    fill). No branch rebuilds the winner's clipped polygon: a software adapter runs
+//    every branch under a lane mask, so a rare costly branch would cost every texel.
 //
 // Coverage is watertight: a texel centre on a shared edge is inside both triangles. Each
 // edge function is evaluated with its endpoints in one canonical order, so the two
@@ -264,8 +266,8 @@ fn offer(poly: Polygon, g: u32, t: vec2<i32>, size: vec2<u32>) {
     if !ID_STEP {
         atomicMax(&prepass_words[at], d);
     } else if d == atomicLoad(&prepass_words[at]) {
-        // The triangle and its facing: the lowest triangle wins a tie.
-        atomicMax(&prepass_words[at + 1u], ~((g << 1u) | u32(poly.back)));
+        // Its facing and index: a front face, then the lower triangle, wins a tie.
+        atomicMax(&prepass_words[at + 1u], ~((u32(poly.back) << 31u) | g));
     }
 }
 
@@ -394,13 +396,14 @@ fn resolve(@builtin(global_invocation_id) gid: vec3<u32>) {
     let id = atomicLoad(&prepass_words[at + 1u]);
     if atomicLoad(&prepass_words[at]) != 0u && id != 0u {
         let key = ~id;
-        if (key & 1u) != 0u {
+        let g = key & ~BACK_FACES;
+        if (key & BACK_FACES) != 0u {
             // A back face is nearest only where the ray starts inside the proxy (or its
             // front face was clipped): the march starts at the camera.
-            let k = word(RUNS_AT + 4u * run_of(key >> 1u) + 3u) & ~BACK_FACES;
+            let k = word(RUNS_AT + 4u * run_of(g) + 3u) & ~BACK_FACES;
             out = vec4(instances[k].camera_object.xyz, f32(k + 1u));
         } else {
-            out = entry_of(key >> 1u, t, size);
+            out = entry_of(g, t, size);
         }
     } else {
         let fill = word(H_FILL);

@@ -20,6 +20,9 @@ pub enum PassError {
         /// Kind name.
         kind: &'static str,
     },
+    /// The pass cannot run on this backend (the message says why, and what can).
+    #[error("unsupported here: {0}")]
+    Unsupported(String),
     /// Something exceeds a device or index limit.
     #[error("too large for the GPU: {0}")]
     TooLarge(String),

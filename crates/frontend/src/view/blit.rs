@@ -65,31 +65,25 @@ impl Blit {
         encoder: &mut wgpu::CommandEncoder,
         frame: &wgpu::Texture,
     ) {
-        let stale = self
-            .source
-            .as_ref()
-            .is_none_or(|(t, _)| t.size() != frame.size() || t.format() != frame.format());
+        let stale = self.source.as_ref().is_none_or(|(t, _)| {
+            t.size() != frame.size() || t.format() != frame.format().add_srgb_suffix()
+        });
         if stale {
             // An 8-bit output without an sRGB format holds sRGB-encoded bytes (the
-            // composites encode for it, `CompositeCompute` always): read it through an sRGB
-            // view, so that it decodes as an sRGB output does.
-            let srgb = frame.format().add_srgb_suffix();
-            let decode = srgb != frame.format();
-            let view_formats = [srgb];
+            // composites encode for it, `CompositeCompute` always): its copy takes the sRGB
+            // format (copies may change only that), so that it decodes as an sRGB output
+            // does. No view format: GLES and WebGL have none.
             let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("view frame copy"),
                 size: frame.size(),
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
-                format: frame.format(),
+                format: frame.format().add_srgb_suffix(),
                 usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: if decode { &view_formats } else { &[] },
+                view_formats: &[],
             });
-            let view = texture.create_view(&wgpu::TextureViewDescriptor {
-                format: decode.then_some(srgb),
-                ..Default::default()
-            });
+            let view = texture.create_view(&Default::default());
             let bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("view blit"),
                 layout: &self.layout,

@@ -1,8 +1,8 @@
 //! The GL backend (issue 34): on Mesa's GL driver (llvmpipe, which wgpu drives as OpenGL
 //! ES 3.2: `ssbvb_gpu::context::prefer_gles_on_mesa`), `WGPU_BACKEND=gl ssbvb render` draws
 //! what Vulkan (lavapipe) draws: the default SSBVB frame (the compute splat on both) with
-//! triangles mixed in (the default scene), 64 instances, rasterized billboards and a ray
-//! caster, byte for byte (as measured;
+//! triangles mixed in (the default scene), 64 instances, the prepass in compute
+//! (`ssbvb_compute.ron`), rasterized billboards and a ray caster, byte for byte (as measured;
 //! the Vulkan frames are held to the CPU reference by the GPU tests). What GL lacks and
 //! what the renderer does instead is listed in `render --json` `fallbacks`. The test fails,
 //! never skips, where Mesa's GL is missing (`.ci/run` and `cargo xtask test` install it).
@@ -12,8 +12,12 @@ use super::{ssbvb, stdout_json, succeeded};
 #[test]
 fn gl_draws_what_vulkan_draws() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&str, Option<&str>); 4] = [
+    let cases: [(&str, Option<&str>); 5] = [
         ("assets/scenes/default.ron", None),
+        (
+            "assets/scenes/default.ron",
+            Some("assets/pipelines/ssbvb_compute.ron"),
+        ),
         ("assets/scenes/bunnies_64.ron", None),
         (
             "assets/scenes/default.ron",
@@ -66,4 +70,32 @@ fn gl_draws_what_vulkan_draws() {
             "{scene} {pipeline:?}: the GL frame differs from Vulkan's"
         );
     }
+}
+
+/// `SmoothCompute` binds the depth and the stencil aspect of one texture in one dispatch,
+/// which GL cannot (its sampled aspect belongs to the texture): on GL the all-compute frame
+/// is refused with a message saying so and what to use, never drawn from the wrong aspect.
+#[test]
+fn gl_refuses_the_compute_smoothing_and_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = ssbvb()
+        .env("WGPU_BACKEND", "gl")
+        .args([
+            "render",
+            "--size",
+            "64x48",
+            "--pipeline",
+            "assets/pipelines/ssbvb_all_compute.ron",
+            "-o",
+        ])
+        .arg(dir.path().join("x.png"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("SmoothCompute") && stderr.contains("use Smooth on GL"),
+        "{stderr}"
+    );
+    assert!(!dir.path().join("x.png").exists());
 }

@@ -224,6 +224,15 @@ impl PassNode for EmptySpaceCompute {
         // The header and runs, two words a texel, the large triangles' count, and room for
         // every triangle.
         let texels_at = header.len() as u64;
+        let bytes = 4 * (texels_at + 2 * texels + 1 + triangles);
+        let max = rec.gpu.device.limits().max_storage_buffer_binding_size;
+        // A key holds a triangle's index in 31 bits (its facing in the 32nd).
+        if bytes > max || triangles >= 1 << 31 {
+            return Err(PassError::TooLarge(format!(
+                "pass `{}` (EmptySpaceCompute) needs {bytes} bytes of words for {w}x{h}                  texels and {triangles} proxy triangles; the device binds at most {max}:                  use a smaller screen or the rasterized prepass (EmptySpacePrepass)",
+                rec.pass.name
+            )));
+        }
         let words = words_buffer(
             rec.gpu,
             &mut self.words,

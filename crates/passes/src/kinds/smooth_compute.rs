@@ -46,6 +46,14 @@ impl PassImpl for SmoothCompute {
     /// Compiles the pipeline; `max_i` and `min_dist` become the WGSL overrides of Eq. 1.
     fn new(init: &PassInit<'_>, params: &SmoothComputeParams) -> Result<Self, PassError> {
         let (ctx, scene, pipeline, pass) = init.parts();
+        // GL keeps a depth-stencil texture's sampled aspect on the texture, not the view:
+        // of the two views bound here one would read the other's aspect.
+        if ctx.adapter.get_info().backend == wgpu::Backend::Gl {
+            return Err(PassError::Unsupported(format!(
+                "pass `{}` (SmoothCompute) reads the depth and the stencil of one texture                  in one dispatch, which GL cannot: use Smooth on GL",
+                pass.name
+            )));
+        }
         let module = ctx.shader(
             Self::SHADER,
             &shaders::source_for(Self::SHADER, &scene.bindings)?,
