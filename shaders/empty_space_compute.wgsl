@@ -15,7 +15,7 @@
 //    cleared 0). Triangles whose pixel rectangle is large are listed instead, and
 //    `large` gives each of them a workgroup (one thread walking 100,000 pixels would
 //    hold its whole wave back).
-// 2. `raster` and `large` again (step 2, `ID_STEP`): where a triangle's depth is the
+// 2. `raster` and `large` again (step 2, dispatched with two layers): where a triangle's depth is the
 //    texel's nearest, it offers its facing and index (`atomicMax` of the inverted
 //    (back, index) pair). At an exact tie a front face wins over a back face, then the
 //    lower triangle, as the rasterizer's strict test keeps the first-drawn fragment (it
@@ -44,7 +44,7 @@
 @group(1) @binding(3) var<storage, read_write> prepass_words: array<atomic<u32>>;
 // `large`'s indirect dispatch, written by `large_args` (the only
 // entry point binding it).
-@group(1) @binding(4) var<storage, read_write> prepass_dispatch: array<u32, 3>;
+@group(1) @binding(4) var<storage, read_write> prepass_dispatch: array<u32, 6>;
 
 // Header words.
 const H_RUNS: u32 = 0u;
@@ -252,18 +252,30 @@ fn texel_word(t: vec2<i32>, size: vec2<u32>) -> u32 {
     return word(H_TEXELS) + 2u * (u32(t.y) * size.x + u32(t.x));
 }
 
-// Which step a pipeline runs (`raster` and `large` are compiled for each): false, the
-// nearest depth (step 1); true, the winning triangle at that depth (step 2).
-override ID_STEP: bool = false;
+// Which step a dispatch of `raster` or `large` runs, and whether this workgroup has work
+// in it. One pipeline runs both steps, so that the depth step 2 compares is computed by
+// the same compiled code as step 1's (two pipelines might contract a multiply-add in one
+// and not the other, and then no triangle would match): step 1 is dispatched with one
+// layer of workgroups, step 2 with two, of which the first returns at once.
+struct Step {
+    id_step: bool,
+    idle: bool,
+}
 
-// The polygon of triangle `g` offers itself at texel `t`, in this pipeline's step.
-fn offer(poly: Polygon, g: u32, t: vec2<i32>, size: vec2<u32>) {
+fn step_of(wg: vec3<u32>, groups: vec3<u32>) -> Step {
+    let id_step = groups.z == 2u;
+    return Step(id_step, id_step && wg.z == 0u);
+}
+
+// The polygon of triangle `g` offers itself at texel `t`: in step 1 its depth, in step 2,
+// where that depth is the nearest, its facing and index.
+fn offer(poly: Polygon, g: u32, t: vec2<i32>, size: vec2<u32>, id_step: bool) {
     let d = depth_at(poly, t);
     let at = texel_word(t, size);
     if d == 0u {
         return;
     }
-    if !ID_STEP {
+    if !id_step {
         atomicMax(&prepass_words[at], d);
     } else if d == atomicLoad(&prepass_words[at]) {
         // Its facing and index: a front face, then the lower triangle, wins a tie.
@@ -294,6 +306,10 @@ fn raster(
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) li: u32,
 ) {
+    let step = step_of(wg, groups);
+    if step.idle {
+        return;
+    }
     let size = textureDimensions(entry);
     let g = group_index(wg, groups) * GROUP + li;
     let poly = thread_polygon(g, size);
@@ -302,7 +318,7 @@ fn raster(
         return;
     }
     if texels > LARGE_PIXELS {
-        if !ID_STEP {
+        if !step.id_step {
             let at = large_at(size);
             let i = atomicAdd(&prepass_words[at], 1u);
             atomicStore(&prepass_words[at + 1u + i], g);
@@ -311,17 +327,19 @@ fn raster(
     }
     for (var y = poly.lo.y; y <= poly.hi.y; y++) {
         for (var x = poly.lo.x; x <= poly.hi.x; x++) {
-            offer(poly, g, vec2(x, y), size);
+            offer(poly, g, vec2(x, y), size, step.id_step);
         }
     }
 }
 
-// One thread: the large triangles' grid (at most 65,535 workgroups a dimension).
+// One thread: the large triangles' grids for both steps (at most 65,535 workgroups a
+// dimension; one layer, then two).
 @compute @workgroup_size(1)
 fn large_args() {
     let n = atomicLoad(&prepass_words[large_at(textureDimensions(entry))]);
     let x = min(n, 65535u);
-    prepass_dispatch = array(x, select(0u, (n + x - 1u) / max(x, 1u), n > 0u), 1u);
+    let y = select(0u, (n + x - 1u) / max(x, 1u), n > 0u);
+    prepass_dispatch = array(x, y, 1u, x, y, 2u);
 }
 
 // A large triangle's workgroup: its threads stride over its rectangle.
@@ -340,6 +358,10 @@ fn large(
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) li: u32,
 ) {
+    let step = step_of(wg, groups);
+    if step.idle {
+        return;
+    }
     let g = large_triangle(wg, groups);
     if g == 0xffffffffu {
         return;
@@ -348,7 +370,7 @@ fn large(
     let poly = polygon(g, size);
     let w = u32(poly.hi.x - poly.lo.x) + 1u;
     for (var i = li; i < rect_texels(poly); i += GROUP) {
-        offer(poly, g, poly.lo + vec2(i32(i % w), i32(i / w)), size);
+        offer(poly, g, poly.lo + vec2(i32(i % w), i32(i / w)), size, step.id_step);
     }
 }
 

@@ -60,6 +60,8 @@ const RUN_WORDS: u64 = 4;
 const BACK_FACES: u32 = 0x8000_0000;
 /// Threads per workgroup of the per-triangle steps.
 const GROUP: u64 = 64;
+/// Bytes of the large triangles' dispatch arguments: two grids of three `u32`.
+const DISPATCH_BYTES: u64 = 24;
 /// Texels a side of the resolve's workgroups.
 const RESOLVE_TILE: u32 = 8;
 
@@ -116,11 +118,9 @@ fn grid(groups: u64, max: u32) -> (u32, u32) {
 
 /// The compiled prepass.
 pub struct EmptySpaceCompute {
-    raster_depth: wgpu::ComputePipeline,
-    raster_id: wgpu::ComputePipeline,
+    raster: wgpu::ComputePipeline,
     large_args: wgpu::ComputePipeline,
-    large_depth: wgpu::ComputePipeline,
-    large_id: wgpu::ComputePipeline,
+    large_triangles: wgpu::ComputePipeline,
     resolve: wgpu::ComputePipeline,
     bindings: PassBindings,
     args_bindings: PassBindings,
@@ -149,39 +149,29 @@ impl PassImpl for EmptySpaceCompute {
         let bindings = PassBindings::used_only(ctx, pipeline, pass, OWN, Some(&RASTER_BINDINGS));
         let args_bindings = PassBindings::used_only(ctx, pipeline, pass, OWN, Some(&ARGS_BINDINGS));
         let large = f64::from(large_pixels(ctx, params.large_pixels));
-        // `raster` and `large` once per step (`ID_STEP`), so both steps compute the same
-        // depths from one shader.
-        let [raster_depth, raster_id, large_depth, large_id, resolve] =
-            ctx.validated(&label, |d| {
-                let layout = pipeline_layout(d, &label, scene, Some(&bindings));
-                [
-                    ("raster", 0.0),
-                    ("raster", 1.0),
-                    ("large", 0.0),
-                    ("large", 1.0),
-                    ("resolve", 0.0),
-                ]
-                .map(|(entry, id_step)| {
-                    let constants = [("LARGE_PIXELS", large), ("ID_STEP", id_step)];
-                    compute_pipeline(d, &layout, &module, entry, &constants)
-                })
-            })?;
+        // One pipeline each for `raster` and `large` runs both steps (see the WGSL), so
+        // that both compute the same depths.
+        let [raster, large_triangles, resolve] = ctx.validated(&label, |d| {
+            let layout = pipeline_layout(d, &label, scene, Some(&bindings));
+            let constants = [("LARGE_PIXELS", large)];
+            ["raster", "large", "resolve"]
+                .map(|entry| compute_pipeline(d, &layout, &module, entry, &constants))
+        })?;
         let large_args = ctx.validated(&label, |d| {
             let layout = pipeline_layout(d, &label, scene, Some(&args_bindings));
             compute_pipeline(d, &layout, &module, "large_args", &[])
         })?;
         let dispatch = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("prepass dispatch arguments"),
-            size: 12,
+            // Two grids: the large triangles' steps 1 and 2.
+            size: DISPATCH_BYTES,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
             mapped_at_creation: false,
         });
         Ok(Self {
-            raster_depth,
-            raster_id,
+            raster,
             large_args,
-            large_depth,
-            large_id,
+            large_triangles,
             resolve,
             bindings,
             args_bindings,
@@ -265,19 +255,20 @@ impl PassNode for EmptySpaceCompute {
         // wgpu orders the dispatches of a pass: every depth is in before an index is
         // offered, and every index before the resolve reads it.
         if triangles > 0 {
+            // Step 1 with one layer of workgroups, step 2 with two (the first idle).
             pass.set_bind_group(1, &bind_group, &[]);
-            pass.set_pipeline(&self.raster_depth);
+            pass.set_pipeline(&self.raster);
             pass.dispatch_workgroups(gx, gy, 1);
             pass.set_bind_group(1, &args_group, &[]);
             pass.set_pipeline(&self.large_args);
             pass.dispatch_workgroups(1, 1, 1);
             pass.set_bind_group(1, &bind_group, &[]);
-            pass.set_pipeline(&self.large_depth);
+            pass.set_pipeline(&self.large_triangles);
             pass.dispatch_workgroups_indirect(&self.dispatch, 0);
-            pass.set_pipeline(&self.raster_id);
-            pass.dispatch_workgroups(gx, gy, 1);
-            pass.set_pipeline(&self.large_id);
-            pass.dispatch_workgroups_indirect(&self.dispatch, 0);
+            pass.set_pipeline(&self.raster);
+            pass.dispatch_workgroups(gx, gy, 2);
+            pass.set_pipeline(&self.large_triangles);
+            pass.dispatch_workgroups_indirect(&self.dispatch, DISPATCH_BYTES / 2);
         }
         pass.set_bind_group(1, &bind_group, &[]);
         pass.set_pipeline(&self.resolve);
