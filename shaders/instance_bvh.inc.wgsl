@@ -27,7 +27,7 @@ fn bvh_enter(i: u32) -> f32 {
     boxes_tested += 1u;
     let n = instance_bvh[i];
     // Parallel to a slab and outside it: missed.
-    if any(walk_flat & !(n.lo <= vec3(0.0) & vec3(0.0) <= n.hi)) {
+    if any(walk_flat & !((n.lo <= vec3(0.0)) & (vec3(0.0) <= n.hi))) {
         return BIG;
     }
     let t0 = n.lo * walk_inv_dir;

@@ -625,7 +625,8 @@ fn march_lod(o: vec3<f32>, d: vec3<f32>, lod: LodInfo, t_from: f32, t_limit: f32
         if (upper & planes) != upper {
             continue;
         }
-        r.lower = vec3(upper & 1u, upper & 2u, upper & 4u) == vec3(0u) & vec3(planes & 1u, planes & 2u, planes & 4u) != vec3(0u);
+        r.lower = (vec3(upper & 1u, upper & 2u, upper & 4u) == vec3(0u))
+        & (vec3(planes & 1u, planes & 2u, planes & 4u) != vec3(0u));
         var h = march(r, lod, t_from, min(t_limit, best.t), record);
         h.rank |= upper;
         let key = rank_key(h.rank);

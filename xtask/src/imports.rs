@@ -23,6 +23,7 @@ pub const NO_CIRCLES: &[&str] = &[
     "crates/passes",
     "crates/scene-file",
     "crates/voxel",
+    "crates/web",
     "tests",
     "xtask",
 ];

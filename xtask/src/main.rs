@@ -10,6 +10,9 @@ mod layout_check;
 mod mutate;
 mod shaders;
 mod standalone;
+mod system;
+mod web;
+mod web_test;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -22,7 +25,8 @@ const USAGE: &str = "usage:
                                              no tracked file refers outside the repository, check the
                                              import circles (see imports), validate shaders, run
                                              clippy (-D warnings), build the docs (warnings denied),
-                                             run all workspace tests and fuzz every parser for 20 s
+                                             run all workspace tests, the web page in headless
+                                             Chromium (web-test) and fuzz every parser for 20 s
   cargo xtask imports [--root DIR]           the files of each crate as an import graph: files, arrows,
                                              floors and circles (files importing each other); fails
                                              when crates/passes, crates/gpu or crates/gpu-build has one
@@ -36,7 +40,11 @@ const USAGE: &str = "usage:
   cargo xtask gpu-bench [--bin PATH] [--out DIR] [--frames N] [--skip-paper] [--allow-software] [--dry-run]
                                              on a machine with a GPU: the per-pass breakdown of every
                                              SSBVB form and ray caster, then the paper preset, into
-                                             docs/bench/<gpu>/ (see `cargo xtask gpu-bench --help`)";
+                                             docs/bench/<gpu>/ (see `cargo xtask gpu-bench --help`)
+  cargo xtask web [--serve] [--port P]       build the browser page into target/web/ (wasm32 + WebGPU);
+                                             with --serve, serve it at http://127.0.0.1:P/
+  cargo xtask web-test                       build the page and check it in headless Chromium against
+                                             native renders (part of `cargo xtask test`)";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -47,6 +55,8 @@ fn main() -> ExitCode {
         Some("imports") => imports::run(&workspace_root(), &args[1..]),
         Some("mutate-shaders") => mutate::run(&workspace_root(), &args[1..]),
         Some("gpu-bench") => gpu_bench::run(&run_root(), &args[1..]),
+        Some("web") => web::run(&workspace_root(), &args[1..]),
+        Some("web-test") => web_test::run(&workspace_root()),
         Some("-h" | "--help") | None => {
             println!("{USAGE}");
             Ok(true)
@@ -127,14 +137,6 @@ fn vulkan_icd_present() -> bool {
     })
 }
 
-fn is_root() -> bool {
-    Command::new("id")
-        .arg("-u")
-        .output()
-        .map(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
-        .unwrap_or(false)
-}
-
 /// Whether Mesa's EGL (the GL backend's test) is installed.
 fn mesa_egl_present() -> bool {
     [
@@ -182,7 +184,7 @@ fn ensure_adapter() -> Result<()> {
         return Ok(());
     }
     let apt = Path::new("/usr/bin/apt-get").exists();
-    if apt && is_root() {
+    if apt && system::is_root() {
         eprintln!("xtask: no Vulkan driver or no Xvfb found; installing Mesa's lavapipe and Xvfb");
         let ok = |c: &mut Command| c.status().map(|s| s.success()).unwrap_or(false);
         let env = [("DEBIAN_FRONTEND", "noninteractive")];
@@ -293,6 +295,14 @@ fn test(extra: &[String]) -> Result<bool> {
         eprintln!("xtask: the core frame tests on GL (WGPU_BACKEND=gl)");
         if !gl.status().context("running cargo test on GL")?.success() {
             eprintln!("xtask: the core frame tests failed on the GL backend");
+            return Ok(false);
+        }
+    }
+    // The web page in headless Chromium against native renders.
+    if extra.is_empty() {
+        eprintln!("xtask: the web page in headless Chromium (cargo xtask web-test)");
+        if !web_test::run(&root)? {
+            eprintln!("xtask: the web page's browser test failed");
             return Ok(false);
         }
     }

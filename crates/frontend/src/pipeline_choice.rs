@@ -390,3 +390,21 @@ mod tests {
         assert_eq!((c.pipeline.as_str(), c.by), ("b.ron", "scene"));
     }
 }
+
+#[cfg(test)]
+mod web_page_tests {
+    /// The web page chooses its default among the same forms, in the same order.
+    #[test]
+    fn the_page_chooses_among_the_same_forms() {
+        let stems: Vec<String> = super::FORMS
+            .iter()
+            .map(|f| {
+                f.file
+                    .trim_start_matches("pipelines/")
+                    .trim_end_matches(".ron")
+                    .to_string()
+            })
+            .collect();
+        assert_eq!(stems, ssbvb_web::params::DEFAULT_FORMS);
+    }
+}

@@ -65,6 +65,11 @@ pub struct RenderArgs {
     /// Output PNG.
     #[arg(short = 'o', long, default_value = "render.png")]
     pub output: PathBuf,
+    /// Also write the frame's voxel coverage as a PNG: white where the stencil says a voxel
+    /// was drawn, black elsewhere (GPU pipelines with a `depth_stencil` resource; the web
+    /// page's `readVoxelMask` reads the same).
+    #[arg(long, value_name = "PNG")]
+    pub voxel_mask: Option<PathBuf>,
     /// Print the report as one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
@@ -379,6 +384,9 @@ fn render_reference(
 ) -> Result<Report> {
     let start = Instant::now();
     let (w, h) = args.size;
+    if args.voxel_mask.is_some() {
+        bail!("--voxel-mask reads a GPU frame's stencil; the CPU reference (--reference) has none");
+    }
     let scene = crate::animation::posed(scene, animated, args.time)?;
     let mut instances = Vec::new();
     let mut lod_histogram = std::collections::BTreeMap::new();
@@ -543,6 +551,9 @@ fn render_gpu(
     )?;
     let rgba = to_rgba8(&out)?;
     ssbvb_gpu::readback::write_png_rgba8(&args.output, w, h, &rgba)?;
+    if let Some(path) = &args.voxel_mask {
+        write_voxel_mask(&ctx, &renderer, path, (w, h))?;
+    }
     let fill = renderer.fill_count(&ctx)?;
     let counters = renderer.counters(&ctx)?;
     Ok(Report {
@@ -642,19 +653,30 @@ pub(crate) fn clipping_warnings(scene: &Scene, camera: &Camera) -> Vec<String> {
 }
 
 /// RGBA8 bytes of an output texture (sRGB or not, RGBA or BGRA).
+/// `--voxel-mask`: the stencil's voxel pixels as an opaque black-and-white PNG.
+fn write_voxel_mask(
+    ctx: &ssbvb_gpu::GpuContext,
+    renderer: &ssbvb_passes::Renderer,
+    path: &std::path::Path,
+    (w, h): (u32, u32),
+) -> Result<()> {
+    let Some(mask) = ssbvb_passes::measure::voxel_mask(ctx, renderer)? else {
+        bail!("--voxel-mask: this pipeline has no depth_stencil resource to read coverage from");
+    };
+    let rgba: Vec<u8> = mask
+        .iter()
+        .flat_map(|&m| {
+            let v = if m == 0 { 0 } else { 255 };
+            [v, v, v, 255]
+        })
+        .collect();
+    ssbvb_gpu::readback::write_png_rgba8(path, w, h, &rgba)?;
+    Ok(())
+}
+
 pub(crate) fn to_rgba8(t: &ssbvb_gpu::readback::TextureData) -> Result<Vec<u8>> {
-    use ssbvb_gpu::wgpu::TextureFormat as F;
-    match t.format {
-        F::Rgba8Unorm | F::Rgba8UnormSrgb => Ok(t.bytes.clone()),
-        F::Bgra8Unorm | F::Bgra8UnormSrgb => Ok(t
-            .bytes
-            .chunks(4)
-            .flat_map(|p| [p[2], p[1], p[0], p[3]])
-            .collect()),
-        other => bail!(
-            "cannot write an output of format {other:?} as PNG; use an 8-bit RGBA/BGRA output"
-        ),
-    }
+    t.to_rgba8()
+        .context("cannot write the output as PNG; use an 8-bit RGBA/BGRA output")
 }
 
 fn print_report(r: &Report) {

@@ -441,3 +441,54 @@ fn volume_object(dir: &Path, v: &VolumeDesc, i: usize) -> Result<VolumeObject> {
         instances: v.placements().iter().map(InstanceDesc::transform).collect(),
     })
 }
+
+/// The web page (`ssbvb-web`) builds its scenes from fetched bytes with its own code; it
+/// must draw what the CLI draws: the same objects (instances, LOD policy, the finest
+/// level's voxels), triangles, light and camera.
+#[cfg(test)]
+mod web_page_tests {
+    use ssbvb_voxel::progress::NoProgress;
+
+    #[test]
+    fn the_page_builds_the_scenes_the_cli_loads() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
+        let cache = tempfile::tempdir().unwrap();
+        for stem in ["default", "bunnies_64"] {
+            let path = root.join(format!("scenes/{stem}.ron"));
+            let cli = super::load_with_cache(&path, Some(cache.path()), &NoProgress).unwrap();
+            let text = std::fs::read_to_string(&path).unwrap();
+            let parsed = ssbvb_web::scene_build::parse_scene(&text, stem).unwrap();
+            let assets = parsed
+                .models()
+                .iter()
+                .map(|(model, level)| {
+                    let bytes = std::fs::read(path.parent().unwrap().join(model)).unwrap();
+                    std::sync::Arc::new(
+                        ssbvb_web::scene_build::prepare_model(&bytes, model, *level).unwrap(),
+                    )
+                })
+                .collect();
+            let page = parsed.build(assets);
+            assert_eq!(page.objects.len(), cli.scene.objects.len(), "{stem}");
+            for (p, c) in page.objects.iter().zip(&cli.scene.objects) {
+                assert_eq!(p.instances, c.instances, "{stem}");
+                assert_eq!(p.lod, c.lod, "{stem}");
+                assert_eq!(p.asset.lods.len(), c.asset.lods.len(), "{stem}");
+                let finest = |o: &ssbvb_gpu::scene::VoxelObject| {
+                    o.asset.lods.last().unwrap().point_cloud.clone()
+                };
+                assert!(
+                    finest(p) == finest(c),
+                    "{stem}: the finest level's voxels differ"
+                );
+            }
+            assert_eq!(
+                format!("{:?}", page.triangles),
+                format!("{:?}", cli.scene.triangles),
+                "{stem}"
+            );
+            assert_eq!(page.light, cli.scene.light, "{stem}");
+            assert_eq!(parsed.camera(), cli.camera, "{stem}");
+        }
+    }
+}

@@ -7,7 +7,7 @@
 //! static frame. Voxel sets supplied by the application ([`Animator::stream`]) and brush
 //! edits (`ssbvb_voxel::edit`) take the same way from the LOD build on.
 
-use std::time::Instant;
+use web_time::Instant;
 
 use ssbvb_gpu::GpuContext;
 use ssbvb_voxel::animate::MeshAnimation;

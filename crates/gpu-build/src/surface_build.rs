@@ -10,7 +10,7 @@
 //! colours, ranges, bounds — and normals up to one octahedral step (GPU `sqrt` and division
 //! round differently); the GPU tests check this on the shared models.
 
-use std::time::Instant;
+use web_time::Instant;
 
 use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_voxel::asset::LodLevel;

@@ -105,14 +105,23 @@ impl AdapterReport {
     /// taken.
     fn new(info: &wgpu::AdapterInfo, features: wgpu::Features, fallbacks: Vec<String>) -> Self {
         AdapterReport {
-            name: info.name.clone(),
+            // Browsers may hide the adapter's name (WebGPU's privacy rules).
+            name: if info.name.is_empty() {
+                "unnamed adapter".to_string()
+            } else {
+                info.name.clone()
+            },
             backend: format!("{:?}", info.backend),
             device_type: format!("{:?}", info.device_type),
             driver: driver_text(info),
             is_software: is_software(info),
-            timestamps: features.contains(
-                wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
-            ),
+            // Passes write timestamps only at their begin and end, which WebGPU's
+            // `timestamp-query` allows; natively the encoder-level feature is asked too.
+            timestamps: features.contains(if cfg!(target_arch = "wasm32") {
+                wgpu::Features::TIMESTAMP_QUERY
+            } else {
+                wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
+            }),
             fallbacks,
             limits: DeviceLimits::Adapter.name(),
         }
@@ -482,6 +491,19 @@ impl GpuContext {
         fallbacks: Vec<String>,
         limits: DeviceLimits,
     ) -> Result<Self, GpuError> {
+        pollster::block_on(Self::from_adapter_async(
+            instance, adapter, fallbacks, limits,
+        ))
+    }
+
+    /// [`GpuContext::from_adapter_with`] awaiting the device: the form for the browser,
+    /// whose thread must not block.
+    pub async fn from_adapter_async(
+        instance: wgpu::Instance,
+        adapter: wgpu::Adapter,
+        fallbacks: Vec<String>,
+        limits: DeviceLimits,
+    ) -> Result<Self, GpuError> {
         let info = adapter.get_info();
         let wanted = wgpu::Features::TIMESTAMP_QUERY
             | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
@@ -500,16 +522,18 @@ impl GpuContext {
             DeviceLimits::Adapter => adapter.features() & wanted,
             DeviceLimits::WebGpuDefaults => wgpu::Features::empty(),
         };
-        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-            label: Some("ssbvb"),
-            required_features: features,
-            required_limits: limits.on(&adapter),
-            ..Default::default()
-        }))
-        .map_err(|e| GpuError::RequestDevice {
-            adapter: info.name.clone(),
-            message: e.to_string(),
-        })?;
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("ssbvb"),
+                required_features: features,
+                required_limits: limits.on(&adapter),
+                ..Default::default()
+            })
+            .await
+            .map_err(|e| GpuError::RequestDevice {
+                adapter: info.name.clone(),
+                message: e.to_string(),
+            })?;
         let uncaptured = Arc::new(Mutex::new(Vec::new()));
         let sink = uncaptured.clone();
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
@@ -587,11 +611,19 @@ impl GpuContext {
 
     /// Runs `f` inside validation, out-of-memory and internal error scopes and turns the
     /// first error into [`GpuError::Wgpu`] naming `label`.
+    ///
+    /// In the browser an error scope's result arrives only after the thread yields, so
+    /// there `f` runs without scopes: its errors reach the uncaptured-error handler, which
+    /// [`GpuContext::take_uncaptured_errors`] reads (the page does after every frame).
     pub fn validated<T>(
         &self,
         label: &str,
         f: impl FnOnce(&wgpu::Device) -> T,
     ) -> Result<T, GpuError> {
+        if cfg!(target_arch = "wasm32") {
+            let _ = label;
+            return Ok(f(&self.device));
+        }
         let internal = self.device.push_error_scope(wgpu::ErrorFilter::Internal);
         let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);

@@ -36,6 +36,25 @@ impl TextureData {
     pub fn as_u32(&self) -> Vec<u32> {
         bytemuck::pod_collect_to_vec(&self.bytes)
     }
+
+    /// An 8-bit RGBA or BGRA image as RGBA8 bytes, rows top to bottom, with the encoding
+    /// the texels have (sRGB formats' bytes are sRGB-encoded): what a PNG of the frame
+    /// holds. Other formats are an error.
+    pub fn to_rgba8(&self) -> Result<Vec<u8>, GpuError> {
+        use wgpu::TextureFormat as F;
+        match self.format {
+            F::Rgba8Unorm | F::Rgba8UnormSrgb => Ok(self.bytes.clone()),
+            F::Bgra8Unorm | F::Bgra8UnormSrgb => Ok(self
+                .bytes
+                .chunks(4)
+                .flat_map(|p| [p[2], p[1], p[0], p[3]])
+                .collect()),
+            other => Err(GpuError::Readback {
+                label: format!("{other:?}"),
+                message: "only an 8-bit RGBA/BGRA output can be written as an RGBA8 image".into(),
+            }),
+        }
+    }
 }
 
 /// Bytes per row of a texel copy must be a multiple of this.
@@ -44,6 +63,17 @@ pub const ROW_ALIGN: u32 = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
 impl GpuContext {
     /// Reads mip 0, layer 0 of a 2D texture (the given aspect) back to the CPU.
     pub fn read_texture(
+        &self,
+        texture: &wgpu::Texture,
+        aspect: wgpu::TextureAspect,
+    ) -> Result<TextureData, GpuError> {
+        pollster::block_on(self.read_texture_async(texture, aspect))
+    }
+
+    /// [`GpuContext::read_texture`] awaiting the mapping: the form for the browser, whose
+    /// thread must not block (natively the device is waited for first, so the future is
+    /// ready when first polled).
+    pub async fn read_texture_async(
         &self,
         texture: &wgpu::Texture,
         aspect: wgpu::TextureAspect,
@@ -94,7 +124,7 @@ impl GpuContext {
             );
             self.submit("texture readback", [enc.finish()]);
         })?;
-        let data = self.map_read(&staging, "texture")?;
+        let data = self.map_read(&staging, "texture").await?;
         let mut bytes = Vec::with_capacity((row * height) as usize);
         for y in 0..height as usize {
             let start = y * padded as usize;
@@ -111,6 +141,12 @@ impl GpuContext {
 
     /// Reads a whole buffer (it needs `COPY_SRC` usage) back to the CPU.
     pub fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+        pollster::block_on(self.read_buffer_async(buffer))
+    }
+
+    /// [`GpuContext::read_buffer`] awaiting the mapping (see
+    /// [`GpuContext::read_texture_async`]).
+    pub async fn read_buffer_async(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
         let size = buffer.size();
         let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
@@ -125,37 +161,31 @@ impl GpuContext {
             enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
             self.submit("buffer readback", [enc.finish()]);
         })?;
-        self.map_read(&staging, "buffer")
+        self.map_read(&staging, "buffer").await
     }
 
-    fn map_read(&self, staging: &wgpu::Buffer, label: &str) -> Result<Vec<u8>, GpuError> {
-        let (tx, rx) = std::sync::mpsc::channel();
+    async fn map_read(&self, staging: &wgpu::Buffer, label: &str) -> Result<Vec<u8>, GpuError> {
+        let failed = |message: String| GpuError::Readback {
+            label: label.into(),
+            message,
+        };
+        let (tx, rx) = futures_channel::oneshot::channel();
         staging.map_async(wgpu::MapMode::Read, .., move |r| {
             let _ = tx.send(r);
         });
-        self.wait_idle()?;
-        match rx.recv() {
+        // Natively the callback runs inside a poll; the browser runs it on its own.
+        if !cfg!(target_arch = "wasm32") {
+            self.wait_idle()?;
+        }
+        match rx.await {
             Ok(Ok(())) => {}
-            Ok(Err(e)) => {
-                return Err(GpuError::Readback {
-                    label: label.into(),
-                    message: e.to_string(),
-                });
-            }
-            Err(e) => {
-                return Err(GpuError::Readback {
-                    label: label.into(),
-                    message: e.to_string(),
-                });
-            }
+            Ok(Err(e)) => return Err(failed(e.to_string())),
+            Err(e) => return Err(failed(e.to_string())),
         }
         let out = staging
             .slice(..)
             .get_mapped_range()
-            .map_err(|e| GpuError::Readback {
-                label: label.into(),
-                message: e.to_string(),
-            })?
+            .map_err(|e| failed(e.to_string()))?
             .to_vec();
         staging.unmap();
         Ok(out)

@@ -7,7 +7,7 @@
 //! it is for measuring (`--time-submissions`), not for frames that are timed otherwise.
 
 use std::collections::BTreeMap;
-use std::time::Instant;
+use web_time::Instant;
 
 use serde::Serialize;
 

@@ -27,5 +27,5 @@ pub use runtime::counters::FrameCounters;
 pub use runtime::node::{CounterSource, PassNode};
 pub use runtime::recorder::Recorder;
 pub use runtime::registry::{PassImpl, PassInit, Registration};
-pub use runtime::renderer::{FrameStats, PassTiming, Profiling, Renderer};
+pub use runtime::renderer::{FrameStats, PassTimesReadout, PassTiming, Profiling, Renderer};
 pub use runtime::resources::PHYSICAL_LABEL_MARK;

@@ -300,15 +300,17 @@ fn write_atomically(path: &Path, parts: &[&[u8]]) -> Result<(), LoadError> {
         COUNTER.fetch_add(1, Ordering::Relaxed)
     ));
     let result = (|| -> io::Result<()> {
-        let mut f = fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&tmp)?;
-        for part in parts {
-            f.write_all(part)?;
+        {
+            // Closed before the rename.
+            let mut f = fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&tmp)?;
+            for part in parts {
+                f.write_all(part)?;
+            }
+            f.sync_all()?;
         }
-        f.sync_all()?;
-        drop(f);
         fs::rename(&tmp, path)
     })();
     result.map_err(|e| {

@@ -13,6 +13,7 @@ mod rastavox;
 mod submissions;
 mod supersample;
 mod volumes;
+mod voxel_mask;
 mod voxelize_gpu;
 
 use std::path::Path;

@@ -24,7 +24,7 @@
 //! one beyond the device's storage-binding limit is refused with the size it needs, never
 //! truncated.
 
-use std::time::Instant;
+use web_time::Instant;
 
 use glam::DVec3;
 use ssbvb_gpu::InitBuffer;

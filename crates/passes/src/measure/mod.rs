@@ -139,6 +139,42 @@ pub fn voxel_pixels(ctx: &GpuContext, r: &Renderer) -> Result<Option<usize>, Pas
     Ok(count.map(|c| c as usize))
 }
 
+/// Per pixel, 1 where the stencil says a voxel was drawn and 0 elsewhere (rows top to
+/// bottom), from the pipeline's `depth_stencil`; `None` without one. The coverage the page
+/// and `ssbvb render --voxel-mask` compare.
+pub fn voxel_mask(ctx: &GpuContext, r: &Renderer) -> Result<Option<Vec<u8>>, PassError> {
+    match voxel_mask_texture(r) {
+        Some(t) => pollster::block_on(read_voxel_mask_async(ctx, &t)).map(Some),
+        None => Ok(None),
+    }
+}
+
+/// The texture [`voxel_mask`] reads: the pipeline's `depth_stencil`, when it has one with
+/// a stencil.
+pub fn voxel_mask_texture(r: &Renderer) -> Option<wgpu::Texture> {
+    let texture = &r.resources.texture(r.resource("depth_stencil")?).texture;
+    texture
+        .format()
+        .is_depth_stencil_format()
+        .then(|| texture.clone())
+}
+
+/// [`voxel_mask`] of a [`voxel_mask_texture`], awaiting the readback (the browser's form).
+pub async fn read_voxel_mask_async(
+    ctx: &GpuContext,
+    depth_stencil: &wgpu::Texture,
+) -> Result<Vec<u8>, PassError> {
+    let stencil = ctx
+        .read_texture_async(depth_stencil, wgpu::TextureAspect::StencilOnly)
+        .await?;
+    let voxel = STENCIL_VOXEL as u8;
+    Ok(stencil
+        .bytes
+        .iter()
+        .map(|&s| u8::from(s == voxel))
+        .collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::f16_to_f32;

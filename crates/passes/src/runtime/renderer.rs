@@ -1,7 +1,7 @@
 //! Executing a resolved pipeline: physical resources for a screen size, one pass object
 //! per scheduled pass, per-pass GPU timestamps (and wall time per pass on request).
 
-use std::time::Instant;
+use web_time::Instant;
 
 use ssbvb_gpu::scene::GpuScene;
 use ssbvb_gpu::{GpuContext, wgpu};
@@ -26,6 +26,10 @@ pub enum Profiling {
     /// Timestamps plus each pass submitted and waited for alone: per-pass wall time (what
     /// to trust on software adapters, whose timestamps are unreliable).
     TimestampsAndWall,
+    /// GPU timestamps per pass written and resolved but not waited for: the frame's
+    /// [`FrameStats::passes`] are empty and [`Renderer::pass_times_readout`] reads them
+    /// later (the browser, whose thread must not block).
+    TimestampsUnwaited,
 }
 
 /// Timing of one pass.
@@ -205,6 +209,22 @@ impl Renderer {
         }
     }
 
+    /// What reads each pass's GPU time of the last frame drawn with timestamps
+    /// ([`Profiling::TimestampsUnwaited`]); `None` when the device has no timestamp
+    /// queries. It holds its own handles, so the renderer is free while it reads.
+    pub fn pass_times_readout(&self) -> Option<PassTimesReadout> {
+        let (_, buffer) = self.queries.as_ref()?;
+        Some(PassTimesReadout {
+            buffer: buffer.clone(),
+            names: self
+                .pipeline
+                .passes
+                .iter()
+                .map(|p| p.name.clone())
+                .collect(),
+        })
+    }
+
     /// The output texture.
     pub fn output(&self) -> &FrameTexture {
         self.resources.texture(self.pipeline.output)
@@ -218,7 +238,11 @@ impl Renderer {
         camera: &Camera,
         profiling: Profiling,
     ) -> Result<FrameStats, PassError> {
-        if profiling != Profiling::Off {
+        let waits = matches!(
+            profiling,
+            Profiling::Timestamps | Profiling::TimestampsAndWall
+        );
+        if waits {
             // Earlier unwaited frames must not be billed to this one.
             ctx.wait_idle().map_err(PassError::Gpu)?;
         }
@@ -288,16 +312,11 @@ impl Renderer {
         ctx.submit("frame", [encoder.finish()]);
         scene.after_submit();
         let mut gpu_ms = vec![None; self.passes.len()];
-        if use_ts {
+        if use_ts && waits {
             let (_, buf) = self.queries.as_ref().expect("queries exist");
-            let raw: Vec<u64> =
-                bytemuck::pod_collect_to_vec(&ctx.read_buffer(buf).map_err(PassError::Gpu)?);
-            let period = ctx.queue.get_timestamp_period() as f64;
-            for (i, ms) in gpu_ms.iter_mut().enumerate() {
-                let (a, b) = (raw[2 * i], raw[2 * i + 1]);
-                *ms = (b >= a).then(|| (b - a) as f64 * period / 1e6);
-            }
-        } else if profiling != Profiling::Off {
+            let raw = ctx.read_buffer(buf).map_err(PassError::Gpu)?;
+            gpu_ms = pass_ms(ctx, &raw);
+        } else if waits {
             ctx.wait_idle().map_err(PassError::Gpu)?;
         }
         let errors = ctx.take_uncaptured_errors();
@@ -308,7 +327,7 @@ impl Renderer {
                 message: errors.join("; "),
             }));
         }
-        let passes = if profiling == Profiling::Off {
+        let passes = if !waits {
             Vec::new()
         } else {
             self.pipeline
@@ -327,5 +346,42 @@ impl Renderer {
             frame_wall_ms: start.elapsed().as_secs_f64() * 1e3,
             visible_instances,
         })
+    }
+}
+
+/// Each pass's time in ms from its begin and end timestamps (`raw`: two `u64` per pass);
+/// `None` where the end precedes the begin (a counter that wrapped or was reset).
+fn pass_ms(ctx: &GpuContext, raw: &[u8]) -> Vec<Option<f64>> {
+    let raw: Vec<u64> = bytemuck::pod_collect_to_vec(raw);
+    let period = f64::from(ctx.queue.get_timestamp_period());
+    raw.chunks_exact(2)
+        .map(|t| (t[1] >= t[0]).then(|| (t[1] - t[0]) as f64 * period / 1e6))
+        .collect()
+}
+
+/// The resolved timestamps of a frame and its passes' names
+/// ([`Renderer::pass_times_readout`]).
+pub struct PassTimesReadout {
+    buffer: wgpu::Buffer,
+    names: Vec<String>,
+}
+
+impl PassTimesReadout {
+    /// Each pass's GPU time, awaiting the readback (the browser's form).
+    pub async fn read(&self, ctx: &GpuContext) -> Result<Vec<PassTiming>, PassError> {
+        let raw = ctx
+            .read_buffer_async(&self.buffer)
+            .await
+            .map_err(PassError::Gpu)?;
+        Ok(self
+            .names
+            .iter()
+            .zip(pass_ms(ctx, &raw))
+            .map(|(name, gpu_ms)| PassTiming {
+                name: name.clone(),
+                gpu_ms,
+                wall_ms: None,
+            })
+            .collect())
     }
 }

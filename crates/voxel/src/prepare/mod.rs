@@ -10,7 +10,7 @@ mod regions;
 
 pub use regions::{PrepareToFileError, REGION_LOG, prepare_mesh_in_regions, prepare_mesh_to_cache};
 
-use std::time::Instant;
+use web_time::Instant;
 
 use rayon::prelude::*;
 use serde::Serialize;

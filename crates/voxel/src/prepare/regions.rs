@@ -12,7 +12,7 @@
 //! floats. The result equals the whole-grid path's exactly (same per-brick voxels, same
 //! per-sibling-run averages; a test checks).
 
-use std::time::Instant;
+use web_time::Instant;
 
 use std::path::Path;
 
