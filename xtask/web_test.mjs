@@ -12,14 +12,15 @@ import puppeteer from "puppeteer-core";
 const plan = JSON.parse(readFileSync(process.argv[2], "utf8"));
 const result = { cases: [], console_errors: [], model: null, bad: null };
 
+// Chromium's own WebGPU (SwiftShader where there is no GPU); no network.
+const browserArgs = [
+  "--no-sandbox", "--enable-unsafe-webgpu", "--disable-quic", "--no-first-run",
+  "--disable-background-networking", "--disable-component-update", "--disable-sync",
+];
 const browser = await puppeteer.launch({
   executablePath: plan.chromium,
   headless: true,
-  args: [
-    "--no-sandbox", "--enable-unsafe-webgpu", "--enable-features=Vulkan",
-    "--use-webgpu-adapter=swiftshader", "--disable-quic", "--no-first-run",
-    "--disable-background-networking", "--disable-component-update", "--disable-sync",
-  ],
+  args: browserArgs,
   protocolTimeout: plan.timeout_ms,
 });
 
@@ -96,6 +97,27 @@ try {
       result.model = { outcome: "page not ready: " + title };
     }
     await page.close();
+  }
+  // Pages that must fail clearly: a bad URL parameter, and (in a browser without WebGPU
+  // enabled) no adapter.
+  result.failures = [];
+  const bad = await openPage("size=0x0");
+  result.failures.push({ case: "bad size", title: bad.title });
+  await bad.page.close();
+  const plain = await puppeteer.launch({
+    executablePath: plan.chromium, headless: true,
+    args: browserArgs.filter((a) => a !== "--enable-unsafe-webgpu"),
+  });
+  try {
+    const page = await plain.newPage();
+    await page.goto(plan.base_url, { waitUntil: "load" });
+    await page.waitForFunction(
+      () => document.title.startsWith("ssbvb ready") || document.title.startsWith("ssbvb error:"),
+      { timeout: plan.timeout_ms, polling: 200 },
+    );
+    result.failures.push({ case: "no WebGPU", title: await page.title() });
+  } finally {
+    await plain.close();
   }
 } finally {
   await browser.close();

@@ -154,6 +154,24 @@ fn check(root: &Path, out: &Path, result: &serde_json::Value) -> Result<bool> {
             "a broken file did not get the page's message: {bad}"
         ));
     }
+    for (case, want) in [
+        ("bad size", "ssbvb error: URL parameter size:"),
+        (
+            "no WebGPU",
+            "ssbvb error: the browser gave no WebGPU adapter",
+        ),
+    ] {
+        let title = result["failures"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .find(|f| f["case"] == case)
+            .and_then(|f| f["title"].as_str())
+            .unwrap_or_default();
+        if !title.starts_with(want) {
+            fail(format!("{case}: the page says `{title}`, not `{want}…`"));
+        }
+    }
     let errors = result["console_errors"]
         .as_array()
         .cloned()

@@ -179,8 +179,8 @@ async fn adapter() -> Result<(wgpu::Instance, wgpu::Adapter), WebError> {
         }
     }
     Err(WebError::Gpu(
-        "WebGPU is on, but the browser gave no adapter (a blocked GPU or driver; \
-         chrome://gpu says why)"
+        "the browser gave no WebGPU adapter: WebGPU may be off or the GPU blocked \
+         (chrome://gpu says why; Chromium on Linux needs --enable-unsafe-webgpu)"
             .into(),
     ))
 }
