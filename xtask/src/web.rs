@@ -79,10 +79,12 @@ pub fn build(root: &Path) -> Result<PathBuf> {
     if !ok {
         bail!("wasm-bindgen failed on {}", wasm.display());
     }
-    std::fs::copy(
-        root.join("crates/web/static/index.html"),
-        staging.join("index.html"),
-    )?;
+    for file in ["index.html", "worker.js"] {
+        std::fs::copy(
+            root.join("crates/web/static").join(file),
+            staging.join(file),
+        )?;
+    }
     for dir in ["scenes", "pipelines", "models"] {
         copy_dir(
             &root.join("assets").join(dir),

@@ -122,6 +122,14 @@ fn check(root: &Path, out: &Path, result: &serde_json::Value) -> Result<bool> {
             c["stats"]["first_frame_ms"].as_f64().unwrap_or(f64::NAN),
             c["frames_ms"].as_f64().unwrap_or(f64::NAN),
         );
+        let worker = &c["stats"]["models_prepared_in_worker"];
+        let updates = &c["stats"]["progress_updates"];
+        if worker.as_u64() != Some(1) || updates.as_u64().unwrap_or(0) < 2 {
+            fail(format!(
+                "{name}: the model was not prepared in the worker with its progress shown \
+                 (models_prepared_in_worker {worker}, progress_updates {updates})"
+            ));
+        }
         if psnr < MIN_PSNR_DB {
             fail(format!("{name}: PSNR {psnr:.2} dB < {MIN_PSNR_DB}"));
         }
@@ -135,7 +143,9 @@ fn check(root: &Path, out: &Path, result: &serde_json::Value) -> Result<bool> {
         "web-test: loadModel(cow.obj, level 6): {}, {voxels} voxel pixels, {} ms",
         model["outcome"], model["ms"]
     );
-    if model["outcome"] != "ok" || voxels < 100 {
+    // The scene's bunny and then the cow, both in the worker.
+    let in_worker = model["stats"]["models_prepared_in_worker"].as_u64();
+    if model["outcome"] != "ok" || voxels < 100 || in_worker != Some(2) {
         fail(format!("a model handed to the page did not draw: {model}"));
     }
     let bad = &result["bad"];

@@ -136,10 +136,8 @@ pub async fn load_model(
         });
     }
     clear_error();
-    status(&format!("voxelizing {name} at level {level}"));
-    yield_now().await;
     let t = now_ms();
-    let asset = Arc::new(scene_build::prepare_model(&bytes, name, level)?);
+    let asset = Arc::new(crate::worker_client::prepare(name, bytes, level).await?);
     let prepare_ms = now_ms() - t;
     let (scene, camera) = scene_build::model_scene(asset);
     // Wait for a frame or readback in flight: it holds the view.

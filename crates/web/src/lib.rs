@@ -9,9 +9,15 @@
 //! ready…`) or what failed (`ssbvb error: …`). What differs from the native renderer
 //! (one thread, no files, WebGPU's limits, timestamps) is in `docs/architecture.md`.
 //!
-//! Natively the crate is only its testable parts: the URL parameters ([`params`]) and the
-//! scene made from fetched bytes ([`scene_build`]).
+//! Models are prepared in a Web Worker (`static/worker.js`, the same module) so the page
+//! stays responsive and shows the voxelizer's progress; the asset comes back as bytes
+//! ([`asset_bytes`]).
+//!
+//! Natively the crate is only its testable parts: the URL parameters ([`params`]), the
+//! scene made from fetched bytes ([`scene_build`]) and the asset's bytes
+//! ([`asset_bytes`]).
 
+pub mod asset_bytes;
 pub mod params;
 pub mod scene_build;
 
@@ -29,6 +35,10 @@ mod page_input;
 mod present;
 #[cfg(target_arch = "wasm32")]
 mod view;
+#[cfg(target_arch = "wasm32")]
+mod worker;
+#[cfg(target_arch = "wasm32")]
+mod worker_client;
 
 /// What went wrong, as the page shows it.
 #[derive(Debug, thiserror::Error)]

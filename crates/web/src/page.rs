@@ -25,6 +25,10 @@ use crate::view::View;
 /// Entry point: runs the page and turns a failure or a panic into the page's message.
 #[wasm_bindgen(start)]
 pub fn start() {
+    if web_sys::window().is_none() {
+        // The voxelizing worker loads this module too: it has no page to run.
+        return;
+    }
     std::panic::set_hook(Box::new(|info| {
         let msg = format!("internal error (a bug; please report it): {info}");
         web_sys::console::error_1(&msg.clone().into());
@@ -89,9 +93,7 @@ async fn run() -> Result<(), WebError> {
         let url = format!("assets/scenes/{model}");
         status(&format!("loading {model}"));
         let bytes = fetch_bytes(&url).await?;
-        status(&format!("voxelizing {model} at level {level}"));
-        yield_now().await;
-        let asset = Arc::new(scene_build::prepare_model(&bytes, &model, level)?);
+        let asset = Arc::new(crate::worker_client::prepare(&model, bytes, level).await?);
         done.push(((model, level), asset.clone()));
         assets.push(asset);
     }

@@ -119,6 +119,16 @@ impl ParsedScene {
 /// Loads a model from its bytes (`name`'s extension, else its first bytes, say the format)
 /// and prepares it at `level`: the asset `ssbvb voxelize` would write to its cache.
 pub fn prepare_model(bytes: &[u8], name: &str, level: u32) -> Result<VoxelAsset, WebError> {
+    prepare_model_with(bytes, name, level, &ssbvb_voxel::progress::NoProgress)
+}
+
+/// [`prepare_model`] reporting its stages to `progress`.
+pub fn prepare_model_with(
+    bytes: &[u8],
+    name: &str,
+    level: u32,
+    progress: &dyn ssbvb_voxel::progress::Progress,
+) -> Result<VoxelAsset, WebError> {
     let bad = |message: String| WebError::Model {
         name: name.to_string(),
         message,
@@ -142,12 +152,8 @@ pub fn prepare_model(bytes: &[u8], name: &str, level: u32) -> Result<VoxelAsset,
     for w in &loaded.warnings {
         log::warn!("{name}: {w}");
     }
-    let (asset, _) = ssbvb_voxel::prepare::prepare_asset(
-        &loaded.model,
-        level,
-        &ssbvb_voxel::progress::NoProgress,
-    )
-    .map_err(|e| bad(e.to_string()))?;
+    let (asset, _) = ssbvb_voxel::prepare::prepare_asset(&loaded.model, level, progress)
+        .map_err(|e| bad(e.to_string()))?;
     Ok(asset)
 }
 
