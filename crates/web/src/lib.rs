@@ -18,6 +18,7 @@
 //! ([`asset_bytes`]).
 
 pub mod asset_bytes;
+pub mod gestures;
 pub mod params;
 pub mod scene_build;
 

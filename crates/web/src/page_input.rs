@@ -1,7 +1,8 @@
-//! The user's input: the orbit camera (pointer drag, mouse or touch, and the wheel), a
-//! model chosen with the file input or dropped on the canvas, and the frame loop that
-//! draws what changed.
+//! The user's input: the orbit camera (a pointer drag, mouse or touch, a two-finger pinch,
+//! the wheel; [`crate::gestures`]), a model chosen with the file input or dropped on the
+//! canvas, and the frame loop that draws what changed.
 
+use std::cell::RefCell;
 use std::rc::Rc;
 
 use wasm_bindgen::prelude::*;
@@ -9,6 +10,7 @@ use wasm_bindgen_futures::{JsFuture, spawn_local};
 
 use crate::app::{App, load_model, request_frames};
 use crate::dom::{canvas, element, show_error};
+use crate::gestures::{Gesture, Gestures};
 
 fn listen<E: JsCast + wasm_bindgen::convert::FromWasmAbi + 'static>(
     target: &web_sys::EventTarget,
@@ -24,28 +26,33 @@ fn listen<E: JsCast + wasm_bindgen::convert::FromWasmAbi + 'static>(
 pub fn install(app: Rc<App>) {
     let canvas = canvas();
     let target: &web_sys::EventTarget = canvas.as_ref();
-    let last: Rc<std::cell::Cell<Option<(i32, i32)>>> = Default::default();
-    let (l, c) = (last.clone(), canvas.clone());
+    let gestures: Rc<RefCell<Gestures>> = Default::default();
+    let (g, c) = (gestures.clone(), canvas.clone());
     listen(target, "pointerdown", move |e: web_sys::PointerEvent| {
         let _ = c.set_pointer_capture(e.pointer_id());
-        l.set(Some((e.client_x(), e.client_y())));
+        let (x, y) = (f64::from(e.client_x()), f64::from(e.client_y()));
+        g.borrow_mut().down(e.pointer_id(), x, y);
     });
-    let (l, a) = (last.clone(), app.clone());
+    let (g, a) = (gestures.clone(), app.clone());
     listen(target, "pointermove", move |e: web_sys::PointerEvent| {
-        let Some((x, y)) = l.get() else {
+        let (x, y) = (f64::from(e.client_x()), f64::from(e.client_y()));
+        let Some(gesture) = g.borrow_mut().moved(e.pointer_id(), x, y) else {
             return;
         };
-        let (nx, ny) = (e.client_x(), e.client_y());
-        l.set(Some((nx, ny)));
         if let Ok(mut view) = a.view.try_borrow_mut() {
-            view.orbit.drag(f64::from(nx - x), f64::from(ny - y));
+            match gesture {
+                Gesture::Turn(dx, dy) => view.orbit.drag(dx, dy),
+                Gesture::Zoom(units) => view.orbit.zoom(units),
+            }
             view.touched = true;
             view.dirty = true;
         }
     });
     for kind in ["pointerup", "pointercancel"] {
-        let l = last.clone();
-        listen(target, kind, move |_: web_sys::PointerEvent| l.set(None));
+        let g = gestures.clone();
+        listen(target, kind, move |e: web_sys::PointerEvent| {
+            g.borrow_mut().up(e.pointer_id())
+        });
     }
     let a = app.clone();
     listen(target, "wheel", move |e: web_sys::WheelEvent| {
