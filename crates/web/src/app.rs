@@ -49,6 +49,8 @@ pub struct App {
     pub info: RefCell<PageInfo>,
     /// The resolved pipeline (a dropped model is drawn with it too).
     pub pipeline: ResolvedPipeline,
+    /// Whether frames follow the canvas's size (no `size` in the URL).
+    pub follows_canvas: bool,
     /// Whether a frame is being drawn and waited for (the frame loop skips a tick then).
     pub drawing: Cell<bool>,
 }
@@ -171,12 +173,14 @@ pub async fn load_model(
     Ok(())
 }
 
-/// Draws when something changed, once per animation frame.
+/// Draws when something changed (the camera, the canvas's size), once per animation
+/// frame.
 pub fn request_frames(app: Rc<App>) {
     type Tick = Rc<std::cell::RefCell<Option<Closure<dyn FnMut()>>>>;
     let tick: Tick = Default::default();
     let again = tick.clone();
     *tick.borrow_mut() = Some(Closure::new(move || {
+        follow_canvas(&app);
         if app.view.borrow().dirty && !app.drawing.get() {
             let a = app.clone();
             spawn_local(async move {
@@ -191,5 +195,26 @@ pub fn request_frames(app: Rc<App>) {
     }));
     if let (Some(w), Some(f)) = (web_sys::window(), tick.borrow().as_ref()) {
         let _ = w.request_animation_frame(f.as_ref().unchecked_ref());
+    }
+}
+
+/// Renders at the canvas's new size after the window changed, where frames follow it.
+pub fn follow_canvas(app: &App) {
+    if !app.follows_canvas || app.drawing.get() {
+        return;
+    }
+    let canvas = crate::dom::canvas();
+    let size = crate::dom::canvas_size(&canvas);
+    let Ok(mut view) = app.view.try_borrow_mut() else {
+        return;
+    };
+    if view.renderer.screen == size {
+        return;
+    }
+    canvas.set_width(size.0);
+    canvas.set_height(size.1);
+    match view.resize(&app.ctx, size) {
+        Ok(()) => app.info.borrow_mut().size = size,
+        Err(e) => show_error(&e.to_string()),
     }
 }

@@ -149,6 +149,7 @@ async fn run() -> Result<(), WebError> {
             ..Default::default()
         }),
         pipeline,
+        follows_canvas: params.size.is_none(),
         drawing: Default::default(),
     });
     draw_and_report(&app).await?;

@@ -100,6 +100,11 @@ impl Presenter {
         })
     }
 
+    /// The canvas's surface, to configure again for another frame size.
+    pub fn into_surface(self) -> wgpu::Surface<'static> {
+        self.surface
+    }
+
     /// Draws `output` (the frame just rendered) into the canvas.
     pub fn present(&self, ctx: &GpuContext, output: &wgpu::Texture) -> Result<(), WebError> {
         let frame = match self.surface.get_current_texture() {

@@ -104,6 +104,20 @@ impl View {
         })
     }
 
+    /// Renders at `size` from now on (the canvas was resized): the renderer's frame
+    /// resources and the canvas's configuration are made again.
+    pub fn resize(&mut self, ctx: &GpuContext, size: (u32, u32)) -> Result<(), WebError> {
+        let pipeline = self.renderer.pipeline.clone();
+        self.renderer = Renderer::new(ctx, &self.scene, pipeline, size)
+            .map_err(|e| WebError::Gpu(e.to_string()))?;
+        if let Some(p) = self.presenter.take() {
+            let output = &self.renderer.output().texture;
+            self.presenter = Some(Presenter::new(ctx, p.into_surface(), output)?);
+        }
+        self.dirty = true;
+        Ok(())
+    }
+
     /// Draws a frame (with per-pass timestamps where the device has them) and presents it.
     pub fn draw(&mut self, ctx: &GpuContext) -> Result<FrameStats, WebError> {
         let camera = self.orbit.camera(self.touched);
