@@ -11,6 +11,7 @@ mod faults;
 mod flip;
 mod pipeline_choice;
 mod pipeline_cmd;
+mod pipeline_kinds;
 mod progress;
 mod render_cmd;
 mod scene_file;

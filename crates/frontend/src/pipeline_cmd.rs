@@ -1,4 +1,6 @@
-//! `ssbvb pipeline check <file.ron>`: resolve a pipeline and print its schedule.
+//! `ssbvb pipeline check <file.ron>`: resolve a pipeline and print its schedule;
+//! `ssbvb pipeline kinds [NAME] [--markdown]`: the pass-kind reference
+//! ([`crate::pipeline_kinds`]).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -16,6 +18,16 @@ pub enum PipelineCommand {
         /// Screen size for the resource sizes in the report.
         #[arg(long, default_value = "1280x720", value_parser = parse_size)]
         size: (u32, u32),
+    },
+    /// List the pass kinds a pipeline file can use, from the code's own specs: what each
+    /// does, its slots and parameters (type, default, allowed values) and the bundled
+    /// pipelines that use it.
+    Kinds {
+        /// One kind to show whole.
+        name: Option<String>,
+        /// Write the whole reference as Markdown (`docs/pipelines.md`).
+        #[arg(long, conflicts_with = "name")]
+        markdown: bool,
     },
 }
 
@@ -39,6 +51,14 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 /// Runs a pipeline subcommand.
 pub fn run(cmd: &PipelineCommand) -> anyhow::Result<ExitCode> {
     match cmd {
+        PipelineCommand::Kinds { name, markdown } => {
+            if *markdown {
+                print!("{}", crate::pipeline_kinds::markdown());
+            } else {
+                print!("{}", crate::pipeline_kinds::text(name.as_deref())?);
+            }
+            Ok(ExitCode::SUCCESS)
+        }
         PipelineCommand::Check { file, size } => match ssbvb_graph::resolve_file(file) {
             Ok(p) => {
                 print!("{}", p.describe(*size));

@@ -232,7 +232,7 @@ impl fmt::Display for PipelineErrors {
 impl std::error::Error for PipelineErrors {}
 
 /// `"; did you mean `x`?"` when a known name is close to `found`, plus the known names.
-pub(crate) fn suggest<'a>(found: &str, known: impl IntoIterator<Item = &'a str>) -> String {
+pub fn suggest<'a>(found: &str, known: impl IntoIterator<Item = &'a str>) -> String {
     let known: Vec<&str> = known.into_iter().collect();
     let best = known
         .iter()

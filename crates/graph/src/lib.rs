@@ -22,7 +22,7 @@ pub mod resolve;
 pub mod schema;
 pub mod watch;
 
-pub use error::{GraphError, Loc, PipelineErrors};
+pub use error::{GraphError, Loc, PipelineErrors, suggest};
 pub use format::{BufferLayout, Format};
 pub use kinds::*;
 pub use locate::Position;

@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use super::formats::GBUFFER_WRITES;
 use super::shared::one;
-use super::spec::{KindSpec, PassStage, SlotClass, SlotDesc};
+use super::spec::{KindSpec, ParamDesc, PassStage, SlotClass, SlotDesc};
 use crate::format::BufferLayout;
 
 /// How billboards are shaded.
@@ -62,6 +62,14 @@ pub(crate) const fn billboard_slots(draw: SlotClass) -> [SlotDesc; 7] {
 }
 
 impl KindSpec for BillboardsParams {
+    const PARAMS: &'static [ParamDesc] = &[
+        ParamDesc::new(
+            "mode",
+            "Flat | RayBox | Pixel",
+            "Flat or RayBox (Pixel is SplatBillboards')",
+        ),
+        ParamDesc::new("size_scale", "f32", "a positive number"),
+    ];
     const NAME: &'static str = "Billboards";
     const STAGE: PassStage = PassStage::Render;
     const SLOTS: &'static [SlotDesc] =

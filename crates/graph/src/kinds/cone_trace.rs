@@ -5,7 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::formats::{ALBEDO, LIGHT, NORMAL, POSITION};
-use super::spec::{KindSpec, PassStage, SlotClass, SlotDesc};
+use super::spec::{KindSpec, ParamDesc, PassStage, SlotClass, SlotDesc};
 
 /// The most diffuse cones per pixel.
 pub const MAX_CONES: u32 = 64;
@@ -73,6 +73,14 @@ impl Default for ConeTraceParams {
 }
 
 impl KindSpec for ConeTraceParams {
+    const PARAMS: &'static [ParamDesc] = &[
+        ParamDesc::new("cones", "u32", "1 to 64 (MAX_CONES)"),
+        ParamDesc::new("aperture", "f32", "degrees, above 0 and below 180"),
+        ParamDesc::new("max_distance", "f32", "a positive number (world units)"),
+        ParamDesc::new("step_scale", "f32", "0.05 to 4"),
+        ParamDesc::new("shadow_aperture", "f32", "degrees, above 0 and below 180"),
+        ParamDesc::new("resolution", "u32", "8 to 512 (MAX_VOLUME_RESOLUTION)"),
+    ];
     const NAME: &'static str = "ConeTrace";
     const STAGE: PassStage = PassStage::Render;
     const SLOTS: &'static [SlotDesc] = &[

@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::formats::GBUFFER_WRITES;
-use super::spec::{KindSpec, PassStage, SlotDesc};
+use super::spec::{KindSpec, ParamDesc, PassStage, SlotDesc};
 
 /// Parameters of `CubeRaster`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
@@ -27,6 +27,8 @@ impl Default for CubeRasterParams {
 }
 
 impl KindSpec for CubeRasterParams {
+    const PARAMS: &'static [ParamDesc] =
+        &[ParamDesc::new("merge_full_nodes", "bool", "true or false")];
     const NAME: &'static str = "CubeRaster";
     const STAGE: PassStage = PassStage::Render;
     const SLOTS: &'static [SlotDesc] = GBUFFER_WRITES;

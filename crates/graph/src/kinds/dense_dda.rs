@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 
 use super::formats::GBUFFER_WRITES;
 use super::shared::{default_ray_cast_steps, steps_problems};
-use super::spec::{KindSpec, PassStage, SlotDesc};
+use super::spec::{KindSpec, ParamDesc, PassStage, SlotDesc};
 
 /// Parameters of `DenseDda`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
@@ -24,6 +24,7 @@ impl Default for DenseDdaParams {
 }
 
 impl KindSpec for DenseDdaParams {
+    const PARAMS: &'static [ParamDesc] = &[ParamDesc::new("max_steps", "u32", "at least 1")];
     const NAME: &'static str = "DenseDda";
     const STAGE: PassStage = PassStage::Render;
     const SLOTS: &'static [SlotDesc] = GBUFFER_WRITES;

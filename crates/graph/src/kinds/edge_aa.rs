@@ -6,7 +6,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::formats::COLOR_OUT;
-use super::spec::{KindSpec, PassStage, SlotClass, SlotDesc};
+use super::spec::{KindSpec, ParamDesc, PassStage, SlotClass, SlotDesc};
 
 /// Parameters of `EdgeAa`.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
@@ -40,6 +40,10 @@ impl Default for EdgeAaParams {
 }
 
 impl KindSpec for EdgeAaParams {
+    const PARAMS: &'static [ParamDesc] = &[
+        ParamDesc::new("threshold", "f32", "above 0, at most 1"),
+        ParamDesc::new("subpixel", "f32", "0 to 1"),
+    ];
     const NAME: &'static str = "EdgeAa";
     const STAGE: PassStage = PassStage::Render;
     const SLOTS: &'static [SlotDesc] = &[

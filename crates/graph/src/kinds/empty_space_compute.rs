@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::formats::ENTRY;
-use super::spec::{KindSpec, PassStage, SlotClass, SlotDesc};
+use super::spec::{KindSpec, ParamDesc, PassStage, SlotClass, SlotDesc};
 
 /// Parameters of `EmptySpaceCompute`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
@@ -18,6 +18,11 @@ pub struct EmptySpaceComputeParams {
 }
 
 impl KindSpec for EmptySpaceComputeParams {
+    const PARAMS: &'static [ParamDesc] = &[ParamDesc::new(
+        "large_pixels",
+        "Option<u32>",
+        "None (4096 on CPU adapters, 256 elsewhere) or at least 1",
+    )];
     const NAME: &'static str = "EmptySpaceCompute";
     const STAGE: PassStage = PassStage::Compute;
     const SLOTS: &'static [SlotDesc] =

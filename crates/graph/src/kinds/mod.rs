@@ -42,7 +42,7 @@ pub use octree_ray_cast::OctreeRayCastParams;
 pub use rastavox::{MAX_PIXEL_ERROR, RastaVoxParams};
 pub use ray_march_filter::{MarchMode, RayMarchFilterParams};
 pub use smooth::{SmoothComputeParams, SmoothParams};
-pub use spec::{Access, KindSpec, PassStage, SlotClass, SlotDesc};
+pub use spec::{Access, KindSpec, ParamDesc, PassStage, SlotClass, SlotDesc};
 pub use splat_billboards::SplatBillboardsParams;
 pub use temporal::TemporalParams;
 pub use triangles::TrianglesKind;
@@ -124,9 +124,97 @@ pass_kinds! {
     CompositeCompute = CompositeComputeKind;
 }
 
+impl PassKind {
+    /// The kind's parameters with their values as written in RON, in declaration order
+    /// (`[("max_steps", "1024"), ("march", "Exact"), …]`; of a default kind, the
+    /// defaults). Empty for a kind without parameters.
+    pub fn parameter_values(&self) -> Vec<(String, String)> {
+        let Ok(text) = ron::to_string(self) else {
+            return Vec::new();
+        };
+        // `Name((a:1,b:Some(2)))`: peel parentheses until the fields are at the top.
+        let mut body = text.strip_prefix(self.name()).unwrap_or_default();
+        while let Some(inner) = body.strip_prefix('(').and_then(|b| b.strip_suffix(')')) {
+            body = inner;
+            if split_top_level(body)
+                .iter()
+                .all(|f| field_name(f).is_some())
+            {
+                break;
+            }
+        }
+        split_top_level(body)
+            .into_iter()
+            .filter_map(|f| Some((field_name(f)?.to_string(), f.split_once(':')?.1.to_string())))
+            .collect()
+    }
+}
+
+/// The name of a RON field `name:value` (`None` when `text` is not one).
+fn field_name(text: &str) -> Option<&str> {
+    let (name, _) = text.split_once(':')?;
+    (!name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_'))
+        .then_some(name)
+}
+
+/// `text` split at the commas outside parentheses.
+fn split_top_level(text: &str) -> Vec<&str> {
+    let (mut out, mut depth, mut start) = (Vec::new(), 0i32, 0);
+    for (i, c) in text.char_indices() {
+        match c {
+            '(' | '[' => depth += 1,
+            ')' | ']' => depth -= 1,
+            ',' if depth == 0 => {
+                out.push(&text[start..i]);
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    if start < text.len() {
+        out.push(&text[start..]);
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The reference's parameters are the kinds' own fields, in order, each with a type
+    /// and a range; a kind's description is its doc comment.
+    #[test]
+    fn every_parameter_is_described_and_has_its_default() {
+        for kind in PassKind::all_defaults() {
+            let values = kind.parameter_values();
+            let names: Vec<&str> = values.iter().map(|(k, _)| k.as_str()).collect();
+            let described: Vec<&str> = kind.parameters().iter().map(|p| p.name).collect();
+            assert_eq!(names, described, "{}", kind.name());
+            for p in kind.parameters() {
+                assert!(!p.ty.is_empty() && !p.range.is_empty(), "{}", kind.name());
+            }
+            assert!(kind.description().len() > 20, "{}", kind.name());
+        }
+        let filter = PassKind::RayMarchFilter(RayMarchFilterParams::default());
+        assert_eq!(
+            filter.parameter_values(),
+            [
+                ("max_steps", "1024"),
+                ("unique_voxels", "false"),
+                ("march", "Exact"),
+                ("peel", "false")
+            ]
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+        );
+        let compute = PassKind::EmptySpaceCompute(EmptySpaceComputeParams {
+            large_pixels: Some(64),
+        });
+        assert_eq!(
+            compute.parameter_values(),
+            [("large_pixels".to_string(), "Some(64)".to_string())]
+        );
+        assert!(PassKind::Composite.parameter_values().is_empty());
+    }
 
     #[test]
     fn kind_names_match_variants_and_specs() {

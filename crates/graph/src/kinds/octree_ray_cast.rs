@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 
 use super::formats::GBUFFER_WRITES;
 use super::shared::{default_ray_cast_steps, steps_problems};
-use super::spec::{KindSpec, PassStage, SlotDesc};
+use super::spec::{KindSpec, ParamDesc, PassStage, SlotDesc};
 
 /// Parameters of `OctreeRayCast`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
@@ -31,6 +31,10 @@ impl Default for OctreeRayCastParams {
 }
 
 impl KindSpec for OctreeRayCastParams {
+    const PARAMS: &'static [ParamDesc] = &[
+        ParamDesc::new("max_steps", "u32", "at least 1"),
+        ParamDesc::new("compute", "bool", "true or false"),
+    ];
     const NAME: &'static str = "OctreeRayCast";
     const STAGE: PassStage = PassStage::Render;
     const SLOTS: &'static [SlotDesc] = GBUFFER_WRITES;

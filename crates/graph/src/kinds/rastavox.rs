@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 
 use super::formats::GBUFFER_WRITES;
 use super::shared::one;
-use super::spec::{KindSpec, PassStage, SlotDesc};
+use super::spec::{KindSpec, ParamDesc, PassStage, SlotDesc};
 
 /// Parameters of `RastaVox`.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
@@ -26,6 +26,11 @@ impl Default for RastaVoxParams {
 }
 
 impl KindSpec for RastaVoxParams {
+    const PARAMS: &'static [ParamDesc] = &[ParamDesc::new(
+        "pixel_error",
+        "f32",
+        "0 to 4096 (MAX_PIXEL_ERROR)",
+    )];
     const NAME: &'static str = "RastaVox";
     const STAGE: PassStage = PassStage::Render;
     const SLOTS: &'static [SlotDesc] = GBUFFER_WRITES;

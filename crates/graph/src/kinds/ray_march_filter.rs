@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 
 use super::formats::ENTRY;
 use super::shared::steps_problems;
-use super::spec::{KindSpec, PassStage, SlotClass, SlotDesc};
+use super::spec::{KindSpec, ParamDesc, PassStage, SlotClass, SlotDesc};
 use crate::format::BufferLayout;
 
 /// Parameters of `RayMarchFilter`.
@@ -62,6 +62,12 @@ impl Default for RayMarchFilterParams {
 }
 
 impl KindSpec for RayMarchFilterParams {
+    const PARAMS: &'static [ParamDesc] = &[
+        ParamDesc::new("max_steps", "u32", "at least 1"),
+        ParamDesc::new("unique_voxels", "bool", "true or false"),
+        ParamDesc::new("march", "Exact | Fast", "either"),
+        ParamDesc::new("peel", "bool", "true or false"),
+    ];
     const NAME: &'static str = "RayMarchFilter";
     const STAGE: PassStage = PassStage::Compute;
     const SLOTS: &'static [SlotDesc] = &[

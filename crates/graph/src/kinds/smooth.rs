@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 
 use super::formats::{DEPTH_STENCIL, GBUFFER_NORMAL, NORMAL};
 use super::shared::one;
-use super::spec::{KindSpec, PassStage, SlotClass, SlotDesc};
+use super::spec::{KindSpec, ParamDesc, PassStage, SlotClass, SlotDesc};
 
 /// Parameters of `Smooth`.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
@@ -39,6 +39,11 @@ impl Default for SmoothParams {
 }
 
 impl KindSpec for SmoothParams {
+    const PARAMS: &'static [ParamDesc] = &[
+        ParamDesc::new("max_i", "f32", "at least 0"),
+        ParamDesc::new("min_dist", "f32", "at least 0"),
+        ParamDesc::new("copy_depth", "bool", "true or false"),
+    ];
     const NAME: &'static str = "Smooth";
     const STAGE: PassStage = PassStage::Render;
     const SLOTS: &'static [SlotDesc] = &[
@@ -89,6 +94,10 @@ impl Default for SmoothComputeParams {
 }
 
 impl KindSpec for SmoothComputeParams {
+    const PARAMS: &'static [ParamDesc] = &[
+        ParamDesc::new("max_i", "f32", "at least 0"),
+        ParamDesc::new("min_dist", "f32", "at least 0"),
+    ];
     const NAME: &'static str = "SmoothCompute";
     const STAGE: PassStage = PassStage::Compute;
     const SLOTS: &'static [SlotDesc] = &[

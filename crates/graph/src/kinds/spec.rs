@@ -129,6 +129,27 @@ impl SlotDesc {
     }
 }
 
+/// One parameter of a pass kind as the reference shows it (`ssbvb pipeline kinds`): its
+/// name in RON, its type, and the values [`KindSpec::problems`] allows. Its default is
+/// the kind's own `Default`, read from there ([`crate::PassKind::parameter_values`] of a
+/// default kind).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ParamDesc {
+    /// Field name, as written in RON.
+    pub name: &'static str,
+    /// Type, as written in RON (`u32`, `f32`, `bool`, an enum's variants, `Option<u32>`).
+    pub ty: &'static str,
+    /// Allowed values, in words.
+    pub range: &'static str,
+}
+
+impl ParamDesc {
+    /// A parameter `name` of type `ty` allowing `range`.
+    pub const fn new(name: &'static str, ty: &'static str, range: &'static str) -> Self {
+        ParamDesc { name, ty, range }
+    }
+}
+
 /// Whether a pass runs as a render pass or a compute pass.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PassStage {
@@ -156,6 +177,9 @@ pub trait KindSpec {
         PassStage::Compute => &["main"],
     };
 
+    /// The parameters, in declaration order (none for a kind without).
+    const PARAMS: &'static [ParamDesc] = &[];
+
     /// Problems with the parameters (empty when they are valid).
     fn problems(&self) -> Vec<String> {
         Vec::new()
@@ -169,11 +193,11 @@ pub trait KindSpec {
 /// `Name = MarkerType` (RON: `Name`). `OfKind` is declared here with the enum it reads,
 /// so that this file does not import the list that imports it.
 macro_rules! pass_kinds {
-    ($( $(#[$doc:meta])* $name:ident $( ( $params:ident ) )? $( = $unit:ident )? ; )*) => {
+    ($( $(#[doc = $doc:literal])* $name:ident $( ( $params:ident ) )? $( = $unit:ident )? ; )*) => {
         /// Every pass kind, with its parameters (RON: `RayMarchFilter(max_steps: 512)`).
         #[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
         pub enum PassKind {
-            $( $(#[$doc])* $name $( ($params) )?, )*
+            $( $(#[doc = $doc])* $name $( ($params) )?, )*
         }
 
         /// The parameters of a pass kind found in a [`PassKind`] value.
@@ -199,6 +223,20 @@ macro_rules! pass_kinds {
             /// tools).
             pub fn all_defaults() -> Vec<PassKind> {
                 vec![$( pass_kinds!(@default $name $( ($params) )? $( = $unit )?) ),*]
+            }
+
+            /// What the kind does: its doc comment in the list of kinds.
+            pub fn description(&self) -> &'static str {
+                match self {
+                    $( PassKind::$name { .. } => concat!($( $doc, "\n" ),*), )*
+                }
+            }
+
+            /// The kind's parameters ([`KindSpec::PARAMS`]).
+            pub fn parameters(&self) -> &'static [ParamDesc] {
+                match self {
+                    $( PassKind::$name { .. } => <$($params)? $($unit)? as KindSpec>::PARAMS, )*
+                }
             }
 
             /// Render or compute.

@@ -5,7 +5,7 @@ use std::ops::Deref;
 use serde::{Deserialize, Serialize};
 
 use super::billboards::{BillboardsParams, billboard_slots};
-use super::spec::{KindSpec, PassStage, SlotClass, SlotDesc};
+use super::spec::{KindSpec, ParamDesc, PassStage, SlotClass, SlotDesc};
 use crate::format::BufferLayout;
 
 /// Parameters of `SplatBillboards`: those of `Billboards`, read and written the same way
@@ -25,6 +25,10 @@ impl Deref for SplatBillboardsParams {
 }
 
 impl KindSpec for SplatBillboardsParams {
+    const PARAMS: &'static [ParamDesc] = &[
+        ParamDesc::new("mode", "Flat | RayBox | Pixel", "any"),
+        ParamDesc::new("size_scale", "f32", "a positive number"),
+    ];
     const NAME: &'static str = "SplatBillboards";
     const STAGE: PassStage = PassStage::Render;
     // The draw list is read by the splat (the entry count), not used as an indirect draw.

@@ -7,7 +7,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::formats::{COLOR_OUT, POSITION};
-use super::spec::{KindSpec, PassStage, SlotClass, SlotDesc};
+use super::spec::{KindSpec, ParamDesc, PassStage, SlotClass, SlotDesc};
 
 /// Parameters of `Temporal`.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
@@ -52,6 +52,11 @@ impl Default for TemporalParams {
 }
 
 impl KindSpec for TemporalParams {
+    const PARAMS: &'static [ParamDesc] = &[
+        ParamDesc::new("blend", "f32", "above 0, at most 1"),
+        ParamDesc::new("cut", "f32", "a positive number"),
+        ParamDesc::new("motion_blend", "f32", "blend to 1"),
+    ];
     const NAME: &'static str = "Temporal";
     const STAGE: PassStage = PassStage::Render;
     const SLOTS: &'static [SlotDesc] = &[

@@ -5,7 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::formats::{COLOR_OUT, DEPTH_STENCIL};
-use super::spec::{KindSpec, PassStage, SlotClass, SlotDesc};
+use super::spec::{KindSpec, ParamDesc, PassStage, SlotClass, SlotDesc};
 
 /// The finest slice spacing accepted, in texels (thinner slices cost without changing the
 /// image: the reference converges at a quarter texel).
@@ -42,6 +42,10 @@ impl Default for VolumeSlicesParams {
 }
 
 impl KindSpec for VolumeSlicesParams {
+    const PARAMS: &'static [ParamDesc] = &[
+        ParamDesc::new("slice_spacing", "f32", "0.05 to 8 texels"),
+        ParamDesc::new("mip_bias", "f32", "-10 to 10 levels"),
+    ];
     const NAME: &'static str = "VolumeSlices";
     const STAGE: PassStage = PassStage::Render;
     const SLOTS: &'static [SlotDesc] = &[
