@@ -15,6 +15,7 @@ mod pipeline_kinds;
 mod progress;
 mod render_cmd;
 mod scene_file;
+mod scene_reference;
 mod session;
 mod soak;
 mod view;
@@ -57,6 +58,17 @@ enum Command {
     /// List every GPU adapter with what it lacks for a pipeline, and the one ssbvb would
     /// use (set SSBVB_ADAPTER / WGPU_BACKEND to choose).
     Adapter(adapter_cmd::AdapterArgs),
+    /// Scene files (RON).
+    #[command(subcommand)]
+    Scene(SceneCommand),
+}
+
+/// Scene-file subcommands.
+#[derive(Subcommand)]
+enum SceneCommand {
+    /// Print the scene-file reference (every field: type, default, meaning; Markdown, the
+    /// text of `docs/scenes.md`), from the format's own declarations.
+    Fields,
 }
 
 fn main() -> ExitCode {
@@ -72,7 +84,7 @@ fn main() -> ExitCode {
         Command::Render(a) => adapter_cmd::set_limits(a.limits),
         Command::View(a) => adapter_cmd::set_limits(a.limits),
         Command::Calibrate(a) => adapter_cmd::set_limits(a.limits),
-        Command::Pipeline(_) | Command::Voxelize(_) => {}
+        Command::Pipeline(_) | Command::Voxelize(_) | Command::Scene(_) => {}
     }
     let result = match cli.command {
         Command::Pipeline(c) => pipeline_cmd::run(&c),
@@ -83,6 +95,10 @@ fn main() -> ExitCode {
         Command::View(a) => view::run(&a).map(|_| ExitCode::SUCCESS),
         Command::Voxelize(a) => voxelize_cmd::run(&a).map(|_| ExitCode::SUCCESS),
         Command::Calibrate(a) => calibrate_cmd::run(&a).map(|_| ExitCode::SUCCESS),
+        Command::Scene(SceneCommand::Fields) => {
+            print!("{}", scene_reference::markdown());
+            Ok(ExitCode::SUCCESS)
+        }
     };
     match result {
         Ok(code) => code,
