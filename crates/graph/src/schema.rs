@@ -1,7 +1,8 @@
 //! The RON pipeline file, as written by users (deserialized with serde).
 //!
-//! See the README's "Pipeline RON reference" for the format with an example. Nothing here
-//! is validated beyond syntax: [`crate::resolve`] checks meaning and reports every error.
+//! See `docs/usage.md`, "Pipeline RON reference", for the format with an example, and
+//! `docs/pipelines.md` for every kind. Nothing here is validated beyond syntax:
+//! [`crate::resolve`] checks meaning and reports every error.
 
 use std::fmt;
 

@@ -5,6 +5,7 @@ mod animation;
 mod calibrate;
 mod cone_trace;
 mod device_loss;
+mod docs_commands;
 mod gl;
 mod limits;
 mod out_of_memory;

@@ -1,8 +1,8 @@
 //! The one table of implemented pass kinds. Each pass type implements [`PassImpl`] next to
 //! its code (WGSL file, own bindings, adapter needs, constructor from its typed
 //! parameters); the `pass_modules!` list in `kinds/mod.rs` declares each pass module and its
-//! [`crate::kinds::REGISTRY`] entry, one line each (the recipe is in the README,
-//! "Adding a pass kind").
+//! [`crate::kinds::REGISTRY`] entry, one line each (the recipe is in `docs/guide.md`,
+//! "Add a pass kind").
 
 use ssbvb_gpu::requirements::LimitNeed;
 use ssbvb_gpu::{GpuContext, wgpu};
