@@ -7,6 +7,7 @@ mod budget;
 mod bundled;
 mod calibrate_cmd;
 mod calibration;
+mod decl_docs;
 mod faults;
 mod flip;
 mod pipeline_choice;

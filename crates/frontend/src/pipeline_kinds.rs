@@ -9,6 +9,65 @@ use std::path::Path;
 use anyhow::{Result, bail};
 use ssbvb_graph::{Access, PassKind, PassStage, SlotClass, SlotDesc};
 
+use crate::decl_docs::{self, Decl};
+
+/// The sources of the kinds' parameter types: their fields' doc comments are the
+/// parameters' meanings ([`crate::decl_docs`]).
+const KIND_SOURCES: &[&str] = &[
+    include_str!("../../graph/src/kinds/billboards.rs"),
+    include_str!("../../graph/src/kinds/cone_trace.rs"),
+    include_str!("../../graph/src/kinds/cube_raster.rs"),
+    include_str!("../../graph/src/kinds/dense_dda.rs"),
+    include_str!("../../graph/src/kinds/edge_aa.rs"),
+    include_str!("../../graph/src/kinds/empty_space_compute.rs"),
+    include_str!("../../graph/src/kinds/esvo_ray_cast.rs"),
+    include_str!("../../graph/src/kinds/octree_ray_cast.rs"),
+    include_str!("../../graph/src/kinds/rastavox.rs"),
+    include_str!("../../graph/src/kinds/ray_march_filter.rs"),
+    include_str!("../../graph/src/kinds/smooth.rs"),
+    include_str!("../../graph/src/kinds/splat_billboards.rs"),
+    include_str!("../../graph/src/kinds/temporal.rs"),
+    include_str!("../../graph/src/kinds/volume_slices.rs"),
+];
+
+/// Each parameter's meaning, in order: the doc comment of its field in the kind's
+/// parameter type (`<Kind>Params`, or the type a newtype wraps), followed, for an enum, by
+/// its variants' docs. Empty where the declaration is not found (a test fails then).
+fn meanings(kind: &PassKind) -> Vec<String> {
+    let find = |ty: &str| {
+        KIND_SOURCES
+            .iter()
+            .find_map(|src| decl_docs::parse(src, ty).map(|d| (src, d)))
+    };
+    let own = format!("{}Params", kind.name());
+    let declared = find(&own).or_else(|| {
+        // `pub struct SplatBillboardsParams(pub BillboardsParams);`
+        let head = format!("pub struct {own}(pub ");
+        KIND_SOURCES.iter().find_map(|src| {
+            let rest = src.lines().find_map(|l| l.strip_prefix(head.as_str()))?;
+            find(rest.trim_end_matches(");"))
+        })
+    });
+    let Some((_, (_, Decl::Struct(fields)))) = declared else {
+        return vec![String::new(); kind.parameters().len()];
+    };
+    kind.parameters()
+        .iter()
+        .map(|p| {
+            let Some(f) = fields.iter().find(|f| f.name == p.name) else {
+                return String::new();
+            };
+            let mut text = f.doc.clone();
+            if let Some((_, (_, Decl::Enum(variants)))) = find(&f.ty) {
+                for v in variants {
+                    text.push_str(&format!(" `{}`: {}", v.name, v.doc));
+                }
+            }
+            text
+        })
+        .collect()
+}
+
 /// The kinds' reference as text: every kind in one line each, or one kind (`name`) whole.
 pub fn text(name: Option<&str>) -> Result<String> {
     let users = users(&crate::bundled::assets_dir());
@@ -52,9 +111,15 @@ pub fn text(name: Option<&str>) -> Result<String> {
         out.push_str(" none\n");
     } else {
         out.push('\n');
-        for (p, (_, default)) in k.parameters().iter().zip(k.parameter_values()) {
+        let meanings = meanings(k);
+        for ((p, (_, default)), meaning) in k
+            .parameters()
+            .iter()
+            .zip(k.parameter_values())
+            .zip(meanings)
+        {
             out.push_str(&format!(
-                "    {:<16} {:<24} default {:<10} allowed: {}\n",
+                "    {:<16} {:<24} default {:<10} allowed: {}\n      {meaning}\n",
                 p.name, p.ty, default, p.range
             ));
         }
@@ -103,16 +168,25 @@ fn markdown_with(assets: &Path) -> String {
         if k.parameters().is_empty() {
             out.push_str("No parameters.\n\n");
         } else {
-            out.push_str("| parameter | type | default | allowed |\n|---|---|---|---|\n");
-            for (p, (_, default)) in k.parameters().iter().zip(k.parameter_values()) {
+            out.push_str(
+                "| parameter | type | default | allowed | meaning |\n|---|---|---|---|---|\n",
+            );
+            let meanings = meanings(&k);
+            for ((p, (_, default)), meaning) in k
+                .parameters()
+                .iter()
+                .zip(k.parameter_values())
+                .zip(meanings)
+            {
                 // A `|` inside a table cell must be escaped, even in code.
                 let cell = |t: &str| t.replace('|', "\\|");
                 out.push_str(&format!(
-                    "| `{}` | `{}` | `{}` | {} |\n",
+                    "| `{}` | `{}` | `{}` | {} | {} |\n",
                     p.name,
                     cell(p.ty),
                     cell(&default),
-                    cell(p.range)
+                    cell(p.range),
+                    cell(&meaning)
                 ));
             }
             out.push('\n');
@@ -237,6 +311,25 @@ mod tests {
             file == generated,
             "docs/pipelines.md differs from `ssbvb pipeline kinds --markdown`; regenerate it \
              with `cargo run -p ssbvb -- pipeline kinds --markdown > docs/pipelines.md`"
+        );
+    }
+
+    /// Every parameter of every kind has its meaning: the parser found its field.
+    #[test]
+    fn every_parameter_has_its_meaning() {
+        for k in ssbvb_graph::PassKind::all_defaults() {
+            for (p, m) in k.parameters().iter().zip(super::meanings(&k)) {
+                assert!(m.len() > 10, "{}.{}: `{m}`", k.name(), p.name);
+            }
+        }
+        let filter = ssbvb_graph::PassKind::all_defaults()
+            .into_iter()
+            .find(|k| k.name() == "RayMarchFilter")
+            .unwrap();
+        let march = &super::meanings(&filter)[2];
+        assert!(
+            march.contains("`Exact`: The CPU reference's rules"),
+            "{march}"
         );
     }
 
