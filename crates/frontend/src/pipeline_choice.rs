@@ -38,10 +38,9 @@ pub const FORMS: [Form; 2] = [
     Form {
         file: "pipelines/ssbvb_pixel.ron",
         name: "each pixel's hit written at its pixel (no billboard)",
-        why: "the fastest SSBVB frame measured (lavapipe, bunny level 9 at 1280x720: ~0.85x \
-              the splatted billboards' frame, ~0.35x the rasterized ones'; on the NVIDIA \
-              H200 the billboards were the frame's costliest stage, and this form has none; \
-              docs/benchmarks.md)",
+        why: "the fastest SSBVB frame measured on lavapipe; on the NVIDIA H200 the \
+              billboards were the frame's costliest stage, and this form has none \
+              (docs/benchmarks.md)",
     },
     Form {
         file: "pipelines/ssbvb.ron",

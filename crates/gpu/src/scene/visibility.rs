@@ -332,9 +332,8 @@ fn auto_detail(xf: &DAffine3, camera: &Camera, screen: (u32, u32), pixel_error: 
 
 /// Pixels a proxy brick (16 cells, [`ssbvb_voxel::asset::PAGE_SIZE`]) must span for its
 /// level's proxy to be drawn: where a finer proxy's bricks span fewer, its triangles, four
-/// times as many per level, cost the prepass more than its tighter entries save the filter (bunny at
-/// level 12, 1280×720, lavapipe: its own proxy 254–268 ms a frame, level 10's 186–193;
-/// docs/benchmarks.md, "Proxies no finer than the view").
+/// times as many per level, cost the prepass more than its tighter entries save the filter
+/// (docs/benchmarks.md, "Proxies no finer than the view").
 pub const PROXY_BRICK_PX: f64 = 16.0;
 
 /// Levels up to this one always draw their own proxy (cheap: about 10⁵ triangles for the

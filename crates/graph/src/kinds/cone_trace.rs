@@ -27,8 +27,8 @@ pub struct ConeTraceParams {
     /// How far the diffuse cones reach (world units): the AO and bounce radius.
     #[serde(default = "default_max_distance")]
     pub max_distance: f32,
-    /// A step along a cone is `step_scale` times the cone's diameter there (1: the
-    /// measured knee, 0.5 costs 1.6× for 0.001 less AO error; docs/benchmarks.md).
+    /// A step along a cone is `step_scale` times the cone's diameter there (1: the knee
+    /// of cost against AO error measured in docs/benchmarks.md).
     #[serde(default = "default_step_scale")]
     pub step_scale: f32,
     /// Full apex angle of the shadow cone towards the light, degrees (the light's angular

@@ -1,6 +1,7 @@
 //! `empty_space_compute`: the empty-space prepass in compute (`EmptySpaceCompute`;
-//! `shaders/empty_space_compute.wgsl`), for adapters whose raster units are slow (the
-//! H200 of `docs/benchmarks.md` spent 0.59 ms rasterizing the bunny's proxy at 720p).
+//! `shaders/empty_space_compute.wgsl`), for adapters whose raster units are slow (on the
+//! NVIDIA H200 of `docs/benchmarks.md` the rasterized prepass is a large share of the
+//! frame).
 //!
 //! It writes what [`crate::kinds::empty_space`] rasterizes, into `entry` as a storage
 //! texture: per texel the object-space point where the texel-centre ray enters the nearest
