@@ -52,7 +52,8 @@ override FAST_MARCH: bool = false;
 override UNIQUE_VOXELS: bool = false;
 // Chosen per frame (ray_march_filter.rs, `MainVariant`): some LOD has pages (a GPU budget),
 // and more than one instance is visible. Off, their code is left out of the pipeline,
-// which the software adapter runs markedly faster (docs/benchmarks.md); on, it is correct
+// which the software adapter runs faster (docs/benchmarks.md, "The crowd's walk, taken
+// apart"); on, it is correct
 // for any scene.
 override PAGED: bool = true;
 override SEVERAL_INSTANCES: bool = true;

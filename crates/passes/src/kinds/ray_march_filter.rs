@@ -248,8 +248,8 @@ pub fn claim_offsets(voxels: impl IntoIterator<Item = u64>) -> Vec<u32> {
 }
 
 /// What a frame needs of `main`, as WGSL overrides: code a frame does not need is left out
-/// of its pipeline (the software adapter runs the filter markedly faster without the
-/// instance-hierarchy walk; docs/benchmarks.md). Each is on whenever the frame might need
+/// of its pipeline (the software adapter runs the filter faster without the
+/// instance-hierarchy walk; docs/benchmarks.md, "The crowd's walk, taken apart"). Each is on whenever the frame might need
 /// it, so a variant is never chosen that draws a frame wrongly.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct MainVariant {
