@@ -53,8 +53,7 @@ override UNIQUE_VOXELS: bool = false;
 // Chosen per frame (ray_march_filter.rs, `MainVariant`): some LOD has pages (a GPU budget),
 // and more than one instance is visible. Off, their code is left out of the pipeline,
 // which the software adapter runs faster (docs/benchmarks.md, "The crowd's walk, taken
-// apart"); on, it is correct
-// for any scene.
+// apart"); on, it is correct for any scene.
 override PAGED: bool = true;
 override SEVERAL_INSTANCES: bool = true;
 // Count the frame's work into the counters of `filter_words` (off: the pipeline of frames that no report
