@@ -1,4 +1,4 @@
-//! The GL backend (issue 34): on Mesa's GL driver (llvmpipe, which wgpu drives as OpenGL
+//! The GL backend: on Mesa's GL driver (llvmpipe, which wgpu drives as OpenGL
 //! ES 3.2: `ssbvb_gpu::context::prefer_gles_on_mesa`), `WGPU_BACKEND=gl ssbvb render` draws
 //! what Vulkan (lavapipe) draws: the default SSBVB frame (the compute splat on both) with
 //! triangles mixed in (the default scene), 64 instances, the prepass in compute

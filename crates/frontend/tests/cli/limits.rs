@@ -64,7 +64,7 @@ fn webgpu_limits_are_checked_up_front_and_named() {
     );
 
     // `adapter --limits webgpu`: every adapter's verdict under WebGPU's defaults; the
-    // default pipeline fits them (issue 34).
+    // default pipeline fits them.
     let out = succeeded(ssbvb().args(["adapter", "--limits", "webgpu"]));
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
