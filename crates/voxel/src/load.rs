@@ -284,7 +284,7 @@ pub fn write_raw(path: &Path, nx: u32, ny: u32, nz: u32, cells: &[u8]) -> Result
 
 /// Writes `parts` to a unique temporary file beside `path`, syncs it, and renames it over
 /// `path`. The temporary file is removed if anything fails.
-fn write_atomically(path: &Path, parts: &[&[u8]]) -> Result<(), LoadError> {
+pub(crate) fn write_atomically(path: &Path, parts: &[&[u8]]) -> Result<(), LoadError> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,

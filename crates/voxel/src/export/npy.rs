@@ -1,0 +1,85 @@
+//! NumPy `.npy` files (format version 1.0), written here rather than through a crate
+//! because the format is a short text header before the raw array, and the structured
+//! dtype of the sparse form is one line of it; the tests read the files back with the
+//! `npyz` crate. `numpy.load(path)` reads both forms with `allow_pickle=False`.
+//!
+//! - **Dense** (default): `uint8`, shape `(X, Y, Z, 4)`, C order, index `[x, y, z, c]`:
+//!   sRGB-encoded RGBA, alpha 0 where a cell is empty (alpha 255 × the voxel's where it
+//!   is occupied, never 0).
+//! - **Sparse** (`--sparse`): one record per voxel, dtype
+//!   `[('x','<u2'),('y','<u2'),('z','<u2'),('r','u1'),('g','u1'),('b','u1'),('a','u1'),
+//!   ('nx','<f4'),('ny','<f4'),('nz','<f4')]`.
+
+use std::path::Path;
+
+use super::{ExportError, ExportVoxel};
+
+/// The largest dense grid written (bytes): a level-9 RGBA grid is 512 MiB; level 10's
+/// 4 GiB is refused.
+pub const MAX_DENSE_BYTES: u64 = 1 << 30;
+
+/// The sparse form's record dtype, as the header writes it.
+pub const SPARSE_DTYPE: &str = "[('x', '<u2'), ('y', '<u2'), ('z', '<u2'), ('r', '|u1'), \
+('g', '|u1'), ('b', '|u1'), ('a', '|u1'), ('nx', '<f4'), ('ny', '<f4'), ('nz', '<f4')]";
+
+/// The `.npy` header for `descr` and `shape`, padded so the data starts on 64 bytes.
+fn header(descr: &str, shape: &[u64]) -> Vec<u8> {
+    let dims: Vec<String> = shape.iter().map(u64::to_string).collect();
+    let shape = if dims.len() == 1 {
+        format!("({},)", dims[0])
+    } else {
+        format!("({})", dims.join(", "))
+    };
+    let dict = format!("{{'descr': {descr}, 'fortran_order': False, 'shape': {shape}, }}");
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    let unpadded = out.len() + 2 + dict.len() + 1;
+    let len = unpadded.div_ceil(64) * 64 - out.len() - 2;
+    out.extend_from_slice(&(len as u16).to_le_bytes());
+    out.extend_from_slice(dict.as_bytes());
+    out.resize(out.len() + len - dict.len() - 1, b' ');
+    out.push(b'\n');
+    out
+}
+
+/// Writes the dense RGBA grid of `edge`³ cells.
+pub fn write_dense(path: &Path, edge: u32, voxels: &[ExportVoxel]) -> Result<(), ExportError> {
+    let bytes = u64::from(edge).pow(3) * 4;
+    if bytes > MAX_DENSE_BYTES {
+        return Err(ExportError::TooLarge {
+            format: "npy",
+            what: format!("a dense {edge}³ RGBA grid ({} MiB)", bytes >> 20),
+            limit: format!("{} MiB", MAX_DENSE_BYTES >> 20),
+            hint: "export a coarser --level, or --sparse (one record per voxel)".into(),
+        });
+    }
+    let mut grid = vec![0u8; bytes as usize];
+    let e = edge as usize;
+    for v in voxels {
+        let [x, y, z] = v.cell.map(|c| c as usize);
+        let i = ((x * e + y) * e + z) * 4;
+        let mut rgba = v.rgba;
+        rgba[3] = rgba[3].max(1);
+        grid[i..i + 4].copy_from_slice(&rgba);
+    }
+    let e = u64::from(edge);
+    let head = header("'|u1'", &[e, e, e, 4]);
+    crate::load::write_atomically(path, &[&head, &grid])?;
+    Ok(())
+}
+
+/// Writes the sparse voxel list.
+pub fn write_sparse(path: &Path, voxels: &[ExportVoxel]) -> Result<(), ExportError> {
+    let mut data = Vec::with_capacity(voxels.len() * 22);
+    for v in voxels {
+        for c in v.cell {
+            data.extend_from_slice(&(c as u16).to_le_bytes());
+        }
+        data.extend_from_slice(&v.rgba);
+        for n in v.normal {
+            data.extend_from_slice(&n.to_le_bytes());
+        }
+    }
+    let head = header(SPARSE_DTYPE, &[voxels.len() as u64]);
+    crate::load::write_atomically(path, &[&head, &data])?;
+    Ok(())
+}
