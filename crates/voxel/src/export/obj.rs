@@ -32,11 +32,17 @@ pub struct Rect {
     pub rgba: [u8; 4],
 }
 
+/// A plane of faces: `(axis, facing +axis, plane)`.
+type PlaneKey = (usize, bool, u32);
+
+/// The exposed unit faces of one plane, at `(u, v)`, with their colours.
+type PlaneFaces = HashMap<(u32, u32), [u8; 4]>;
+
 /// The exposed faces of `voxels`, merged into rectangles of one colour.
 pub fn rectangles(voxels: &[ExportVoxel]) -> Vec<Rect> {
     let occupied: HashSet<[u32; 3]> = voxels.iter().map(|v| v.cell).collect();
     // Per (axis, side, plane): the exposed unit faces at (u, v) with their colours.
-    let mut groups: HashMap<(usize, bool, u32), HashMap<(u32, u32), [u8; 4]>> = HashMap::new();
+    let mut groups: HashMap<PlaneKey, PlaneFaces> = HashMap::new();
     for v in voxels {
         for axis in 0..3 {
             for positive in [false, true] {
@@ -66,11 +72,7 @@ pub fn rectangles(voxels: &[ExportVoxel]) -> Vec<Rect> {
 
 /// Greedy merge of one plane's faces: from the lowest unvisited face (by v, then u), as
 /// wide as the row allows, then as tall as whole rows of that width allow.
-fn merge(
-    (axis, positive, plane): (usize, bool, u32),
-    faces: &HashMap<(u32, u32), [u8; 4]>,
-    out: &mut Vec<Rect>,
-) {
+fn merge((axis, positive, plane): PlaneKey, faces: &PlaneFaces, out: &mut Vec<Rect>) {
     let mut order: Vec<(u32, u32)> = faces.keys().copied().collect();
     order.sort_by_key(|&(u, v)| (v, u));
     let mut used: HashSet<(u32, u32)> = HashSet::new();

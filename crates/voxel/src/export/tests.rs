@@ -193,7 +193,8 @@ fn obj_is_the_exposed_faces() {
         })
     };
     let mut area = HashMap::new();
-    let mut tris: HashMap<(usize, bool, i64), Vec<[[f64; 3]; 3]>> = HashMap::new();
+    type Triangle = [[f64; 3]; 3];
+    let mut tris: HashMap<(usize, bool, i64), Vec<Triangle>> = HashMap::new();
     for t in &mesh.triangles {
         let p = t.map(|i| grid(mesh.positions[i as usize].to_array()));
         let e1: [f64; 3] = std::array::from_fn(|i| p[1][i] - p[0][i]);
