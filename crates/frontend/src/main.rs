@@ -8,6 +8,7 @@ mod bundled;
 mod calibrate_cmd;
 mod calibration;
 mod decl_docs;
+mod export_cmd;
 mod faults;
 mod flip;
 mod pipeline_choice;
@@ -62,6 +63,9 @@ enum Command {
     /// Scene files (RON).
     #[command(subcommand)]
     Scene(SceneCommand),
+    /// Write a model's voxels at a level where other tools open them: MagicaVoxel VOX, the
+    /// dense raw grid, NumPy .npy (dense or --sparse), or an OBJ of the exposed faces.
+    Export(export_cmd::ExportArgs),
 }
 
 /// Scene-file subcommands.
@@ -85,7 +89,7 @@ fn main() -> ExitCode {
         Command::Render(a) => adapter_cmd::set_limits(a.limits),
         Command::View(a) => adapter_cmd::set_limits(a.limits),
         Command::Calibrate(a) => adapter_cmd::set_limits(a.limits),
-        Command::Pipeline(_) | Command::Voxelize(_) | Command::Scene(_) => {}
+        Command::Pipeline(_) | Command::Voxelize(_) | Command::Scene(_) | Command::Export(_) => {}
     }
     let result = match cli.command {
         Command::Pipeline(c) => pipeline_cmd::run(&c),
@@ -96,6 +100,7 @@ fn main() -> ExitCode {
         Command::View(a) => view::run(&a).map(|_| ExitCode::SUCCESS),
         Command::Voxelize(a) => voxelize_cmd::run(&a).map(|_| ExitCode::SUCCESS),
         Command::Calibrate(a) => calibrate_cmd::run(&a).map(|_| ExitCode::SUCCESS),
+        Command::Export(a) => export_cmd::run(&a).map(|_| ExitCode::SUCCESS),
         Command::Scene(SceneCommand::Fields) => {
             print!("{}", scene_reference::markdown());
             Ok(ExitCode::SUCCESS)

@@ -6,6 +6,7 @@ mod calibrate;
 mod cone_trace;
 mod device_loss;
 mod docs_commands;
+mod export;
 mod gl;
 mod limits;
 mod out_of_memory;

@@ -91,18 +91,100 @@ pub fn level_voxels(
     Ok((1u32 << lod.level, voxels))
 }
 
+/// The formats `ssbvb export` writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ExportFormat {
+    /// MagicaVoxel `.vox`.
+    Vox,
+    /// The project's dense raw grid.
+    Raw,
+    /// NumPy `.npy`: dense RGBA, or with `sparse` a record per voxel.
+    Npy {
+        /// One record per voxel instead of the dense grid.
+        sparse: bool,
+    },
+    /// Wavefront OBJ of the exposed faces.
+    Obj,
+}
+
+/// Refuses an export of an `edge`³ grid that `format` cannot hold, before anything is
+/// voxelized or written (the writers check the same).
+pub fn check_size(format: ExportFormat, edge: u32) -> Result<(), ExportError> {
+    let dense = |name: &'static str, bytes: u64, hint: &str| {
+        if bytes > npy::MAX_DENSE_BYTES {
+            Err(ExportError::TooLarge {
+                format: name,
+                what: format!("a dense {edge}³ grid ({} MiB)", bytes >> 20),
+                limit: format!("{} MiB", npy::MAX_DENSE_BYTES >> 20),
+                hint: hint.into(),
+            })
+        } else {
+            Ok(())
+        }
+    };
+    let cells = u64::from(edge).pow(3);
+    match format {
+        ExportFormat::Vox if edge > vox::MAX_EDGE => Err(ExportError::TooLarge {
+            format: "vox",
+            what: format!("a {edge}³ grid"),
+            limit: format!("{}³ cells per model", vox::MAX_EDGE),
+            hint: "export --level 8 or coarser (several models placed by the scene graph \
+                   are not written yet), or use --format npy or obj"
+                .into(),
+        }),
+        ExportFormat::Raw => dense(
+            "raw",
+            cells,
+            "export a coarser --level, or --format npy --sparse",
+        ),
+        ExportFormat::Npy { sparse: false } => dense(
+            "npy",
+            cells * 4,
+            "export a coarser --level, or --sparse (one record per voxel)",
+        ),
+        _ => Ok(()),
+    }
+}
+
+/// What [`write`] wrote.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Written {
+    /// Voxels exported.
+    pub voxels: usize,
+    /// Merged rectangles (OBJ only).
+    pub rectangles: Option<usize>,
+}
+
+/// Writes level `level` of `asset` to `path` in `format`.
+pub fn write(
+    format: ExportFormat,
+    path: &Path,
+    asset: &VoxelAsset,
+    level: u32,
+) -> Result<Written, ExportError> {
+    let (edge, voxels) = level_voxels(asset, level)?;
+    check_size(format, edge)?;
+    let mut rectangles = None;
+    match format {
+        ExportFormat::Vox => vox::write(path, edge, &voxels)?,
+        ExportFormat::Raw => write_raw(path, edge, &voxels)?,
+        ExportFormat::Npy { sparse: false } => npy::write_dense(path, edge, &voxels)?,
+        ExportFormat::Npy { sparse: true } => npy::write_sparse(path, &voxels)?,
+        ExportFormat::Obj => {
+            rectangles = Some(obj::write(path, edge, &voxels, &asset.object_space)?);
+        }
+    }
+    Ok(Written {
+        voxels: voxels.len(),
+        rectangles,
+    })
+}
+
 /// Writes the project's dense raw grid (`load::write_raw`): one byte per cell, 0 empty,
 /// else the voxel's grey level (its sRGB colour's luma, at least 1).
 pub fn write_raw(path: &Path, edge: u32, voxels: &[ExportVoxel]) -> Result<(), ExportError> {
+    check_size(ExportFormat::Raw, edge)?;
     let cells = u64::from(edge).pow(3);
-    if cells > crate::export::npy::MAX_DENSE_BYTES {
-        return Err(ExportError::TooLarge {
-            format: "raw",
-            what: format!("a {edge}³ grid ({cells} bytes)"),
-            limit: format!("{} bytes", npy::MAX_DENSE_BYTES),
-            hint: "export a coarser --level, or --format npy --sparse".into(),
-        });
-    }
     let mut grid = vec![0u8; cells as usize];
     for v in voxels {
         let [r, g, b, _] = v.rgba.map(f32::from);

@@ -43,15 +43,8 @@ fn header(descr: &str, shape: &[u64]) -> Vec<u8> {
 
 /// Writes the dense RGBA grid of `edge`³ cells.
 pub fn write_dense(path: &Path, edge: u32, voxels: &[ExportVoxel]) -> Result<(), ExportError> {
+    super::check_size(super::ExportFormat::Npy { sparse: false }, edge)?;
     let bytes = u64::from(edge).pow(3) * 4;
-    if bytes > MAX_DENSE_BYTES {
-        return Err(ExportError::TooLarge {
-            format: "npy",
-            what: format!("a dense {edge}³ RGBA grid ({} MiB)", bytes >> 20),
-            limit: format!("{} MiB", MAX_DENSE_BYTES >> 20),
-            hint: "export a coarser --level, or --sparse (one record per voxel)".into(),
-        });
-    }
     let mut grid = vec![0u8; bytes as usize];
     let e = edge as usize;
     for v in voxels {

@@ -16,16 +16,7 @@ pub const MAX_EDGE: u32 = 256;
 
 /// Writes the voxels of an `edge`³ grid as one VOX model.
 pub fn write(path: &Path, edge: u32, voxels: &[ExportVoxel]) -> Result<(), ExportError> {
-    if edge > MAX_EDGE {
-        return Err(ExportError::TooLarge {
-            format: "vox",
-            what: format!("a {edge}³ grid"),
-            limit: format!("{MAX_EDGE}³ cells per model"),
-            hint: "export --level 8 or coarser (several models placed by the scene graph \
-                   are not written yet), or use --format npy or obj"
-                .into(),
-        });
-    }
+    super::check_size(super::ExportFormat::Vox, edge)?;
     let colors: Vec<[u8; 4]> = voxels.iter().map(|v| v.rgba).collect();
     let (entries, index) = palette::quantize(&colors, 255);
     let mut palette: Vec<dot_vox::Color> = entries
