@@ -12,11 +12,7 @@
 
 use std::path::Path;
 
-use super::{ExportError, ExportVoxel};
-
-/// The largest dense grid written (bytes): a level-9 RGBA grid is 512 MiB; level 10's
-/// 4 GiB is refused.
-pub const MAX_DENSE_BYTES: u64 = 1 << 30;
+use super::common::{ExportError, ExportFormat, ExportVoxel, check_size};
 
 /// The sparse form's record dtype, as the header writes it.
 pub const SPARSE_DTYPE: &str = "[('x', '<u2'), ('y', '<u2'), ('z', '<u2'), ('r', '|u1'), \
@@ -43,7 +39,7 @@ fn header(descr: &str, shape: &[u64]) -> Vec<u8> {
 
 /// Writes the dense RGBA grid of `edge`³ cells.
 pub fn write_dense(path: &Path, edge: u32, voxels: &[ExportVoxel]) -> Result<(), ExportError> {
-    super::check_size(super::ExportFormat::Npy { sparse: false }, edge)?;
+    check_size(ExportFormat::Npy { sparse: false }, edge)?;
     let bytes = u64::from(edge).pow(3) * 4;
     let mut grid = vec![0u8; bytes as usize];
     let e = edge as usize;

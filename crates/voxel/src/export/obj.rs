@@ -10,7 +10,7 @@ use std::collections::{HashMap, HashSet};
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::{ExportError, ExportVoxel};
+use super::common::{ExportError, ExportVoxel};
 use crate::model::ObjectSpace;
 
 /// One merged rectangle: on the plane `axis = plane` (grid units), facing `+axis` when

@@ -9,14 +9,12 @@
 
 use std::path::Path;
 
-use super::{ExportError, ExportVoxel, palette};
-
-/// Most cells per axis of one VOX model.
-pub const MAX_EDGE: u32 = 256;
+use super::common::{ExportError, ExportFormat, ExportVoxel, check_size};
+use super::palette;
 
 /// Writes the voxels of an `edge`³ grid as one VOX model.
 pub fn write(path: &Path, edge: u32, voxels: &[ExportVoxel]) -> Result<(), ExportError> {
-    super::check_size(super::ExportFormat::Vox, edge)?;
+    check_size(ExportFormat::Vox, edge)?;
     let colors: Vec<[u8; 4]> = voxels.iter().map(|v| v.rgba).collect();
     let (entries, index) = palette::quantize(&colors, 255);
     let mut palette: Vec<dot_vox::Color> = entries
