@@ -17,6 +17,7 @@ pub mod camera;
 pub mod cube_list;
 pub mod edit;
 pub mod enclosure;
+#[cfg(not(target_arch = "wasm32"))]
 pub mod export;
 pub mod instance_bvh;
 pub mod level_splice;
