@@ -46,6 +46,7 @@ pub fn run(args: &VoxelizeArgs) -> anyhow::Result<()> {
             .then(|| (outcome.cache_path.clone(), outcome.cache_key));
         let (status, reason) = match outcome.status {
             CacheStatus::Hit => ("hit", None),
+            CacheStatus::AssetFile => ("asset_file", None),
             CacheStatus::Rebuilt { reason } => ("rebuilt", Some(reason)),
         };
         let cache = CacheReport {

@@ -56,7 +56,7 @@ pub enum GpuMethodArg {
 pub(crate) struct Report {
     pub(crate) model: PathBuf,
     pub(crate) level: u32,
-    /// "hit", "rebuilt" or "disabled".
+    /// "hit", "rebuilt", "asset_file" (the model is a prepared asset) or "disabled".
     pub(crate) cache: CacheReport,
     /// Where `-o` wrote the asset.
     pub(crate) output: Option<PathBuf>,

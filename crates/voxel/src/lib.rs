@@ -16,6 +16,7 @@ pub mod cache;
 pub mod camera;
 pub mod cube_list;
 pub mod edit;
+pub mod edit_journal;
 pub mod enclosure;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod export;

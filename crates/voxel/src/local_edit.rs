@@ -11,9 +11,12 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
+use crate::asset::{LodLevel, VoxelAsset};
 use crate::edit::{Edit, EditError, EditReport, apply_edit, brush_cells, set_of};
 use crate::level_splice::{LevelMirror, LevelPatch, voxels_in};
+use crate::prepare::{lookup_from_codes, point_cloud_of};
 use crate::progress::NoProgress;
+use crate::proxy::build_proxy;
 use crate::svo::{LevelVoxels, build_lod_chain, morton_encode};
 
 /// A dynamic object's levels kept on the CPU to edit them locally.
@@ -155,13 +158,50 @@ impl LocalEditor {
         })
     }
 
-    /// Undoes `edit`, the last edit applied, when its patches could not be applied (a room
-    /// too small, a device error): splicing the blocks' old content back restores every
-    /// level exactly.
-    pub fn revert(&mut self, edit: &LocalEdit) {
+    /// Undoes `edit`, the last edit applied (or the last [`LocalEditor::revert`]), by
+    /// splicing its blocks' old content back: every level is restored exactly, and the
+    /// result is the inverse edit — its patches take the GPU's rooms back, and reverting it
+    /// in turn redoes `edit`. It touches the blocks `edit` touched, so undoing a click
+    /// costs what the click cost. Also used when a click's patches could not reach the GPU
+    /// (a room too small, a device error).
+    pub fn revert(&mut self, edit: &LocalEdit) -> LocalEdit {
+        let mut undo = Vec::with_capacity(self.levels.len());
+        let mut patches = Vec::with_capacity(self.levels.len());
         for (level, old) in self.levels.iter_mut().zip(&edit.undo) {
-            level.splice(old);
+            undo.push(keep(level, old));
+            patches.push(level.splice(old));
         }
+        LocalEdit {
+            report: EditReport {
+                added: edit.report.removed,
+                removed: edit.report.added,
+                clipped: edit.report.clipped,
+            },
+            patches,
+            block_side: edit.block_side,
+            blocks: edit.blocks,
+            undo,
+        }
+    }
+
+    /// The asset of the levels as they are now (point clouds, lookups and proxies built
+    /// from the editor's levels, not rebuilt from the finest: they are the same chain),
+    /// in `object_space`. What the viewer saves.
+    pub fn asset(&self, object_space: crate::model::ObjectSpace) -> VoxelAsset {
+        let lods = self
+            .levels
+            .iter()
+            .map(|m| {
+                let lookup = lookup_from_codes(m.voxels.level, &m.voxels.codes);
+                LodLevel {
+                    level: m.voxels.level,
+                    point_cloud: point_cloud_of(&m.voxels),
+                    proxy: build_proxy(&lookup),
+                    lookup,
+                }
+            })
+            .collect();
+        VoxelAsset { object_space, lods }
     }
 }
 
@@ -406,5 +446,70 @@ mod tests {
         for (l, v) in chain.into_iter().enumerate() {
             assert_eq!(editor.level(l).unwrap(), &LevelMirror::new(v), "level {l}");
         }
+    }
+
+    /// Undo and redo as a stack: each revert's patches turn the streams of the state
+    /// before it into those of the state after it (the whole-set preparation of each is
+    /// the oracle), reverting the inverse redoes, and the saved asset of every state is
+    /// its whole-set preparation.
+    #[test]
+    fn undo_and_redo_patch_the_streams_back_and_forth_exactly() {
+        let s = crate::model::cell_size(5);
+        let strokes = [
+            Edit::RemoveSphere {
+                center: (0.7, 0.0, 0.0),
+                radius: 4.0 * s,
+            },
+            Edit::AddBox {
+                min: (-0.3, -0.2, 0.1),
+                max: (0.1, 0.2, 0.4),
+                color: (0.2, 0.8, 0.3, 1.0),
+            },
+            Edit::AddSphere {
+                center: (0.65, 0.05, 0.0),
+                radius: 2.0 * s,
+                color: (0.9, 0.1, 0.1, 1.0),
+            },
+        ];
+        let mut editor = LocalEditor::new(shell(5));
+        let mut states = vec![editor.finest().clone()];
+        let mut done = Vec::new();
+        for e in &strokes {
+            done.push(editor.apply(&[*e]).unwrap());
+            states.push(editor.finest().clone());
+        }
+        let streams = |v: &LevelVoxels| asset_streams(&prepared(v.clone()));
+        let space = ObjectSpace {
+            center: glam::DVec3::ZERO,
+            scale: 1.0,
+        };
+        let patched = |patches: &[LevelPatch], from: &LevelVoxels, to: &LevelVoxels| {
+            let (old, new) = (streams(from), streams(to));
+            for (l, p) in patches.iter().enumerate() {
+                assert_eq!(p.apply_colors(&old[l].0), new[l].0, "level {l} colours");
+                assert_eq!(p.apply_normals(&old[l].1), new[l].1, "level {l} normals");
+                assert_eq!(p.apply_nodes(&old[l].2), new[l].2, "level {l} nodes");
+            }
+        };
+        // Undo the last two strokes.
+        let mut redo = Vec::new();
+        for k in [3, 2] {
+            let inverse = editor.revert(&done.pop().unwrap());
+            assert_eq!(editor.finest(), &states[k - 1]);
+            patched(&inverse.patches, &states[k], &states[k - 1]);
+            assert_eq!(editor.asset(space), prepared(states[k - 1].clone()));
+            redo.push(inverse);
+        }
+        // Redo one: the state after the second stroke, its report the stroke's.
+        let again = editor.revert(&redo.pop().unwrap());
+        assert_eq!(editor.finest(), &states[2]);
+        patched(&again.patches, &states[1], &states[2]);
+        let (_, report) = apply_edits(&states[1], &strokes[1..2]).unwrap();
+        assert_eq!(again.report, report);
+        assert_eq!(editor.asset(space), prepared(states[2].clone()));
+        // Undo everything left: the shell as it was.
+        editor.revert(&again);
+        editor.revert(&done.pop().unwrap());
+        assert_eq!(editor.finest(), &states[0]);
     }
 }

@@ -45,6 +45,7 @@
 //!
 //! [`load_or_prepare`] (in `prepare`) puts the cache in front of the preparation stage.
 
+mod asset_file;
 mod deps;
 mod format;
 mod page_file;
@@ -69,6 +70,9 @@ use format::{
 };
 use reader::Source;
 
+pub use asset_file::{
+    ASSET_FILE_EXTENSION, AssetFileHeader, asset_file_header, read_asset_file, write_asset_file,
+};
 pub use format::{CacheError, FORMAT_VERSION, MAGIC};
 pub use page_file::PageFile;
 pub use pages::{PageEntry, page_index, read_page};

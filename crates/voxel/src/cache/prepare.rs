@@ -8,7 +8,10 @@ use serde::Serialize;
 
 use super::deps::{self, Dependency};
 use super::format::{CacheError, FORMAT_VERSION};
-use super::{cache_file_name, default_cache_dir, hash_source, read_cache, write_cache};
+use super::{
+    asset_file_header, cache_file_name, default_cache_dir, hash_source, read_asset_file, read_cache,
+    write_cache,
+};
 use crate::asset::VoxelAsset;
 use crate::load::{LoadError, LoadOptions, load_model_with};
 use crate::model::Model;
@@ -25,6 +28,8 @@ use crate::voxelize::VoxelizeError;
 pub enum CacheStatus {
     /// Read from a valid cache file.
     Hit,
+    /// The model file is itself a prepared asset file (a viewer's save), read as it is.
+    AssetFile,
     /// Prepared from the source (the reason says why the cache was not used).
     Rebuilt {
         /// Why: "cache missing", "cache corrupt (checksum mismatch in section …)", …
@@ -54,6 +59,11 @@ impl std::fmt::Display for PrepareOutcome {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match &self.status {
             CacheStatus::Hit => write!(f, "cache hit ({})", self.cache_path.display())?,
+            CacheStatus::AssetFile => write!(
+                f,
+                "prepared asset file, read as it is ({})",
+                self.cache_path.display()
+            )?,
             CacheStatus::Rebuilt { reason } => {
                 write!(f, "{reason}, rebuilt ({})", self.cache_path.display())?
             }
@@ -131,6 +141,9 @@ fn obtain(
     progress: &dyn Progress,
     stream: bool,
 ) -> Result<(Option<VoxelAsset>, PrepareOutcome), PrepareError> {
+    if let Some(found) = asset_file(model_path, level)? {
+        return Ok(found);
+    }
     let model_hash = hash_source(model_path)?;
     let dir = cache_dir.map_or_else(default_cache_dir, Path::to_path_buf);
     let list = deps::list_path(&dir, model_hash);
@@ -214,6 +227,28 @@ fn obtain(
         cache_write_error,
     };
     Ok((Some(asset), outcome))
+}
+
+/// The asset of `model_path` when it is a prepared asset file (levels `0..=level` of it),
+/// `None` when it is a model to prepare.
+fn asset_file(
+    model_path: &Path,
+    level: u32,
+) -> Result<Option<(Option<VoxelAsset>, PrepareOutcome)>, PrepareError> {
+    if asset_file_header(model_path)?.is_none() {
+        return Ok(None);
+    }
+    let (asset, header) = read_asset_file(model_path, Some(level))?;
+    let outcome = PrepareOutcome {
+        cache_path: model_path.to_path_buf(),
+        cache_key: header.source_hash,
+        status: CacheStatus::AssetFile,
+        stats: None,
+        // A budgeted run at a level coarser than the file's finest cannot page from the
+        // file (`PageFile::open` says so) and streams from memory.
+        cache_write_error: None,
+    };
+    Ok(Some((Some(asset), outcome)))
 }
 
 /// The level limit [`prepare_asset`] applies, for the streaming path that bypasses it.
