@@ -205,7 +205,7 @@ fn the_cache_rebuilds_when_a_file_the_model_reads_changes() {
             CacheStatus::Rebuilt { reason } => {
                 assert!(reason.contains(file), "{file}: {reason}")
             }
-            CacheStatus::Hit => panic!("{file} changed but the cache was hit"),
+            other => panic!("{file} changed but the cache was not rebuilt: {other:?}"),
         }
         assert!(outcome.cache_write_error.is_none(), "{outcome}");
         asset
