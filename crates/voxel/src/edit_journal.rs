@@ -288,7 +288,10 @@ impl JournalWriter {
     /// Appends `op` in one write and syncs it to disk before returning.
     pub fn record(&mut self, op: &JournalOp) -> Result<(), JournalError> {
         let bytes = encode(op, self.objects).map_err(|reason| {
-            JournalError::io(&self.path, io::Error::new(io::ErrorKind::InvalidInput, reason))
+            JournalError::io(
+                &self.path,
+                io::Error::new(io::ErrorKind::InvalidInput, reason),
+            )
         })?;
         self.file
             .write_all(&bytes)
@@ -301,7 +304,10 @@ impl JournalWriter {
     #[doc(hidden)]
     pub fn record_torn(&mut self, op: &JournalOp, keep: usize) -> Result<(), JournalError> {
         let bytes = encode(op, self.objects).map_err(|reason| {
-            JournalError::io(&self.path, io::Error::new(io::ErrorKind::InvalidInput, reason))
+            JournalError::io(
+                &self.path,
+                io::Error::new(io::ErrorKind::InvalidInput, reason),
+            )
         })?;
         self.file
             .write_all(&bytes[..keep.min(bytes.len())])

@@ -82,7 +82,10 @@ fn a_torn_last_record_is_dropped_at_every_cut_and_the_rest_kept() {
         std::fs::write(&path, &whole[..five + keep]).unwrap();
         let back = read_journal(&path, 2, 0xfeed).unwrap();
         assert_eq!(back.ops, ops()[..5], "cut at {keep}");
-        assert!(back.torn.as_ref().unwrap().contains("record 6 of 6"), "{back:?}");
+        assert!(
+            back.torn.as_ref().unwrap().contains("record 6 of 6"),
+            "{back:?}"
+        );
         assert_eq!(back.valid_bytes as usize, five);
     }
     // A whole last record with a flipped byte (written out of order) is torn too.
@@ -112,13 +115,20 @@ fn damage_before_the_end_another_model_or_version_is_refused_and_the_file_kept()
     let corrupt = |bytes: &[u8]| {
         std::fs::write(&path, bytes).unwrap();
         let e = read_journal(&path, 2, 0xfeed).unwrap_err();
-        assert_eq!(std::fs::read(&path).unwrap(), bytes, "the file is left as it was");
+        assert_eq!(
+            std::fs::read(&path).unwrap(),
+            bytes,
+            "the file is left as it was"
+        );
         e.to_string()
     };
     let mut bytes = whole.clone();
     bytes[HEADER_BYTES + RECORD_BYTES + 30] ^= 4;
     let e = corrupt(&bytes);
-    assert!(e.contains("record 2 of 6 is corrupt (checksum mismatch)"), "{e}");
+    assert!(
+        e.contains("record 2 of 6 is corrupt (checksum mismatch)"),
+        "{e}"
+    );
     // A newer version.
     let mut bytes = whole.clone();
     bytes[8] = 2;

@@ -14,11 +14,13 @@ use winit::event_loop::ActiveEventLoop;
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::WindowId;
 
+use super::brush_history::Step;
 use super::camera_control::CameraRig;
 use super::capture;
 use super::overlay::{self, Action, ObjectLod, OverlayView};
 use super::stats::Stats;
 
+mod editing;
 mod open;
 mod present;
 mod recover;
@@ -64,6 +66,14 @@ impl App {
         // Release GPU objects while the window (and its display connection) still exists.
         self.viewer = None;
         event_loop.exit();
+    }
+}
+
+/// Ends the viewer's session (saves on exit, the journal kept or removed).
+fn viewer_end(viewer: &mut Option<Viewer>, options: &Options) -> Result<()> {
+    match viewer {
+        Some(v) => v.end_session(options),
+        None => Ok(()),
     }
 }
 
@@ -119,7 +129,11 @@ impl ApplicationHandler for App {
                 }
             }
             Ok(Flow::Exit) => {
+                let ended = viewer_end(&mut self.viewer, &self.options);
                 self.viewer = None;
+                if let Err(e) = ended {
+                    self.fail(event_loop, e);
+                }
                 event_loop.exit();
             }
             Err(e) => self.fail(event_loop, e),
@@ -163,6 +177,17 @@ impl Viewer {
                             self.screenshot_next = Some(capture::default_path());
                         }
                         KeyCode::Escape if pressed => return self.quit(options),
+                        KeyCode::KeyZ if pressed && self.input.ctrl_held() => {
+                            self.brush_step(if self.input.shift_held() {
+                                Step::Redo
+                            } else {
+                                Step::Undo
+                            });
+                        }
+                        KeyCode::KeyY if pressed && self.input.ctrl_held() => {
+                            self.brush_step(Step::Redo);
+                        }
+                        KeyCode::KeyS if pressed && self.input.ctrl_held() => self.save(None),
                         _ => {}
                     }
                 }
@@ -340,24 +365,9 @@ impl Viewer {
                     b.settings = settings;
                 }
             }
-        }
-    }
-
-    /// Applies the brush at window pixel `(x, y)` of the frame on screen. Each edit is
-    /// printed in a scene file's syntax (a session's edits can go into `edits:`).
-    fn paint(&mut self, x: u32, y: u32) {
-        let Some(brush) = &mut self.brush else {
-            return;
-        };
-        let camera = self.rig.camera();
-        match brush.paint(&self.gpu.ctx, &mut self.scene, &camera, x, y) {
-            Ok(Some(p)) => {
-                let edit = ron::to_string(&p.edit).unwrap_or_else(|e| e.to_string());
-                eprintln!("brush: object {}: {edit}", p.object);
-                self.status = Some(p.status);
-            }
-            Ok(None) => self.status = Some("brush: no editable voxel under the cursor".into()),
-            Err(e) => self.error = Some(format!("brush: {e:#}")),
+            Action::BrushStep(step) => self.brush_step(step),
+            Action::Save(path) => self.save(Some(path)),
+            Action::Journal { restore } => self.restore_journal(Some(restore)),
         }
     }
 
@@ -412,8 +422,8 @@ impl Viewer {
         self.poll_reload();
         // Automation: --paint, once the first frame has set the view.
         if self.frame == 1 {
-            for &(x, y) in &options.paint {
-                self.paint(x, y);
+            for &step in &options.paint {
+                self.script_step(step);
             }
         }
         if self.needs_rebuild {
@@ -496,7 +506,7 @@ impl Viewer {
             notice: self.notice.as_deref(),
             size: self.gpu.size(),
             streaming: self.scene.streaming_stats(),
-            brush: self.brush.as_ref().map(|b| b.settings),
+            brush: self.brush.as_ref().map(|b| b.view()),
         };
         let overlay_state = &mut self.overlay;
         let mut actions = Vec::new();

@@ -5,6 +5,7 @@
 //! into the object's room on the GPU ([`LevelSplicer`]), so a click costs the touched
 //! blocks, not a rebuild. Every instance of the object shows the edit (they share it).
 
+use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Result, bail};
@@ -14,10 +15,13 @@ use ssbvb_gpu::scene::{DynamicRoom, GpuScene, Scene};
 use ssbvb_gpu_build::level_splice::LevelSplicer;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::edit::{Edit, level_voxels};
-use ssbvb_voxel::local_edit::LocalEditor;
+use ssbvb_voxel::edit_journal::JournalOp;
+use ssbvb_voxel::local_edit::{LocalEdit, LocalEditor};
 use ssbvb_voxel::lookup::SparseLookup;
 use ssbvb_voxel::model::cell_size;
 use ssbvb_voxel::reference::{Traversal, trace_object_ray};
+
+use super::brush_journal::{Journal, JournalOptions};
 
 /// Room per level for an editable object, as a multiple of its voxels and nodes.
 const GROWTH: f64 = 2.0;
@@ -97,10 +101,10 @@ impl BrushSettings {
 }
 
 /// One editable object.
-struct Editable {
+pub(super) struct Editable {
     /// Its index in the scene's objects.
-    object: usize,
-    editor: LocalEditor,
+    pub(super) object: usize,
+    pub(super) editor: LocalEditor,
     /// Its finest level's lookup as edited (for picking).
     lookup: SparseLookup,
 }
@@ -129,22 +133,48 @@ pub struct Painted {
     pub status: String,
 }
 
-/// The brush tool: its settings and the editable objects.
+/// A stroke on the undo or redo stack: the edit, and the change last applied for it (the
+/// edit itself, or its undo), whose [`LocalEditor::revert`] takes the other step.
+#[derive(Clone)]
+pub(super) struct Stroke {
+    /// Index among the editable objects.
+    pub(super) editable: usize,
+    pub(super) edit: Edit,
+    pub(super) local: LocalEdit,
+}
+
+/// The brush tool: its settings, the editable objects, the undo and redo stacks and the
+/// journal (`brush_history`).
 pub struct Brush {
     /// What a click does.
     pub settings: BrushSettings,
-    objects: Vec<Editable>,
+    pub(super) objects: Vec<Editable>,
     splicer: Option<LevelSplicer>,
     /// The objects left out (animated ones), for [`Brush::restarted`].
     skip: Vec<usize>,
-    /// Every edit applied so far, in order, by object: what a device loss must not lose.
-    history: Vec<(usize, Edit)>,
+    /// Strokes applied and not undone, oldest first: what a device loss must not lose.
+    pub(super) done: Vec<Stroke>,
+    /// Strokes undone, the last undone last.
+    pub(super) undone: Vec<Stroke>,
+    /// Where every operation is written before it is shown.
+    pub(super) journal: Journal,
+    /// Operations since the last save (0: the saved file holds the session).
+    pub(super) unsaved: u64,
+    /// Where save writes.
+    pub save_path: PathBuf,
 }
 
 impl Brush {
-    /// Editors for the voxel objects of `scene` except `skip` (animated ones).
-    pub fn new(scene: &Scene, skip: &[usize]) -> Self {
-        let objects = scene
+    /// Editors for the voxel objects of `scene` except `skip` (animated ones), with the
+    /// journal `journal` says (a journal found there is read now: offered, restored or set
+    /// aside as it says) and saves going to `save_path`.
+    pub fn new(
+        scene: &Scene,
+        skip: &[usize],
+        journal: &JournalOptions,
+        save_path: PathBuf,
+    ) -> Self {
+        let objects: Vec<Editable> = scene
             .objects
             .iter()
             .enumerate()
@@ -158,81 +188,140 @@ impl Brush {
                 }
             })
             .collect();
+        let assets: Vec<&ssbvb_voxel::asset::VoxelAsset> = objects
+            .iter()
+            .map(|e| scene.objects[e.object].asset.as_ref())
+            .collect();
+        let key = ssbvb_voxel::edit_journal::model_key(&assets);
         Self {
             settings: BrushSettings::default(),
+            journal: Journal::open(journal, objects.len() as u32, key),
             objects,
             splicer: None,
             skip: skip.to_vec(),
-            history: Vec::new(),
+            done: Vec::new(),
+            undone: Vec::new(),
+            unsaved: 0,
+            save_path,
         }
     }
 
-    /// The edits applied so far, in order.
-    pub fn history(&self) -> &[(usize, Edit)] {
-        &self.history
+    /// The edits applied and not undone, in order, by scene object.
+    pub fn history(&self) -> Vec<(usize, Edit)> {
+        self.done
+            .iter()
+            .map(|s| (self.objects[s.editable].object, s.edit))
+            .collect()
     }
 
-    /// A brush with these settings on `scene` as it was before any edit (the scene's
-    /// assets are never edited: the edits live in the GPU rooms and the editors), for a new
-    /// device; [`Brush::replay`] then applies the history again.
-    pub fn restarted(&self, scene: &Scene) -> Self {
-        let mut b = Self::new(scene, &self.skip);
+    /// A brush with these settings, journal, redo stack and save state on `scene` as it
+    /// was before any edit (the scene's assets are never edited: the edits live in the GPU
+    /// rooms and the editors), for a new device; [`Brush::replay`] then applies the
+    /// history again. The journal moves to the new brush.
+    pub fn restarted(&mut self, scene: &Scene) -> Self {
+        let mut b = Self::new(scene, &self.skip, &JournalOptions::off(), PathBuf::new());
         b.settings = self.settings;
+        b.journal = std::mem::replace(&mut self.journal, Journal::off());
+        b.undone = self.undone.clone();
+        b.unsaved = self.unsaved;
+        b.save_path = self.save_path.clone();
         b
     }
 
-    /// Applies `edits` in order on a scene uploaded with [`Brush::rooms`]: the same
-    /// patches as when they were first made, so the rooms end as they were.
+    /// Applies `edits` in order on a scene uploaded with [`Brush::rooms`] (not journaled:
+    /// they are already): the same patches as when they were first made, so the rooms end
+    /// as they were.
     pub fn replay(
         &mut self,
         ctx: &GpuContext,
         gpu_scene: &mut GpuScene,
         edits: &[(usize, Edit)],
     ) -> Result<()> {
+        let redo = std::mem::take(&mut self.undone);
         for &(object, edit) in edits {
-            self.apply(ctx, gpu_scene, object, edit)?;
+            let k = self.editable(object)?;
+            self.stroke(ctx, gpu_scene, k, edit, false)?;
         }
+        self.undone = redo;
         ctx.wait_idle()?;
         Ok(())
     }
 
-    /// Applies `edit` to `object` (its editor, then its room on the GPU, then the lookup
-    /// used for picking) and records it: the edit's report and the words uploaded.
-    fn apply(
+    /// The index among the editable objects of scene object `object`.
+    pub(super) fn editable(&self, object: usize) -> Result<usize> {
+        match self.objects.iter().position(|e| e.object == object) {
+            Some(k) => Ok(k),
+            None => bail!("object {object} is not editable"),
+        }
+    }
+
+    /// Applies `edit` to editable object `k` as a new stroke: its editor, the journal
+    /// (when `record`), its room on the GPU, the lookup used for picking; the redo stack
+    /// is cleared. Nothing changes when any step fails. Returns the edit's report, the
+    /// blocks it touched and the words uploaded.
+    pub(super) fn stroke(
         &mut self,
         ctx: &GpuContext,
         gpu_scene: &mut GpuScene,
-        object: usize,
+        k: usize,
         edit: Edit,
+        record: bool,
     ) -> Result<(ssbvb_voxel::edit::EditReport, usize, u32, u64)> {
+        let local = self.objects[k].editor.apply(&[edit])?;
+        if record {
+            let op = JournalOp::Edit {
+                object: k as u32,
+                edit,
+            };
+            if let Err(e) = self.journal.record(&op) {
+                self.objects[k].editor.revert(&local);
+                return Err(e.context("the edit was not applied"));
+            }
+        }
+        let words = match self.splice(ctx, gpu_scene, k, &local) {
+            Ok(w) => w,
+            Err(err) => {
+                // Nothing reached the GPU: the editor goes back to what the room holds,
+                // and the journal says the edit was taken back.
+                self.objects[k].editor.revert(&local);
+                if record {
+                    let _ = self.journal.record(&JournalOp::Undo);
+                }
+                return Err(err);
+            }
+        };
+        let out = (local.report, local.blocks, local.block_side, words);
+        self.done.push(Stroke {
+            editable: k,
+            edit,
+            local,
+        });
+        self.undone.clear();
+        self.unsaved += 1;
+        Ok(out)
+    }
+
+    /// Sends `local`'s patches to editable object `k`'s room and updates its picking
+    /// lookup: the words uploaded.
+    pub(super) fn splice(
+        &mut self,
+        ctx: &GpuContext,
+        gpu_scene: &mut GpuScene,
+        k: usize,
+        local: &LocalEdit,
+    ) -> Result<u64> {
         if self.splicer.is_none() {
             self.splicer = Some(LevelSplicer::new(ctx)?);
         }
         let Some(splicer) = &self.splicer else {
             bail!("the splice kernels did not compile");
         };
-        let Some(e) = self.objects.iter_mut().find(|e| e.object == object) else {
-            bail!("object {object} is not editable");
-        };
-        let local = e.editor.apply(&[edit])?;
-        let stats = match splicer.apply(ctx, gpu_scene, object, &local.patches) {
-            Ok(s) => s,
-            Err(err) => {
-                // Nothing reached the GPU: the editor goes back to what the room holds.
-                e.editor.revert(&local);
-                return Err(err.into());
-            }
-        };
+        let e = &mut self.objects[k];
+        let stats = splicer.apply(ctx, gpu_scene, e.object, &local.patches)?;
         if let Some(finest) = local.patches.last() {
             e.lookup.nodes = finest.apply_nodes(&e.lookup.nodes);
         }
-        self.history.push((object, edit));
-        Ok((
-            local.report,
-            local.blocks,
-            local.block_side,
-            stats.words_uploaded,
-        ))
+        Ok(stats.words_uploaded)
     }
 
     /// The room the editable objects need in the GPU scene.
@@ -301,17 +390,11 @@ impl Brush {
         let Some(pick) = self.pick(&gpu_scene.scene, camera, px, py, size) else {
             return Ok(None);
         };
-        let Some(level) = self
-            .objects
-            .iter()
-            .find(|e| e.object == pick.object)
-            .map(|e| e.lookup.level)
-        else {
-            bail!("object {} is not editable", pick.object);
-        };
+        let k = self.editable(pick.object)?;
+        let level = self.objects[k].lookup.level;
         let t0 = Instant::now();
         let edit = self.settings.edit_at(pick.center, level);
-        let (r, blocks, block_side, words) = self.apply(ctx, gpu_scene, pick.object, edit)?;
+        let (r, blocks, block_side, words) = self.stroke(ctx, gpu_scene, k, edit, true)?;
         ctx.wait_idle()?;
         let status = format!(
             "brush on object {}: +{} −{} voxels ({blocks} blocks of {block_side}³, {words} \
@@ -360,7 +443,7 @@ mod tests {
     #[test]
     fn the_pick_is_the_nearest_voxel_under_the_pixel_in_object_space() {
         let scene = scene();
-        let brush = Brush::new(&scene, &[]);
+        let brush = Brush::new(&scene, &[], &JournalOptions::off(), PathBuf::new());
         let size = (64, 64);
         // Looking down −z at the first instance: the centre pixel hits the ball's front.
         let cam = Camera::new(DVec3::new(0.0, 0.0, 4.0), DVec3::ZERO);
@@ -380,7 +463,7 @@ mod tests {
         assert_eq!(brush.pick(&scene, &cam, 0, 0, size), None);
         assert_eq!(brush.pick(&scene, &cam, 64, 32, size), None);
         // Nothing is editable when the object is skipped (animated).
-        let none = Brush::new(&scene, &[0]);
+        let none = Brush::new(&scene, &[0], &JournalOptions::off(), PathBuf::new());
         assert!(none.rooms().is_empty());
         assert_eq!(none.pick(&scene, &cam, 32, 32, size), None);
     }

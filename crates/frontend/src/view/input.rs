@@ -104,6 +104,12 @@ impl CameraInput {
             || self.held_keys.contains(&KeyCode::ControlRight)
     }
 
+    /// Whether a Shift key is held (Ctrl + Shift + Z is redo).
+    pub fn shift_held(&self) -> bool {
+        self.held_keys.contains(&KeyCode::ShiftLeft)
+            || self.held_keys.contains(&KeyCode::ShiftRight)
+    }
+
     /// Movement axes from the held keys.
     pub fn movement(&self) -> MoveInput {
         let axis = |plus: KeyCode, minus: KeyCode| {

@@ -20,6 +20,8 @@
 mod app;
 mod blit;
 mod brush;
+mod brush_history;
+mod brush_journal;
 mod camera_control;
 mod capture;
 mod display;
@@ -81,10 +83,33 @@ pub struct ViewArgs {
     /// The brush's radius at start, in voxels of the edited object's finest level.
     #[arg(long, value_name = "VOXELS", default_value_t = 6.0)]
     pub brush_radius: f64,
-    /// Automation: apply the brush (carving a sphere of --brush-radius) at window pixel
-    /// X,Y after the first frame; repeatable; implies --brush.
-    #[arg(long, value_name = "X,Y", value_parser = parse_pixel, requires = "frames")]
-    pub paint: Vec<(u32, u32)>,
+    /// Automation: after the first frame, in order: apply the brush (carving a sphere of
+    /// --brush-radius) at window pixel X,Y, or `undo`, `redo`, or `save` (to the save
+    /// path); repeatable; implies --brush.
+    #[arg(long, value_name = "X,Y|undo|redo|save", value_parser = parse_script_step, requires = "frames")]
+    pub paint: Vec<ScriptStep>,
+    /// Save the edited objects here when the viewer closes (a prepared asset file that
+    /// `ssbvb render FILE` and `ssbvb view FILE` open, every level as edited; with several
+    /// editable objects, FILE with each object's index before the extension). Also where
+    /// Ctrl+S saves. Implies --brush.
+    #[arg(long, value_name = "FILE")]
+    pub save_on_exit: Option<PathBuf>,
+    /// Replay the journal an earlier session left beside the model (its unsaved brush
+    /// work) without asking. Implies --brush.
+    #[arg(long, conflicts_with = "discard_journal")]
+    pub restore: bool,
+    /// Set an earlier session's journal aside (renamed `….discarded`) without asking, also
+    /// one that cannot be used. Implies --brush.
+    #[arg(long)]
+    pub discard_journal: bool,
+    /// The brush journal's file (default: beside the model, `MODEL.L<level>.ssbvb-journal`,
+    /// or `SCENE.ron.ssbvb-journal`).
+    #[arg(long, value_name = "FILE")]
+    pub journal: Option<PathBuf>,
+    /// Crash injection for tests: `after@N` aborts right after journal record N,
+    /// `torn@N` in the middle of writing it.
+    #[arg(long, hide = true, value_parser = brush_journal::parse_crash)]
+    pub inject_crash: Option<brush_journal::Crash>,
     /// Fault injection for tests: `device-lost@FRAME` destroys the device before frame
     /// FRAME, `oom@FRAME` rebuilds the GPU side there with its first large allocation
     /// refused (repeatable); the viewer recovers, keeping the brush edits.
@@ -94,6 +119,27 @@ pub struct ViewArgs {
     /// optional feature).
     #[arg(long, value_enum, default_value = "adapter")]
     pub limits: crate::adapter_cmd::LimitsArg,
+}
+
+/// One step of `--paint`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ScriptStep {
+    /// Apply the brush at a window pixel.
+    Paint(u32, u32),
+    /// Undo or redo.
+    Step(brush_history::Step),
+    /// Save to the save path.
+    Save,
+}
+
+/// `X,Y`, `undo`, `redo` or `save`.
+fn parse_script_step(s: &str) -> Result<ScriptStep, String> {
+    match s {
+        "undo" => Ok(ScriptStep::Step(brush_history::Step::Undo)),
+        "redo" => Ok(ScriptStep::Step(brush_history::Step::Redo)),
+        "save" => Ok(ScriptStep::Save),
+        _ => parse_pixel(s).map(|(x, y)| ScriptStep::Paint(x, y)),
+    }
 }
 
 /// A window pixel `X,Y`.
@@ -150,7 +196,11 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     if !animated.is_empty() && args.gpu_budget.or(gpu_budget_mib).is_some() {
         anyhow::bail!("animated objects cannot be paged under a GPU budget; drop --gpu-budget");
     }
-    let editable = args.brush || !args.paint.is_empty();
+    let editable = args.brush
+        || !args.paint.is_empty()
+        || args.save_on_exit.is_some()
+        || args.restore
+        || args.discard_journal;
     if !(args.brush_radius.is_finite()
         && args.brush_radius > 0.0
         && args.brush_radius <= brush::MAX_RADIUS_VOXELS)
@@ -166,8 +216,22 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     }
     let brush = editable.then(|| {
         let skip: Vec<usize> = animated.iter().map(|a| a.object).collect();
-        let mut b = brush::Brush::new(&scene, &skip);
+        let (journal, save_path) = journal_and_save_paths(args, &input, &scene);
+        let decision = match (args.restore, args.discard_journal) {
+            (true, _) => brush_journal::JournalDecision::Restore,
+            (_, true) => brush_journal::JournalDecision::Discard,
+            _ => brush_journal::JournalDecision::Ask,
+        };
+        let journal = brush_journal::JournalOptions {
+            path: Some(journal),
+            decision,
+            crash: args.inject_crash,
+        };
+        let mut b = brush::Brush::new(&scene, &skip, &journal, save_path);
         b.settings.radius_voxels = args.brush_radius;
+        for n in b.journal_notes() {
+            eprintln!("journal: {n}");
+        }
         b
     });
     progress.finish();
@@ -201,6 +265,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         techniques: techniques::list(&assets_dir().join("pipelines")),
         memory_report: args.memory_report.clone(),
         paint: args.paint.clone(),
+        save_on_exit: args.save_on_exit.clone(),
         faults: args.inject_fault.clone(),
     };
     let mut app = app::App::new(
@@ -218,6 +283,36 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         .run_app(&mut app)
         .map_err(|e| anyhow!("the window's event loop failed: {e}"))?;
     app.into_result()
+}
+
+/// The brush journal's path and where saves go: `--journal` or beside the input (the
+/// level in the name for a model file, whose journal depends on it), and
+/// `--save-on-exit` or `INPUT_STEM.edited.ssbvb` beside the input.
+fn journal_and_save_paths(
+    args: &ViewArgs,
+    input: &std::path::Path,
+    scene: &ssbvb_gpu::scene::Scene,
+) -> (PathBuf, PathBuf) {
+    let is_scene = input
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ron"));
+    let level = (!is_scene)
+        .then(|| scene.objects.first().map(|o| o.asset.lods.len() as u32 - 1))
+        .flatten();
+    let journal = args
+        .journal
+        .clone()
+        .unwrap_or_else(|| brush_journal::default_path(input, level));
+    let stem = input
+        .file_stem()
+        .map_or_else(|| "model".into(), |s| s.to_string_lossy().into_owned());
+    let save = args.save_on_exit.clone().unwrap_or_else(|| {
+        input.with_file_name(format!(
+            "{stem}.edited.{}",
+            ssbvb_voxel::cache::ASSET_FILE_EXTENSION
+        ))
+    });
+    (journal, save)
 }
 
 /// The event loop, or the no-display error (winit panics on some broken X servers:

@@ -13,6 +13,7 @@ use ssbvb_gpu::scene::LodPolicy;
 use ssbvb_graph::{PassKind, ResolvedPipeline};
 
 use super::brush::{BrushMode, BrushSettings, BrushShape};
+use super::brush_history::Step;
 use super::camera_control::CameraMode;
 use super::knobs;
 use super::stats::{SLOW_SAMPLE_EVERY, Stats, TIMESTAMP_EVERY, TimingSource};
@@ -51,6 +52,34 @@ pub enum Action {
     Budget(u64),
     /// New brush settings.
     Brush(BrushSettings),
+    /// Undo or redo a brush stroke.
+    BrushStep(Step),
+    /// Save the edited objects here.
+    Save(PathBuf),
+    /// Answer the offer of an earlier session's journal.
+    Journal {
+        /// Replay it (else set it aside).
+        restore: bool,
+    },
+}
+
+/// What the overlay shows of the brush.
+#[derive(Debug, Clone)]
+pub struct BrushView {
+    /// Its settings.
+    pub settings: BrushSettings,
+    /// Whether undo and redo have something to take.
+    pub can_undo: bool,
+    /// See `can_undo`.
+    pub can_redo: bool,
+    /// Operations since the last save.
+    pub unsaved: u64,
+    /// Where save writes.
+    pub save_path: PathBuf,
+    /// The journal's line.
+    pub journal: String,
+    /// Operations of an earlier session waiting for an answer.
+    pub offered: Option<usize>,
 }
 
 /// One voxel object's LOD as the overlay shows it.
@@ -110,8 +139,8 @@ pub struct OverlayView<'a> {
     pub size: (u32, u32),
     /// Under a GPU budget: what the page cache holds and did.
     pub streaming: Option<&'a ssbvb_gpu::scene::StreamingStats>,
-    /// With --brush: its settings.
-    pub brush: Option<BrushSettings>,
+    /// With --brush: its settings and state.
+    pub brush: Option<BrushView>,
 }
 
 /// Overlay state kept between frames: knob values being edited.
@@ -124,6 +153,8 @@ pub struct OverlayState {
     knob_error: Option<String>,
     /// The GPU budget being edited (MiB), applied with its button.
     budget_draft: Option<u64>,
+    /// The save path being edited.
+    save_draft: Option<String>,
 }
 
 impl OverlayState {
@@ -167,8 +198,8 @@ pub fn draw(ctx: &egui::Context, view: &OverlayView<'_>, state: &mut OverlayStat
             }
             camera(ui, view, &mut actions);
             ui.separator();
-            if let Some(b) = view.brush {
-                brush(ui, b, &mut actions);
+            if let Some(b) = &view.brush {
+                brush(ui, b, state, &mut actions);
                 ui.separator();
             }
             ui.horizontal(|ui| {
@@ -183,9 +214,24 @@ pub fn draw(ctx: &egui::Context, view: &OverlayView<'_>, state: &mut OverlayStat
     actions
 }
 
-/// The brush section: mode, shape, radius and colour (Ctrl + left click paints).
-fn brush(ui: &mut egui::Ui, mut b: BrushSettings, actions: &mut Vec<Action>) {
-    let before = b;
+/// The brush section: mode, shape, radius and colour (Ctrl + left click paints), undo and
+/// redo, save, and the journal (with an earlier session's offer).
+fn brush(ui: &mut egui::Ui, view: &BrushView, state: &mut OverlayState, actions: &mut Vec<Action>) {
+    if let Some(n) = view.offered {
+        ui.colored_label(
+            Color32::from_rgb(240, 180, 60),
+            format!("An earlier session left {n} unsaved brush operations."),
+        );
+        ui.horizontal(|ui| {
+            if ui.button("Restore").clicked() {
+                actions.push(Action::Journal { restore: true });
+            }
+            if ui.button("Discard").clicked() {
+                actions.push(Action::Journal { restore: false });
+            }
+        });
+    }
+    let mut b = view.settings;
     ui.collapsing("Brush (Ctrl + left click)", |ui| {
         ui.horizontal(|ui| {
             ui.radio_value(&mut b.mode, BrushMode::Carve, "Carve");
@@ -202,8 +248,32 @@ fn brush(ui: &mut egui::Ui, mut b: BrushSettings, actions: &mut Vec<Action>) {
                 ui.color_edit_button_rgb(&mut b.color);
             });
         }
+        ui.horizontal(|ui| {
+            let undo = ui.add_enabled(view.can_undo, egui::Button::new("Undo (Ctrl+Z)"));
+            if undo.clicked() {
+                actions.push(Action::BrushStep(Step::Undo));
+            }
+            let redo = ui.add_enabled(view.can_redo, egui::Button::new("Redo (Ctrl+Shift+Z)"));
+            if redo.clicked() {
+                actions.push(Action::BrushStep(Step::Redo));
+            }
+        });
+        let draft = state
+            .save_draft
+            .get_or_insert_with(|| view.save_path.display().to_string());
+        ui.horizontal(|ui| {
+            ui.text_edit_singleline(draft);
+            if ui.button("Save (Ctrl+S)").clicked() {
+                actions.push(Action::Save(PathBuf::from(draft.trim())));
+            }
+        });
+        let unsaved = match view.unsaved {
+            0 => "saved".to_string(),
+            n => format!("{n} operations unsaved"),
+        };
+        ui.label(RichText::new(format!("{unsaved}; {}", view.journal)).small());
     });
-    if b != before {
+    if b != view.settings {
         actions.push(Action::Brush(b));
     }
 }

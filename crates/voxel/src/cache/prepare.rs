@@ -9,8 +9,8 @@ use serde::Serialize;
 use super::deps::{self, Dependency};
 use super::format::{CacheError, FORMAT_VERSION};
 use super::{
-    asset_file_header, cache_file_name, default_cache_dir, hash_source, read_asset_file, read_cache,
-    write_cache,
+    asset_file_header, cache_file_name, default_cache_dir, hash_source, read_asset_file,
+    read_cache, write_cache,
 };
 use crate::asset::VoxelAsset;
 use crate::load::{LoadError, LoadOptions, load_model_with};

@@ -173,6 +173,8 @@ impl Viewer {
         let (parts, lowered) =
             GpuParts::open_within_memory(&window, &display, &mut loaded, pipeline, refuse)?;
         let mut v = Self::assemble(window, display, parts, loaded);
+        // `--restore`: the journal replays before the first frame.
+        v.restore_journal(None);
         if !lowered.is_empty() {
             let notice = format!("out of GPU memory at the start: {}", lowered.join("; "));
             eprintln!("view: {notice}");

@@ -45,7 +45,7 @@ impl Viewer {
             .as_ref()
             .map(|b| b.history().to_vec())
             .unwrap_or_default();
-        let brush = self.brush.as_ref().map(|b| b.restarted(&scene));
+        let brush = self.brush.as_mut().map(|b| b.restarted(&scene));
         // What is on screen: an edit or reload whose rebuild failed never drew.
         let pipeline = self.renderer.pipeline.clone();
         let Viewer {

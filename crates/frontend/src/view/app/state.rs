@@ -35,8 +35,11 @@ pub struct Options {
     pub techniques: Vec<PathBuf>,
     /// With --frames: write process and device memory at the start and end here.
     pub memory_report: Option<PathBuf>,
-    /// Automation: window pixels the brush paints at, after the first frame.
-    pub paint: Vec<(u32, u32)>,
+    /// Automation: brush steps (paint at a window pixel, undo, redo, save), after the
+    /// first frame.
+    pub paint: Vec<super::super::ScriptStep>,
+    /// Where the edited objects are saved when the viewer closes.
+    pub save_on_exit: Option<PathBuf>,
     /// Faults injected before given frames (`--inject-fault`, tests).
     pub faults: Vec<crate::faults::Fault>,
 }
