@@ -92,6 +92,20 @@ pub enum PrepareError {
     /// The source file could not be read for hashing.
     #[error(transparent)]
     Cache(#[from] CacheError),
+    /// A prepared asset file asked for at a level finer than it holds.
+    #[error(
+        "{}: a prepared asset file of levels 0..={holds}; level {asked} is finer than it \
+         holds (ask for level {holds} or coarser)",
+        .path.display()
+    )]
+    AssetLevel {
+        /// The file.
+        path: PathBuf,
+        /// Its finest level.
+        holds: u32,
+        /// The level asked for.
+        asked: u32,
+    },
 }
 
 /// Returns the asset of `model_path` at `level`: read from the cache when a valid cache
@@ -235,8 +249,15 @@ fn asset_file(
     model_path: &Path,
     level: u32,
 ) -> Result<Option<(Option<VoxelAsset>, PrepareOutcome)>, PrepareError> {
-    if asset_file_header(model_path)?.is_none() {
+    let Some(found) = asset_file_header(model_path)? else {
         return Ok(None);
+    };
+    if level > found.level {
+        return Err(PrepareError::AssetLevel {
+            path: model_path.to_path_buf(),
+            holds: found.level,
+            asked: level,
+        });
     }
     let (asset, header) = read_asset_file(model_path, Some(level))?;
     let outcome = PrepareOutcome {

@@ -11,14 +11,15 @@ use std::path::{Path, PathBuf};
 /// shown to a user as is.
 #[derive(Debug, thiserror::Error)]
 pub enum LoadError {
-    /// The file (or a file it references, such as an MTL library) could not be read.
-    #[error("{}: {source}", .path.display())]
+    /// The file (or a file it references, such as an MTL library) could not be read or
+    /// written. The message includes the operating system's error, so it is not repeated
+    /// as a `source()` (an error chain would print it twice).
+    #[error("{}: {error}", .path.display())]
     Io {
-        /// The file that could not be read.
+        /// The file that could not be read or written.
         path: PathBuf,
         /// The operating system's error.
-        #[source]
-        source: io::Error,
+        error: io::Error,
     },
     /// The file's content is malformed.
     #[error("{}: {message}", Location(.path, *.line, *.offset))]
@@ -110,7 +111,7 @@ impl LoadError {
     pub(crate) fn io(path: &Path, source: io::Error) -> Self {
         LoadError::Io {
             path: path.to_path_buf(),
-            source,
+            error: source,
         }
     }
 
