@@ -17,7 +17,8 @@ use crate::progress::BarProgress;
 /// The formats, as written on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum FormatArg {
-    /// MagicaVoxel `.vox` (one model, levels up to 8; palette of the closest 255 colours).
+    /// MagicaVoxel `.vox` (palette of the closest 255 colours; past level 8, 256³ models
+    /// placed by the scene graph, up to level 12).
     Vox,
     /// The project's dense raw grid (grey levels).
     Raw,
@@ -31,7 +32,8 @@ pub enum FormatArg {
 /// Arguments of `ssbvb export`.
 #[derive(Debug, Args)]
 pub struct ExportArgs {
-    /// A model file (OBJ, PLY, glTF/GLB, VOX, raw grid), voxelized at `--level` (cached).
+    /// A model file (OBJ, PLY, glTF/GLB, VOX, raw grid), voxelized at `--level` (cached),
+    /// or a prepared asset file (`voxelize -o`, the viewer's save), read as it is.
     pub model: PathBuf,
     /// The level to export (2^level cells per axis).
     #[arg(long)]

@@ -51,7 +51,7 @@ fn each_format_is_written_and_renders_again() {
         }
     }
     for (format, level, want) in [
-        ("vox", "9", "256³ cells per model"),
+        ("vox", "13", "4096³ cells"),
         ("npy", "11", "--sparse"),
         ("raw", "11", "coarser --level"),
     ] {

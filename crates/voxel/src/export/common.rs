@@ -12,6 +12,11 @@ pub const MAX_DENSE_BYTES: u64 = 1 << 30;
 /// Most cells per axis of one VOX model.
 pub const MAX_VOX_EDGE: u32 = 256;
 
+/// Most cells per axis of a VOX export: larger grids are split into 256³ models placed by
+/// the scene graph, up to 16³ of them (level 12). The format allows more; this writer
+/// stops there because every model's nodes and chunk are held in memory at once.
+pub const MAX_VOX_SCENE_EDGE: u32 = 4096;
+
 /// Why an export was refused or failed.
 #[derive(Debug, thiserror::Error)]
 pub enum ExportError {
@@ -115,13 +120,14 @@ pub fn check_size(format: ExportFormat, edge: u32) -> Result<(), ExportError> {
     };
     let cells = u64::from(edge).pow(3);
     match format {
-        ExportFormat::Vox if edge > MAX_VOX_EDGE => Err(ExportError::TooLarge {
+        ExportFormat::Vox if edge > MAX_VOX_SCENE_EDGE => Err(ExportError::TooLarge {
             format: "vox",
             what: format!("a {edge}³ grid"),
-            limit: format!("{}³ cells per model", MAX_VOX_EDGE),
-            hint: "export --level 8 or coarser (several models placed by the scene graph \
-                   are not written yet), or use --format npy or obj"
-                .into(),
+            limit: format!(
+                "{MAX_VOX_SCENE_EDGE}³ cells ({}³ models of {MAX_VOX_EDGE}³ in the scene graph)",
+                MAX_VOX_SCENE_EDGE / MAX_VOX_EDGE
+            ),
+            hint: "export --level 12 or coarser, or use --format npy --sparse or obj".into(),
         }),
         ExportFormat::Raw => dense(
             "raw",
