@@ -285,6 +285,15 @@ pub fn write_raw(path: &Path, nx: u32, ny: u32, nz: u32, cells: &[u8]) -> Result
 /// Writes `parts` to a unique temporary file beside `path`, syncs it, and renames it over
 /// `path`. The temporary file is removed if anything fails.
 pub(crate) fn write_atomically(path: &Path, parts: &[&[u8]]) -> Result<(), LoadError> {
+    write_atomically_with(path, |w| parts.iter().try_for_each(|p| w.write_all(p)))
+}
+
+/// [`write_atomically`] with the content streamed by `fill` through a buffered writer (a
+/// large export is never held whole in memory).
+pub(crate) fn write_atomically_with(
+    path: &Path,
+    fill: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+) -> Result<(), LoadError> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
@@ -302,14 +311,14 @@ pub(crate) fn write_atomically(path: &Path, parts: &[&[u8]]) -> Result<(), LoadE
     let result = (|| -> io::Result<()> {
         {
             // Closed before the rename.
-            let mut f = fs::OpenOptions::new()
+            let f = fs::OpenOptions::new()
                 .write(true)
                 .create_new(true)
                 .open(&tmp)?;
-            for part in parts {
-                f.write_all(part)?;
-            }
-            f.sync_all()?;
+            let mut w = io::BufWriter::with_capacity(1 << 20, f);
+            fill(&mut w)?;
+            w.flush()?;
+            w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
         }
         fs::rename(&tmp, path)
     })();

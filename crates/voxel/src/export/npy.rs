@@ -56,19 +56,23 @@ pub fn write_dense(path: &Path, edge: u32, voxels: &[ExportVoxel]) -> Result<(),
     Ok(())
 }
 
-/// Writes the sparse voxel list.
+/// Writes the sparse voxel list (streamed: no copy of the records is held).
 pub fn write_sparse(path: &Path, voxels: &[ExportVoxel]) -> Result<(), ExportError> {
-    let mut data = Vec::with_capacity(voxels.len() * 22);
-    for v in voxels {
-        for c in v.cell {
-            data.extend_from_slice(&(c as u16).to_le_bytes());
-        }
-        data.extend_from_slice(&v.rgba);
-        for n in v.normal {
-            data.extend_from_slice(&n.to_le_bytes());
-        }
-    }
     let head = header(SPARSE_DTYPE, &[voxels.len() as u64]);
-    crate::load::write_atomically(path, &[&head, &data])?;
+    crate::load::write_atomically_with(path, |w| {
+        w.write_all(&head)?;
+        for v in voxels {
+            let mut record = [0u8; 22];
+            for (i, c) in v.cell.iter().enumerate() {
+                record[2 * i..2 * i + 2].copy_from_slice(&(*c as u16).to_le_bytes());
+            }
+            record[6..10].copy_from_slice(&v.rgba);
+            for (i, n) in v.normal.iter().enumerate() {
+                record[10 + 4 * i..14 + 4 * i].copy_from_slice(&n.to_le_bytes());
+            }
+            w.write_all(&record)?;
+        }
+        Ok(())
+    })?;
     Ok(())
 }

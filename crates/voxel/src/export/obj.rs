@@ -7,7 +7,6 @@
 //! vertices.
 
 use std::collections::{HashMap, HashSet};
-use std::fmt::Write as _;
 use std::path::Path;
 
 use super::common::{ExportError, ExportVoxel};
@@ -121,38 +120,40 @@ pub fn write(
     let model = |g: [u32; 3]| -> [f64; 3] {
         std::array::from_fn(|i| space.center[i] + (-1.0 + f64::from(g[i]) * cell) / space.scale)
     };
-    let mut text = String::from("# ssbvb export: exposed voxel faces, vertex colours sRGB\n");
-    let mut n = 0usize;
-    for r in &rects {
-        let (ua, va) = ((r.axis + 1) % 3, (r.axis + 2) % 3);
-        let corner = |u: u32, v: u32| {
-            let mut g = [0u32; 3];
-            g[r.axis] = r.plane;
-            g[ua] = u;
-            g[va] = v;
-            model(g)
-        };
-        let mut quad = [
-            corner(r.u[0], r.v[0]),
-            corner(r.u[1], r.v[0]),
-            corner(r.u[1], r.v[1]),
-            corner(r.u[0], r.v[1]),
-        ];
-        if !r.positive {
-            quad.reverse();
+    crate::load::write_atomically_with(path, |w| {
+        writeln!(w, "# ssbvb export: exposed voxel faces, vertex colours sRGB")?;
+        let mut n = 0usize;
+        for r in &rects {
+            let (ua, va) = ((r.axis + 1) % 3, (r.axis + 2) % 3);
+            let corner = |u: u32, v: u32| {
+                let mut g = [0u32; 3];
+                g[r.axis] = r.plane;
+                g[ua] = u;
+                g[va] = v;
+                model(g)
+            };
+            let mut quad = [
+                corner(r.u[0], r.v[0]),
+                corner(r.u[1], r.v[0]),
+                corner(r.u[1], r.v[1]),
+                corner(r.u[0], r.v[1]),
+            ];
+            if !r.positive {
+                quad.reverse();
+            }
+            let c = r.rgba.map(|x| f64::from(x) / 255.0);
+            for p in quad {
+                writeln!(
+                    w,
+                    "v {} {} {} {:.4} {:.4} {:.4}",
+                    p[0], p[1], p[2], c[0], c[1], c[2]
+                )?;
+            }
+            writeln!(w, "f {} {} {}", n + 1, n + 2, n + 3)?;
+            writeln!(w, "f {} {} {}", n + 1, n + 3, n + 4)?;
+            n += 4;
         }
-        let c = r.rgba.map(|x| f64::from(x) / 255.0);
-        for p in quad {
-            let _ = writeln!(
-                text,
-                "v {} {} {} {:.4} {:.4} {:.4}",
-                p[0], p[1], p[2], c[0], c[1], c[2]
-            );
-        }
-        let _ = writeln!(text, "f {} {} {}", n + 1, n + 2, n + 3);
-        let _ = writeln!(text, "f {} {} {}", n + 1, n + 3, n + 4);
-        n += 4;
-    }
-    crate::load::write_atomically(path, &[text.as_bytes()])?;
+        Ok(())
+    })?;
     Ok(rects.len())
 }
