@@ -626,6 +626,40 @@ fn view_brush_work_is_undone_saved_and_restored_after_a_torn_journal_record() {
     );
     let len = std::fs::metadata(&journal).unwrap().len();
     assert_eq!(len, 32 + 4 * 84 + 42, "four whole records and half a fifth");
+    // The journal opened by a session of another model (level 5) is refused, left whole,
+    // and its strokes are not applied; a journal that cannot be written refuses strokes.
+    let before = std::fs::read(&journal).unwrap();
+    let j = journal.display().to_string();
+    let other = [
+        m.as_str(),
+        "--level",
+        "5",
+        "--size",
+        "320x240",
+        "--frames",
+        "2",
+    ];
+    let (ok, log) = view_run(&[&other[..], &["--journal", &j, "--paint", "160,120"]].concat());
+    assert!(ok, "{log}");
+    assert!(
+        log.contains("written for another model") && log.contains("left as it is"),
+        "{log}"
+    );
+    assert!(!log.contains("brush: object 0:"), "{log}");
+    assert_eq!(std::fs::read(&journal).unwrap(), before);
+    let unwritable = format!("{m}/journal");
+    let (ok, log) = view_run(
+        &[
+            &other[..],
+            &["--journal", &unwritable, "--paint", "160,120"],
+        ]
+        .concat(),
+    );
+    assert!(ok, "{log}");
+    assert!(
+        log.contains("cannot start the journal") && log.contains("the edit was not applied"),
+        "{log}"
+    );
     // Restored: the torn record dropped, four operations replayed; one more undo gives
     // the first session's state, saved byte for byte.
     let r = restored.display().to_string();

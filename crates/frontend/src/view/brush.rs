@@ -143,6 +143,19 @@ pub(super) struct Stroke {
     pub(super) local: LocalEdit,
 }
 
+/// What a stroke did and cost.
+pub(super) struct StrokeCost {
+    /// Cells added, removed, clipped.
+    pub(super) report: ssbvb_voxel::edit::EditReport,
+    /// Blocks touched at the finest level, and their side.
+    pub(super) blocks: usize,
+    pub(super) block_side: u32,
+    /// Words uploaded to the GPU.
+    pub(super) words: u64,
+    /// Milliseconds spent journaling it (one synced write).
+    pub(super) journal_ms: f64,
+}
+
 /// The brush tool: its settings, the editable objects, the undo and redo stacks and the
 /// journal (`brush_history`).
 pub struct Brush {
@@ -257,8 +270,7 @@ impl Brush {
 
     /// Applies `edit` to editable object `k` as a new stroke: its editor, the journal
     /// (when `record`), its room on the GPU, the lookup used for picking; the redo stack
-    /// is cleared. Nothing changes when any step fails. Returns the edit's report, the
-    /// blocks it touched and the words uploaded.
+    /// is cleared. Nothing changes when any step fails.
     pub(super) fn stroke(
         &mut self,
         ctx: &GpuContext,
@@ -266,8 +278,9 @@ impl Brush {
         k: usize,
         edit: Edit,
         record: bool,
-    ) -> Result<(ssbvb_voxel::edit::EditReport, usize, u32, u64)> {
+    ) -> Result<StrokeCost> {
         let local = self.objects[k].editor.apply(&[edit])?;
+        let t_journal = Instant::now();
         if record {
             let op = JournalOp::Edit {
                 object: k as u32,
@@ -278,6 +291,7 @@ impl Brush {
                 return Err(e.context("the edit was not applied"));
             }
         }
+        let journal_ms = t_journal.elapsed().as_secs_f64() * 1e3;
         let words = match self.splice(ctx, gpu_scene, k, &local) {
             Ok(w) => w,
             Err(err) => {
@@ -290,7 +304,13 @@ impl Brush {
                 return Err(err);
             }
         };
-        let out = (local.report, local.blocks, local.block_side, words);
+        let out = StrokeCost {
+            report: local.report,
+            blocks: local.blocks,
+            block_side: local.block_side,
+            words,
+            journal_ms,
+        };
         self.done.push(Stroke {
             editable: k,
             edit,
@@ -394,15 +414,19 @@ impl Brush {
         let level = self.objects[k].lookup.level;
         let t0 = Instant::now();
         let edit = self.settings.edit_at(pick.center, level);
-        let (r, blocks, block_side, words) = self.stroke(ctx, gpu_scene, k, edit, true)?;
+        let c = self.stroke(ctx, gpu_scene, k, edit, true)?;
         ctx.wait_idle()?;
         let status = format!(
-            "brush on object {}: +{} −{} voxels ({blocks} blocks of {block_side}³, {words} \
-             words uploaded) in {:.1} ms",
+            "brush on object {}: +{} −{} voxels ({} blocks of {}³, {} words uploaded) in \
+             {:.1} ms (journal {:.2} ms)",
             pick.object,
-            r.added,
-            r.removed,
-            t0.elapsed().as_secs_f64() * 1e3
+            c.report.added,
+            c.report.removed,
+            c.blocks,
+            c.block_side,
+            c.words,
+            t0.elapsed().as_secs_f64() * 1e3,
+            c.journal_ms
         );
         Ok(Some(Painted {
             object: pick.object,

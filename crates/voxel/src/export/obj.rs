@@ -121,7 +121,10 @@ pub fn write(
         std::array::from_fn(|i| space.center[i] + (-1.0 + f64::from(g[i]) * cell) / space.scale)
     };
     crate::load::write_atomically_with(path, |w| {
-        writeln!(w, "# ssbvb export: exposed voxel faces, vertex colours sRGB")?;
+        writeln!(
+            w,
+            "# ssbvb export: exposed voxel faces, vertex colours sRGB"
+        )?;
         let mut n = 0usize;
         for r in &rects {
             let (ua, va) = ((r.axis + 1) % 3, (r.axis + 2) % 3);

@@ -31,6 +31,7 @@ impl Viewer {
             Ok(Some(p)) => {
                 let edit = ron::to_string(&p.edit).unwrap_or_else(|e| e.to_string());
                 eprintln!("brush: object {}: {edit}", p.object);
+                eprintln!("{}", p.status);
                 self.status = Some(p.status);
             }
             Ok(None) => self.status = Some("brush: no editable voxel under the cursor".into()),
