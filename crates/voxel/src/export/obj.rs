@@ -107,8 +107,11 @@ fn merge((axis, positive, plane): PlaneKey, faces: &PlaneFaces, out: &mut Vec<Re
     }
 }
 
-/// Writes the surface of `voxels` (cells of an `edge`³ grid of `space`) as OBJ; returns
-/// how many rectangles it has.
+/// Writes the surface of `voxels` (cells of an `edge`³ grid of `space`) as OBJ, streamed;
+/// returns how many rectangles it has. A corner's coordinate on an axis is one of
+/// `edge + 1` grid planes and a colour channel one of 256 values, so their text is made
+/// once per value, and a line is copied from those pieces: formatting floats per vertex
+/// was most of the time of a large export (`docs/bench/details.md`, "Export").
 pub fn write(
     path: &Path,
     edge: u32,
@@ -117,15 +120,22 @@ pub fn write(
 ) -> Result<usize, ExportError> {
     let rects = rectangles(voxels);
     let cell = 2.0 / f64::from(edge);
-    let model = |g: [u32; 3]| -> [f64; 3] {
-        std::array::from_fn(|i| space.center[i] + (-1.0 + f64::from(g[i]) * cell) / space.scale)
-    };
+    let planes: [Vec<String>; 3] = std::array::from_fn(|i| {
+        (0..=edge)
+            .map(|g| {
+                let x = space.center[i] + (-1.0 + f64::from(g) * cell) / space.scale;
+                format!("{x}")
+            })
+            .collect()
+    });
+    let channel: Vec<String> = (0..=255u32)
+        .map(|c| format!("{:.4}", f64::from(c) / 255.0))
+        .collect();
     crate::load::write_atomically_with(path, |w| {
-        writeln!(
-            w,
-            "# ssbvb export: exposed voxel faces, vertex colours sRGB"
-        )?;
+        writeln!(w, "# ssbvb export: exposed voxel faces, vertex colours sRGB")?;
         let mut n = 0usize;
+        let mut line = Vec::with_capacity(256);
+        let mut int = itoa::Buffer::new();
         for r in &rects {
             let (ua, va) = ((r.axis + 1) % 3, (r.axis + 2) % 3);
             let corner = |u: u32, v: u32| {
@@ -133,7 +143,7 @@ pub fn write(
                 g[r.axis] = r.plane;
                 g[ua] = u;
                 g[va] = v;
-                model(g)
+                g
             };
             let mut quad = [
                 corner(r.u[0], r.v[0]),
@@ -144,16 +154,28 @@ pub fn write(
             if !r.positive {
                 quad.reverse();
             }
-            let c = r.rgba.map(|x| f64::from(x) / 255.0);
-            for p in quad {
-                writeln!(
-                    w,
-                    "v {} {} {} {:.4} {:.4} {:.4}",
-                    p[0], p[1], p[2], c[0], c[1], c[2]
-                )?;
+            line.clear();
+            for g in quad {
+                line.push(b'v');
+                for (i, p) in g.iter().enumerate() {
+                    line.push(b' ');
+                    line.extend_from_slice(planes[i][*p as usize].as_bytes());
+                }
+                for c in &r.rgba[..3] {
+                    line.push(b' ');
+                    line.extend_from_slice(channel[usize::from(*c)].as_bytes());
+                }
+                line.push(b'\n');
             }
-            writeln!(w, "f {} {} {}", n + 1, n + 2, n + 3)?;
-            writeln!(w, "f {} {} {}", n + 1, n + 3, n + 4)?;
+            for tri in [[1, 2, 3], [1, 3, 4]] {
+                line.push(b'f');
+                for k in tri {
+                    line.push(b' ');
+                    line.extend_from_slice(int.format(n + k).as_bytes());
+                }
+                line.push(b'\n');
+            }
+            w.write_all(&line)?;
             n += 4;
         }
         Ok(())
