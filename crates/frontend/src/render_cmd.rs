@@ -247,8 +247,7 @@ pub fn load_input(
         });
     }
     // A prepared asset file (a viewer's save) is drawn at its finest level by default.
-    let saved = ssbvb_voxel::cache::asset_file_header(input)
-        .with_context(|| format!("reading {}", input.display()))?;
+    let saved = ssbvb_voxel::cache::asset_file_header(input).context("reading the model")?;
     let level = level.unwrap_or(saved.map_or(8, |h| h.level));
     let (asset, outcome) = ssbvb_voxel::cache::load_or_prepare(input, level, None, progress)
         .with_context(|| format!("preparing {}", input.display()))?;

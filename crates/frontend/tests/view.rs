@@ -572,13 +572,14 @@ fn view_lowers_its_budget_when_an_allocation_is_refused() {
 }
 
 /// Brush work that lasts: strokes, undo and redo saved on exit (`--save-on-exit`) to a
-/// prepared asset file; the same session killed in the middle of its fifth journal record
-/// (`--inject-crash torn@5`, hidden) and restored (`--restore`) drops the torn record with
-/// a warning and, after one more undo, saves the same bytes. The saved file rendered by
+/// prepared asset file; the same session killed between operations (`--inject-crash
+/// after@4`, hidden) or in the middle of its fifth journal record (`torn@5`) and restored
+/// (`--restore`) saves the same bytes (the torn record dropped with a warning, the undo
+/// it held made again). The saved file rendered by
 /// `ssbvb render FILE` is the oracle-checked image: the model with the one stroke that
 /// stayed, listed as a scene's `edits:`, drawn exactly the same.
 #[test]
-fn view_brush_work_is_undone_saved_and_restored_after_a_torn_journal_record() {
+fn view_brush_work_is_undone_saved_and_restored_after_a_crash() {
     let dir = tempfile::tempdir().unwrap();
     let model = dir.path().join("bunny.obj");
     std::fs::copy(root().join("assets/models/bunny.obj"), &model).unwrap();
@@ -615,6 +616,38 @@ fn view_brush_work_is_undone_saved_and_restored_after_a_torn_journal_record() {
     assert!(log.contains("brush: undid on object 0") && log.contains("brush: redid"));
     assert!(log.contains("brush: saved"), "{log}");
     assert!(!journal.exists(), "a saved session's journal is removed");
+
+    // Killed between operations (right after the fourth record), then restored with one
+    // more undo but saved where no file can be written: the save fails naming the file,
+    // and the journal, now five records, is kept; restored as it is, it saves the first
+    // session's bytes.
+    let journal_len = || std::fs::metadata(&journal).unwrap().len();
+    let mut killed = args.clone();
+    killed.extend(["--inject-crash", "after@4"]);
+    let (ok, log) = view_run(&killed);
+    assert!(!ok && log.contains("after journal record 4"), "{log}");
+    assert_eq!(journal_len(), 32 + 4 * 84);
+    let unsaveable = format!("{m}/a.ssbvb");
+    let mut resumed: Vec<&str> = base.to_vec();
+    resumed.extend(["--frames", "2", "--restore", "--paint", "undo"]);
+    let (ok, log) = view_run(&[&resumed[..], &["--save-on-exit", &unsaveable]].concat());
+    assert!(!ok && log.contains("saving object 0 to"), "{log}");
+    assert_eq!(journal_len(), 32 + 5 * 84);
+    let between = dir.path().join("c.ssbvb");
+    let c = between.display().to_string();
+    let mut as_is: Vec<&str> = base.to_vec();
+    as_is.extend(["--frames", "2", "--restore", "--save-on-exit", &c]);
+    let (ok, log) = view_run(&as_is);
+    assert!(ok, "{log}");
+    assert!(
+        log.contains("restored 5 journaled operations (1 strokes applied)"),
+        "{log}"
+    );
+    assert_eq!(
+        std::fs::read(&saved).unwrap(),
+        std::fs::read(&between).unwrap()
+    );
+    assert!(!journal.exists());
 
     // Killed in the middle of the fifth record (the last undo).
     let mut crashed = args.clone();

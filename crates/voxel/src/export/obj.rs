@@ -132,7 +132,10 @@ pub fn write(
         .map(|c| format!("{:.4}", f64::from(c) / 255.0))
         .collect();
     crate::load::write_atomically_with(path, |w| {
-        writeln!(w, "# ssbvb export: exposed voxel faces, vertex colours sRGB")?;
+        writeln!(
+            w,
+            "# ssbvb export: exposed voxel faces, vertex colours sRGB"
+        )?;
         let mut n = 0usize;
         let mut line = Vec::with_capacity(256);
         let mut int = itoa::Buffer::new();
