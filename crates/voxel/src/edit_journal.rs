@@ -287,30 +287,27 @@ impl JournalWriter {
 
     /// Appends `op` in one write and syncs it to disk before returning.
     pub fn record(&mut self, op: &JournalOp) -> Result<(), JournalError> {
-        let bytes = encode(op, self.objects).map_err(|reason| {
-            JournalError::io(
-                &self.path,
-                io::Error::new(io::ErrorKind::InvalidInput, reason),
-            )
-        })?;
-        self.file
-            .write_all(&bytes)
-            .and_then(|()| self.file.sync_data())
-            .map_err(|e| JournalError::io(&self.path, e))
+        let bytes = self.encoded(op)?;
+        self.write_synced(&bytes)
     }
 
     /// Fault injection for tests: writes the first `keep` bytes of `op`'s record, as a
     /// process killed in the middle of [`JournalWriter::record`] would leave it.
     #[doc(hidden)]
     pub fn record_torn(&mut self, op: &JournalOp, keep: usize) -> Result<(), JournalError> {
-        let bytes = encode(op, self.objects).map_err(|reason| {
-            JournalError::io(
-                &self.path,
-                io::Error::new(io::ErrorKind::InvalidInput, reason),
-            )
-        })?;
+        let bytes = self.encoded(op)?;
+        self.write_synced(&bytes[..keep.min(bytes.len())])
+    }
+
+    fn encoded(&self, op: &JournalOp) -> Result<Vec<u8>, JournalError> {
+        encode(op, self.objects).map_err(|reason| {
+            JournalError::io(&self.path, io::Error::new(io::ErrorKind::InvalidInput, reason))
+        })
+    }
+
+    fn write_synced(&mut self, bytes: &[u8]) -> Result<(), JournalError> {
         self.file
-            .write_all(&bytes[..keep.min(bytes.len())])
+            .write_all(bytes)
             .and_then(|()| self.file.sync_data())
             .map_err(|e| JournalError::io(&self.path, e))
     }
