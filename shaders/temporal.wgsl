@@ -5,13 +5,23 @@
 // reprojected by the G-buffer's position: a surface point seen now at `px` was at `q` in
 // the previous frame (the previous camera's unjittered view), so the history is read at
 // `q` less this frame's jitter (a still camera reads its own pixel: no resampling blur).
-// The history is clamped to the current colour's 3 x 3 neighbourhood (what it may hold
-// of a surface no longer there), and weighted 1 - `taa.delta.w`, less where it moved (up
-// to 1 - `taa.motion.x` at a pixel of motion: its resampling blurs). Colours are blended
-// premultiplied by coverage; the output has straight alpha, like the composite's.
+// With DILATE the motion is that of the nearest surface in the 3 x 3 neighbourhood: at a
+// silhouette the background pixels move with the object, and the history's soft edge
+// goes with it instead of staying behind as a ghost. The history is clamped to the
+// current colour's 3 x 3 neighbourhood (what it may hold of a surface no longer there),
+// and weighted 1 - `taa.delta.w`, less where it moved (up to 1 - `taa.motion.x` at a pixel
+// of motion: its resampling blurs). Where it moved, with UNJITTER, the current frame
+// enters resampled to the pixel's centre (Catmull-Rom, from this frame's jitter): a
+// jittered frame is the image shifted by up to half a pixel, and in motion its share is
+// large. Colours are blended premultiplied by coverage; the output has straight alpha,
+// like the composite's.
 
 // The targets are 8-bit without hardware sRGB: texels hold sRGB-encoded values.
 override ENCODED: bool = false;
+// Reproject with the nearest surface's motion in the 3 x 3 neighbourhood.
+override DILATE: bool = true;
+// In motion, resample the current frame to the pixel centre.
+override UNJITTER: bool = true;
 
 struct Taa {
     // The previous frame's camera-relative world -> clip, unjittered.
@@ -80,6 +90,55 @@ fn history_at(p: vec2<f32>) -> vec4<f32> {
     return tap / total;
 }
 
+// The current frame at `p` (pixels, centres at + 0.5), Catmull-Rom from its 4 x 4 texels
+// (premultiplied, so coverage is filtered with colour).
+fn current_cubic(p: vec2<f32>) -> vec4<f32> {
+    let centre = floor(p - 0.5) + 0.5;
+    let t = p - centre;
+    let wx = array<f32, 4>(
+        t.x * (-0.5 + t.x * (1.0 - 0.5 * t.x)),
+        1.0 + t.x * t.x * (-2.5 + 1.5 * t.x),
+        t.x * (0.5 + t.x * (2.0 - 1.5 * t.x)),
+        t.x * t.x * (-0.5 + 0.5 * t.x),
+    );
+    let wy = array<f32, 4>(
+        t.y * (-0.5 + t.y * (1.0 - 0.5 * t.y)),
+        1.0 + t.y * t.y * (-2.5 + 1.5 * t.y),
+        t.y * (0.5 + t.y * (2.0 - 1.5 * t.y)),
+        t.y * t.y * (-0.5 + 0.5 * t.y),
+    );
+    let base = vec2<i32>(floor(centre)) - 1;
+    var sum = vec4(0.0);
+    for (var j = 0; j < 4; j++) {
+        for (var i = 0; i < 4; i++) {
+            sum += current_at(base + vec2(i, j)) * (wx[i] * wy[j]);
+        }
+    }
+    return sum;
+}
+
+// The pixel whose surface moves `px`: itself, or with DILATE the nearest drawn pixel of
+// its 3 x 3 neighbourhood (itself when none is drawn).
+fn motion_source(px: vec2<i32>) -> vec2<i32> {
+    if !DILATE {
+        return px;
+    }
+    var best = px;
+    var depth = 3.4e38;
+    let last = vec2<i32>(textureDimensions(position)) - 1;
+    for (var dy = -1; dy <= 1; dy++) {
+        for (var dx = -1; dx <= 1; dx++) {
+            let n = clamp(px + vec2(dx, dy), vec2(0), last);
+            let d = textureLoad(position, n, 0).w;
+            if d > 0.0 && d < depth {
+                depth = d;
+                best = n;
+            }
+        }
+    }
+    return best;
+}
+
 @fragment
 fn fs_main(@builtin(position) pos: vec4<f32>) -> Out {
     let px = vec2<i32>(pos.xy);
@@ -95,7 +154,8 @@ fn fs_main(@builtin(position) pos: vec4<f32>) -> Out {
     }
     var result = cur;
     if taa.delta.w < 1.0 {
-        let p = textureLoad(position, px, 0);
+        let source = motion_source(px);
+        let p = textureLoad(position, source, 0);
         var clip: vec4<f32>;
         if p.w > 0.0 {
             clip = taa.prev_view_proj * vec4(p.xyz + taa.delta.xyz, 1.0);
@@ -105,12 +165,18 @@ fn fs_main(@builtin(position) pos: vec4<f32>) -> Out {
         }
         if clip.w > 0.0 {
             let ndc = clip.xy / clip.w;
+            // Where `source`'s centre was, moved back to this pixel.
             let q = vec2((ndc.x + 1.0) * 0.5, (1.0 - ndc.y) * 0.5) * frame.screen.xy
-                - frame.jitter.xy;
+                - frame.jitter.xy + vec2<f32>(px - source);
             if all(q >= vec2(0.0)) && all(q <= frame.screen.xy) {
                 let h = clamp(history_at(q), lo, hi);
                 let moved = clamp(length(q - (vec2<f32>(px) + 0.5)), 0.0, 1.0);
-                result = mix(h, cur, mix(taa.delta.w, taa.motion.x, moved));
+                var c = cur;
+                if UNJITTER && moved > 1e-3 {
+                    let centred = current_cubic(vec2<f32>(px) + 0.5 - frame.jitter.xy);
+                    c = mix(cur, clamp(centred, lo, hi), moved);
+                }
+                result = mix(h, c, mix(taa.delta.w, taa.motion.x, moved));
             }
         }
     }

@@ -301,7 +301,10 @@ impl JournalWriter {
 
     fn encoded(&self, op: &JournalOp) -> Result<Vec<u8>, JournalError> {
         encode(op, self.objects).map_err(|reason| {
-            JournalError::io(&self.path, io::Error::new(io::ErrorKind::InvalidInput, reason))
+            JournalError::io(
+                &self.path,
+                io::Error::new(io::ErrorKind::InvalidInput, reason),
+            )
         })
     }
 

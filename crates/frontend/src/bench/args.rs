@@ -88,6 +88,10 @@ pub struct BenchArgs {
     /// Timed frames per cell instead of the preset's.
     #[arg(long)]
     pub frames: Option<usize>,
+    /// Views of `--preset quality` to run (comma-separated: path, hover, bunny; default
+    /// all).
+    #[arg(long, value_delimiter = ',')]
+    pub views: Option<Vec<String>>,
     /// Instance counts of `--preset scale` (comma-separated; default 1,16,256,4096).
     #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(usize))]
     pub instances: Option<Vec<usize>>,

@@ -27,6 +27,20 @@ pub struct TemporalParams {
     /// frame's larger share bounds it.
     #[serde(default = "default_motion_blend")]
     pub motion_blend: f32,
+    /// Reproject each pixel with the motion of the nearest surface in its 3 x 3
+    /// neighbourhood, so that a silhouette's soft edge moves with the object instead of
+    /// leaving a ghost on the background (`false`: each pixel's own surface).
+    #[serde(default = "default_true")]
+    pub dilate: bool,
+    /// In motion, blend the current frame resampled to the pixel centre (undoing its
+    /// jitter) rather than as drawn: a jittered frame is the image shifted by up to half a
+    /// pixel, and in motion its share of the output is large.
+    #[serde(default = "default_true")]
+    pub unjitter: bool,
+}
+
+fn default_true() -> bool {
+    true
 }
 
 fn default_blend() -> f32 {
@@ -47,6 +61,8 @@ impl Default for TemporalParams {
             blend: default_blend(),
             cut: default_cut(),
             motion_blend: default_motion_blend(),
+            dilate: true,
+            unjitter: true,
         }
     }
 }
@@ -56,6 +72,8 @@ impl KindSpec for TemporalParams {
         ParamDesc::new("blend", "f32", "above 0, at most 1"),
         ParamDesc::new("cut", "f32", "a positive number"),
         ParamDesc::new("motion_blend", "f32", "blend to 1"),
+        ParamDesc::new("dilate", "bool", "true or false"),
+        ParamDesc::new("unjitter", "bool", "true or false"),
     ];
     const NAME: &'static str = "Temporal";
     const STAGE: PassStage = PassStage::Render;
@@ -91,6 +109,7 @@ mod tests {
             blend,
             cut,
             motion_blend,
+            ..Default::default()
         }
     }
 
@@ -119,5 +138,6 @@ mod tests {
         // Read from RON without it: the default.
         let p: TemporalParams = ron::from_str("(blend: 0.2, cut: 0.5)").unwrap();
         assert_eq!(p.motion_blend, 0.5);
+        assert!(p.dilate && p.unjitter);
     }
 }

@@ -97,7 +97,12 @@ impl PassImpl for Temporal {
             out,
             wgpu::TextureFormat::Rgba8Unorm | wgpu::TextureFormat::Bgra8Unorm
         );
-        let constants = [("ENCODED", if encoded { 1.0 } else { 0.0 })];
+        let flag = |on: bool| if on { 1.0 } else { 0.0 };
+        let constants = [
+            ("ENCODED", flag(encoded)),
+            ("DILATE", flag(params.dilate)),
+            ("UNJITTER", flag(params.unjitter)),
+        ];
         let targets = [Some(out.into()), Some(HISTORY_FORMAT.into())];
         let pipeline = render_pipeline(
             d,

@@ -113,13 +113,26 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
     let sizes = args.sizes.clone().unwrap_or_else(|| vec![(320, 240)]);
     let n = args.frames.unwrap_or(12).max(2);
     let grid = args.flip_samples_grid();
+    let wanted = |name: &str| {
+        args.views
+            .as_ref()
+            .is_none_or(|v| v.iter().any(|w| w == name))
+    };
+    if let Some(bad) = args
+        .views
+        .iter()
+        .flatten()
+        .find(|v| !["path", "hover", "bunny"].contains(&v.as_str()))
+    {
+        anyhow::bail!("--views: unknown view `{bad}`; the quality views are path, hover, bunny");
+    }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
     let mut images = Vec::new();
     for (k, &size) in sizes.iter().enumerate() {
-        for view in views(n, size)? {
+        for view in views(n, size)?.into_iter().filter(|v| wanted(v.name)) {
             // The renderer's rows: each chosen technique, and ssbvb-unique without hysteresis.
             let mut runs: Vec<(String, &Technique, f64)> = Vec::new();
             for t in &chosen {
