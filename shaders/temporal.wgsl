@@ -45,7 +45,14 @@ struct Taa {
 struct Out {
     @location(0) color: vec4<f32>,
     @location(1) history: vec4<f32>,
+    // 1 where the history was rejected: none to reproject (a cut, off screen), or the
+    // neighbourhood clamp moved it by more than REJECT in a channel (it held another
+    // surface). Read back by the quality preset.
+    @location(2) rejected: vec4<f32>,
 }
+
+// A clamp that moves the history by more than this (premultiplied linear) rejects it.
+const REJECT: f32 = 0.0625;
 
 fn srgb_to_linear(x: f32) -> f32 {
     if x <= 0.04045 {
@@ -153,6 +160,7 @@ fn fs_main(@builtin(position) pos: vec4<f32>) -> Out {
         }
     }
     var result = cur;
+    var rejected = 1.0;
     if taa.delta.w < 1.0 {
         let source = motion_source(px);
         let p = textureLoad(position, source, 0);
@@ -169,7 +177,10 @@ fn fs_main(@builtin(position) pos: vec4<f32>) -> Out {
             let q = vec2((ndc.x + 1.0) * 0.5, (1.0 - ndc.y) * 0.5) * frame.screen.xy
                 - frame.jitter.xy + vec2<f32>(px - source);
             if all(q >= vec2(0.0)) && all(q <= frame.screen.xy) {
-                let h = clamp(history_at(q), lo, hi);
+                let held = history_at(q);
+                let h = clamp(held, lo, hi);
+                let clamped = abs(held - h);
+                rejected = select(0.0, 1.0, max(max(clamped.r, clamped.g), max(clamped.b, clamped.a)) > REJECT);
                 let moved = clamp(length(q - (vec2<f32>(px) + 0.5)), 0.0, 1.0);
                 var c = cur;
                 if UNJITTER && moved > 1e-3 {
@@ -182,6 +193,7 @@ fn fs_main(@builtin(position) pos: vec4<f32>) -> Out {
     }
     var out: Out;
     out.history = result;
+    out.rejected = vec4(rejected, 0.0, 0.0, 0.0);
     var rgb = vec3(0.0);
     if result.a > 0.0 {
         rgb = result.rgb / result.a;

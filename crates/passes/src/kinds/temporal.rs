@@ -64,6 +64,9 @@ struct TaaUniform {
 }
 
 const HISTORY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// Per pixel, whether its history was rejected (1) or used (0): read back for the quality
+/// preset's `history_rejected_share`.
+const REJECTED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 
 /// The temporal pass.
 pub struct Temporal {
@@ -74,6 +77,8 @@ pub struct Temporal {
     sampler: wgpu::Sampler,
     /// The two history textures and their size; `read` is the one holding the last output.
     history: Option<([wgpu::TextureView; 2], (u32, u32))>,
+    /// The last frame's rejection mask (same size as the history).
+    rejected: Option<wgpu::Texture>,
     read: usize,
     /// Frames blended since the last reset.
     frames: u32,
@@ -103,7 +108,11 @@ impl PassImpl for Temporal {
             ("DILATE", flag(params.dilate)),
             ("UNJITTER", flag(params.unjitter)),
         ];
-        let targets = [Some(out.into()), Some(HISTORY_FORMAT.into())];
+        let targets = [
+            Some(out.into()),
+            Some(HISTORY_FORMAT.into()),
+            Some(REJECTED_FORMAT.into()),
+        ];
         let pipeline = render_pipeline(
             d,
             &RenderSpec {
@@ -130,6 +139,7 @@ impl PassImpl for Temporal {
             uniform,
             sampler,
             history: None,
+            rejected: None,
             read: 0,
             frames: 0,
             previous: None,
@@ -170,6 +180,20 @@ impl Temporal {
                 .create_view(&Default::default())
         };
         self.history = Some(([make(), make()], size));
+        self.rejected = Some(device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("temporal rejection mask"),
+            size: wgpu::Extent3d {
+                width: size.0.max(1),
+                height: size.1.max(1),
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: REJECTED_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        }));
         self.frames = 0;
     }
 }
@@ -228,9 +252,27 @@ impl PassNode for Temporal {
                 store: wgpu::StoreOp::Store,
             },
         };
+        let mask = self
+            .rejected
+            .as_ref()
+            .expect("made with the history")
+            .create_view(&Default::default());
+        let rejected_out = wgpu::RenderPassColorAttachment {
+            view: &mask,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                store: wgpu::StoreOp::Store,
+            },
+        };
         rec.draw_fullscreen(
             encoder,
-            &[rec.color_attachment("color"), Some(history_out)],
+            &[
+                rec.color_attachment("color"),
+                Some(history_out),
+                Some(rejected_out),
+            ],
             &self.pipeline,
             &bg,
         );
@@ -238,6 +280,17 @@ impl PassNode for Temporal {
         self.frames = self.frames.saturating_add(1);
         self.previous = Some(now);
         Ok(())
+    }
+
+    fn history_rejected_share(&self, gpu: &ssbvb_gpu::GpuContext) -> Result<Option<f64>, PassError> {
+        let Some(mask) = &self.rejected else {
+            return Ok(None);
+        };
+        let data = gpu
+            .read_texture(mask, wgpu::TextureAspect::All)
+            .map_err(PassError::Gpu)?;
+        let rejected = data.bytes.iter().filter(|&&v| v >= 128).count();
+        Ok(Some(rejected as f64 / data.bytes.len().max(1) as f64))
     }
 }
 

@@ -33,6 +33,13 @@ pub trait PassNode {
     fn fill_count(&self, _frame: &CounterSource<'_>) -> Result<Option<u32>, PassError> {
         Ok(None)
     }
+
+    /// For a temporal pass: the share of the last frame's pixels whose history was
+    /// rejected (none to reproject, or clamped away), read back (`None` for every other
+    /// pass).
+    fn history_rejected_share(&self, _gpu: &GpuContext) -> Result<Option<f64>, PassError> {
+        Ok(None)
+    }
 }
 
 /// What a pass may read back after a frame: the device and the frame's resources bound to

@@ -186,6 +186,17 @@ impl Renderer {
         Ok(None)
     }
 
+    /// The share of the last frame's pixels whose history the temporal pass rejected
+    /// ([`PassNode::history_rejected_share`]); `None` without a temporal pass.
+    pub fn history_rejected_share(&self, ctx: &GpuContext) -> Result<Option<f64>, PassError> {
+        for node in &self.passes {
+            if let Some(share) = node.history_rejected_share(ctx)? {
+                return Ok(Some(share));
+            }
+        }
+        Ok(None)
+    }
+
     /// What the passes counted in the last frame (reads back from the GPU), with the
     /// measures derived from several passes' counts ([`FrameCounters::derive`]).
     pub fn counters(&self, ctx: &GpuContext) -> Result<FrameCounters, PassError> {

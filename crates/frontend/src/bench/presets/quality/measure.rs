@@ -27,6 +27,9 @@ pub(super) struct Drawn {
     pub frames: Vec<Vec<u8>>,
     pub levels: Vec<Levels>,
     pub frame_ms_median: f64,
+    /// With a temporal pass: per path frame, the share of pixels whose history it
+    /// rejected.
+    pub rejected: Vec<Option<f64>>,
 }
 
 /// Frames the camera holds still at the path's start before the still frame is taken (a
@@ -52,7 +55,7 @@ pub(super) fn technique_frames(
         .iter()
         .map(|o| o.instances.len())
         .sum::<usize>();
-    let mut draw = |camera: &Camera| -> Result<(Vec<u8>, Levels, f64)> {
+    let mut draw = |camera: &Camera| -> Result<(Vec<u8>, Levels, f64, Option<f64>)> {
         let t0 = Instant::now();
         renderer.render(ctx, &mut gpu_scene, camera, Profiling::Off)?;
         ctx.wait_idle()?;
@@ -65,20 +68,28 @@ pub(super) fn technique_frames(
         for v in &gpu_scene.visible {
             levels[v.scene_index as usize] = Some(v.level);
         }
-        Ok((over_black(&crate::render_cmd::to_rgba8(&out)?), levels, ms))
+        let rejected = renderer.history_rejected_share(ctx)?;
+        Ok((
+            over_black(&crate::render_cmd::to_rgba8(&out)?),
+            levels,
+            ms,
+            rejected,
+        ))
     };
-    let mut still = (Vec::new(), Vec::new(), 0.0);
+    let mut still = (Vec::new(), Vec::new(), 0.0, None);
     for _ in 0..STILL_FRAMES {
         still = draw(&view.cameras[0])?;
     }
     let mut frames = Vec::new();
     let mut levels = Vec::new();
     let mut times = Vec::new();
+    let mut rejected = Vec::new();
     for c in &view.cameras {
-        let (f, l, ms) = draw(c)?;
+        let (f, l, ms, r) = draw(c)?;
         frames.push(f);
         levels.push(l);
         times.push(ms);
+        rejected.push(r);
     }
     Ok(Drawn {
         still: still.0,
@@ -86,6 +97,7 @@ pub(super) fn technique_frames(
         frames,
         levels,
         frame_ms_median: median(&mut times),
+        rejected,
     })
 }
 
@@ -178,6 +190,7 @@ pub(super) fn reference_frames(
         still: frames[0].clone(),
         still_levels: levels[0].clone(),
         frame_ms_median: median(&mut times),
+        rejected: vec![None; frames.len()],
         frames,
         levels,
     }

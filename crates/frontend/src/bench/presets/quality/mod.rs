@@ -16,7 +16,10 @@
 //!   ground truth's path (1.0: as stable as ground truth; above: shimmering, popping);
 //! - `lod_switches`: instances drawn at another level than in the frame before;
 //! - `frame_ms_median`: the median time of a path frame (submit and wait; the references'
-//!   rows: the CPU's time).
+//!   rows: the CPU's time);
+//! - `history_rejected_share`: with a temporal pass, the share of pixels whose history it
+//!   rejected per path frame (nothing to reproject, or its neighbourhood clamp moved the
+//!   history by more than 1/16: it held another surface), averaged.
 //!
 //! Reference rows: `reference-1spp` (finest levels, one sample: what exact aliasing costs)
 //! and `reference-auto-lod` (Auto LOD's levels with the renderer's hysteresis,
@@ -63,6 +66,9 @@ struct QualityRow {
     /// Instance level changes between consecutive frames of the path.
     lod_switches: usize,
     frame_ms_median: f64,
+    /// With a temporal pass: the share of pixels whose history was rejected (nothing to
+    /// reproject, or clamped away), averaged over the path's frames.
+    history_rejected_share: Option<f64>,
 }
 
 #[derive(Serialize)]
@@ -261,6 +267,13 @@ fn quality_row(
         },
         lod_switches: lod_switches(&d.levels),
         frame_ms_median: d.frame_ms_median,
+        history_rejected_share: d
+            .rejected
+            .iter()
+            .copied()
+            .collect::<Option<Vec<f64>>>()
+            .filter(|v| !v.is_empty())
+            .map(|v| mean(&v)),
     })
 }
 
@@ -345,6 +358,11 @@ fn table(rows: &[QualityRow]) -> Table<'_, QualityRow> {
             Column::new("frame_ms_median", |r: &QualityRow| r.frame_ms_median)
                 .csv(Fmt::fixed(3))
                 .md("frame ms", Fmt::fixed(1)),
+            Column::new("history_rejected_share", |r: &QualityRow| {
+                r.history_rejected_share
+            })
+            .csv(Fmt::fixed(5))
+            .md("history rejected", Fmt::fixed(4).or("-")),
         ],
     )
 }
