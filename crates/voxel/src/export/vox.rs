@@ -5,7 +5,7 @@
 //!
 //! A grid of at most 256³ (level 8) is one model without a scene graph. A larger one is
 //! split into 256³ models, the non-empty ones written, each placed by the scene-graph
-//! extension (`../shared/models/MagicaVoxel-file-format-vox-extension.txt`): a root `nTRN`
+//! extension (MagicaVoxel's `vox-extension` notes): a root `nTRN`
 //! over one `nGRP`, and per model an `nTRN` whose `_t` puts it in place over an `nSHP`.
 //! MagicaVoxel centres a model of size `s` on its pivot `floor(s / 2)`, so the translation
 //! of the model at MagicaVoxel offset `o` is `o + 128 − edge / 2`: the whole grid centred
