@@ -12,8 +12,26 @@ use ssbvb_gpu::scene::{GpuScene, Scene};
 use ssbvb_voxel::edit_journal::JournalOp;
 use ssbvb_voxel::export::ExportFormat;
 
-use super::brush::{Brush, Stroke};
-use super::overlay::BrushView;
+use super::brush::{Brush, BrushSettings, Stroke};
+
+/// What the overlay shows of the brush.
+#[derive(Debug, Clone)]
+pub struct BrushView {
+    /// Its settings.
+    pub settings: BrushSettings,
+    /// Whether undo and redo have something to take.
+    pub can_undo: bool,
+    /// See `can_undo`.
+    pub can_redo: bool,
+    /// Operations since the last save.
+    pub unsaved: u64,
+    /// Where save writes.
+    pub save_path: PathBuf,
+    /// The journal's line.
+    pub journal: String,
+    /// Operations of an earlier session waiting for an answer.
+    pub offered: Option<usize>,
+}
 
 /// Undo or redo.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -28,6 +28,7 @@ mod display;
 mod input;
 mod knobs;
 mod overlay;
+mod script;
 mod stats;
 mod surface;
 mod techniques;
@@ -86,8 +87,8 @@ pub struct ViewArgs {
     /// Automation: after the first frame, in order: apply the brush (carving a sphere of
     /// --brush-radius) at window pixel X,Y, or `undo`, `redo`, or `save` (to the save
     /// path); repeatable; implies --brush.
-    #[arg(long, value_name = "X,Y|undo|redo|save", value_parser = parse_script_step, requires = "frames")]
-    pub paint: Vec<ScriptStep>,
+    #[arg(long, value_name = "X,Y|undo|redo|save", value_parser = script::parse_script_step, requires = "frames")]
+    pub paint: Vec<script::ScriptStep>,
     /// Save the edited objects here when the viewer closes (a prepared asset file that
     /// `ssbvb render FILE` and `ssbvb view FILE` open, every level as edited; with several
     /// editable objects, FILE with each object's index before the extension). Also where
@@ -119,40 +120,6 @@ pub struct ViewArgs {
     /// optional feature).
     #[arg(long, value_enum, default_value = "adapter")]
     pub limits: crate::adapter_cmd::LimitsArg,
-}
-
-/// One step of `--paint`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ScriptStep {
-    /// Apply the brush at a window pixel.
-    Paint(u32, u32),
-    /// Undo or redo.
-    Step(brush_history::Step),
-    /// Save to the save path.
-    Save,
-}
-
-/// `X,Y`, `undo`, `redo` or `save`.
-fn parse_script_step(s: &str) -> Result<ScriptStep, String> {
-    match s {
-        "undo" => Ok(ScriptStep::Step(brush_history::Step::Undo)),
-        "redo" => Ok(ScriptStep::Step(brush_history::Step::Redo)),
-        "save" => Ok(ScriptStep::Save),
-        _ => parse_pixel(s).map(|(x, y)| ScriptStep::Paint(x, y)),
-    }
-}
-
-/// A window pixel `X,Y`.
-fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
-    let (x, y) = s
-        .split_once(',')
-        .ok_or_else(|| format!("expected X,Y, got `{s}`"))?;
-    let p = |v: &str| {
-        v.trim()
-            .parse::<u32>()
-            .map_err(|e| format!("bad pixel `{s}`: {e}"))
-    };
-    Ok((p(x)?, p(y)?))
 }
 
 /// Pages the viewer streams in before one frame at most.

@@ -13,7 +13,7 @@ use ssbvb_gpu::scene::LodPolicy;
 use ssbvb_graph::{PassKind, ResolvedPipeline};
 
 use super::brush::{BrushMode, BrushSettings, BrushShape};
-use super::brush_history::Step;
+use super::brush_history::{BrushView, Step};
 use super::camera_control::CameraMode;
 use super::knobs;
 use super::stats::{SLOW_SAMPLE_EVERY, Stats, TIMESTAMP_EVERY, TimingSource};
@@ -61,25 +61,6 @@ pub enum Action {
         /// Replay it (else set it aside).
         restore: bool,
     },
-}
-
-/// What the overlay shows of the brush.
-#[derive(Debug, Clone)]
-pub struct BrushView {
-    /// Its settings.
-    pub settings: BrushSettings,
-    /// Whether undo and redo have something to take.
-    pub can_undo: bool,
-    /// See `can_undo`.
-    pub can_redo: bool,
-    /// Operations since the last save.
-    pub unsaved: u64,
-    /// Where save writes.
-    pub save_path: PathBuf,
-    /// The journal's line.
-    pub journal: String,
-    /// Operations of an earlier session waiting for an answer.
-    pub offered: Option<usize>,
 }
 
 /// One voxel object's LOD as the overlay shows it.

@@ -6,8 +6,8 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use super::super::ScriptStep;
 use super::super::brush_history::Step;
+use super::super::script::ScriptStep;
 use super::state::{Options, Viewer};
 
 impl Viewer {

@@ -37,7 +37,7 @@ pub struct Options {
     pub memory_report: Option<PathBuf>,
     /// Automation: brush steps (paint at a window pixel, undo, redo, save), after the
     /// first frame.
-    pub paint: Vec<super::super::ScriptStep>,
+    pub paint: Vec<super::super::script::ScriptStep>,
     /// Where the edited objects are saved when the viewer closes.
     pub save_on_exit: Option<PathBuf>,
     /// Faults injected before given frames (`--inject-fault`, tests).
