@@ -375,6 +375,9 @@ fn view_brush_carves_where_clicked_like_the_edited_scene() {
         ])
         .args(["--paint", &at, "--screenshot"])
         .arg(&shot)
+        // The unsaved edit's journal goes to the test's folder, not the bundled scene's.
+        .arg("--journal")
+        .arg(dir.path().join("carve.ssbvb-journal"))
         .output()
         .unwrap();
     let log = String::from_utf8_lossy(&out.stderr).to_string();
@@ -494,6 +497,9 @@ fn view_recovers_from_twenty_lost_devices_with_its_brush_edit() {
     let mut lost = clean.clone();
     clean.push(shot("clean.png"));
     lost.push(shot("lost.png"));
+    // Each run's unsaved edit stays in its own journal, out of the bundled scene's folder.
+    clean.extend(["--journal".into(), shot("clean.ssbvb-journal")]);
+    lost.extend(["--journal".into(), shot("lost.ssbvb-journal")]);
     // 20 losses 8 to 10 frames apart (more than `LOST_AGAIN_WITHIN`), from frame 3: the
     // first after the edit (frame 1).
     let mut f = 3;
