@@ -29,7 +29,8 @@ struct Taa {
     // xyz: this frame's camera position minus the previous frame's (world); w: the
     // current frame's weight (1: no history).
     delta: vec4<f32>,
-    // x: the current frame's weight where the history moved by a pixel or more.
+    // x: the current frame's weight where the history moved by a pixel or more; y: 1 when
+    // the camera moved (0: every pixel reprojects to itself).
     motion: vec4<f32>,
 }
 
@@ -124,10 +125,10 @@ fn current_cubic(p: vec2<f32>) -> vec4<f32> {
     return sum;
 }
 
-// The pixel whose surface moves `px`: itself, or with DILATE the nearest drawn pixel of
-// its 3 x 3 neighbourhood (itself when none is drawn).
+// The pixel whose surface moves `px`: itself, or with DILATE and a moving camera the
+// nearest drawn pixel of its 3 x 3 neighbourhood (itself when none is drawn).
 fn motion_source(px: vec2<i32>) -> vec2<i32> {
-    if !DILATE {
+    if !DILATE || taa.motion.y < 0.5 {
         return px;
     }
     var best = px;

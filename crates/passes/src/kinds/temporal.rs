@@ -59,7 +59,8 @@ struct TaaUniform {
     prev_view_proj: [[f32; 4]; 4],
     /// xyz: this frame's camera minus the previous one's; w: the current frame's weight.
     delta: [f32; 4],
-    /// x: the current frame's least weight where the history moved by a pixel or more.
+    /// x: the current frame's least weight where the history moved by a pixel or more;
+    /// y: 1 when the camera moved since the previous frame, else 0.
     motion: [f32; 4],
 }
 
@@ -225,7 +226,14 @@ impl PassNode for Temporal {
         let constants = TaaUniform {
             prev_view_proj: prev_frame.view_proj,
             delta: [delta.x as f32, delta.y as f32, delta.z as f32, weight],
-            motion: [weight.max(self.params.motion_blend), 0.0, 0.0, 0.0],
+            // y: whether the camera moved (a still frame's reprojection is the identity,
+            // and the pass skips the neighbourhood's motion search).
+            motion: [
+                weight.max(self.params.motion_blend),
+                if prev == now { 0.0 } else { 1.0 },
+                0.0,
+                0.0,
+            ],
         };
         rec.gpu
             .queue
