@@ -161,40 +161,36 @@ impl Temporal {
         if self.history.as_ref().is_some_and(|(_, s)| *s == size) {
             return;
         }
-        let make = || {
-            device
-                .create_texture(&wgpu::TextureDescriptor {
-                    label: Some("temporal history"),
-                    size: wgpu::Extent3d {
-                        width: size.0.max(1),
-                        height: size.1.max(1),
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: HISTORY_FORMAT,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                        | wgpu::TextureUsages::TEXTURE_BINDING,
-                    view_formats: &[],
-                })
-                .create_view(&Default::default())
+        let texture = |label, format, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: size.0.max(1),
+                    height: size.1.max(1),
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | usage,
+                view_formats: &[],
+            })
         };
-        self.history = Some(([make(), make()], size));
-        self.rejected = Some(device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("temporal rejection mask"),
-            size: wgpu::Extent3d {
-                width: size.0.max(1),
-                height: size.1.max(1),
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: REJECTED_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        }));
+        let history = || {
+            texture(
+                "temporal history",
+                HISTORY_FORMAT,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+            )
+            .create_view(&Default::default())
+        };
+        self.history = Some(([history(), history()], size));
+        self.rejected = Some(texture(
+            "temporal rejection mask",
+            REJECTED_FORMAT,
+            wgpu::TextureUsages::COPY_SRC,
+        ));
         self.frames = 0;
     }
 }
