@@ -22,6 +22,11 @@ override ENCODED: bool = false;
 override DILATE: bool = true;
 // In motion, resample the current frame to the pixel centre.
 override UNJITTER: bool = true;
+// The camera moved since the previous frame. The pass has a pipeline for each case, chosen
+// per frame: a still camera reads each pixel's own history texel, and a software
+// rasterizer runs every branch of a shader whatever its condition, so the motion's code
+// must not be in the still frame's pipeline.
+override MOVING: bool = true;
 
 struct Taa {
     // The previous frame's camera-relative world -> clip, unjittered.
@@ -29,8 +34,7 @@ struct Taa {
     // xyz: this frame's camera position minus the previous frame's (world); w: the
     // current frame's weight (1: no history).
     delta: vec4<f32>,
-    // x: the current frame's weight where the history moved by a pixel or more; y: 1 when
-    // the camera moved (0: every pixel reprojects to itself).
+    // x: the current frame's weight where the history moved by a pixel or more.
     motion: vec4<f32>,
 }
 
@@ -98,37 +102,55 @@ fn history_at(p: vec2<f32>) -> vec4<f32> {
     return tap / total;
 }
 
-// The current frame at `p` (pixels, centres at + 0.5), Catmull-Rom from its 4 x 4 texels
-// (premultiplied, so coverage is filtered with colour).
-fn current_cubic(p: vec2<f32>) -> vec4<f32> {
+// Catmull-Rom weights of the four taps around `t` (the sample's offset from the second tap).
+fn cubic_weights(t: f32) -> vec4<f32> {
+    return vec4(
+        t * (-0.5 + t * (1.0 - 0.5 * t)),
+        1.0 + t * t * (-2.5 + 1.5 * t),
+        t * (0.5 + t * (2.0 - 1.5 * t)),
+        t * t * (-0.5 + 0.5 * t),
+    );
+}
+
+// In motion: the current colour's 3 x 3 neighbourhood bounds and the current frame
+// resampled to the pixel centre, from one 4 x 4 block of texels. The centre is
+// `px + 0.5 - jitter`; the block's taps are `first .. first + 3` per axis with `first` =
+// px - 1 - (1 where the jitter is positive), so it holds the 3 x 3 neighbourhood.
+struct Block {
+    lo: vec4<f32>,
+    hi: vec4<f32>,
+    centred: vec4<f32>,
+}
+
+fn block_at(px: vec2<i32>) -> Block {
+    let p = vec2<f32>(px) + 0.5 - frame.jitter.xy;
     let centre = floor(p - 0.5) + 0.5;
     let t = p - centre;
-    let wx = array<f32, 4>(
-        t.x * (-0.5 + t.x * (1.0 - 0.5 * t.x)),
-        1.0 + t.x * t.x * (-2.5 + 1.5 * t.x),
-        t.x * (0.5 + t.x * (2.0 - 1.5 * t.x)),
-        t.x * t.x * (-0.5 + 0.5 * t.x),
-    );
-    let wy = array<f32, 4>(
-        t.y * (-0.5 + t.y * (1.0 - 0.5 * t.y)),
-        1.0 + t.y * t.y * (-2.5 + 1.5 * t.y),
-        t.y * (0.5 + t.y * (2.0 - 1.5 * t.y)),
-        t.y * t.y * (-0.5 + 0.5 * t.y),
-    );
-    let base = vec2<i32>(floor(centre)) - 1;
-    var sum = vec4(0.0);
+    let wx = cubic_weights(t.x);
+    let wy = cubic_weights(t.y);
+    let first = vec2<i32>(floor(centre)) - 1;
+    var b: Block;
+    b.lo = vec4(3.4e38);
+    b.hi = vec4(-3.4e38);
+    b.centred = vec4(0.0);
     for (var j = 0; j < 4; j++) {
         for (var i = 0; i < 4; i++) {
-            sum += current_at(base + vec2(i, j)) * (wx[i] * wy[j]);
+            let at = first + vec2(i, j);
+            let c = current_at(at);
+            b.centred += c * (wx[i] * wy[j]);
+            if all(abs(at - px) <= vec2(1)) {
+                b.lo = min(b.lo, c);
+                b.hi = max(b.hi, c);
+            }
         }
     }
-    return sum;
+    return b;
 }
 
 // The pixel whose surface moves `px`: itself, or with DILATE and a moving camera the
 // nearest drawn pixel of its 3 x 3 neighbourhood (itself when none is drawn).
 fn motion_source(px: vec2<i32>) -> vec2<i32> {
-    if !DILATE || taa.motion.y < 0.5 {
+    if !DILATE {
         return px;
     }
     var best = px;
@@ -147,12 +169,10 @@ fn motion_source(px: vec2<i32>) -> vec2<i32> {
     return best;
 }
 
-@fragment
-fn fs_main(@builtin(position) pos: vec4<f32>) -> Out {
-    let px = vec2<i32>(pos.xy);
-    let cur = current_at(px);
-    var lo = cur;
-    var hi = cur;
+// The 3 x 3 neighbourhood's bounds of the current colour (a still frame's).
+fn neighbourhood(px: vec2<i32>) -> array<vec4<f32>, 2> {
+    var lo = vec4(3.4e38);
+    var hi = vec4(-3.4e38);
     for (var dy = -1; dy <= 1; dy++) {
         for (var dx = -1; dx <= 1; dx++) {
             let n = current_at(px + vec2(dx, dy));
@@ -160,9 +180,31 @@ fn fs_main(@builtin(position) pos: vec4<f32>) -> Out {
             hi = max(hi, n);
         }
     }
+    return array(lo, hi);
+}
+
+// Whether clamping `held` to [lo, hi] moved it by more than REJECT in a channel.
+fn is_rejected(held: vec4<f32>, h: vec4<f32>) -> f32 {
+    let clamped = abs(held - h);
+    return select(0.0, 1.0, max(max(clamped.r, clamped.g), max(clamped.b, clamped.a)) > REJECT);
+}
+
+@fragment
+fn fs_main(@builtin(position) pos: vec4<f32>) -> Out {
+    let px = vec2<i32>(pos.xy);
+    let cur = current_at(px);
     var result = cur;
     var rejected = 1.0;
-    if taa.delta.w < 1.0 {
+    if !MOVING {
+        if taa.delta.w < 1.0 {
+            // Every pixel reprojects to itself.
+            let bounds = neighbourhood(px);
+            let held = textureLoad(history, px, 0);
+            let h = clamp(held, bounds[0], bounds[1]);
+            rejected = is_rejected(held, h);
+            result = mix(h, cur, taa.delta.w);
+        }
+    } else if taa.delta.w < 1.0 {
         let source = motion_source(px);
         let p = textureLoad(position, source, 0);
         var clip: vec4<f32>;
@@ -178,15 +220,14 @@ fn fs_main(@builtin(position) pos: vec4<f32>) -> Out {
             let q = vec2((ndc.x + 1.0) * 0.5, (1.0 - ndc.y) * 0.5) * frame.screen.xy
                 - frame.jitter.xy + vec2<f32>(px - source);
             if all(q >= vec2(0.0)) && all(q <= frame.screen.xy) {
+                let b = block_at(px);
                 let held = history_at(q);
-                let h = clamp(held, lo, hi);
-                let clamped = abs(held - h);
-                rejected = select(0.0, 1.0, max(max(clamped.r, clamped.g), max(clamped.b, clamped.a)) > REJECT);
+                let h = clamp(held, b.lo, b.hi);
+                rejected = is_rejected(held, h);
                 let moved = clamp(length(q - (vec2<f32>(px) + 0.5)), 0.0, 1.0);
                 var c = cur;
-                if UNJITTER && moved > 1e-3 {
-                    let centred = current_cubic(vec2<f32>(px) + 0.5 - frame.jitter.xy);
-                    c = mix(cur, clamp(centred, lo, hi), moved);
+                if UNJITTER {
+                    c = mix(cur, clamp(b.centred, b.lo, b.hi), moved);
                 }
                 result = mix(h, c, mix(taa.delta.w, taa.motion.x, moved));
             }

@@ -43,6 +43,10 @@ const FILES: &[(&str, &[u8])] = &[
         include_bytes!("../../../assets/pipelines/ssbvb_aa.ron"),
     ),
     (
+        "pipelines/ssbvb_raster_aa.ron",
+        include_bytes!("../../../assets/pipelines/ssbvb_raster_aa.ron"),
+    ),
+    (
         "pipelines/ssbvb_edge_aa.ron",
         include_bytes!("../../../assets/pipelines/ssbvb_edge_aa.ron"),
     ),

@@ -69,10 +69,17 @@ impl App {
     }
 }
 
-/// Ends the viewer's session (saves on exit, the journal kept or removed).
+/// Ends the viewer's session (saves on exit, the journal kept or removed) and prints the
+/// last camera as `render` flags, so that a view found here can be drawn again.
 fn viewer_end(viewer: &mut Option<Viewer>, options: &Options) -> Result<()> {
     match viewer {
-        Some(v) => v.end_session(options),
+        Some(v) => {
+            eprintln!(
+                "last camera: {}",
+                super::script::render_flags(&v.rig.camera())
+            );
+            v.end_session(options)
+        }
         None => Ok(()),
     }
 }
@@ -419,6 +426,9 @@ impl Viewer {
         let dt = (now - self.last_frame).as_secs_f64().min(0.25);
         self.last_frame = now;
         self.input.update(&mut self.rig, dt);
+        if let Some(deg) = options.orbit_deg.filter(|_| self.frame >= 1) {
+            self.rig.orbit.yaw += deg.to_radians();
+        }
         self.poll_reload();
         // Automation: --paint, once the first frame has set the view.
         if self.frame == 1 {

@@ -89,6 +89,11 @@ pub struct ViewArgs {
     /// path); repeatable; implies --brush.
     #[arg(long, value_name = "X,Y|undo|redo|save", value_parser = script::parse_script_step, requires = "frames")]
     pub paint: Vec<script::ScriptStep>,
+    /// Automation: turn the orbit camera by DEG degrees about its target every frame after
+    /// the first (a moving camera, e.g. to see temporal anti-aliasing in motion). The last
+    /// camera is printed as `ssbvb render` flags when the viewer closes, with or without it.
+    #[arg(long, value_name = "DEG", value_parser = script::parse_orbit, requires = "frames", allow_hyphen_values = true)]
+    pub orbit: Option<f64>,
     /// Save the edited objects here when the viewer closes (a prepared asset file that
     /// `ssbvb render FILE` and `ssbvb view FILE` open, every level as edited; with several
     /// editable objects, FILE with each object's index before the extension). Also where
@@ -234,6 +239,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         paint: args.paint.clone(),
         save_on_exit: args.save_on_exit.clone(),
         faults: args.inject_fault.clone(),
+        orbit_deg: args.orbit,
     };
     let mut app = app::App::new(
         options,

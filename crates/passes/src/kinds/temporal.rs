@@ -59,8 +59,7 @@ struct TaaUniform {
     prev_view_proj: [[f32; 4]; 4],
     /// xyz: this frame's camera minus the previous one's; w: the current frame's weight.
     delta: [f32; 4],
-    /// x: the current frame's least weight where the history moved by a pixel or more;
-    /// y: 1 when the camera moved since the previous frame, else 0.
+    /// x: the current frame's least weight where the history moved by a pixel or more.
     motion: [f32; 4],
 }
 
@@ -71,7 +70,9 @@ const REJECTED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 
 /// The temporal pass.
 pub struct Temporal {
-    pipeline: wgpu::RenderPipeline,
+    /// For a still camera (each pixel's history is its own texel) and a moving one.
+    still: wgpu::RenderPipeline,
+    moving: wgpu::RenderPipeline,
     bindings: PassBindings,
     params: TemporalParams,
     uniform: wgpu::Buffer,
@@ -104,23 +105,26 @@ impl PassImpl for Temporal {
             wgpu::TextureFormat::Rgba8Unorm | wgpu::TextureFormat::Bgra8Unorm
         );
         let flag = |on: bool| if on { 1.0 } else { 0.0 };
-        let constants = [
-            ("ENCODED", flag(encoded)),
-            ("DILATE", flag(params.dilate)),
-            ("UNJITTER", flag(params.unjitter)),
-        ];
         let targets = [
             Some(out.into()),
             Some(HISTORY_FORMAT.into()),
             Some(REJECTED_FORMAT.into()),
         ];
-        let pipeline = render_pipeline(
-            d,
-            &RenderSpec {
-                constants: &constants,
-                ..RenderSpec::new(Self::SHADER, &module, &layout, &targets)
-            },
-        );
+        let pipeline = |moving: bool| {
+            let constants = [
+                ("ENCODED", flag(encoded)),
+                ("DILATE", flag(params.dilate)),
+                ("UNJITTER", flag(params.unjitter)),
+                ("MOVING", flag(moving)),
+            ];
+            render_pipeline(
+                d,
+                &RenderSpec {
+                    constants: &constants,
+                    ..RenderSpec::new(Self::SHADER, &module, &layout, &targets)
+                },
+            )
+        };
         let uniform = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("temporal constants"),
             size: std::mem::size_of::<TaaUniform>() as u64,
@@ -134,7 +138,8 @@ impl PassImpl for Temporal {
             ..Default::default()
         });
         Ok(Self {
-            pipeline,
+            still: pipeline(false),
+            moving: pipeline(true),
             bindings,
             params: *params,
             uniform,
@@ -222,14 +227,13 @@ impl PassNode for Temporal {
         let constants = TaaUniform {
             prev_view_proj: prev_frame.view_proj,
             delta: [delta.x as f32, delta.y as f32, delta.z as f32, weight],
-            // y: whether the camera moved (a still frame's reprojection is the identity,
-            // and the pass skips the neighbourhood's motion search).
-            motion: [
-                weight.max(self.params.motion_blend),
-                if prev == now { 0.0 } else { 1.0 },
-                0.0,
-                0.0,
-            ],
+            motion: [weight.max(self.params.motion_blend), 0.0, 0.0, 0.0],
+        };
+        // A still frame's reprojection is the identity.
+        let pipeline = if prev == now {
+            &self.still
+        } else {
+            &self.moving
         };
         rec.gpu
             .queue
@@ -277,7 +281,7 @@ impl PassNode for Temporal {
                 Some(history_out),
                 Some(rejected_out),
             ],
-            &self.pipeline,
+            pipeline,
             &bg,
         );
         self.read = 1 - self.read;

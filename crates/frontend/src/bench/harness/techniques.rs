@@ -113,12 +113,19 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         }),
         max_level: 16,
     },
-    // The raster form with temporal anti-aliasing (jittered frames blended into the
-    // reprojected history) and ray-box billboards: its FLIP against the supersampled
-    // reference is the point.
+    // The default frame (no billboard) with temporal anti-aliasing (jittered frames blended
+    // into the reprojected history): its FLIP against the supersampled reference is the
+    // point.
     Technique {
         name: "ssbvb-aa",
         pipeline: PipelineSource::File("ssbvb_aa.ron"),
+        edit: None,
+        max_level: 16,
+    },
+    // The raster form with the same temporal anti-aliasing and ray-box billboards.
+    Technique {
+        name: "ssbvb-raster-aa",
+        pipeline: PipelineSource::File("ssbvb_raster_aa.ron"),
         edit: None,
         max_level: 16,
     },
@@ -286,14 +293,16 @@ pub(crate) const PAPER_TECHNIQUES: &[&str] = &[
 /// Techniques left out unless named: the raster form by another name, the pixel form with
 /// the filter's second proxy layer (its image; a crowd's knob), the compute forms of the
 /// octree casters (their fragment forms' images; the paper preset runs them) and the
-/// still-image anti-aliasing (the quality preset runs it), and the all-compute pair (the
-/// images of their forms with fragment smoothing; `gpu-bench` runs them).
+/// still-image anti-aliasing and the raster form's temporal one (the quality preset runs
+/// them), and the all-compute pair (the images of their forms with fragment smoothing;
+/// `gpu-bench` runs them).
 const ALIASES: &[&str] = &[
     "ssbvb-fast",
     "ssbvb-peel",
     "octree-compute",
     "esvo-compute",
     "ssbvb-edge-aa",
+    "ssbvb-raster-aa",
     "ssbvb-all-compute",
     "esvo-all-compute",
 ];

@@ -495,6 +495,7 @@ fn run_one(ctx: &GpuContext, t: &Technique, c: &Cell) -> Result<Row> {
                 | "ssbvb-all-compute"
                 | "ssbvb-peel"
                 | "ssbvb-aa"
+                | "ssbvb-raster-aa"
                 | "ssbvb-edge-aa"
         ) {
             m.slot_same_voxel_rate

@@ -42,6 +42,8 @@ pub struct Options {
     pub save_on_exit: Option<PathBuf>,
     /// Faults injected before given frames (`--inject-fault`, tests).
     pub faults: Vec<crate::faults::Fault>,
+    /// Automation: degrees the orbit camera turns every frame after the first.
+    pub orbit_deg: Option<f64>,
 }
 
 /// What is loaded before the window exists.

@@ -99,6 +99,7 @@ fn quality_techniques(args: &BenchArgs) -> Result<Vec<&'static Technique>> {
         &[
             "ssbvb-unique",
             "ssbvb-aa",
+            "ssbvb-raster-aa",
             "ssbvb-edge-aa",
             "ssbvb-flat",
             "ssbvb-raybox",

@@ -2,6 +2,8 @@
 //! render`; under a virtual X display (Xvfb) it opens a window, renders the default scene
 //! and writes a screenshot of what the window shows.
 
+mod motion;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
