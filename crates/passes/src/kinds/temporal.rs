@@ -1,7 +1,8 @@
 //! `temporal`: temporal anti-aliasing (see `shaders/temporal.wgsl`). The renderer jitters
 //! each frame of a pipeline with this pass by a sub-pixel offset ([`jitter`]); the pass
 //! keeps the previous output (premultiplied, `Rgba16Float`) in two textures it owns, read
-//! one and write the other, and the previous frame's camera to reproject it.
+//! one and write the other, and the previous frame's camera to reproject it. It draws with
+//! one of two pipelines a frame: a still camera's (no reprojection) or a moving one's.
 
 use bytemuck::{Pod, Zeroable};
 use ssbvb_gpu::shaders;
