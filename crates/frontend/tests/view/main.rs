@@ -56,15 +56,24 @@ fn xvfb_run() -> PathBuf {
     })
 }
 
+/// `ssbvb` (the binary under test) run in a virtual X display, from the repository's root.
+fn xvfb_ssbvb() -> Command {
+    let mut c = Command::new(xvfb_run());
+    ssbvb_env(&mut c);
+    c.args(["-a", "-s", "-screen 0 1280x800x24"])
+        .arg(env!("CARGO_BIN_EXE_ssbvb"));
+    c
+}
+
 fn read_png(path: &Path) -> image::RgbaImage {
     image::open(path)
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
         .to_rgba8()
 }
 
-/// `ssbvb render` of the default scene at the window's size (plus `extra` flags) into
+/// `ssbvb render` at the window's size with `extra` flags (default: the default scene) into
 /// `png`, read back.
-fn render_default_scene(png: &Path, extra: &[&str]) -> image::RgbaImage {
+fn render_at_window_size(png: &Path, extra: &[&str]) -> image::RgbaImage {
     let mut c = Command::new(env!("CARGO_BIN_EXE_ssbvb"));
     ssbvb_env(&mut c);
     let out = c
@@ -85,11 +94,7 @@ fn render_default_scene(png: &Path, extra: &[&str]) -> image::RgbaImage {
 /// `ssbvb view` of the default scene at 320x240 under Xvfb with `extra` flags, its
 /// screenshot written to `shot` and read back.
 fn view_screenshot(shot: &Path, extra: &[&str]) -> image::RgbaImage {
-    let mut c = Command::new(xvfb_run());
-    ssbvb_env(&mut c);
-    let out = c
-        .args(["-a", "-s", "-screen 0 1280x800x24"])
-        .arg(env!("CARGO_BIN_EXE_ssbvb"))
+    let out = xvfb_ssbvb()
         .args(["view", "--size", "320x240"])
         .args(extra)
         .arg("--screenshot")
@@ -129,7 +134,7 @@ fn view_shows_an_srgb_encoded_linear_output_as_render_writes_it() {
         &dir.path().join("view.png"),
         &[&["--frames", "5"][..], &pipeline[..]].concat(),
     );
-    let reference = render_default_scene(&dir.path().join("render.png"), &pipeline);
+    let reference = render_at_window_size(&dir.path().join("render.png"), &pipeline);
     let (scene, same) = matching_scene_pixels(&img, &reference);
     assert!(scene > 5000, "the render covers only {scene} pixels");
     assert!(
@@ -148,7 +153,7 @@ fn view_under_xvfb_shows_the_scene_and_writes_a_screenshot() {
 
     // The same view rendered offline: where it drew the scene, the window shows the same
     // colours (away from the overlay's title bar at the top).
-    let reference = render_default_scene(&dir.path().join("render.png"), &[]);
+    let reference = render_at_window_size(&dir.path().join("render.png"), &[]);
     let (scene, same) = matching_scene_pixels(&img, &reference);
     assert!(
         scene > 5000,
@@ -161,7 +166,7 @@ fn view_under_xvfb_shows_the_scene_and_writes_a_screenshot() {
     // An independent oracle: the exact CPU reference (`render --reference`, voxels only, no
     // smoothing). Where it shows the bunny, the window shows the bunny's colours, up to the
     // smoothing of normals (the ground plane behind it would be far off).
-    let exact = render_default_scene(&dir.path().join("reference.png"), &["--reference"]);
+    let exact = render_at_window_size(&dir.path().join("reference.png"), &["--reference"]);
     let (mut bunny, mut close) = (0usize, 0usize);
     for (x, y, r) in exact.enumerate_pixels() {
         if y < 60 || r[3] == 0 {
@@ -203,7 +208,7 @@ fn view_under_a_gpu_budget_streams_to_the_rendered_image() {
         &dir.path().join("view.png"),
         &["--frames", "30", "--gpu-budget", "2"],
     );
-    let reference = render_default_scene(&dir.path().join("render.png"), &["--gpu-budget", "2"]);
+    let reference = render_at_window_size(&dir.path().join("render.png"), &["--gpu-budget", "2"]);
     let (mut scene, mut same) = (0usize, 0usize);
     for (x, y, r) in reference.enumerate_pixels() {
         if y < 60 || r[3] == 0 {
@@ -233,11 +238,7 @@ fn view_keeps_rendering_and_holds_memory_while_its_pipeline_is_rewritten() {
     assert_ne!(good, bad);
     std::fs::write(&pipeline, &good).unwrap();
     let report = dir.path().join("memory.json");
-    let mut c = Command::new(xvfb_run());
-    ssbvb_env(&mut c);
-    let mut child = c
-        .args(["-a", "-s", "-screen 0 1280x800x24"])
-        .arg(env!("CARGO_BIN_EXE_ssbvb"))
+    let mut child = xvfb_ssbvb()
         .args(["view", "--size", "160x120", "--frames", "300", "--pipeline"])
         .arg(&pipeline)
         .arg("--memory-report")
@@ -353,7 +354,7 @@ fn view_animates_a_twisting_mesh() {
 fn view_brush_carves_where_clicked_like_the_edited_scene() {
     let dir = tempfile::tempdir().unwrap();
     // A bunny pixel near the image centre, from the CPU reference of the default view.
-    let exact = render_default_scene(&dir.path().join("reference.png"), &["--reference"]);
+    let exact = render_at_window_size(&dir.path().join("reference.png"), &["--reference"]);
     let (x, y, _) = exact
         .enumerate_pixels()
         .filter(|(_, y, p)| *y >= 80 && p[3] > 0)
@@ -361,11 +362,7 @@ fn view_brush_carves_where_clicked_like_the_edited_scene() {
         .unwrap();
     let at = format!("{x},{y}");
     let shot = dir.path().join("painted.png");
-    let mut c = Command::new(xvfb_run());
-    ssbvb_env(&mut c);
-    let out = c
-        .args(["-a", "-s", "-screen 0 1280x800x24"])
-        .arg(env!("CARGO_BIN_EXE_ssbvb"))
+    let out = xvfb_ssbvb()
         .args([
             "view",
             "--size",
@@ -402,8 +399,8 @@ fn view_brush_carves_where_clicked_like_the_edited_scene() {
     let scene = dir.path().join("edited.ron");
     std::fs::write(&scene, text).unwrap();
     let s = scene.display().to_string();
-    let edited = render_default_scene(&dir.path().join("edited.png"), &[&s]);
-    let plain = render_default_scene(&dir.path().join("plain.png"), &[]);
+    let edited = render_at_window_size(&dir.path().join("edited.png"), &[&s]);
+    let plain = render_at_window_size(&dir.path().join("plain.png"), &[]);
     // Where the edit changed the offline image, and whether the window agrees.
     let (mut changed, mut agree, mut same) = (0usize, 0usize, 0usize);
     let close = |a: &image::Rgba<u8>, b: &image::Rgba<u8>| {
@@ -439,15 +436,7 @@ fn view_brush_carves_where_clicked_like_the_edited_scene() {
 
 /// `ssbvb view` with `extra` flags under Xvfb: whether it succeeded, and its stderr.
 fn view_run(extra: &[&str]) -> (bool, String) {
-    let mut c = Command::new(xvfb_run());
-    ssbvb_env(&mut c);
-    let out = c
-        .args(["-a", "-s", "-screen 0 1280x800x24"])
-        .arg(env!("CARGO_BIN_EXE_ssbvb"))
-        .arg("view")
-        .args(extra)
-        .output()
-        .unwrap();
+    let out = xvfb_ssbvb().arg("view").args(extra).output().unwrap();
     (
         out.status.success(),
         String::from_utf8_lossy(&out.stderr).to_string(),

@@ -2,14 +2,14 @@
 //! supersampled reference of the camera they show than without.
 
 use std::path::Path;
-use std::process::Command;
 
-use super::{read_png, ssbvb_env, xvfb_run};
+use super::{read_png, render_at_window_size, xvfb_ssbvb};
 
 /// The model, its level and the window of these runs (the smallest window the tests use:
 /// a smaller one is not what Xvfb's window manager gives): voxels about two pixels, the
 /// silhouette's steps aliased at one sample a pixel.
 const MODEL: [&str; 3] = ["assets/models/bunny.obj", "--level", "7"];
+/// (`render_at_window_size` draws the reference at the same size.)
 const SIZE: &str = "320x240";
 /// Rows of the window's top that the overlay's title bar may cover.
 const TITLE_ROWS: u32 = 40;
@@ -23,11 +23,7 @@ fn orbit_view(
     frames: u32,
 ) -> (image::RgbaImage, Vec<String>) {
     let shot = dir.join(format!("{}.png", pipeline.replace('/', "_")));
-    let mut c = Command::new(xvfb_run());
-    ssbvb_env(&mut c);
-    let out = c
-        .args(["-a", "-s", "-screen 0 1280x800x24"])
-        .arg(env!("CARGO_BIN_EXE_ssbvb"))
+    let out = xvfb_ssbvb()
         .arg("view")
         .args(MODEL)
         .args(["--size", SIZE, "--pipeline", pipeline])
@@ -51,30 +47,11 @@ fn orbit_view(
 
 /// `ssbvb render --reference` of the model at `flags`' camera with `samples` a pixel.
 fn reference(dir: &Path, flags: &[String], samples: u32) -> image::RgbaImage {
-    let png = dir.join(format!("reference_{samples}.png"));
-    let mut c = Command::new(env!("CARGO_BIN_EXE_ssbvb"));
-    ssbvb_env(&mut c);
-    let out = c
-        .arg("render")
-        .args(MODEL)
-        .args([
-            "--size",
-            SIZE,
-            "--reference",
-            "--samples",
-            &samples.to_string(),
-        ])
-        .args(flags)
-        .arg("-o")
-        .arg(&png)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    read_png(&png)
+    let samples = samples.to_string();
+    let mut extra: Vec<&str> = MODEL.to_vec();
+    extra.extend(["--reference", "--samples", &samples]);
+    extra.extend(flags.iter().map(String::as_str));
+    render_at_window_size(&dir.join(format!("reference_{samples}.png")), &extra)
 }
 
 fn srgb_to_linear(v: u8) -> f64 {
