@@ -35,6 +35,7 @@ use crate::runtime::bindings::PassBindings;
 use crate::runtime::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
 use crate::runtime::recorder::{Recorder, slot_format};
 use crate::runtime::registry::{PassImpl, PassInit};
+use crate::runtime::resources::render_target;
 use ssbvb_gpu::shaders;
 
 /// Stencil value of voxel pixels (`STENCIL_VOXEL` in common.inc.wgsl).
@@ -414,16 +415,13 @@ pub fn count_stencil_by_drawing(
     )?;
     let size = texture.size();
     let (target, pipeline) = ctx.validated("stencil count", |d| {
-        let target = d.create_texture(&wgpu::TextureDescriptor {
-            label: Some("stencil count"),
-            size,
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::R32Uint,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        let target = render_target(
+            d,
+            "stencil count",
+            (size.width, size.height),
+            wgpu::TextureFormat::R32Uint,
+            wgpu::TextureUsages::COPY_SRC,
+        );
         let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("stencil count"),
             bind_group_layouts: &[],

@@ -19,6 +19,7 @@ use crate::runtime::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
 use crate::runtime::registry::{KindNeeds, PassImpl, PassInit};
 use crate::error::PassError;
 use crate::runtime::node::PassNode;
+use crate::runtime::resources::render_target;
 use ssbvb_gpu::shaders;
 
 /// Eq. 1 of the paper made total, exactly as `smooth.wgsl` computes it:
@@ -174,17 +175,13 @@ impl DepthCopy {
         let ds = &rec.texture("depth_stencil").texture;
         let size = ds.size();
         if self.target.as_ref().is_none_or(|(t, _)| t.size() != size) {
-            let texture = rec.gpu.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("smooth depth copy"),
-                size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::R32Uint,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                    | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            });
+            let texture = render_target(
+                &rec.gpu.device,
+                "smooth depth copy",
+                (size.width, size.height),
+                wgpu::TextureFormat::R32Uint,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+            );
             let view = texture.create_view(&Default::default());
             self.target = Some((texture, view));
         }

@@ -16,6 +16,7 @@ use crate::runtime::node::PassNode;
 use crate::runtime::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
 use crate::runtime::recorder::{Recorder, slot_format};
 use crate::runtime::registry::{OwnBinding, OwnKind, PassImpl, PassInit};
+use crate::runtime::resources::render_target;
 
 /// Frames of the jitter sequence before it repeats.
 pub const JITTER_PERIOD: u64 = 16;
@@ -167,22 +168,7 @@ impl Temporal {
         if self.history.as_ref().is_some_and(|(_, s)| *s == size) {
             return;
         }
-        let texture = |label, format, usage| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width: size.0.max(1),
-                    height: size.1.max(1),
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | usage,
-                view_formats: &[],
-            })
-        };
+        let texture = |label, format, usage| render_target(device, label, size, format, usage);
         let history = || {
             texture(
                 "temporal history",

@@ -31,6 +31,7 @@ use crate::runtime::registry::{OwnBinding, OwnKind};
 use crate::runtime::recorder::{Recorder, slot_format};
 use crate::runtime::pipelines::{RenderSpec, pipeline_layout, render_pipeline};
 use crate::runtime::registry::{KindNeeds, PassImpl, PassInit};
+use crate::runtime::resources::render_target;
 use crate::error::PassError;
 use crate::runtime::node::PassNode;
 use ssbvb_gpu::shaders;
@@ -172,22 +173,14 @@ fn upload_atlas(
 }
 
 fn accumulation_target(ctx: &ssbvb_gpu::GpuContext, size: (u32, u32)) -> wgpu::TextureView {
-    ctx.device
-        .create_texture(&wgpu::TextureDescriptor {
-            label: Some("volume slices"),
-            size: wgpu::Extent3d {
-                width: size.0.max(1),
-                height: size.1.max(1),
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: ACCUMULATION,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        })
-        .create_view(&Default::default())
+    render_target(
+        &ctx.device,
+        "volume slices",
+        size,
+        ACCUMULATION,
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    )
+    .create_view(&Default::default())
 }
 
 /// The pixels the slices can cover (x, y, width, height), so that the resolve touches only

@@ -209,3 +209,29 @@ pub fn texture_format(ctx: &GpuContext, format: ssbvb_graph::Format) -> wgpu::Te
         f => f,
     }
 }
+
+/// A 2D texture of `size` (each side at least 1) that passes draw into
+/// (`RENDER_ATTACHMENT`) and use as `usage` besides: a pass's own targets beside the
+/// pipeline's resources (history, accumulation, copies).
+pub(crate) fn render_target(
+    device: &wgpu::Device,
+    label: &str,
+    size: (u32, u32),
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: size.0.max(1),
+            height: size.1.max(1),
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | usage,
+        view_formats: &[],
+    })
+}
