@@ -8,13 +8,13 @@
 // With DILATE the motion is that of the nearest surface in the 3 x 3 neighbourhood: at a
 // silhouette the background pixels move with the object, and the history's soft edge
 // goes with it instead of staying behind as a ghost. The history is clamped to the
-// current colour's 3 x 3 neighbourhood (what it may hold of a surface no longer there),
-// and weighted 1 - `taa.delta.w`, less where it moved (up to 1 - `taa.motion.x` at a pixel
-// of motion: its resampling blurs). Where it moved, with UNJITTER, the current frame
-// enters resampled to the pixel's centre (Catmull-Rom, from this frame's jitter): a
-// jittered frame is the image shifted by up to half a pixel, and in motion its share is
-// large. Colours are blended premultiplied by coverage; the output has straight alpha,
-// like the composite's.
+// current colour's bounds around the pixel (3 x 3; in motion up to 4 x 4: what it may hold
+// of a surface no longer there), and weighted 1 - `taa.delta.w`, less where it moved (up
+// to 1 - `taa.motion.x` at a pixel of motion: its resampling blurs). Where it moved, with
+// UNJITTER, the current frame enters resampled to the pixel's centre (Catmull-Rom, from
+// this frame's jitter): a jittered frame is the image shifted by up to half a pixel, and
+// in motion its share is large. Colours are blended premultiplied by coverage; the output
+// has straight alpha, like the composite's.
 
 // The targets are 8-bit without hardware sRGB: texels hold sRGB-encoded values.
 override ENCODED: bool = false;
@@ -112,17 +112,21 @@ fn cubic_weights(t: f32) -> vec4<f32> {
     );
 }
 
-// In motion: the current colour's 3 x 3 neighbourhood bounds and the current frame
+// In motion: the bounds of the current colour around the pixel and the current frame
 // resampled to the pixel centre, from one 4 x 4 block of texels. The centre is
 // `px + 0.5 - jitter`; the block's taps are `first .. first + 3` per axis with `first` =
-// px - 1 - (1 where the jitter is positive), so it holds the 3 x 3 neighbourhood.
+// px - 1 - (1 where the jitter is positive), so it holds the 3 x 3 neighbourhood and one
+// more row and column. The bounds take those in too where the history moved little (`moved`
+// pixels, blended to the 3 x 3 bounds at one): one jittered sample a pixel may miss detail
+// below a pixel in all nine, and the converged history, clamped to them, would follow each
+// frame's aliasing; a history resampled by a pixel or more is held to the tighter bounds.
 struct Block {
     lo: vec4<f32>,
     hi: vec4<f32>,
     centred: vec4<f32>,
 }
 
-fn block_at(px: vec2<i32>) -> Block {
+fn block_at(px: vec2<i32>, moved: f32) -> Block {
     let p = vec2<f32>(px) + 0.5 - frame.jitter.xy;
     let centre = floor(p - 0.5) + 0.5;
     let t = p - centre;
@@ -132,18 +136,24 @@ fn block_at(px: vec2<i32>) -> Block {
     var b: Block;
     b.lo = vec4(3.4e38);
     b.hi = vec4(-3.4e38);
+    var wide_lo = b.lo;
+    var wide_hi = b.hi;
     b.centred = vec4(0.0);
     for (var j = 0; j < 4; j++) {
         for (var i = 0; i < 4; i++) {
             let at = first + vec2(i, j);
             let c = current_at(at);
             b.centred += c * (wx[i] * wy[j]);
+            wide_lo = min(wide_lo, c);
+            wide_hi = max(wide_hi, c);
             if all(abs(at - px) <= vec2(1)) {
                 b.lo = min(b.lo, c);
                 b.hi = max(b.hi, c);
             }
         }
     }
+    b.lo = mix(wide_lo, b.lo, moved);
+    b.hi = mix(wide_hi, b.hi, moved);
     return b;
 }
 
@@ -220,11 +230,11 @@ fn fs_main(@builtin(position) pos: vec4<f32>) -> Out {
             let q = vec2((ndc.x + 1.0) * 0.5, (1.0 - ndc.y) * 0.5) * frame.screen.xy
                 - frame.jitter.xy + vec2<f32>(px - source);
             if all(q >= vec2(0.0)) && all(q <= frame.screen.xy) {
-                let b = block_at(px);
+                let moved = clamp(length(q - (vec2<f32>(px) + 0.5)), 0.0, 1.0);
+                let b = block_at(px, moved);
                 let held = history_at(q);
                 let h = clamp(held, b.lo, b.hi);
                 rejected = is_rejected(held, h);
-                let moved = clamp(length(q - (vec2<f32>(px) + 0.5)), 0.0, 1.0);
                 var c = cur;
                 if UNJITTER {
                     c = mix(cur, clamp(b.centred, b.lo, b.hi), moved);

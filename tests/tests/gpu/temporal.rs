@@ -184,10 +184,7 @@ fn moving_error(pipeline: &str, plain: &str) -> (f64, f64) {
 fn a_moving_camera_stays_nearer_the_supersampled_reference_than_one_sample() {
     let (e_aa, e_plain) = moving_error(AA, PLAIN);
     let variant = |param: &str| {
-        let text = AA.replace(
-            "motion_blend: 0.5)",
-            &format!("motion_blend: 0.5, {param})"),
-        );
+        let text = AA.replace("kind: Temporal(", &format!("kind: Temporal({param}, "));
         assert_ne!(text, AA, "the pipeline's Temporal pass changed");
         moving_error(&text, PLAIN).0
     };
@@ -196,10 +193,9 @@ fn a_moving_camera_stays_nearer_the_supersampled_reference_than_one_sample() {
         "error against 16 samples after 8 moving frames: plain {e_plain:.5}, AA {e_aa:.5}, \
          without dilate {no_dilate:.5}, without unjitter {no_unjitter:.5}"
     );
-    // Measured: 0.64 of the one-sample frame's error (the raster form: 0.61), 0.67 of the
-    // error without dilate (0.95 of one sample's: what the pass drew before). Bounds: each
-    // plus about 0.1.
-    assert!(e_aa < 0.71 * e_plain, "{e_aa} against {e_plain}");
+    // Measured: 0.67 of the one-sample frame's error (the raster form: 0.64), 0.64 of the
+    // error without dilate (1.05 of one sample's). Bounds: each plus about 0.1.
+    assert!(e_aa < 0.77 * e_plain, "{e_aa} against {e_plain}");
     assert!(
         e_aa < 0.8 * no_dilate,
         "{e_aa} against {no_dilate} without dilate"
@@ -207,7 +203,7 @@ fn a_moving_camera_stays_nearer_the_supersampled_reference_than_one_sample() {
     let (e_raster_aa, e_raster) = moving_error(RASTER_AA, RASTER);
     eprintln!("the raster form: plain {e_raster:.5}, AA {e_raster_aa:.5}");
     assert!(
-        e_raster_aa < 0.71 * e_raster,
+        e_raster_aa < 0.75 * e_raster,
         "{e_raster_aa} against {e_raster}"
     );
 }
@@ -216,7 +212,9 @@ fn a_moving_camera_stays_nearer_the_supersampled_reference_than_one_sample() {
 /// black) from the one-sample frame of that camera over that from the one-sample frame of
 /// the camera before, both pipelines drawing `scene` frame after frame.
 fn follows_along(scene: &Scene, path: &[Camera]) -> Vec<f64> {
-    let (mut aa, mut aa_scene) = renderer(AA, scene.clone());
+    // The history is under test, not the level choice: the AA frame at the plain frame's
+    // levels (its `lod_bias` is checked on its own below).
+    let (mut aa, mut aa_scene) = renderer(&without_lod_bias(AA), scene.clone());
     let (mut plain, mut plain_scene) = renderer(PLAIN, scene.clone());
     let mut previous: Option<Vec<[f64; 3]>> = None;
     let mut ratios = Vec::new();
@@ -280,4 +278,70 @@ fn many_instances_switching_levels_and_a_camera_inside_keep_no_stale_history() {
     let worst = |v: &[f64]| v.iter().fold(0.0f64, |m, &d| m.max(d));
     assert!(worst(&along_dolly) < 0.85, "{along_dolly:?}");
     assert!(worst(&along_inside) < 0.27, "{along_inside:?}");
+}
+
+/// The parameters of `pipeline`'s temporal pass.
+fn temporal_params(pipeline: &str) -> ssbvb_graph::TemporalParams {
+    let resolved = ssbvb_graph::resolve_str(pipeline, "test pipeline").unwrap();
+    resolved
+        .passes
+        .iter()
+        .find_map(|p| match &p.kind {
+            ssbvb_graph::PassKind::Temporal(t) => Some(*t),
+            _ => None,
+        })
+        .expect("a temporal pass")
+}
+
+/// `pipeline` with its temporal pass's `lod_bias` set to 0.
+fn without_lod_bias(pipeline: &str) -> String {
+    let bias = temporal_params(pipeline).lod_bias;
+    let out = pipeline.replace(&format!("lod_bias: {bias}"), "lod_bias: 0");
+    assert!(bias > 0 && out != pipeline, "the pipeline sets a lod_bias");
+    out
+}
+
+/// Sorted (instance, level) pairs of the instances `pipeline` draws of `scene` from
+/// `camera`, after two frames (the second holds the first's levels by hysteresis).
+fn drawn_levels(pipeline: &str, scene: &Scene, camera: &Camera) -> Vec<(u32, u32)> {
+    let (mut r, mut g) = renderer(pipeline, scene.clone());
+    draw(&mut r, &mut g, camera, 2);
+    let mut l: Vec<(u32, u32)> = g.visible.iter().map(|v| (v.scene_index, v.level)).collect();
+    l.sort();
+    l
+}
+
+/// The anti-aliased pipelines draw each Auto LOD instance `lod_bias` levels finer than the
+/// plain frame, at most the asset's finest; instances at a fixed level keep it, and with
+/// `lod_bias` 0 the levels are the plain frame's.
+#[test]
+fn a_temporal_pass_draws_auto_lod_instances_lod_bias_levels_finer() {
+    use ssbvb_gpu::scene::LodPolicy;
+    let finest = 6;
+    let auto = crate::scale::bunny_grid(8, finest, LodPolicy::AUTO);
+    let camera = Camera::new(DVec3::new(-4.0, 9.0, 14.0), DVec3::ZERO);
+    let plain = drawn_levels(PLAIN, &auto, &camera);
+    let levels: std::collections::BTreeSet<u32> = plain.iter().map(|p| p.1).collect();
+    eprintln!("plain frame's levels: {levels:?}");
+    assert!(plain.len() >= 32, "{} instances drawn", plain.len());
+    assert!(
+        levels.len() >= 2 && levels.iter().any(|&l| l + 2 < finest),
+        "the view must hold several levels well below the finest: {levels:?}"
+    );
+    for aa in [AA, RASTER_AA] {
+        let bias = temporal_params(aa).lod_bias;
+        let finer: Vec<(u32, u32)> = plain
+            .iter()
+            .map(|&(i, l)| (i, (l + bias).min(finest)))
+            .collect();
+        assert_eq!(drawn_levels(aa, &auto, &camera), finer);
+        assert_eq!(drawn_levels(&without_lod_bias(aa), &auto, &camera), plain);
+    }
+    let fixed = crate::scale::bunny_grid(8, finest, LodPolicy::Fixed(3));
+    let fixed_levels = drawn_levels(AA, &fixed, &camera);
+    assert!(!fixed_levels.is_empty());
+    assert!(
+        fixed_levels.iter().all(|&(_, l)| l == 3),
+        "{fixed_levels:?}"
+    );
 }

@@ -85,6 +85,9 @@ pub struct GpuScene {
     /// coarser than in the frame before ([`DEFAULT_LOD_HYSTERESIS`]; 0: every frame
     /// chooses afresh, as [`choose_level`] does).
     pub lod_hysteresis: f64,
+    /// Levels finer than Auto LOD's choice to draw each `Auto` instance at (set by the
+    /// renderer before [`GpuScene::update`] from a temporal pass's `lod_bias`; 0: none).
+    pub lod_bias: u32,
     /// By scene index, the level each instance was drawn at in the last frame.
     held_levels: Vec<Option<u32>>,
     /// GPU memory per object (the whole asset, as uploaded without a budget).
@@ -344,6 +347,7 @@ impl GpuScene {
             meshes,
             visible: Vec::new(),
             lod_hysteresis: DEFAULT_LOD_HYSTERESIS,
+            lod_bias: 0,
             held_levels: Vec::new(),
             memory,
             streaming,
@@ -391,7 +395,11 @@ impl GpuScene {
             &self.scene,
             &self.lod_base,
             &self.proxies,
-            &visibility::View { camera, screen },
+            &visibility::View {
+                camera,
+                screen,
+                lod_bias: self.lod_bias,
+            },
             caps,
             &self.held_levels,
             self.lod_hysteresis,

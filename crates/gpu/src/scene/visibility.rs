@@ -81,11 +81,13 @@ pub fn jittered_frame_uniform(
     }
 }
 
-/// A frame's camera and screen size in pixels.
+/// A frame's camera and screen size in pixels, and the levels finer than Auto LOD's choice
+/// its frames resolve ([`GpuScene::lod_bias`](super::GpuScene::lod_bias)).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct View<'a> {
     pub camera: &'a Camera,
     pub screen: (u32, u32),
+    pub lod_bias: u32,
 }
 
 /// Caps on the levels of a frame: the finest level an instance may use, and the finest
@@ -111,7 +113,11 @@ pub(crate) fn visible_instances(
     held: &[Option<u32>],
     hysteresis: f64,
 ) -> (Vec<VisibleInstance>, Vec<InstanceUniform>) {
-    let View { camera, screen } = *view;
+    let View {
+        camera,
+        screen,
+        lod_bias,
+    } = *view;
     let (w, h) = (screen.0.max(1) as f64, screen.1.max(1) as f64);
     let aspect = w / h;
     let eye = camera.position;
@@ -151,8 +157,15 @@ pub(crate) fn visible_instances(
                 continue;
             }
             let previous = held.get(si as usize).copied().flatten();
+            let policy = match obj.lod {
+                LodPolicy::Auto { bias, pixel_error } => LodPolicy::Auto {
+                    bias: bias.saturating_add(lod_bias.min(i32::MAX as u32) as i32),
+                    pixel_error,
+                },
+                fixed => fixed,
+            };
             let level =
-                choose_level_held(obj.lod, xf, camera, screen, max_level, previous, hysteresis);
+                choose_level_held(policy, xf, camera, screen, max_level, previous, hysteresis);
             let lod_index = lod_base[oi] + level;
             // Camera-relative object → world.
             let rel = DAffine3 {

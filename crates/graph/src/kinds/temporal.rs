@@ -37,7 +37,16 @@ pub struct TemporalParams {
     /// pixel, and in motion its share of the output is large.
     #[serde(default = "default_true")]
     pub unjitter: bool,
+    /// Levels finer than Auto LOD would draw each instance at while this pass runs (0 to
+    /// [`MAX_LOD_BIAS`]): the jittered frames resolve detail below a pixel, as a texture's
+    /// mip bias does under temporal anti-aliasing, and a pop between finer levels moves
+    /// less of the image. Instances at a fixed level keep it.
+    #[serde(default)]
+    pub lod_bias: u32,
 }
+
+/// The largest [`TemporalParams::lod_bias`]: each level has 4× the voxels of the one before.
+pub const MAX_LOD_BIAS: u32 = 3;
 
 fn default_true() -> bool {
     true
@@ -63,6 +72,7 @@ impl Default for TemporalParams {
             motion_blend: default_motion_blend(),
             dilate: true,
             unjitter: true,
+            lod_bias: 0,
         }
     }
 }
@@ -74,6 +84,7 @@ impl KindSpec for TemporalParams {
         ParamDesc::new("motion_blend", "f32", "blend to 1"),
         ParamDesc::new("dilate", "bool", "true or false"),
         ParamDesc::new("unjitter", "bool", "true or false"),
+        ParamDesc::new("lod_bias", "u32", "0 to 3 (MAX_LOD_BIAS)"),
     ];
     const NAME: &'static str = "Temporal";
     const STAGE: PassStage = PassStage::Render;
@@ -95,6 +106,12 @@ impl KindSpec for TemporalParams {
         }
         if !(self.cut.is_finite() && self.cut > 0.0) {
             out.push(format!("cut must be a number > 0, got {}", self.cut));
+        }
+        if self.lod_bias > MAX_LOD_BIAS {
+            out.push(format!(
+                "lod_bias must be in [0, {MAX_LOD_BIAS}], got {}",
+                self.lod_bias
+            ));
         }
         out
     }
@@ -135,9 +152,22 @@ mod tests {
         );
         one(params(0.1, 0.25, 1.5), "motion_blend must be");
         one(params(0.1, 0.25, f32::NAN), "motion_blend must be");
+        one(
+            TemporalParams {
+                lod_bias: 4,
+                ..Default::default()
+            },
+            "lod_bias must be in [0, 3], got 4",
+        );
+        let three = TemporalParams {
+            lod_bias: 3,
+            ..Default::default()
+        };
+        assert!(three.problems().is_empty());
         // Read from RON without it: the default.
         let p: TemporalParams = ron::from_str("(blend: 0.2, cut: 0.5)").unwrap();
         assert_eq!(p.motion_blend, 0.5);
         assert!(p.dilate && p.unjitter);
+        assert_eq!(p.lod_bias, 0);
     }
 }

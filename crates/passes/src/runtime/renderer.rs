@@ -69,6 +69,9 @@ pub struct Renderer {
     /// With a `Temporal` pass: the index of the next frame's jitter
     /// ([`crate::kinds::temporal::jitter`]); `None`: frames are not jittered.
     jitter_frame: Option<u64>,
+    /// Levels finer than Auto LOD's choice this pipeline draws at (its temporal pass's
+    /// `lod_bias`; [`GpuScene::lod_bias`]).
+    lod_bias: u32,
 }
 
 impl Renderer {
@@ -105,10 +108,10 @@ impl Renderer {
             )));
         }
         let resources = FrameResources::with_imports(ctx, &pipeline, screen, imports)?;
-        let temporal = pipeline
-            .passes
-            .iter()
-            .any(|p| matches!(p.kind, ssbvb_graph::PassKind::Temporal(_)));
+        let temporal_lod_bias = pipeline.passes.iter().find_map(|p| match &p.kind {
+            ssbvb_graph::PassKind::Temporal(t) => Some(t.lod_bias),
+            _ => None,
+        });
         let mut passes = Vec::new();
         for p in &pipeline.passes {
             let node = ctx
@@ -159,7 +162,8 @@ impl Renderer {
             first_writes,
             queries,
             counting: false,
-            jitter_frame: temporal.then_some(0),
+            jitter_frame: temporal_lod_bias.map(|_| 0),
+            lod_bias: temporal_lod_bias.unwrap_or(0),
         })
     }
 
@@ -266,6 +270,7 @@ impl Renderer {
             }
             None => [0.0; 2],
         };
+        scene.lod_bias = self.lod_bias;
         scene.update(ctx, camera, self.screen);
         let use_ts = profiling != Profiling::Off && self.queries.is_some();
         let mut walls = vec![None; self.passes.len()];
