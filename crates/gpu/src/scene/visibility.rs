@@ -132,6 +132,13 @@ pub(crate) fn visible_instances(
     let mut scene_index = 0u32;
     for (oi, obj) in scene.objects.iter().enumerate() {
         let max_level = (obj.asset.lods.len() as u32 - 1).min(caps.level);
+        let policy = match obj.lod {
+            LodPolicy::Auto { bias, pixel_error } => LodPolicy::Auto {
+                bias: bias.saturating_add(i32::try_from(lod_bias).unwrap_or(i32::MAX)),
+                pixel_error,
+            },
+            fixed => fixed,
+        };
         for xf in &obj.instances {
             let si = scene_index;
             scene_index += 1;
@@ -157,13 +164,6 @@ pub(crate) fn visible_instances(
                 continue;
             }
             let previous = held.get(si as usize).copied().flatten();
-            let policy = match obj.lod {
-                LodPolicy::Auto { bias, pixel_error } => LodPolicy::Auto {
-                    bias: bias.saturating_add(lod_bias.min(i32::MAX as u32) as i32),
-                    pixel_error,
-                },
-                fixed => fixed,
-            };
             let level =
                 choose_level_held(policy, xf, camera, screen, max_level, previous, hysteresis);
             let lod_index = lod_base[oi] + level;
