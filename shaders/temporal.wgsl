@@ -8,8 +8,9 @@
 // With DILATE the motion is that of the nearest surface in the 3 x 3 neighbourhood: at a
 // silhouette the background pixels move with the object, and the history's soft edge
 // goes with it instead of staying behind as a ghost. The history is clamped to the
-// current colour's bounds around the pixel (3 x 3; in motion up to 4 x 4: what it may hold
-// of a surface no longer there), and weighted 1 - `taa.delta.w`, less where it moved (up
+// current colour's bounds around the pixel (3 x 3; in motion up to 4 x 4 or, at a pixel of
+// motion, a variance clip of the 3 x 3: what it may hold of a surface no longer there), and
+// weighted 1 - `taa.delta.w`, less where it moved (up
 // to 1 - `taa.motion.x` at a pixel of motion: its resampling blurs). Where it moved, with
 // UNJITTER, the current frame enters resampled to the pixel's centre (Catmull-Rom, from
 // this frame's jitter): a jittered frame is the image shifted by up to half a pixel, and
@@ -34,7 +35,8 @@ struct Taa {
     // xyz: this frame's camera position minus the previous frame's (world); w: the
     // current frame's weight (1: no history).
     delta: vec4<f32>,
-    // x: the current frame's weight where the history moved by a pixel or more.
+    // x: the current frame's weight where the history moved by a pixel or more; y: the
+    // variance clip's standard deviations there.
     motion: vec4<f32>,
 }
 
@@ -112,14 +114,37 @@ fn cubic_weights(t: f32) -> vec4<f32> {
     );
 }
 
-// In motion: the bounds of the current colour around the pixel and the current frame
-// resampled to the pixel centre, from one 4 x 4 block of texels. The centre is
+// Luminance and chroma (YCoCg), alpha kept: the moving pipeline's bounds are taken in it, so
+// that a colour's spread along its luminance does not widen its chroma's bounds.
+fn to_ycocg(c: vec4<f32>) -> vec4<f32> {
+    return vec4(
+        0.25 * c.r + 0.5 * c.g + 0.25 * c.b,
+        0.5 * c.r - 0.5 * c.b,
+        -0.25 * c.r + 0.5 * c.g - 0.25 * c.b,
+        c.a,
+    );
+}
+
+fn from_ycocg(c: vec4<f32>) -> vec4<f32> {
+    return vec4(c.x + c.y - c.z, c.x + c.z, c.x - c.y - c.z, c.w);
+}
+
+// `c` (premultiplied linear) clamped to YCoCg bounds; a box corner can lie a little outside
+// the RGB cube.
+fn clamp_ycocg(c: vec4<f32>, lo: vec4<f32>, hi: vec4<f32>) -> vec4<f32> {
+    return max(from_ycocg(clamp(to_ycocg(c), lo, hi)), vec4(0.0));
+}
+
+// In motion: the bounds of the current colour around the pixel (YCoCg) and the current
+// frame resampled to the pixel centre, from one 4 x 4 block of texels. The centre is
 // `px + 0.5 - jitter`; the block's taps are `first .. first + 3` per axis with `first` =
 // px - 1 - (1 where the jitter is positive), so it holds the 3 x 3 neighbourhood and one
 // more row and column. The bounds take those in too where the history moved little (`moved`
-// pixels, blended to the 3 x 3 bounds at one): one jittered sample a pixel may miss detail
-// below a pixel in all nine, and the converged history, clamped to them, would follow each
-// frame's aliasing; a history resampled by a pixel or more is held to the tighter bounds.
+// pixels): one jittered sample a pixel may miss detail below a pixel in all nine, and the
+// converged history, clamped to them, would follow each frame's aliasing. A history
+// resampled by a pixel or more is held to the 3 x 3 bounds narrowed to `taa.motion.y`
+// standard deviations about their mean (variance clipping): what the resampling blurred
+// into it from a neighbouring surface lies outside them, and left in, it trails.
 struct Block {
     lo: vec4<f32>,
     hi: vec4<f32>,
@@ -139,21 +164,30 @@ fn block_at(px: vec2<i32>, moved: f32) -> Block {
     var wide_lo = b.lo;
     var wide_hi = b.hi;
     b.centred = vec4(0.0);
+    var m1 = vec4(0.0);
+    var m2 = vec4(0.0);
     for (var j = 0; j < 4; j++) {
         for (var i = 0; i < 4; i++) {
             let at = first + vec2(i, j);
-            let c = current_at(at);
-            b.centred += c * (wx[i] * wy[j]);
+            let rgb = current_at(at);
+            b.centred += rgb * (wx[i] * wy[j]);
+            let c = to_ycocg(rgb);
             wide_lo = min(wide_lo, c);
             wide_hi = max(wide_hi, c);
             if all(abs(at - px) <= vec2(1)) {
                 b.lo = min(b.lo, c);
                 b.hi = max(b.hi, c);
+                m1 += c;
+                m2 += c * c;
             }
         }
     }
-    b.lo = mix(wide_lo, b.lo, moved);
-    b.hi = mix(wide_hi, b.hi, moved);
+    let mean = m1 / 9.0;
+    let sigma = sqrt(max(m2 / 9.0 - mean * mean, vec4(0.0)));
+    let tight_lo = max(b.lo, mean - taa.motion.y * sigma);
+    let tight_hi = min(b.hi, mean + taa.motion.y * sigma);
+    b.lo = mix(wide_lo, tight_lo, moved);
+    b.hi = mix(wide_hi, tight_hi, moved);
     return b;
 }
 
@@ -233,11 +267,11 @@ fn fs_main(@builtin(position) pos: vec4<f32>) -> Out {
                 let moved = clamp(length(q - (vec2<f32>(px) + 0.5)), 0.0, 1.0);
                 let b = block_at(px, moved);
                 let held = history_at(q);
-                let h = clamp(held, b.lo, b.hi);
+                let h = clamp_ycocg(held, b.lo, b.hi);
                 rejected = is_rejected(held, h);
                 var c = cur;
                 if UNJITTER {
-                    c = mix(cur, clamp(b.centred, b.lo, b.hi), moved);
+                    c = mix(cur, clamp_ycocg(b.centred, b.lo, b.hi), moved);
                 }
                 result = mix(h, c, mix(taa.delta.w, taa.motion.x, moved));
             }

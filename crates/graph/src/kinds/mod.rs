@@ -44,7 +44,7 @@ pub use ray_march_filter::{MarchMode, RayMarchFilterParams};
 pub use smooth::{SmoothComputeParams, SmoothParams};
 pub use spec::{Access, KindSpec, ParamDesc, PassStage, SlotClass, SlotDesc};
 pub use splat_billboards::SplatBillboardsParams;
-pub use temporal::{MAX_LOD_BIAS, TemporalParams};
+pub use temporal::{MAX_LOD_BIAS, MAX_VARIANCE_CLIP, TemporalParams};
 pub use triangles::TrianglesKind;
 pub use volume_slices::{MAX_MIP_BIAS, MAX_SLICE_SPACING, MIN_SLICE_SPACING, VolumeSlicesParams};
 

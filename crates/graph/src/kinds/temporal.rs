@@ -1,8 +1,9 @@
 //! `Temporal`: temporal anti-aliasing. The renderer jitters every frame's projection by a
 //! sub-pixel offset (Halton 2, 3) while a pipeline has this pass; the pass reprojects its
 //! history into the current frame by the G-buffer's position, clamps it to the current
-//! colour's 3 × 3 neighbourhood and blends the current frame in, with a larger share where
-//! the history moved.
+//! colour's 3 × 3 neighbourhood (in motion: its variance clip, or the 4 × 4 block's bounds
+//! where it moved less than a pixel) and blends the current frame in, with a larger share
+//! where the history moved.
 
 use serde::{Deserialize, Serialize};
 
@@ -43,10 +44,25 @@ pub struct TemporalParams {
     /// less of the image. Instances at a fixed level keep it.
     #[serde(default)]
     pub lod_bias: u32,
+    /// Where the history moved by a pixel or more, its bounds are the current colour's 3 x 3
+    /// neighbourhood narrowed to this many standard deviations about its mean, per
+    /// luminance and chroma channel (variance clipping; between no motion and a pixel the
+    /// bounds widen in proportion to the 4 x 4 block's). Above 0, at most
+    /// [`MAX_VARIANCE_CLIP`]: nine samples lie within √8 standard deviations of their mean,
+    /// so 3 leaves the neighbourhood's min–max bounds as they are.
+    #[serde(default = "default_variance_clip")]
+    pub variance_clip: f32,
 }
 
 /// The largest [`TemporalParams::lod_bias`]: each level has 4× the voxels of the one before.
 pub const MAX_LOD_BIAS: u32 = 3;
+
+/// The largest [`TemporalParams::variance_clip`]: the min–max bounds, unnarrowed.
+pub const MAX_VARIANCE_CLIP: f32 = 3.0;
+
+fn default_variance_clip() -> f32 {
+    0.75
+}
 
 fn default_true() -> bool {
     true
@@ -73,6 +89,7 @@ impl Default for TemporalParams {
             dilate: true,
             unjitter: true,
             lod_bias: 0,
+            variance_clip: default_variance_clip(),
         }
     }
 }
@@ -85,6 +102,11 @@ impl KindSpec for TemporalParams {
         ParamDesc::new("dilate", "bool", "true or false"),
         ParamDesc::new("unjitter", "bool", "true or false"),
         ParamDesc::new("lod_bias", "u32", "0 to 3 (MAX_LOD_BIAS)"),
+        ParamDesc::new(
+            "variance_clip",
+            "f32",
+            "above 0, at most 3 (MAX_VARIANCE_CLIP)",
+        ),
     ];
     const NAME: &'static str = "Temporal";
     const STAGE: PassStage = PassStage::Render;
@@ -111,6 +133,12 @@ impl KindSpec for TemporalParams {
             out.push(format!(
                 "lod_bias must be in [0, {MAX_LOD_BIAS}], got {}",
                 self.lod_bias
+            ));
+        }
+        if !(self.variance_clip > 0.0 && self.variance_clip <= MAX_VARIANCE_CLIP) {
+            out.push(format!(
+                "variance_clip must be in (0, {MAX_VARIANCE_CLIP}], got {}",
+                self.variance_clip
             ));
         }
         out
@@ -159,6 +187,15 @@ mod tests {
             },
             "lod_bias must be in [0, 3], got 4",
         );
+        for bad in [0.0, -1.0, 3.5, f32::NAN] {
+            one(
+                TemporalParams {
+                    variance_clip: bad,
+                    ..Default::default()
+                },
+                "variance_clip must be in (0, 3], got",
+            );
+        }
         let three = TemporalParams {
             lod_bias: 3,
             ..Default::default()
@@ -169,5 +206,6 @@ mod tests {
         assert_eq!(p.motion_blend, 0.5);
         assert!(p.dilate && p.unjitter);
         assert_eq!(p.lod_bias, 0);
+        assert_eq!(p.variance_clip, 0.75);
     }
 }

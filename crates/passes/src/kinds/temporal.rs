@@ -214,7 +214,12 @@ impl PassNode for Temporal {
         let constants = TaaUniform {
             prev_view_proj: prev_frame.view_proj,
             delta: [delta.x as f32, delta.y as f32, delta.z as f32, weight],
-            motion: [weight.max(self.params.motion_blend), 0.0, 0.0, 0.0],
+            motion: [
+                weight.max(self.params.motion_blend),
+                self.params.variance_clip,
+                0.0,
+                0.0,
+            ],
         };
         // A still frame's reprojection is the identity.
         let pipeline = if prev == now {
