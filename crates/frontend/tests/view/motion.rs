@@ -1,5 +1,6 @@
 //! The viewer in motion (`--orbit`): with temporal anti-aliasing its frames stay nearer the
-//! supersampled reference of the camera they show than without.
+//! supersampled reference of the camera they show than without; and the history starts over
+//! after a lost device.
 
 use std::path::Path;
 
@@ -162,4 +163,50 @@ fn angle_deg(a: [f64; 3], b: [f64; 3]) -> f64 {
         .clamp(-1.0, 1.0)
         .acos()
         .to_degrees()
+}
+
+/// A device lost while temporal anti-aliasing has converged (`--inject-fault
+/// device-lost@11` of 12 frames, hidden): the viewer makes its GPU side again, and the frame
+/// after it is a fresh viewer's first frame bit for bit (no history, the jitter sequence
+/// from its start) rather than one blended with a stale frame of the lost device.
+#[test]
+fn view_with_temporal_aa_starts_its_history_over_after_a_lost_device() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, extra: &[&str]| {
+        let shot = dir.path().join(name);
+        let out = xvfb_ssbvb()
+            .arg("view")
+            .args([
+                "--size",
+                "160x120",
+                "--pipeline",
+                "assets/pipelines/ssbvb_aa.ron",
+            ])
+            .args(extra)
+            .arg("--screenshot")
+            .arg(&shot)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(out.status.success(), "ssbvb view failed:\n{stderr}");
+        (read_png(&shot), stderr)
+    };
+    let (first, _) = run("first.png", &["--frames", "1"]);
+    let (converged, _) = run("converged.png", &["--frames", "12"]);
+    let (after_loss, log) = run(
+        "lost.png",
+        &["--frames", "12", "--inject-fault", "device-lost@11"],
+    );
+    assert!(
+        log.contains("recovered on a new device with the scene, pipeline, camera"),
+        "{log}"
+    );
+    assert_ne!(
+        converged, first,
+        "twelve frames converge away from the first"
+    );
+    assert!(
+        after_loss == first,
+        "the frame after the loss is not a fresh first frame"
+    );
 }
