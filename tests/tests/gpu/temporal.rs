@@ -264,9 +264,11 @@ fn a_moving_camera_flickers_less_than_one_sample_and_no_more_than_the_truth() {
     };
     eprintln!("frame-to-frame change over the reference's: plain {plain:.3}, AA {aa:.3}");
     // Measured: plain 1.21, AA 0.87 (with the min-max bounds, `variance_clip` 3: 0.87; with
-    // the history clipped to 0.05 deviations: 0.88). Bounds: the 1.0 less a
-    // margin for AA, and a tenth above the truth for one sample (the measure must see it).
-    assert!(aa < 0.95, "{aa}");
+    // the history clipped to 0.05 deviations: 0.88: at this level the clamp's share is
+    // small; the quality preset measures it at level 8). Bounds: the 1.0 less a
+    // margin for AA, and above 0.6 (a frame that lags or freezes changes less than the
+    // truth's); a tenth above the truth for one sample (the measure must see it).
+    assert!(aa < 0.95 && aa > 0.6, "{aa}");
     assert!(plain > 1.1, "{plain}");
 }
 

@@ -44,10 +44,12 @@ pub struct TemporalParams {
     /// less of the image. Instances at a fixed level keep it.
     #[serde(default)]
     pub lod_bias: u32,
-    /// Where the history moved by a pixel or more, its bounds are the current colour's 3 x 3
-    /// neighbourhood narrowed to this many standard deviations about its mean, per
-    /// luminance and chroma channel (variance clipping; between no motion and a pixel the
-    /// bounds widen in proportion to the 4 x 4 block's). Above 0, at most
+    /// Where the history moved by a pixel or more, its bounds (and those of the current
+    /// frame's resample to the pixel centre) are the current colour's 3 x 3 neighbourhood
+    /// narrowed to this many standard deviations about its mean, per luminance, chroma and
+    /// coverage channel (a variance clamp; between no motion and a pixel the bounds widen
+    /// in proportion to the 4 x 4 block's). Pipelines that leave it out get 0.75, the
+    /// bundled files' value. Above 0, at most
     /// [`MAX_VARIANCE_CLIP`]: nine samples lie within √8 standard deviations of their mean,
     /// so 3 leaves the neighbourhood's min–max bounds as they are.
     #[serde(default = "default_variance_clip")]
