@@ -74,23 +74,26 @@ fn partial(rgba: &[u8]) -> usize {
         .count()
 }
 
-/// The mean error against 16 samples of the still frame of `plain` and of the first and
-/// the sixteenth frame of `aa`, and the partly covered pixels of the last two.
-fn still_errors(aa: &str, plain: &str) -> ([f64; 3], [usize; 2]) {
-    let s = scene();
-    let lod = &s.objects[0].asset.lods[LEVEL as usize];
+/// The supersampled reference (16 samples a pixel) of `s`'s bunny from `camera`, linear.
+fn truth(s: &Scene, camera: &Camera) -> Vec<[f64; 3]> {
     let inst = [Instance {
-        lod,
+        lod: &s.objects[0].asset.lods[LEVEL as usize],
         object_to_world: DAffine3::IDENTITY,
         faces: None,
     }];
     let grid = SampleGrid::from_count(16).unwrap();
-    let truth = render_supersampled(&inst, &camera(), SIZE.0, SIZE.1, &s.light, grid);
-    let truth: Vec<[f64; 3]> = truth
+    render_supersampled(&inst, camera, SIZE.0, SIZE.1, &s.light, grid)
         .colors
         .iter()
         .map(|c| std::array::from_fn(|k| c[k] as f64))
-        .collect();
+        .collect()
+}
+
+/// The mean error against 16 samples of the still frame of `plain` and of the first and
+/// the sixteenth frame of `aa`, and the partly covered pixels of the last two.
+fn still_errors(aa: &str, plain: &str) -> ([f64; 3], [usize; 2]) {
+    let s = scene();
+    let truth = truth(&s, &camera());
     let (mut plain, mut plain_scene) = renderer(plain, s.clone());
     let plain_out = draw(&mut plain, &mut plain_scene, &camera(), 1);
     let (mut aa, mut aa_scene) = renderer(aa, s);
@@ -147,7 +150,6 @@ fn orbited(c: &Camera, deg: f64) -> Camera {
 /// converged still start, and of the one-sample frame there.
 fn moving_error(pipeline: &str, plain: &str) -> (f64, f64) {
     let s = scene();
-    let lod = &s.objects[0].asset.lods[LEVEL as usize];
     let (mut aa, mut aa_scene) = renderer(pipeline, s.clone());
     let start = camera();
     draw(&mut aa, &mut aa_scene, &start, 16);
@@ -157,17 +159,7 @@ fn moving_error(pipeline: &str, plain: &str) -> (f64, f64) {
         moved = orbited(&moved, 0.5);
         out = draw(&mut aa, &mut aa_scene, &moved, 1);
     }
-    let inst = [Instance {
-        lod,
-        object_to_world: DAffine3::IDENTITY,
-        faces: None,
-    }];
-    let grid = SampleGrid::from_count(16).unwrap();
-    let truth: Vec<[f64; 3]> = render_supersampled(&inst, &moved, SIZE.0, SIZE.1, &s.light, grid)
-        .colors
-        .iter()
-        .map(|c| std::array::from_fn(|k| c[k] as f64))
-        .collect();
+    let truth = truth(&s, &moved);
     let (mut plain, mut plain_scene) = renderer(plain, s);
     let plain_out = draw(&mut plain, &mut plain_scene, &moved, 1);
     (
@@ -181,12 +173,6 @@ fn moving_error(pipeline: &str, plain: &str) -> (f64, f64) {
 /// over the same for the supersampled reference's frames: 1 is as steady as the truth.
 fn orbit_flicker(pipelines: &[&str], steps: usize, deg: f64) -> Vec<f64> {
     let s = scene();
-    let inst = [Instance {
-        lod: &s.objects[0].asset.lods[LEVEL as usize],
-        object_to_world: DAffine3::IDENTITY,
-        faces: None,
-    }];
-    let grid = SampleGrid::from_count(16).unwrap();
     let path: Vec<Camera> = std::iter::successors(Some(camera()), |c| Some(orbited(c, deg)))
         .take(steps + 1)
         .collect();
@@ -196,17 +182,8 @@ fn orbit_flicker(pipelines: &[&str], steps: usize, deg: f64) -> Vec<f64> {
             .map(|w| mean_abs_error(&w[0], &w[1]))
             .sum::<f64>()
     };
-    let truth: Vec<Vec<[f64; 3]>> = path
-        .iter()
-        .map(|c| {
-            render_supersampled(&inst, c, SIZE.0, SIZE.1, &s.light, grid)
-                .colors
-                .iter()
-                .map(|c| std::array::from_fn(|k| c[k] as f64))
-                .collect()
-        })
-        .collect();
-    let truth = steadiness(&truth);
+    let truths: Vec<Vec<[f64; 3]>> = path.iter().map(|c| truth(&s, c)).collect();
+    let truth = steadiness(&truths);
     pipelines
         .iter()
         .map(|p| {
