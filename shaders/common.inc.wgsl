@@ -35,7 +35,9 @@ struct Frame {
     // match. zw: 0.
     jitter: vec4<f32>,
     // The scene's word stream (scene_streams.inc.wgsl): x = log2 of its words per
-    // binding, y = its first colour word, z = its first normal word; w: 0.
+    // binding, y = its first colour word, z = its first normal word; w: where the screen
+    // tiles' instance lists start in `instance_bvh` (in vec4s; 0: none this frame;
+    // instance_bvh.inc.wgsl).
     streams: vec4<u32>,
 }
 
@@ -60,7 +62,8 @@ struct Instance {
 }
 
 // A node of the hierarchy over the visible instances' camera-relative world boxes (group 0,
-// binding 2), rebuilt every frame (ssbvb-voxel instance_bvh.rs; node 0 is the root).
+// binding 2, two vec4s a node: `bvh_node`), rebuilt every frame (ssbvb-voxel
+// instance_bvh.rs; node 0 is the root).
 struct BvhNode {
     lo: vec3<f32>,
     // Left child, or BVH_LEAF | index into `instances`.
@@ -140,7 +143,15 @@ const STENCIL_TRIANGLE: u32 = 2u;
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> instances: array<Instance>;
-@group(0) @binding(2) var<storage, read> instance_bvh: array<BvhNode>;
+// Words, not nodes: after the nodes the same buffer holds the screen tiles' instance lists
+// (`frame.streams.w`), and one binding keeps a pass within WebGPU's 8 storage buffers.
+@group(0) @binding(2) var<storage, read> instance_bvh: array<vec4<u32>>;
+
+fn bvh_node(i: u32) -> BvhNode {
+    let a = instance_bvh[2u * i];
+    let b = instance_bvh[2u * i + 1u];
+    return BvhNode(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w);
+}
 // The scene's streams (ssbvb-gpu scene_bindings.rs): the word stream holds the LOD table
 // (LOD_WORDS words per entry), then per voxel its linear RGBA8 colour, then the 16-bit
 // octahedral normals two to a word (low half = even voxel); positions are implied by the

@@ -84,7 +84,7 @@ fn mark_cast_tiles(@builtin(global_invocation_id) gid: vec3<u32>) {
     if count == 0u || gid.x >= 2u * count - 1u {
         return;
     }
-    let node = instance_bvh[gid.x];
+    let node = bvh_node(gid.x);
     if (node.left & BVH_LEAF) == 0u {
         return;
     }

@@ -340,7 +340,7 @@ fn filter_pixel(px: vec2<i32>) -> bool {
     }
     let before_others = PEEL && best.found && best.t < walk_t_min;
     if SEVERAL_INSTANCES && count > 1u && !before_others {
-        bvh_walk(dir, best.t, count);
+        instance_walk(pixel_centre, dir, best.t, count);
     }
     if !best.found {
         return true;

@@ -146,10 +146,41 @@ pub fn render_with_chunks(
     size: (u32, u32),
     chunks: StreamChunks,
 ) -> Frame {
+    render_set_up(pipeline, scene, camera, size, chunks, |_| {})
+}
+
+/// [`render`] with rays finding the instances they may meet by their screen tile's list
+/// (`instance_lists`, the default) or by the walk over the instance hierarchy.
+pub fn render_walking(
+    pipeline: &str,
+    scene: Scene,
+    camera: &Camera,
+    size: (u32, u32),
+    instance_lists: bool,
+) -> Frame {
+    render_set_up(
+        pipeline,
+        scene,
+        camera,
+        size,
+        StreamChunks::default(),
+        |s| s.instance_lists = instance_lists,
+    )
+}
+
+fn render_set_up(
+    pipeline: &str,
+    scene: Scene,
+    camera: &Camera,
+    size: (u32, u32),
+    chunks: StreamChunks,
+    set_up: impl FnOnce(&mut GpuScene),
+) -> Frame {
     let c = ctx();
     let resolved =
         ssbvb_graph::resolve_str(pipeline, "test pipeline").unwrap_or_else(|e| panic!("{e}"));
     let mut gpu_scene = GpuScene::with_chunks(c, scene, chunks).unwrap_or_else(|e| panic!("{e}"));
+    set_up(&mut gpu_scene);
     let mut renderer =
         Renderer::new(c, &gpu_scene, resolved, size).unwrap_or_else(|e| panic!("{e}"));
     // Tests read the counters; `ray_march_filter::uncounted_frames_draw_the_same` holds the

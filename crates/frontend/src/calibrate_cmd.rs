@@ -45,6 +45,7 @@ pub fn run(args: &CalibrateArgs) -> Result<()> {
             time: 0.0,
             size: args.size,
             time_submissions: false,
+            instance_walk: Default::default(),
         };
         let mut s = source.open_refusing(&mut Vec::new(), false)?.session;
         let gpu_clock = s.ctx.report().timestamps && !s.ctx.report().is_software;

@@ -7,6 +7,7 @@ mod budget;
 mod bundled;
 mod calibrate_cmd;
 mod calibration;
+mod cli_values;
 mod decl_docs;
 mod export_cmd;
 mod faults;

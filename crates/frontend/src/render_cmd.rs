@@ -9,6 +9,8 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use glam::{DAffine3, DVec3};
+
+use crate::cli_values::{parse_samples, parse_vec3};
 use serde::Serialize;
 use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject};
 use ssbvb_passes::Profiling;
@@ -111,33 +113,11 @@ pub struct RenderArgs {
     /// optional feature; `limits` in `--json`).
     #[arg(long, value_enum, default_value = "adapter")]
     pub limits: crate::adapter_cmd::LimitsArg,
-}
-
-/// Parses a sample count of `--samples` (1 to 1024).
-pub(crate) fn parse_samples(s: &str) -> Result<u32, String> {
-    let n: u32 = s
-        .trim()
-        .parse()
-        .map_err(|e| format!("bad sample count `{s}`: {e}"))?;
-    ssbvb_voxel::reference::SampleGrid::from_count(n)
-        .map(|g| g.count())
-        .map_err(|e| e.to_string())
-}
-
-/// Parses `x,y,z`.
-pub fn parse_vec3(s: &str) -> Result<DVec3, String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|p| {
-            p.trim()
-                .parse::<f64>()
-                .map_err(|e| format!("bad number `{p}` in `{s}`: {e}"))
-        })
-        .collect::<Result<_, _>>()?;
-    match v[..] {
-        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(DVec3::new(x, y, z)),
-        _ => Err(format!("expected three finite numbers x,y,z, got `{s}`")),
-    }
+    /// How a ray finds the instances it may meet: `lists` (its screen tile's instances,
+    /// nearest first) or `hierarchy` (the walk over every visible instance's box), for
+    /// comparison; the image is the same.
+    #[arg(long, value_enum, default_value = "lists")]
+    pub instance_walk: crate::cli_values::InstanceWalk,
 }
 
 pub use crate::bundled::assets_dir;
@@ -488,6 +468,7 @@ fn render_gpu(
         time: args.time,
         size: args.size,
         time_submissions: args.time_submissions,
+        instance_walk: args.instance_walk,
     };
     let opened = source.open_refusing(
         &mut notes,

@@ -31,6 +31,8 @@ pub struct SessionSource {
     pub size: (u32, u32),
     /// Time each GPU submission alone (`--time-submissions`).
     pub time_submissions: bool,
+    /// How rays find the instances they may meet.
+    pub instance_walk: crate::cli_values::InstanceWalk,
 }
 
 /// A device with the scene and the renderer on it.
@@ -141,6 +143,7 @@ impl SessionSource {
             }
             None => GpuScene::new(ctx, scene)?,
         };
+        gpu_scene.instance_lists = self.instance_walk == crate::cli_values::InstanceWalk::Lists;
         let animation = if self.animated.is_empty() {
             None
         } else {

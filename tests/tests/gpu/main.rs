@@ -19,6 +19,7 @@ mod empty_space_compute;
 mod esvo_ray_cast;
 mod gpu_sort;
 mod gpu_voxelize;
+mod instance_lists;
 mod local_edit;
 mod octree_ray_cast;
 mod peel;

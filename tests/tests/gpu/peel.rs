@@ -5,16 +5,17 @@
 //! (64 bunnies, Auto LOD), nine overlapping rotated and scaled instances, two bunnies
 //! 10⁶ units away through a narrow lens (f32 distances), and with the camera inside one
 //! instance's proxy (the layer is then cleared and no ray skips). Where it may skip, it
-//! must: fewer boxes are tested per ray (skipped walks, and boxes the ray leaves before
-//! the layer passed over).
+//! must: fewer boxes are tested per ray by the walk over the hierarchy (skipped walks, and
+//! subtrees the ray leaves before the layer passed over). With the screen tiles' instance
+//! lists (the default walk) it finds the same hits too.
 
 use glam::{DAffine3, DQuat, DVec3};
 use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject};
-use ssbvb_tests::{ctx, model_asset, reference_of};
+use ssbvb_tests::{ctx, model_asset, reference_of, render_walking};
 use ssbvb_voxel::accuracy;
 use ssbvb_voxel::camera::Camera;
 
-use crate::ray_march_filter::{cell_sizes, run_filter_with};
+use crate::ray_march_filter::{FilterRun, cell_sizes, filter_run_of};
 
 const PIXEL: &str = include_str!("../../../assets/pipelines/ssbvb_pixel.ron");
 
@@ -34,7 +35,7 @@ fn pipeline(peel: bool) -> String {
 }
 
 /// Nine overlapping instances (scaled, rotated about two axes).
-fn nine() -> Scene {
+pub(crate) fn nine() -> Scene {
     let xfs = (0..9)
         .map(|k| {
             let (i, j) = ((k % 3) as f64, (k / 3) as f64);
@@ -81,8 +82,15 @@ fn the_second_proxy_layer_keeps_every_hit_and_spares_walks_in_a_crowd() {
         ),
     ];
     for (name, scene, camera) in views {
-        let with = run_filter_with(&pipeline(true), &scene, &camera, size, size);
-        let without = run_filter_with(&pipeline(false), &scene, &camera, size, size);
+        let run = |peel: bool, lists: bool| -> FilterRun {
+            let frame = render_walking(&pipeline(peel), scene.clone(), &camera, size, lists);
+            filter_run_of(frame, &scene, &camera, size, size)
+        };
+        let (with, without) = (run(true, false), run(false, false));
+        assert!(
+            run(true, true).hits == without.hits,
+            "{name}: the layer with lists"
+        );
         assert!(with.frame.scene.visible.len() > 1, "{name}");
         let inside = with.frame.scene.visible.iter().any(|v| v.camera_inside);
         assert_eq!(inside, name == "inside", "{name}");
@@ -91,8 +99,7 @@ fn the_second_proxy_layer_keeps_every_hit_and_spares_walks_in_a_crowd() {
         let reference = reference_of(&scene, &camera, size);
         let r =
             accuracy::compare(&reference, &with.hits, &cell_sizes(&scene, &camera, size)).unwrap();
-        let c =
-            |run: &crate::ray_march_filter::FilterRun| run.frame.renderer.counters(ctx()).unwrap();
+        let c = |run: &FilterRun| run.frame.renderer.counters(ctx()).unwrap();
         let (cw, co) = (c(&with), c(&without));
         let boxes = (
             cw.instance_boxes_per_ray.unwrap(),

@@ -35,7 +35,7 @@ mod snapped;
 mod tiles;
 
 pub(crate) use harness::{
-    FilterRun, cell_sizes, check_against_reference, run_filter, run_filter_with,
+    FilterRun, cell_sizes, check_against_reference, filter_run_of, run_filter, run_filter_with,
 };
 use harness::{check_pipeline_against_reference, diff_png};
 

@@ -102,7 +102,7 @@ pub struct BenchArgs {
     pub gpu_budget: Option<Vec<u64>>,
     /// Samples per pixel of the supersampled reference that `flip_mean` is measured
     /// against (1 to 1024).
-    #[arg(long, default_value_t = 16, value_parser = crate::render_cmd::parse_samples)]
+    #[arg(long, default_value_t = 16, value_parser = crate::cli_values::parse_samples)]
     pub flip_samples: u32,
     /// Fault injection for tests: `device-lost@ROW` destroys the device before the main
     /// matrix measures row ROW (from 0; repeatable). That row is reported failed and the

@@ -101,7 +101,7 @@ mod tests {
                 .and_then(|_| words.next())
                 .unwrap()
         };
-        let pos = crate::render_cmd::parse_vec3(value("--camera-pos")).unwrap();
+        let pos = crate::cli_values::parse_vec3(value("--camera-pos")).unwrap();
         assert_eq!(pos, camera.position);
         assert_eq!(value("--far"), "50");
         let infinite = Camera {

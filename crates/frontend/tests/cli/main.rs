@@ -546,24 +546,34 @@ fn near_and_far_planes() {
 
 /// The paper's scene in small (`bunnies_64.ron`): `render --json` reports the per-level
 /// histogram of the visible instances and the filter's counters, and the filter tests a
-/// few hierarchy boxes per ray rather than every visible instance.
+/// few boxes per ray rather than every visible instance: fewer by its tile's list (the
+/// default) than by the walk over the hierarchy (`--instance-walk hierarchy`), which draws
+/// the same image.
 #[test]
 fn bunny_grid_scene_reports_levels_and_counters() {
     let dir = tempfile::tempdir().unwrap();
-    let out = succeeded(
-        ssbvb()
-            .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
-            .args([
-                "render",
-                "assets/scenes/bunnies_64.ron",
-                "--size",
-                "96x72",
-                "--json",
-                "-o",
-            ])
-            .arg(dir.path().join("grid.png")),
-    );
-    let json = stdout_json(&out);
+    let render = |walk: &str| {
+        let png = dir.path().join(format!("grid_{walk}.png"));
+        let out = succeeded(
+            ssbvb()
+                .env("SSBVB_CACHE_DIR", dir.path().join("cache"))
+                .args([
+                    "render",
+                    "assets/scenes/bunnies_64.ron",
+                    "--size",
+                    "96x72",
+                    "--json",
+                    "--instance-walk",
+                    walk,
+                    "-o",
+                ])
+                .arg(&png),
+        );
+        (stdout_json(&out), std::fs::read(&png).unwrap())
+    };
+    let (json, image) = render("lists");
+    let (walked, walked_image) = render("hierarchy");
+    assert!(image == walked_image, "the walks drew different images");
     let visible = json["visible_instances"].as_u64().unwrap();
     assert!(visible >= 40, "{json}");
     let levels = json["lod_histogram"].as_object().unwrap();
@@ -583,7 +593,12 @@ fn bunny_grid_scene_reports_levels_and_counters() {
     assert_eq!(c["billboards_drawn"].as_u64(), Some(fill), "{json}");
     assert!(rays >= fill && fill > 1000, "{json}");
     let boxes = c["instance_boxes_per_ray"].as_f64().unwrap();
-    assert!(boxes > 1.0 && boxes < visible as f64 / 2.0, "{json}");
+    let walked_boxes = walked["counters"]["instance_boxes_per_ray"]
+        .as_f64()
+        .unwrap();
+    // Measured on lavapipe: 7.8 by the lists, 16.7 by the hierarchy.
+    assert!(boxes > 1.0 && boxes < 0.7 * walked_boxes, "{json} {walked}");
+    assert!(walked_boxes < visible as f64 / 2.0, "{walked}");
     assert!(c["march_steps_mean"].as_f64().unwrap() >= 1.0, "{json}");
     assert!(c["march_steps_p99"].as_u64().unwrap() >= 1, "{json}");
 }

@@ -15,6 +15,7 @@ mod layout;
 pub mod page_cache;
 mod pools;
 pub mod streaming;
+mod tile_lists;
 mod upload;
 pub mod visibility;
 
@@ -28,6 +29,7 @@ pub use gpu_level::GpuLevel;
 pub use layout::*;
 pub use pools::{MAX_STREAM_CHUNKS, StreamChunks};
 pub use streaming::{StreamingOptions, StreamingStats};
+pub use tile_lists::{LIST_TILE_PX, LIST_WALK, MAX_FILLS_PER_TILE, MAX_TILE_LIST};
 pub use visibility::{DEFAULT_LOD_HYSTERESIS, choose_level, choose_level_held, frame_uniform};
 
 use pools::{checked_u32, chunked, plan_pools};
@@ -53,8 +55,15 @@ pub struct GpuScene {
     pub frame_buffer: wgpu::Buffer,
     /// Visible instances (room for every instance of the scene).
     pub instance_buffer: wgpu::Buffer,
-    /// The hierarchy over the visible instances' boxes (room for every instance).
+    /// The hierarchy over the visible instances' boxes (room for every instance), then the
+    /// screen tiles' instance lists (grown, and group 0 bound again, when a frame's lists
+    /// need more room).
     pub bvh_buffer: wgpu::Buffer,
+    /// Whether frames get screen tiles' instance lists (`tile_lists`; on by default; off:
+    /// every ray walks the hierarchy, for comparison).
+    pub instance_lists: bool,
+    /// Words of the lists in the current frame (0: none), for reports.
+    pub instance_list_words: usize,
     /// The word stream: the LOD table, the voxel colours (linear RGBA8, one word per
     /// voxel) from word [`Self::color_word_base`], the voxel normals (16-bit octahedral,
     /// two per word) from word [`Self::normal_word_base`]; in bindings of
@@ -335,6 +344,8 @@ impl GpuScene {
             frame_buffer,
             instance_buffer,
             bvh_buffer,
+            instance_lists: true,
+            instance_list_words: 0,
             word_buffers: streams.words,
             color_word_base: streams.color_word_base,
             normal_word_base: streams.normal_word_base,
@@ -411,6 +422,13 @@ impl GpuScene {
             self.held_levels[v.scene_index as usize] = Some(v.level);
         }
         let mut bvh = instance_bvh(&uniforms, &self.lod_bounds);
+        let mut frame = frame;
+        frame.misc[3] = visible.len() as f32;
+        let lists = if self.instance_lists {
+            tile_lists::tile_lists(&bvh, &frame, 8 * bvh.len())
+        } else {
+            Vec::new()
+        };
         if bvh.is_empty() && !uniforms.is_empty() {
             // Visible instances without voxels: a root that no ray enters (an empty box), so
             // no walk reads last frame's nodes.
@@ -421,17 +439,24 @@ impl GpuScene {
                 right: 0,
             });
         }
+        let lists = self.fit_instance_lists(ctx, bvh.len(), lists);
+        // Lists start after the nodes (two vec4s each); 0 is never a list's start.
+        let lists_at = if lists.is_empty() { 0 } else { 2 * bvh.len() };
         if !bvh.is_empty() {
             ctx.queue
                 .write_buffer(&self.bvh_buffer, 0, bytemuck::cast_slice(&bvh));
         }
-        let mut frame = frame;
-        frame.misc[3] = visible.len() as f32;
+        if !lists.is_empty() {
+            let at = (bvh.len() * std::mem::size_of::<GpuBvhNode>()) as u64;
+            ctx.queue
+                .write_buffer(&self.bvh_buffer, at, bytemuck::cast_slice(&lists));
+        }
+        self.instance_list_words = lists.len();
         frame.streams = [
             self.chunks.word_bits,
             self.color_word_base as u32,
             self.normal_word_base as u32,
-            0,
+            lists_at as u32,
         ];
         ctx.queue
             .write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&frame));
@@ -455,6 +480,53 @@ impl GpuScene {
                 .write_buffer(&mesh.uniform, 0, bytemuck::bytes_of(&u));
         }
         self.visible = visible;
+    }
+
+    /// `lists` if the hierarchy's buffer can hold them after `nodes` nodes, grown (and
+    /// group 0 bound again) where it must be; none where the device's limits do not allow
+    /// that buffer (rays then walk the hierarchy).
+    fn fit_instance_lists(&mut self, ctx: &GpuContext, nodes: usize, lists: Vec<u32>) -> Vec<u32> {
+        let need = (nodes * std::mem::size_of::<GpuBvhNode>() + 4 * lists.len()) as u64;
+        if lists.is_empty() || need <= self.bvh_buffer.size() {
+            return lists;
+        }
+        let limits = ctx.device.limits();
+        let cap = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        // A quarter more than asked, so a moving camera does not grow it every frame.
+        let size = (need + need / 4).next_multiple_of(16).min(cap);
+        if need > size {
+            return Vec::new();
+        }
+        self.bvh_buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("instance bvh"),
+            size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let feedback = self
+            .streaming
+            .as_ref()
+            .map(|s| &s.feedback)
+            .or(self._feedback_dummy.as_ref())
+            .expect("one of the two exists");
+        self.bind_group = crate::kernels::bind_buffers(
+            &ctx.device,
+            "scene",
+            &self.layout,
+            &[
+                &self.frame_buffer,
+                &self.instance_buffer,
+                &self.bvh_buffer,
+                feedback,
+            ]
+            .into_iter()
+            .chain(&self.word_buffers)
+            .chain(&self.lookup_buffers)
+            .collect::<Vec<_>>(),
+        );
+        lists
     }
 
     /// The streams the page cache writes into.

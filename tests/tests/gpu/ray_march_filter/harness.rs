@@ -59,7 +59,24 @@ pub(crate) fn run_filter_with(
     size: (u32, u32),
     grid: (u32, u32),
 ) -> FilterRun {
-    let frame = render(pipeline, scene.clone(), camera, size);
+    filter_run_of(
+        render(pipeline, scene.clone(), camera, size),
+        scene,
+        camera,
+        size,
+        grid,
+    )
+}
+
+/// The hits and billboards of `frame`, a filter's frame of `scene` at `size` (its filter
+/// run on a `grid` of texels).
+pub(crate) fn filter_run_of(
+    frame: Frame,
+    scene: &Scene,
+    camera: &Camera,
+    size: (u32, u32),
+    grid: (u32, u32),
+) -> FilterRun {
     let c = ctx();
     let fill = frame.renderer.fill_count(c).unwrap().unwrap();
     let args = draw_args(c, &frame.renderer).unwrap();
