@@ -87,6 +87,7 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
     (
         "instance_bvh.inc.wgsl",
         &[
+            "instance_lists::",
             "ties::",
             "ray_march_filter::many",
             "scale::",
