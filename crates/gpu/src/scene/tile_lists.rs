@@ -294,4 +294,46 @@ mod tests {
             "lists barely narrow: {left_out} left out, {checked} hits"
         );
     }
+
+    /// A tile of more than [`MAX_TILE_LIST`] boxes walks the hierarchy and stores none; a
+    /// frame of more than [`MAX_FILLS_PER_TILE`] entries a tile gets no lists.
+    #[test]
+    fn crowded_tiles_and_frames_fall_back_to_the_hierarchy() {
+        let camera = Camera::new(DVec3::new(0.0, 0.0, 10.0), DVec3::ZERO);
+        let (w, h) = (64u32, 48u32);
+        let frame = jittered_frame_uniform(&camera, (w, h), &Light::default(), [0.0; 2]);
+        let rays = camera.pixel_rays(w, h);
+        // Small boxes on the ray through pixel (4, 4): all in tile 0.
+        let (_, d) = rays.ray_at(4.5, 4.5);
+        let small = |i: u32| {
+            let c = d * (5.0 + 0.01 * i as f64);
+            leaf(i, c - 0.01, c + 0.01)
+        };
+        let one_off = (0..=MAX_TILE_LIST).map(small).collect::<Vec<_>>();
+        let base = 8 * one_off.len();
+        let words = tile_lists(&one_off, &frame, base);
+        assert_eq!(tile_entries(&words, base, 4, 4), None, "65 boxes: no list");
+        assert_eq!(
+            tile_entries(&words, base, 40, 40),
+            Some(vec![]),
+            "an empty tile"
+        );
+        let fewer = &one_off[..MAX_TILE_LIST as usize];
+        let words = tile_lists(fewer, &frame, base);
+        let listed = tile_entries(&words, base, 4, 4).expect("64 boxes: a list");
+        assert_eq!(listed.len(), MAX_TILE_LIST as usize);
+        // Boxes around the camera cover every tile (12 of them): 256 × 12 fills at most.
+        let around = |i: u32| leaf(i, DVec3::splat(-1.0), DVec3::splat(1.0));
+        let at_cap = (0..MAX_FILLS_PER_TILE as u32)
+            .map(around)
+            .collect::<Vec<_>>();
+        assert!(!tile_lists(&at_cap, &frame, base).is_empty());
+        let over = (0..=MAX_FILLS_PER_TILE as u32)
+            .map(around)
+            .collect::<Vec<_>>();
+        assert!(
+            tile_lists(&over, &frame, base).is_empty(),
+            "over the cap: no lists"
+        );
+    }
 }
