@@ -39,16 +39,6 @@ fn sphere_slopes(a: f32, z: f32, r: f32) -> vec2<f32> {
     return vec2(min(s0, s1), max(s0, s1));
 }
 
-// Reversed-Z NDC depth of a camera-relative world point, clamped to [0, 1] (1 = near: a
-// point at or behind the eye, which the CPU reference still sees at t >= 0).
-fn ndc_depth(p: vec3<f32>) -> f32 {
-    let clip = frame.view_proj * vec4(p, 1.0);
-    if !(clip.w > 0.0) {
-        return 1.0;
-    }
-    return clamp(clip.z / clip.w, 0.0, 1.0);
-}
-
 // Radius of the sphere around a cell of world-space edge vectors a, b, c (the columns of
 // object_to_world times the cell size): half the longest of the four diagonals.
 fn circumradius(m: mat4x4<f32>, size: f32) -> f32 {

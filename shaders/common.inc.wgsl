@@ -424,6 +424,16 @@ fn safe_normalize(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
     return fallback;
 }
 
+// Reversed-Z NDC depth of a camera-relative world point, clamped to [0, 1] (1 = near: a
+// point at or behind the eye, which the CPU reference still sees at t >= 0).
+fn ndc_depth(p: vec3<f32>) -> f32 {
+    let clip = frame.view_proj * vec4(p, 1.0);
+    if !(clip.w > 0.0) {
+        return 1.0;
+    }
+    return clamp(clip.z / clip.w, 0.0, 1.0);
+}
+
 // The G-buffer outputs of a geometry pass (its colour attachments, in slot order).
 struct GBuffer {
     // Linear RGBA8, packed (pack4x8unorm).

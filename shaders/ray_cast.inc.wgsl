@@ -34,14 +34,6 @@ struct Hit {
     face: u32,
 }
 
-fn ndc_depth(p: vec3<f32>) -> f32 {
-    let clip = frame.view_proj * vec4(p, 1.0);
-    if !(clip.w > 0.0) {
-        return 1.0;
-    }
-    return clamp(clip.z / clip.w, 0.0, 1.0);
-}
-
 // Time at which the (mirrored) ray crosses plane k of an axis: origin o, |direction| d.
 fn plane_t(k: i32, s: f32, o: f32, d: f32) -> f32 {
     return ((-1.0 + f32(k) * s) - o) / d;

@@ -89,68 +89,19 @@ override CLAIM_HEADER: u32 = 1u;
 @group(1) @binding(5) var peel_t: texture_2d<u32>;
 override PEEL: bool = false;
 
-// Words of the counters: rays, then (low, high) pairs of sums, then the histogram.
-const C_RAYS: u32 = 0u;
-const C_STEPS: u32 = 1u;
-const C_BOXES: u32 = 3u;
-const C_MARCHES: u32 = 5u;
-const C_WORDS: u32 = 7u;
-const C_HISTOGRAM: u32 = 9u;
+// Page feedback (sparse_march.inc.wgsl's; only compute shaders see group 0's).
+@group(0) @binding(3) var<storage, read_write> page_feedback: array<atomic<u32>>;
 
-var<private> marches: u32;
-
-//#include "sparse_march.inc.wgsl"
-//#include "instance_bvh.inc.wgsl"
+//#include "filter_march.inc.wgsl"
 //#include "tile_list.inc.wgsl"
 
-// How far (in `t`) before the prepass entry `e` the march of the prepass instance starts:
-// one cell, plus an eighth of how much the entry moves along the ray to a neighbouring
-// pixel of the same instance (rasterizers snap vertices to 1/16 px or finer, and on faces
-// seen at grazing angles that moves the interpolated entry along the ray by that fraction
-// of the per-pixel change), plus 1e-4 object units for rounding. A pixel without such a
-// neighbour starts 3.5 object units back, outside the object's box ([-1, 1]^3 has a
-// diagonal of 3.46). Entry points are small object-space numbers, so this is exact
-// whatever the camera's distance.
-fn entry_margin(e: vec4<f32>, px: vec2<i32>, size: vec2<i32>, d: vec3<f32>, s: f32) -> f32 {
-    let dd = dot(d, d);
-    var slope = -1.0;
-    var offsets = array(vec2(1, 0), vec2(-1, 0), vec2(0, 1), vec2(0, -1));
-    for (var i = 0u; i < 4u; i++) {
-        let q = px + offsets[i];
-        if all(q >= vec2(0)) && all(q < size) {
-            let en = textureLoad(entry, q, 0);
-            if en.w == e.w {
-                slope = max(slope, abs(dot(en.xyz - e.xyz, d)) / dd);
-            }
-        }
+// Every voxel of another instance lies behind that instance's proxy: with the second
+// layer, a distance before which none lies on the texel's ray.
+fn walk_floor(px: vec2<i32>, size: vec2<i32>) -> f32 {
+    if PEEL {
+        return max(peel_bound(px, size), 0.0);
     }
-    if slope < 0.0 {
-        return 3.5 * inverseSqrt(dd);
-    }
-    return (s + 1e-4) * inverseSqrt(dd) + slope * 0.125;
-}
-
-// Marches the prepass instance `k` for a pixel with entry `e`: the pixel's ray in the
-// instance's object space as every other instance gets it (`object_ray`: from the camera,
-// or for a far camera from a point near the instance, so that a camera 1e6 units away
-// loses no precision), from the entry point moved back by `entry_margin` (never behind
-// the camera; a proxy holding the camera: from the camera). The plane times are the ones
-// of a march from the camera, so ties are decided as in the reference, and two instances
-// hit at the same distance compute the same `t`.
-fn march_prepass(k: u32, e: vec4<f32>, px: vec2<i32>, size: vec2<i32>, dir: vec3<f32>) -> Hit {
-    let inst = instances[k];
-    let lod = lod_info(inst.lod);
-    let ray = object_ray(inst, pixel_centre, dir);
-    var t_from = 0.0;
-    if (inst.flags & 1u) == 0u {
-        // The entry's parameter on the ray (its f32 rounding only moves where the march
-        // starts, within the margin).
-        let tp = dot(e.xyz - ray.o, ray.d) / dot(ray.d, ray.d);
-        t_from = tp - min(entry_margin(e, px, size, ray.d, cell_size(lod.level)), max(tp, 0.0));
-    }
-    var h = march_resident(ray.o, ray.d, inst.lod, t_from, BIG);
-    h.t += ray.t_base;
-    return h;
+    return -1.0;
 }
 
 // The second layer's distance at texel `q` (+inf: no other proxy; 0: no layer drawn).
@@ -228,37 +179,6 @@ fn clear_draw() {
     billboard_draw.first_instance = 0u;
 }
 
-// The pixel's best hit so far and its instance; the prepass instance (marched first).
-var<private> best: Hit;
-var<private> best_inst: u32;
-var<private> prepass_inst: u32;
-// The pixel's centre in screen pixels (for object_ray).
-var<private> pixel_centre: vec2<f32>;
-
-// Marches visible instance `j` up to the best hit; keeps its hit when nearer, or as near
-// with a lower index. Called by the hierarchy walk.
-fn bvh_visit(j: u32, dir: vec3<f32>) -> f32 {
-    if j == prepass_inst {
-        return best.t;
-    }
-    let inst_j = instances[j];
-    let lod_j = lod_info(inst_j.lod);
-    let ray = object_ray(inst_j, pixel_centre, dir);
-    let rj = make_ray_od(ray.o, ray.d, lod_j.level);
-    let limit = best.t - ray.t_base;
-    if !(max(rj.t_enter, 0.0) <= min(rj.t_exit, limit)) {
-        return best.t;
-    }
-    marches += 1u;
-    var h = march_resident(ray.o, ray.d, inst_j.lod, 0.0, limit);
-    h.t += ray.t_base;
-    if h.found && (!best.found || h.t < best.t || (h.t == best.t && j < best_inst)) {
-        best = h;
-        best_inst = j;
-    }
-    return best.t;
-}
-
 const NO_DEDUP: u32 = 0xffffffffu;
 // Probes before a crowded table gives up (then the pixel appends: a duplicate billboard,
 // never a hole). At a load factor of at most 1/2 a probe sequence averages under 3.
@@ -298,49 +218,10 @@ fn claim(key: u32) -> bool {
     return true;
 }
 
-// Whether a prepass texel names a visible instance: w = instance + 1, an exact small
-// integer (NaN or stale values are ignored).
-fn has_proxy(e: vec4<f32>, count: u32) -> bool {
-    return e.w >= 1.0 && e.w < f32(count) + 0.5;
-}
-
-// The visible instances of the frame.
-fn visible_count() -> u32 {
-    return u32(max(frame.misc.w, 0.0));
-}
-
 // Filters one pixel; returns whether it cast a ray.
 fn filter_pixel(px: vec2<i32>) -> bool {
-    let size = vec2<i32>(textureDimensions(entry));
-    if px.x >= size.x || px.y >= size.y {
+    if !march_pixel(px) {
         return false;
-    }
-    let e = textureLoad(entry, px, 0);
-    let count = visible_count();
-    if !has_proxy(e, count) {
-        return false;
-    }
-    let k = u32(e.w) - 1u;
-    // The filter may run at a fraction of the screen (`entry` declared ScreenScaled): the
-    // prepass rasterized this texel's centre, which is this point of the full screen.
-    // (At full resolution exactly the pixel's centre, as the reference's.)
-    let texel_centre = vec2<f32>(px) + vec2(0.5);
-    let full = all(vec2<f32>(size) == frame.screen.xy);
-    pixel_centre = select(texel_centre * frame.screen.xy / vec2<f32>(size), texel_centre, full);
-    let dir = pixel_ray(pixel_centre);
-
-    marches = 1u;
-    best = march_prepass(k, e, px, size, dir);
-    best_inst = k;
-    prepass_inst = k;
-    // Every voxel of another instance lies behind that instance's proxy: a hit before the
-    // second layer needs no walk, and the walk passes over boxes the ray leaves before it.
-    if PEEL {
-        walk_t_min = max(peel_bound(px, size), 0.0);
-    }
-    let before_others = PEEL && best.found && best.t < walk_t_min;
-    if SEVERAL_INSTANCES && count > 1u && !before_others {
-        instance_walk(pixel_centre, dir, best.t, count);
     }
     if !best.found {
         return true;
@@ -365,7 +246,7 @@ fn filter_pixel(px: vec2<i32>) -> bool {
         ssbvb[idx] = VoxelSlot(
             slot_voxel(hit_lod, best.cell, best.id),
             best_inst,
-            u32(px.y) * u32(size.x) + u32(px.x),
+            u32(px.y) * textureDimensions(entry).x + u32(px.x),
             best.t,
             best.face,
         );
@@ -373,26 +254,6 @@ fn filter_pixel(px: vec2<i32>) -> bool {
     return true;
 }
 
-// Histogram bin of a step count: exact below 32, then 8 bins per power of two (the top
-// three bits after the leading one). RayMarchFilter::counters inverts it.
-fn steps_bin(s: u32) -> u32 {
-    if s < 32u {
-        return s;
-    }
-    let e = firstLeadingBit(s);
-    return 32u + (e - 5u) * 8u + ((s >> (e - 3u)) & 7u);
-}
-
-// Adds to a (low, high) pair of words.
-fn add_wide(word: u32, v: u32) {
-    if v == 0u {
-        return;
-    }
-    let old = atomicAdd(&filter_words[word], v);
-    if old + v < old {
-        atomicAdd(&filter_words[word + 1u], 1u);
-    }
-}
 
 // Flags the tile of a texel with a proxy (workgroup = tile).
 @compute @workgroup_size(16, 16)
@@ -438,16 +299,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) lid:
     }
     let n = tile_total(textureDimensions(entry));
     let px = tile_origin(atomicLoad(&filter_words[at + 1u + n + i])) + lid.xy;
-    march_steps = 0u;
-    march_words = 0u;
-    boxes_tested = 0u;
-    marches = 0u;
-    if filter_pixel(vec2<i32>(px)) && COUNT_WORK {
-        atomicAdd(&filter_words[C_RAYS], 1u);
-        add_wide(C_STEPS, march_steps);
-        add_wide(C_BOXES, boxes_tested);
-        add_wide(C_MARCHES, marches);
-        add_wide(C_WORDS, march_words);
-        atomicAdd(&filter_words[C_HISTOGRAM + steps_bin(march_steps)], 1u);
+    reset_counts();
+    if filter_pixel(vec2<i32>(px)) {
+        count_ray();
     }
 }

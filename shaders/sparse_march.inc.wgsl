@@ -73,8 +73,9 @@ var<private> march_words: u32;
 // Page feedback of the frame (streaming.rs): three sets of a bit per page of every paged
 // LOD: the pages a march needed and did not find (FB_MISSING), the pages it entered
 // (FB_TOUCHED), and the missing pages it found looking past the first (FB_AHEAD); cleared
-// every frame.
-@group(0) @binding(3) var<storage, read_write> page_feedback: array<atomic<u32>>;
+// every frame. The includer declares it (`page_feedback: array<atomic<u32>>`): group 0's
+// binding 3 is visible to compute shaders only, so a fragment shader binds it in its own
+// group.
 
 const FB_MISSING: u32 = 0u;
 const FB_TOUCHED: u32 = 1u;

@@ -139,7 +139,7 @@ fn steps(out: &Path, frames: u32, skip_paper: bool) -> Vec<Step> {
             "--sizes",
             "1280x720,1920x1080",
             "--techniques",
-            "ssbvb,ssbvb-pixel,ssbvb-compute,ssbvb-all-compute,ssbvb-unique,ssbvb-splat,esvo,esvo-compute,esvo-all-compute,octree,octree-compute",
+            "ssbvb,ssbvb-direct,ssbvb-pixel,ssbvb-compute,ssbvb-all-compute,ssbvb-unique,ssbvb-splat,esvo,esvo-compute,esvo-all-compute,octree,octree-compute",
             "--frames",
             &f,
             "--out",
@@ -155,6 +155,7 @@ fn steps(out: &Path, frames: u32, skip_paper: bool) -> Vec<Step> {
     ];
     let forms = [
         ("default", None),
+        ("direct", Some("assets/pipelines/ssbvb_direct.ron")),
         ("raster", Some("assets/pipelines/ssbvb.ron")),
         ("splat", Some("assets/pipelines/ssbvb_splat.ron")),
         ("compute", Some("assets/pipelines/ssbvb_compute.ron")),
@@ -170,7 +171,7 @@ fn steps(out: &Path, frames: u32, skip_paper: bool) -> Vec<Step> {
             "--sizes",
             "1280x720",
             "--techniques",
-            "ssbvb,ssbvb-pixel,ssbvb-compute,ssbvb-all-compute,ssbvb-peel,ssbvb-splat,esvo,esvo-compute,esvo-all-compute,octree-compute",
+            "ssbvb,ssbvb-direct,ssbvb-pixel,ssbvb-compute,ssbvb-all-compute,ssbvb-peel,ssbvb-splat,esvo,esvo-compute,esvo-all-compute,octree-compute",
             "--frames",
             &f,
             "--out",
@@ -412,11 +413,11 @@ mod tests {
         assert_eq!(s[2].name, "crowd");
         assert_eq!(s.last().unwrap().name, "paper");
         assert!(s[1].args.join(" ").contains(
-            "ssbvb,ssbvb-pixel,ssbvb-compute,ssbvb-all-compute,ssbvb-unique,ssbvb-splat,esvo,\
-             esvo-compute,esvo-all-compute"
+            "ssbvb,ssbvb-direct,ssbvb-pixel,ssbvb-compute,ssbvb-all-compute,ssbvb-unique,\
+             ssbvb-splat,esvo,esvo-compute,esvo-all-compute"
         ));
         let renders: Vec<&Step> = s.iter().filter(|s| s.args[0] == "render").collect();
-        assert_eq!(renders.len(), 8);
+        assert_eq!(renders.len(), 10);
         assert!(
             renders
                 .iter()

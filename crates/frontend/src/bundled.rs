@@ -31,6 +31,10 @@ const FILES: &[(&str, &[u8])] = &[
         include_bytes!("../../../assets/pipelines/ssbvb_pixel.ron"),
     ),
     (
+        "pipelines/ssbvb_direct.ron",
+        include_bytes!("../../../assets/pipelines/ssbvb_direct.ron"),
+    ),
+    (
         "pipelines/ssbvb_compute.ron",
         include_bytes!("../../../assets/pipelines/ssbvb_compute.ron"),
     ),

@@ -103,7 +103,8 @@ pub struct CalibrationFile {
 pub const VERSION: u32 = 1;
 
 /// The forms measured, in the rule's order of preference (ties go to the earlier).
-pub const FORMS: [&str; 4] = [
+pub const FORMS: [&str; 5] = [
+    "pipelines/ssbvb_direct.ron",
     "pipelines/ssbvb_pixel.ron",
     "pipelines/ssbvb_compute.ron",
     "pipelines/ssbvb_splat.ron",

@@ -31,21 +31,33 @@ pub struct Form {
     pub name: &'static str,
     /// Why it stands where it does in [`FORMS`].
     pub why: &'static str,
+    /// Only for CPU adapters (device type `Cpu`): measured fastest there and nowhere else
+    /// yet (its work is fragment work, slow on data-centre GPUs).
+    pub cpu_only: bool,
 }
 
 /// The SSBVB forms, fastest first on the adapters measured.
-pub const FORMS: [Form; 2] = [
+pub const FORMS: [Form; 3] = [
+    Form {
+        file: "pipelines/ssbvb_direct.ron",
+        name: "each pixel's hit written straight into the G-buffer by the march (no SSBVB)",
+        why: "the fastest SSBVB frame measured on lavapipe, a CPU adapter, where fragment \
+              work costs what compute work costs (docs/benchmarks.md)",
+        cpu_only: true,
+    },
     Form {
         file: "pipelines/ssbvb_pixel.ron",
         name: "each pixel's hit written at its pixel (no billboard)",
-        why: "the fastest SSBVB frame measured on lavapipe; on the NVIDIA H200 the \
+        why: "the fastest compute-marched SSBVB frame measured; on the NVIDIA H200 the \
               billboards were the frame's costliest stage, and this form has none \
               (docs/benchmarks.md)",
+        cpu_only: false,
     },
     Form {
         file: "pipelines/ssbvb.ron",
         name: "rasterized billboards",
         why: "the paper's frame",
+        cpu_only: false,
     },
 ];
 
@@ -217,10 +229,10 @@ pub(crate) fn choose_among(
         if !verdicts.iter().flatten().any(|v| v.allowed) {
             continue;
         }
-        let Some(k) = verdicts
-            .iter()
-            .position(|v| v.is_some_and(|v| v.allowed && v.verdict.fits()))
-        else {
+        let suits = |k: usize, v: &AdapterVerdict| {
+            v.allowed && v.verdict.fits() && (!forms[k].cpu_only || v.device_type == "Cpu")
+        };
+        let Some(k) = (0..forms.len()).find(|&k| verdicts[k].is_some_and(|v| suits(k, v))) else {
             continue;
         };
         let adapter = verdicts[k].expect("found above");
@@ -230,11 +242,14 @@ pub(crate) fn choose_among(
         );
         let mut reason = format!("{} on {name}{under}: {}", forms[k].name, forms[k].why);
         for (f, v) in forms[..k].iter().zip(&verdicts) {
-            let lacks = v.map_or_else(
-                || "not listed".to_string(),
-                |v| v.verdict.missing.join("; "),
-            );
-            reason.push_str(&format!("; not {}: the adapter lacks {lacks}", f.name));
+            let why_not = match v {
+                None => "the adapter is not listed".to_string(),
+                Some(v) if v.verdict.fits() && f.cpu_only => {
+                    "measured faster on CPU adapters only".to_string()
+                }
+                Some(v) => format!("the adapter lacks {}", v.verdict.missing.join("; ")),
+            };
+            reason.push_str(&format!("; not {}: {why_not}", f.name));
         }
         let choice = PipelineChoice {
             pipeline: assets_dir().join(forms[k].file).display().to_string(),
@@ -273,19 +288,64 @@ mod tests {
         }
     }
 
-    /// A lister that answers the pixel form (listed first) from `pixel` and the raster
-    /// form from `raster`.
+    /// A lister that answers the two marched forms (the direct and the pixel form, listed
+    /// first) from `pixel` and the raster form from `raster`.
     fn lister(
         pixel: Vec<AdapterVerdict>,
         raster: Vec<AdapterVerdict>,
     ) -> impl Fn(usize, &Requirements) -> Vec<AdapterVerdict> {
         move |k, _| {
-            if k == 0 {
+            if k <= 1 {
                 pixel.clone()
             } else {
                 raster.clone()
             }
         }
+    }
+
+    fn cpu(name: &str, missing: &[&str]) -> AdapterVerdict {
+        AdapterVerdict {
+            device_type: "Cpu".into(),
+            ..verdict(name, true, missing)
+        }
+    }
+
+    #[test]
+    fn a_cpu_adapter_gets_the_direct_form_and_a_gpu_the_pixel_form_saying_why() {
+        let c = choose_among(
+            &FORMS,
+            "",
+            lister(vec![cpu("lavapipe", &[])], vec![cpu("lavapipe", &[])]),
+        )
+        .unwrap()
+        .0;
+        assert!(c.pipeline.ends_with("ssbvb_direct.ron"), "{c:?}");
+        assert!(c.reason.contains("straight into the G-buffer"), "{c:?}");
+        let g = choose_among(
+            &FORMS,
+            "",
+            lister(
+                vec![verdict("gpu", true, &[])],
+                vec![verdict("gpu", true, &[])],
+            ),
+        )
+        .unwrap()
+        .0;
+        assert!(g.pipeline.ends_with("ssbvb_pixel.ron"), "{g:?}");
+        assert!(
+            g.reason
+                .contains("not each pixel's hit written straight into the G-buffer by the march (no SSBVB): measured faster on CPU adapters only"),
+            "{g:?}"
+        );
+        // A CPU adapter without what the marched forms need gets the raster form.
+        let r = choose_among(
+            &FORMS,
+            "",
+            lister(vec![cpu("cpu", &["x"])], vec![cpu("cpu", &[])]),
+        )
+        .unwrap()
+        .0;
+        assert!(r.pipeline.ends_with("pipelines/ssbvb.ron"), "{r:?}");
     }
 
     #[test]
@@ -392,11 +452,13 @@ mod tests {
 
 #[cfg(test)]
 mod web_page_tests {
-    /// The web page chooses its default among the same forms, in the same order.
+    /// The web page chooses its default among the same forms, in the same order, but for
+    /// those only for CPU adapters (a browser does not say whether its adapter is one).
     #[test]
     fn the_page_chooses_among_the_same_forms() {
         let stems: Vec<String> = super::FORMS
             .iter()
+            .filter(|f| !f.cpu_only)
             .map(|f| {
                 f.file
                     .trim_start_matches("pipelines/")

@@ -24,6 +24,7 @@ const KIND_SOURCES: &[&str] = &[
     include_str!("../../graph/src/kinds/octree_ray_cast.rs"),
     include_str!("../../graph/src/kinds/rastavox.rs"),
     include_str!("../../graph/src/kinds/ray_march_filter.rs"),
+    include_str!("../../graph/src/kinds/ray_march_gbuffer.rs"),
     include_str!("../../graph/src/kinds/smooth.rs"),
     include_str!("../../graph/src/kinds/splat_billboards.rs"),
     include_str!("../../graph/src/kinds/temporal.rs"),

@@ -29,6 +29,7 @@ mod rastavox;
 mod ray_cast_compute;
 mod ray_casters;
 mod ray_march_filter;
+mod ray_march_gbuffer;
 mod scale;
 mod smooth_composite;
 mod splat;

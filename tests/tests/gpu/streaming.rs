@@ -16,6 +16,7 @@ use ssbvb_voxel::camera::Camera;
 const SIZE: (u32, u32) = (128, 96);
 const LEVEL: u32 = 8;
 const PIPELINE: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
+const DIRECT: &str = include_str!("../../../assets/pipelines/ssbvb_direct.ron");
 
 fn asset() -> Arc<VoxelAsset> {
     ssbvb_tests::model_asset("bunny.obj", LEVEL)
@@ -63,20 +64,28 @@ fn frame(c: &GpuContext, r: &mut Renderer, scene: &mut GpuScene, cam: &Camera) -
 }
 
 fn unbudgeted(cam: &Camera) -> (Image, u64) {
+    unbudgeted_with(PIPELINE, cam)
+}
+
+fn unbudgeted_with(pipeline: &str, cam: &Camera) -> (Image, u64) {
     let c = ssbvb_tests::ctx();
     let scene = ssbvb_tests::single_object_scene(asset(), LEVEL);
     let mut s = GpuScene::new(c, scene).unwrap();
-    let resolved = ssbvb_graph::resolve_str(PIPELINE, "ssbvb").unwrap();
+    let resolved = ssbvb_graph::resolve_str(pipeline, "ssbvb").unwrap();
     let mut r = Renderer::new(c, &s, resolved, SIZE).unwrap();
     let total = s.total_memory();
     (frame(c, &mut r, &mut s, cam), total)
 }
 
 fn streamed(options: &StreamingOptions) -> (Renderer, GpuScene) {
+    streamed_with(PIPELINE, options)
+}
+
+fn streamed_with(pipeline: &str, options: &StreamingOptions) -> (Renderer, GpuScene) {
     let c = ssbvb_tests::ctx();
     let scene = ssbvb_tests::single_object_scene(asset(), LEVEL);
     let s = GpuScene::streamed(c, scene, options).unwrap_or_else(|e| panic!("{e}"));
-    let resolved = ssbvb_graph::resolve_str(PIPELINE, "ssbvb").unwrap();
+    let resolved = ssbvb_graph::resolve_str(pipeline, "ssbvb").unwrap();
     let r = Renderer::new(c, &s, resolved, SIZE).unwrap();
     (r, s)
 }
@@ -112,13 +121,22 @@ fn near() -> Camera {
 
 #[test]
 fn a_quarter_budget_converges_to_the_unbudgeted_image_without_a_hole_on_the_way() {
+    // The filter's form, and the direct form's march in a fragment shader, which writes
+    // the page feedback through its own binding (without it no page would stream, and
+    // the converged image would stay coarser).
+    for pipeline in [PIPELINE, DIRECT] {
+        quarter_budget_converges(pipeline);
+    }
+}
+
+fn quarter_budget_converges(pipeline: &str) {
     let c = ssbvb_tests::ctx();
-    let (want, total) = unbudgeted(&near());
+    let (want, total) = unbudgeted_with(pipeline, &near());
     let n = count(&want.covered);
     assert!(n > SIZE.0 as usize * SIZE.1 as usize / 3, "{n} pixels");
     let mut options = StreamingOptions::mib(0);
     options.budget_bytes = total / 4;
-    let (mut r, mut s) = streamed(&options);
+    let (mut r, mut s) = streamed_with(pipeline, &options);
 
     // Frame 1: no page of levels 6..=8 is resident; every pixel the bunny covers is
     // covered by a coarser level (no hole), and the image differs (coarser voxels).

@@ -85,6 +85,22 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
         ],
     ),
     (
+        "filter_march.inc.wgsl",
+        &[
+            "ties::exact",
+            "ties::fast",
+            "streaming::",
+            "ray_march_filter::",
+            "ray_march_gbuffer::",
+            "scale::counters",
+            "scale::a_grid",
+        ],
+    ),
+    (
+        "ray_march_gbuffer.wgsl",
+        &["ray_march_gbuffer::", "streaming::a_quarter"],
+    ),
+    (
         "instance_bvh.inc.wgsl",
         &[
             "instance_lists::",

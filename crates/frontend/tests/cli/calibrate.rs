@@ -40,9 +40,9 @@ fn calibration_sets_the_default_form_for_its_own_adapter_only() {
     let mut json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
     let entry = &json["entries"][0];
-    // Lavapipe runs all four forms; each was timed.
+    // Lavapipe runs all five forms; each was timed.
     let forms = entry["forms"].as_array().unwrap();
-    assert_eq!(forms.len(), 4, "{json}");
+    assert_eq!(forms.len(), 5, "{json}");
     assert!(
         forms.iter().all(|f| f["frame_ms"].as_f64().unwrap() > 0.0),
         "{json}"
@@ -84,7 +84,7 @@ fn calibration_sets_the_default_form_for_its_own_adapter_only() {
         report["pipeline"]
             .as_str()
             .unwrap()
-            .ends_with("pipelines/ssbvb_pixel.ron"),
+            .ends_with("pipelines/ssbvb_direct.ron"),
         "{report}"
     );
     // A corrupt file: a warning, the rule's choice, and the frame still drawn.

@@ -34,11 +34,11 @@ fn webgpu_limits_are_checked_up_front_and_named() {
         choice["pipeline"]
             .as_str()
             .unwrap()
-            .ends_with("pipelines/ssbvb_pixel.ron")
+            .ends_with("pipelines/ssbvb_direct.ron")
             && choice["reason"]
                 .as_str()
                 .unwrap()
-                .contains("at its pixel (no billboard) on llvmpipe")
+                .contains("straight into the G-buffer by the march (no SSBVB) on llvmpipe")
             && !choice["reason"].as_str().unwrap().contains("WebGPU"),
         "{json}"
     );

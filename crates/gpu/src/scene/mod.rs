@@ -505,12 +505,7 @@ impl GpuScene {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let feedback = self
-            .streaming
-            .as_ref()
-            .map(|s| &s.feedback)
-            .or(self._feedback_dummy.as_ref())
-            .expect("one of the two exists");
+        let feedback = self.page_feedback();
         self.bind_group = crate::kernels::bind_buffers(
             &ctx.device,
             "scene",
@@ -539,6 +534,17 @@ impl GpuScene {
             word_chunk_bytes: 4u64 << self.chunks.word_bits,
             node_chunk_bytes: (4 * NODE_WORDS as u64) << self.chunks.node_bits,
         }
+    }
+
+    /// The buffer group 0 binds as the page feedback (binding 3; a small unused one
+    /// without a budget), for a fragment shader that marches, which binds it in its own
+    /// group (group 0's binding is visible to compute shaders only).
+    pub fn page_feedback(&self) -> &wgpu::Buffer {
+        self.streaming
+            .as_ref()
+            .map(|s| &s.feedback)
+            .or(self._feedback_dummy.as_ref())
+            .expect("one of the two exists")
     }
 
     /// Under a budget: reads the page feedback of earlier frames that is ready and streams

@@ -19,6 +19,7 @@ mod formats;
 mod octree_ray_cast;
 mod rastavox;
 mod ray_march_filter;
+mod ray_march_gbuffer;
 mod shared;
 mod smooth;
 mod spec;
@@ -41,6 +42,7 @@ pub use formats::LIGHT;
 pub use octree_ray_cast::OctreeRayCastParams;
 pub use rastavox::{MAX_PIXEL_ERROR, RastaVoxParams};
 pub use ray_march_filter::{MarchMode, RayMarchFilterParams};
+pub use ray_march_gbuffer::RayMarchGBufferParams;
 pub use smooth::{SmoothComputeParams, SmoothParams};
 pub use spec::{Access, KindSpec, ParamDesc, PassStage, SlotClass, SlotDesc};
 pub use splat_billboards::SplatBillboardsParams;
@@ -122,6 +124,10 @@ pass_kinds! {
     /// `Composite` as a compute pass: the same lighting into an `Rgba8Unorm` storage
     /// texture, sRGB-encoded in the shader (the bytes an `Rgba8Unorm` `Composite` writes).
     CompositeCompute = CompositeComputeKind;
+    /// The filter's march in a fragment shader over the prepass's tiles with a proxy, each
+    /// pixel's hit written straight into the G-buffer (stencil = voxel): no SSBVB and no
+    /// billboard, for adapters whose fragment work is as fast as their compute work.
+    RayMarchGBuffer(RayMarchGBufferParams);
 }
 
 impl PassKind {
@@ -241,6 +247,7 @@ mod tests {
             EmptySpaceComputeParams::NAME,
             SmoothComputeParams::NAME,
             CompositeComputeKind::NAME,
+            RayMarchGBufferParams::NAME,
         ];
         assert_eq!(spec_names, KIND_NAMES);
     }

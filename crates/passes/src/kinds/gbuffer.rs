@@ -99,7 +99,7 @@ pub(crate) fn begin_gbuffer_pass<'e>(
 
 /// [`begin_gbuffer_pass`] with the given timestamp writes (a pass whose time began in an
 /// earlier compute pass ends it here: [`Recorder::span_end_timestamps`]).
-fn begin_gbuffer_pass_timed<'e>(
+pub(crate) fn begin_gbuffer_pass_timed<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
     rec: &Recorder<'_>,
     stencil: u32,

@@ -37,6 +37,7 @@ pass_modules! {
     empty_space_compute::EmptySpaceCompute,
     smooth_compute::SmoothCompute,
     composite_compute::CompositeCompute,
+    ray_march_gbuffer::RayMarchGBuffer,
 }
 
 /// The registration of `kind`.

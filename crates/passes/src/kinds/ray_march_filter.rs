@@ -115,7 +115,7 @@ pub struct RayMarchFilter {
 
 /// Words of the counter buffer: rays, (low, high) sums of steps, boxes, marches and
 /// lookup-node words read, then the steps-per-ray histogram (constants `C_*` in the WGSL).
-const COUNTER_WORDS: usize = HISTOGRAM_WORD + crate::runtime::counters::STEP_BINS;
+pub(crate) const COUNTER_WORDS: usize = HISTOGRAM_WORD + crate::runtime::counters::STEP_BINS;
 
 /// The first word of the histogram (`C_HISTOGRAM`).
 const HISTOGRAM_WORD: usize = 9;
@@ -472,33 +472,7 @@ impl PassNode for RayMarchFilter {
         if !self.counted {
             return Ok(());
         }
-        let words = ssbvb_gpu::kernels::read_words(
-            frame.gpu,
-            &self.words.buffer,
-            0,
-            COUNTER_WORDS as u64,
-        )?;
-        if words.len() < COUNTER_WORDS {
-            return Err(PassError::BadScene("filter counters readback is short".into()));
-        }
-        let wide = |i: usize| words[i] as u64 | (words[i + 1] as u64) << 32;
-        let rays = words[0] as u64;
-        let per_ray = |sum: u64| (rays > 0).then(|| sum as f64 / rays as f64);
-        out.filter_rays = Some(rays);
-        out.march_steps_mean = per_ray(wide(1));
-        out.instance_boxes_per_ray = per_ray(wide(3));
-        out.instances_marched_per_ray = per_ray(wide(5));
-        let histogram = &words[HISTOGRAM_WORD..COUNTER_WORDS];
-        let steps = wide(1);
-        check_steps_histogram(rays, steps, histogram).map_err(PassError::InconsistentCounters)?;
-        // Every ray marches its prepass instance at least.
-        if wide(5) < rays {
-            return Err(PassError::InconsistentCounters(format!(
-                "{} instance marches counted for {rays} rays",
-                wide(5)
-            )));
-        }
-        out.march_steps_p99 = histogram_quantile(histogram, 0.99);
+        read_march_counters(frame.gpu, &self.words.buffer, out)?;
         let tiles = ssbvb_gpu::kernels::read_words(
             frame.gpu,
             &self.words.buffer,
@@ -506,7 +480,6 @@ impl PassNode for RayMarchFilter {
             1,
         )?;
         out.filter_tiles = tiles.first().map(|&t| u64::from(t));
-        out.node_words_per_step = (steps > 0).then(|| wide(7) as f64 / steps as f64);
         Ok(())
     }
 }
@@ -579,6 +552,45 @@ impl RayMarchFilter {
         }
         Ok(())
     }
+}
+
+/// Reads the march counters at the start of `buffer` (`COUNTER_WORDS` words, the layout
+/// of `filter_march.inc.wgsl`) into `out`: rays, steps (mean and p99 of the histogram),
+/// boxes and instances per ray, lookup words per step; checked for consistency.
+pub(crate) fn read_march_counters(
+    gpu: &GpuContext,
+    buffer: &wgpu::Buffer,
+    out: &mut FrameCounters,
+) -> Result<(), PassError> {
+        let words = ssbvb_gpu::kernels::read_words(
+            gpu,
+            buffer,
+            0,
+            COUNTER_WORDS as u64,
+        )?;
+        if words.len() < COUNTER_WORDS {
+            return Err(PassError::BadScene("filter counters readback is short".into()));
+        }
+        let wide = |i: usize| words[i] as u64 | (words[i + 1] as u64) << 32;
+        let rays = words[0] as u64;
+        let per_ray = |sum: u64| (rays > 0).then(|| sum as f64 / rays as f64);
+        out.filter_rays = Some(rays);
+        out.march_steps_mean = per_ray(wide(1));
+        out.instance_boxes_per_ray = per_ray(wide(3));
+        out.instances_marched_per_ray = per_ray(wide(5));
+        let histogram = &words[HISTOGRAM_WORD..COUNTER_WORDS];
+        let steps = wide(1);
+        check_steps_histogram(rays, steps, histogram).map_err(PassError::InconsistentCounters)?;
+        // Every ray marches its prepass instance at least.
+        if wide(5) < rays {
+            return Err(PassError::InconsistentCounters(format!(
+                "{} instance marches counted for {rays} rays",
+                wide(5)
+            )));
+        }
+        out.march_steps_p99 = histogram_quantile(histogram, 0.99);
+    out.node_words_per_step = (steps > 0).then(|| wide(7) as f64 / steps as f64);
+    Ok(())
 }
 
 /// The indirect draw the filter wrote into `billboard_draw` (its first 16 bytes, read

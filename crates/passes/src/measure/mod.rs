@@ -57,9 +57,9 @@ pub fn gbuffer_hits_in(
     r: &Renderer,
     scene: &ssbvb_gpu::scene::GpuScene,
 ) -> Result<Vec<Option<GpuHit>>, PassError> {
-    if r.fill_count(ctx)?.is_none() {
+    if !ssbvb::has_ssbvb(r) {
         return Err(PassError::BadScene(
-            "naming the instance of each pixel needs a pipeline with a filter".into(),
+            "naming the instance of each pixel needs a pipeline with an SSBVB".into(),
         ));
     }
     hits(ctx, r, Some(scene))
@@ -76,7 +76,7 @@ fn hits(
     let n = (albedo.width * albedo.height) as usize;
     let mut cells = vec![[u32::MAX; 3]; n];
     let mut instances = vec![0u32; n];
-    if r.fill_count(ctx)?.is_some() {
+    if ssbvb::has_ssbvb(r) {
         for s in ssbvb::read_slots(ctx, r)? {
             if let Some(c) = cells.get_mut(s.pixel as usize) {
                 *c = s.voxel.cell();

@@ -24,6 +24,12 @@ fn filter_resource(renderer: &Renderer, slot: &str) -> Result<usize, PassError> 
         })
 }
 
+/// Whether `renderer`'s pipeline has an SSBVB: a `RayMarchFilter` pass whose slots can be
+/// read back (`RayMarchGBuffer` writes its hits into the G-buffer, and has none).
+pub fn has_ssbvb(renderer: &Renderer) -> bool {
+    filter_resource(renderer, "ssbvb").is_ok()
+}
+
 /// Reads back the indirect draw written by the filter of `renderer`'s last frame: the SSBVB
 /// fill count is its `instance_count`. Meaningful after `Renderer::render` while the
 /// `billboard_draw` resource is still intact (the pipeline's output, in `keep`, or not

@@ -151,6 +151,14 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         edit: None,
         max_level: 16,
     },
+    // No SSBVB: the march writes each pixel's hit straight into the G-buffer
+    // (`RayMarchGBuffer`).
+    Technique {
+        name: "ssbvb-direct",
+        pipeline: PipelineSource::File("ssbvb_direct.ron"),
+        edit: None,
+        max_level: 16,
+    },
     // The same with the empty-space prepass in compute (`EmptySpaceCompute`): no raster
     // work left in the SSBVB's own stages.
     Technique {
@@ -290,7 +298,8 @@ pub(crate) const PAPER_TECHNIQUES: &[&str] = &[
     "ssbvb",
 ];
 
-/// Techniques left out unless named: the raster form by another name, the pixel form with
+/// Techniques left out unless named: the raster form by another name, the direct form (the
+/// default `ssbvb` on a CPU adapter, where CI runs), the pixel form with
 /// the filter's second proxy layer (its image; a crowd's knob), the compute forms of the
 /// octree casters (their fragment forms' images; the paper preset runs them) and the
 /// still-image anti-aliasing and the raster form's temporal one (the quality preset runs
@@ -298,6 +307,7 @@ pub(crate) const PAPER_TECHNIQUES: &[&str] = &[
 /// `gpu-bench` runs them).
 const ALIASES: &[&str] = &[
     "ssbvb-fast",
+    "ssbvb-direct",
     "ssbvb-peel",
     "octree-compute",
     "esvo-compute",

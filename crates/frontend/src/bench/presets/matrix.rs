@@ -482,7 +482,8 @@ fn run_one(ctx: &GpuContext, t: &Technique, c: &Cell) -> Result<Row> {
         gpu_memory_bytes: m.gpu_memory + cube_bytes + surface_bytes,
         coverage_iou: acc.coverage_iou,
         // Voxel ids per pixel come from the slot each pixel's ray filled; with unique_voxels
-        // (one slot per voxel, at the pixel that claimed it) over those pixels only.
+        // (one slot per voxel, at the pixel that claimed it) over those pixels only; none
+        // without an SSBVB (the direct form).
         same_voxel_rate: if matches!(
             t.name,
             "ssbvb"
@@ -491,6 +492,7 @@ fn run_one(ctx: &GpuContext, t: &Technique, c: &Cell) -> Result<Row> {
                 | "ssbvb-fast"
                 | "ssbvb-splat"
                 | "ssbvb-pixel"
+                | "ssbvb-direct"
                 | "ssbvb-compute"
                 | "ssbvb-all-compute"
                 | "ssbvb-peel"
