@@ -424,6 +424,17 @@ fn safe_normalize(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
     return fallback;
 }
 
+// Vertex `v` (0..6: two triangles) of screen tile `t` (row-major, `across` a row) of
+// `tile_px` pixels, in clip space: the quads passes draw over the tiles that hold work.
+fn screen_tile_vertex(v: u32, t: u32, across: u32, tile_px: u32) -> vec4<f32> {
+    let corner = vec2(
+        select(0u, 1u, v == 1u || v == 4u || v == 5u),
+        select(0u, 1u, v == 2u || v == 3u || v == 5u),
+    );
+    let px = vec2<f32>((vec2(t % across, t / across) + corner) * tile_px);
+    return vec4(px.x * frame.screen.z * 2.0 - 1.0, 1.0 - px.y * frame.screen.w * 2.0, 0.0, 1.0);
+}
+
 // Reversed-Z NDC depth of a camera-relative world point, clamped to [0, 1] (1 = near: a
 // point at or behind the eye, which the CPU reference still sees at t >= 0).
 fn ndc_depth(p: vec3<f32>) -> f32 {

@@ -76,13 +76,7 @@ fn vs_main(
     if flagged == 0u {
         return vec4(2.0, 2.0, 0.0, 1.0);
     }
-    let corner = vec2(
-        select(0u, 1u, v == 1u || v == 4u || v == 5u),
-        select(0u, 1u, v == 2u || v == 3u || v == 5u),
-    );
-    let across = tiles_across();
-    let px = vec2<f32>((vec2(t % across, t / across) + corner) * TILE_PX);
-    return vec4(px.x * frame.screen.z * 2.0 - 1.0, 1.0 - px.y * frame.screen.w * 2.0, 0.0, 1.0);
+    return screen_tile_vertex(v, t, tiles_across(), TILE_PX);
 }
 
 @fragment

@@ -695,7 +695,7 @@ fn print_report(r: &Report) {
     }
     println!("frame wall time: {:.2} ms", r.frame_wall_ms);
     if let Some(f) = r.ssbvb_fill_count {
-        println!("SSBVB fill count: {f} billboards");
+        println!("SSBVB fill count: {f} entries");
     }
     if let Some(c) = r.covered_pixels {
         println!("covered pixels: {c}");

@@ -40,7 +40,9 @@ pub const USAGE: &str =
 /// The core shaders, the default set.
 pub const CORE: &[&str] = &[
     "sparse_march.inc.wgsl",
+    "filter_march.inc.wgsl",
     "ray_march_filter.wgsl",
+    "ray_march_gbuffer.wgsl",
     "instance_bvh.inc.wgsl",
     "billboard_quad.inc.wgsl",
     "billboards.wgsl",

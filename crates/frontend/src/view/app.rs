@@ -470,6 +470,10 @@ impl Viewer {
         // Counted from the last rebuild, so a new pipeline is measured at its first frame.
         let sample_frame = self.frame - self.sample_base;
         let profiling = self.stats.profiling(sample_frame);
+        // The sampled frame counts its work: the direct form (`RayMarchGBuffer`) has a fill
+        // count only then; other frames run the passes' uncounted variants.
+        self.renderer
+            .set_counting(Stats::samples_fill(sample_frame));
         match self
             .renderer
             .render(&self.gpu.ctx, &mut self.scene, &camera, profiling)

@@ -304,11 +304,12 @@ fn performance(ui: &mut egui::Ui, view: &OverlayView<'_>) {
             ui.weak("(not sampled yet)");
         }
     });
-    let has_filter = view
-        .pipeline
-        .passes
-        .iter()
-        .any(|p| matches!(p.kind, PassKind::RayMarchFilter { .. }));
+    let has_filter = view.pipeline.passes.iter().any(|p| {
+        matches!(
+            p.kind,
+            PassKind::RayMarchFilter { .. } | PassKind::RayMarchGBuffer { .. }
+        )
+    });
     if has_filter {
         match (s.fill, s.covered) {
             (Some(f), Some(c)) => {
@@ -323,8 +324,9 @@ fn performance(ui: &mut egui::Ui, view: &OverlayView<'_>) {
             _ => ui.label("SSBVB fill: not sampled yet"),
         }
         .on_hover_text(format!(
-            "Billboards the ray-march filter emitted vs pixels showing a voxel (stencil) \
-             (GPU readbacks every {SLOW_SAMPLE_EVERY} frames)"
+            "Entries the ray-march filter appended to the SSBVB (the direct form: pixels \
+             its march wrote) vs pixels showing a voxel (stencil) (GPU readbacks every \
+             {SLOW_SAMPLE_EVERY} frames)"
         ));
     } else {
         ui.weak("SSBVB fill: no ray-march filter");
