@@ -39,6 +39,10 @@ struct Frame {
     // tiles' instance lists start in `instance_bvh` (in vec4s; 0: none this frame;
     // instance_bvh.inc.wgsl).
     streams: vec4<u32>,
+    // x: 1 when no visible proxy is drawn by its back faces: a texel's nearest proxy entry
+    // is then where its ray first meets any instance's proxy (filter_march.inc.wgsl's
+    // `prepass_floor`); yzw: 0.
+    prepass: vec4<u32>,
 }
 
 // One visible instance of a voxel asset (group 0, binding 1), rebuilt every frame.

@@ -2,8 +2,9 @@
 // the SSBVB, and RayMarchGBuffer's `ray_march_gbuffer.wgsl`, whose hits go straight into the
 // G-buffer): from the empty-space prepass's entry point the pixel's instance is marched
 // through its sparse lookup (sparse_march.inc.wgsl), then the other instances whose boxes
-// the ray enters before that hit (instance_bvh.inc.wgsl); the nearest hit is `best`, its
-// instance `best_inst`; and the frame's counters.
+// the ray enters before that hit (instance_bvh.inc.wgsl), from the prepass entry on
+// (`prepass_floor`); the nearest hit is `best`, its instance `best_inst`; and the frame's
+// counters.
 //
 // The includer declares, before including this file:
 // - `entry: texture_2d<f32>` (the prepass: object-space entry point in xyz, instance + 1
@@ -64,16 +65,28 @@ fn entry_margin(e: vec4<f32>, px: vec2<i32>, size: vec2<i32>, d: vec3<f32>, s: f
 // the camera; a proxy holding the camera: from the camera). The plane times are the ones
 // of a march from the camera, so ties are decided as in the reference, and two instances
 // hit at the same distance compute the same `t`.
+//
+// Where that start is the walk's too (`prepass_floor`): when no proxy of the frame is drawn
+// by its back faces, every proxy is entered from outside through a front face, and the
+// prepass kept the nearest; every voxel lies in its instance's proxy, so no voxel of any
+// instance is on the ray before that entry, less the same margin for the interpolated
+// entry's error (one cell, the slope, and the depth test's f32 ties). The walk then passes
+// over the boxes the ray leaves before it and starts each march there (in a crowd most
+// marched boxes lie in front of the prepass instance; docs/benchmarks.md).
 fn march_prepass(k: u32, e: vec4<f32>, px: vec2<i32>, size: vec2<i32>, dir: vec3<f32>) -> Hit {
     let inst = instances[k];
     let lod = lod_info(inst.lod);
     let ray = object_ray(inst, pixel_centre, dir);
     var t_from = 0.0;
+    prepass_floor = 0.0;
     if (inst.flags & 1u) == 0u {
         // The entry's parameter on the ray (its f32 rounding only moves where the march
         // starts, within the margin).
         let tp = dot(e.xyz - ray.o, ray.d) / dot(ray.d, ray.d);
         t_from = tp - min(entry_margin(e, px, size, ray.d, cell_size(lod.level)), max(tp, 0.0));
+        if frame.prepass.x == 1u {
+            prepass_floor = max(t_from + ray.t_base, 0.0);
+        }
     }
     var h = march_resident(ray.o, ray.d, inst.lod, t_from, BIG);
     h.t += ray.t_base;
@@ -83,13 +96,16 @@ fn march_prepass(k: u32, e: vec4<f32>, px: vec2<i32>, size: vec2<i32>, dir: vec3
 
 // The pixel's best hit so far and its instance; the prepass instance (marched first).
 var<private> best: Hit;
+// A world distance before which no instance has a voxel on the pixel's ray (0: none
+// known; `march_prepass`).
+var<private> prepass_floor: f32;
 var<private> best_inst: u32;
 var<private> prepass_inst: u32;
 // The pixel's centre in screen pixels (for object_ray).
 var<private> pixel_centre: vec2<f32>;
 
-// Marches visible instance `j` up to the best hit; keeps its hit when nearer, or as near
-// with a lower index. Called by the hierarchy walk.
+// Marches visible instance `j` from the walk's floor up to the best hit; keeps its hit when
+// nearer, or as near with a lower index. Called by the hierarchy walk.
 fn bvh_visit(j: u32, dir: vec3<f32>) -> f32 {
     if j == prepass_inst {
         return best.t;
@@ -99,11 +115,12 @@ fn bvh_visit(j: u32, dir: vec3<f32>) -> f32 {
     let ray = object_ray(inst_j, pixel_centre, dir);
     let rj = make_ray_od(ray.o, ray.d, lod_j.level);
     let limit = best.t - ray.t_base;
-    if !(max(rj.t_enter, 0.0) <= min(rj.t_exit, limit)) {
+    let t_low = max(walk_t_min - ray.t_base, 0.0);
+    if !(max(rj.t_enter, t_low) <= min(rj.t_exit, limit)) {
         return best.t;
     }
     marches += 1u;
-    var h = march_resident(ray.o, ray.d, inst_j.lod, 0.0, limit);
+    var h = march_resident(ray.o, ray.d, inst_j.lod, t_low, limit);
     h.t += ray.t_base;
     if h.found && (!best.found || h.t < best.t || (h.t == best.t && j < best_inst)) {
         best = h;
@@ -152,7 +169,7 @@ fn march_pixel(px: vec2<i32>) -> bool {
     prepass_inst = k;
     // Every voxel of another instance lies behind the floor: a hit before it needs no
     // walk, and the walk passes over boxes the ray leaves before it.
-    let floor = walk_floor(px, size);
+    let floor = max(walk_floor(px, size), prepass_floor);
     if floor >= 0.0 {
         walk_t_min = floor;
     }

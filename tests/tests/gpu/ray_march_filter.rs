@@ -191,6 +191,55 @@ fn camera_inside_the_object_matches_the_reference() {
     check_against_reference("inside_bunny", &scene, &camera, SIZE);
 }
 
+/// The walk starts at the prepass entry only when no proxy is drawn by its back faces. Here
+/// the camera is in a resident page of a hollow box, facing its near wall; a small bunny
+/// stands behind that wall, still in the page. The box's proxy holds the camera, so the
+/// prepass draws its back face, which lies behind the bunny's front face: the bunny is
+/// each pixel's prepass instance, and the wall (nearer than the bunny's proxy) must still
+/// be found by the walk.
+#[test]
+fn a_wall_before_the_prepass_instance_in_a_proxy_holding_the_camera_is_found() {
+    let level = 6;
+    let s = cell_size(level);
+    let cell = |c: f64| -1.0 + c * s;
+    // Camera at cell x 12.5 (page 0 holds the wall x = 8), looking towards -x.
+    let eye = DVec3::new(cell(12.5), cell(30.5), cell(33.5));
+    let bunny_at = DVec3::new(cell(4.0), eye.y, eye.z);
+    let scene = Scene {
+        objects: vec![
+            VoxelObject {
+                asset: synthetic_asset(level, &hollow_box(8, 55)),
+                instances: vec![DAffine3::IDENTITY],
+                lod: LodPolicy::Fixed(level),
+            },
+            VoxelObject {
+                asset: model_asset("bunny.obj", 5),
+                instances: vec![DAffine3::from_scale_rotation_translation(
+                    DVec3::splat(3.0 * s),
+                    DQuat::IDENTITY,
+                    bunny_at,
+                )],
+                lod: LodPolicy::Fixed(5),
+            },
+        ],
+        ..Default::default()
+    };
+    let camera = Camera::new(eye, bunny_at);
+    let run = run_filter(&scene, &camera, SIZE, 1024);
+    let visible = &run.frame.scene.visible;
+    assert_eq!(visible.len(), 2);
+    assert!(visible.iter().any(|v| v.object == 0 && v.camera_inside));
+    // The bunny is the prepass instance of a sizeable part of the screen.
+    let entry = run.frame.read_f32("entry");
+    let bunny_index = visible.iter().position(|v| v.object == 1).unwrap() as f32 + 1.0;
+    let bunny_texels = entry.chunks(4).filter(|e| e[3] == bunny_index).count();
+    assert!(bunny_texels > 1000, "{bunny_texels} texels");
+    let r = check_against_reference("wall_before_prepass_instance", &scene, &camera, SIZE);
+    assert_eq!(r.covered_reference, (SIZE.0 * SIZE.1) as usize);
+    // Every pixel shows the wall (no bunny voxel is in front of it).
+    assert!(run.hits.iter().flatten().all(|h| h.instance == 0), "{r:?}");
+}
+
 #[test]
 fn max_steps_is_applied() {
     // One step per ray cannot get from the box entry to the bunny's voxels: almost nothing

@@ -78,11 +78,12 @@ fn a_grid_of_64_bunnies_with_auto_lod_matches_the_reference() {
     assert!(rays >= run.fill as u64, "{c:?}");
     let boxes = c.instance_boxes_per_ray.unwrap();
     let marched = c.instances_marched_per_ray.unwrap();
-    // Measured on lavapipe: 20.1 hierarchy boxes (nodes of a depth-6 tree whose boxes the
-    // ray enters before its hit) and 2.04 instances marched per ray, of 62 visible (the old
-    // per-pixel loop box-tested all 62). Bounds with a margin of about half.
+    // Measured on lavapipe: 6.0 boxes of the screen tiles' lists (20.1 hierarchy boxes
+    // before the lists; the old per-pixel loop box-tested all 62 visible) and 1.88
+    // instances marched per ray; 2.02 when the walk does not start at the prepass entry
+    // (`prepass_floor`, filter_march.inc.wgsl): the bound on marches lies between the two.
     assert!(boxes > 3.0 && boxes < 30.0, "{c:?}");
-    assert!((1.0..3.0).contains(&marched), "{c:?}");
+    assert!((1.0..1.95).contains(&marched), "{c:?}");
     let mean = c.march_steps_mean.unwrap();
     assert!(
         mean >= 1.0 && (c.march_steps_p99.unwrap() as f64) >= mean,

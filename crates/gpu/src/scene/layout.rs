@@ -38,6 +38,10 @@ pub struct FrameUniform {
     /// The scene's word stream ([`super::SceneBindings`]): log2 of its words per binding,
     /// its first colour word, its first normal word, 0 (set by [`super::GpuScene::update`]).
     pub streams: [u32; 4],
+    /// x: 1 when no visible instance's proxy is drawn by its back faces, so that a texel's
+    /// nearest proxy entry in the empty-space prepass is where its ray first meets any
+    /// instance's proxy (set by [`super::GpuScene::update`]); yzw 0.
+    pub prepass: [u32; 4],
 }
 
 /// Mirror of WGSL `Instance` (224 bytes).

@@ -78,6 +78,7 @@ pub fn jittered_frame_uniform(
         ],
         jitter: [jitter[0] as f32, jitter[1] as f32, 0.0, 0.0],
         streams: [0; 4],
+        prepass: [0; 4],
     }
 }
 

@@ -61,7 +61,8 @@ pub fn shared_structs() -> Vec<StructLayout> {
                 light_color,
                 misc,
                 jitter,
-                streams
+                streams,
+                prepass
             }
         ),
         layout!(
