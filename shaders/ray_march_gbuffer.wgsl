@@ -16,8 +16,11 @@
 // 3. `fs_main` marches its pixel and writes the hit's G-buffer with its depth, tested
 //    against what is there (the triangles); a pixel without a hit is discarded.
 //
-// A fragment shader cannot see group 0's page feedback (compute only): under a GPU budget
-// the pass binds the scene's feedback buffer in its own group (binding 2).
+// A fragment shader cannot see group 0's page feedback (compute only), and WebGPU refuses
+// a draw or dispatch whose bind groups hold two writable bindings of one buffer (whatever
+// their stages). So under a GPU budget the fragment shader sets the bits in the pass's own
+// feedback buffer (group 1, binding 2), and 4. `merge_feedback` (compute) ORs them into
+// the scene's (group 0, binding 3).
 
 override MAX_STEPS: u32 = 1024u;
 override FAST_MARCH: bool = false;
@@ -39,6 +42,8 @@ const TILE_PX: u32 = 16u;
 // The frame's counters (filter_march.inc.wgsl), the pixels written, then a flag per tile.
 @group(1) @binding(1) var<storage, read_write> filter_words: array<atomic<u32>>;
 @group(1) @binding(2) var<storage, read_write> page_feedback: array<atomic<u32>>;
+// The scene's page feedback (group 0; `merge_feedback` only).
+@group(0) @binding(3) var<storage, read_write> scene_feedback: array<atomic<u32>>;
 
 //#include "filter_march.inc.wgsl"
 
@@ -104,4 +109,20 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> GBufferDepth {
     out.geometric_normal = oct_encode(face_normal_world(inst, best.face));
     out.depth = ndc_depth(p);
     return out;
+}
+
+// ORs the pass's page feedback into the scene's (under a GPU budget, after the draw; both
+// buffers hold the same sets of page bits), a word per thread and pass over the grid.
+@compute @workgroup_size(64)
+fn merge_feedback(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    let n = min(arrayLength(&page_feedback), arrayLength(&scene_feedback));
+    for (var i = gid.x; i < n; i += groups.x * 64u) {
+        let bits = atomicLoad(&page_feedback[i]);
+        if bits != 0u {
+            atomicOr(&scene_feedback[i], bits);
+        }
+    }
 }

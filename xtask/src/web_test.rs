@@ -106,6 +106,19 @@ fn check(root: &Path, out: &Path, result: &serde_json::Value) -> Result<bool> {
             .as_str()
             .unwrap_or_default()
             .to_string();
+        if case.2.is_none() {
+            // The page's default follows the rule of `ssbvb render`: the direct form on a
+            // CPU adapter (a fallback adapter, as headless Chromium's SwiftShader), else not.
+            let cpu = c["stats"]["adapter_is_software"].as_bool();
+            let direct = pipeline == "ssbvb_direct";
+            println!("web-test: {name}: default {pipeline} on a CPU adapter: {cpu:?}");
+            if cpu.is_none() || cpu != Some(direct) {
+                fail(format!(
+                    "{name}: default pipeline {pipeline} with adapter_is_software {cpu:?} ({})",
+                    c["stats"]["pipeline_reason"]
+                ));
+            }
+        }
         let native = render_native(&bin, root, out, name, scene, &pipeline)?;
         let page_rgba = std::fs::read(out.join(format!("{name}.rgba")))?;
         let page_mask = std::fs::read(out.join(format!("{name}.mask"))).unwrap_or_default();

@@ -452,20 +452,23 @@ mod tests {
 
 #[cfg(test)]
 mod web_page_tests {
-    /// The web page chooses its default among the same forms, in the same order, but for
-    /// those only for CPU adapters (a browser does not say whether its adapter is one).
+    /// The web page chooses its default among the same forms, in the same order, with the
+    /// same ones kept for CPU adapters (a browser's fallback adapter).
     #[test]
     fn the_page_chooses_among_the_same_forms() {
-        let stems: Vec<String> = super::FORMS
-            .iter()
-            .filter(|f| !f.cpu_only)
-            .map(|f| {
-                f.file
-                    .trim_start_matches("pipelines/")
-                    .trim_end_matches(".ron")
-                    .to_string()
-            })
-            .collect();
+        let stem = |f: &super::Form| {
+            f.file
+                .trim_start_matches("pipelines/")
+                .trim_end_matches(".ron")
+                .to_string()
+        };
+        let stems: Vec<String> = super::FORMS.iter().map(stem).collect();
         assert_eq!(stems, ssbvb_web::params::DEFAULT_FORMS);
+        let cpu_only: Vec<String> = super::FORMS
+            .iter()
+            .filter(|f| f.cpu_only)
+            .map(stem)
+            .collect();
+        assert_eq!(cpu_only, ssbvb_web::params::CPU_ONLY_FORMS);
     }
 }

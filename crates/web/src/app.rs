@@ -27,6 +27,9 @@ pub struct PageInfo {
     pub pipeline_reason: String,
     /// The adapter.
     pub adapter: String,
+    /// Whether the adapter is a CPU (a browser's fallback adapter): the key of `ssbvb
+    /// render --json`.
+    pub adapter_is_software: bool,
     /// Render size.
     pub size: (u32, u32),
     /// Time spent loading and voxelizing models, ms.

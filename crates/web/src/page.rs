@@ -17,7 +17,7 @@ use crate::app::{App, PageInfo, draw_and_report};
 use crate::dom::{
     document, fetch_bytes, fetch_text, js_text, now_ms, show_error, status, window, yield_now,
 };
-use crate::params::{DEFAULT_FORMS, PageParams};
+use crate::params::{CPU_ONLY_FORMS, DEFAULT_FORMS, PageParams};
 use crate::present::Presenter;
 use crate::scene_build;
 use crate::view::View;
@@ -101,6 +101,7 @@ async fn run() -> Result<(), WebError> {
     status("opening the GPU");
     let (instance, adapter) = adapter().await?;
     let (pipeline_name, pipeline, verdict, reason) = choose_pipeline(&params, &adapter).await?;
+    let adapter_is_cpu = adapter.get_info().device_type == wgpu::DeviceType::Cpu;
     let ctx = GpuContext::from_adapter_async(
         instance.clone(),
         adapter,
@@ -144,6 +145,7 @@ async fn run() -> Result<(), WebError> {
             pipeline: pipeline_name.clone(),
             pipeline_reason: reason,
             adapter: adapter_name,
+            adapter_is_software: adapter_is_cpu,
             size,
             prepare_ms,
             ..Default::default()
@@ -194,9 +196,14 @@ async fn choose_pipeline(
     params: &PageParams,
     adapter: &wgpu::Adapter,
 ) -> Result<(String, ResolvedPipeline, Verdict, String), WebError> {
+    let cpu = adapter.get_info().device_type == wgpu::DeviceType::Cpu;
     let candidates: Vec<&str> = match &params.pipeline {
         Some(p) => vec![p.as_str()],
-        None => DEFAULT_FORMS.to_vec(),
+        None => DEFAULT_FORMS
+            .iter()
+            .copied()
+            .filter(|f| cpu || !CPU_ONLY_FORMS.contains(f))
+            .collect(),
     };
     let mut refused = Vec::new();
     for name in candidates {
@@ -209,9 +216,15 @@ async fn choose_pipeline(
         if verdict.fits() {
             let reason = if params.pipeline.is_some() {
                 "named in the URL".to_string()
-            } else {
-                "the fastest SSBVB form this adapter can run (the rule of `ssbvb render`)"
+            } else if cpu {
+                "the fastest SSBVB form this CPU adapter can run (the rule of `ssbvb render`)"
                     .to_string()
+            } else {
+                format!(
+                    "the fastest SSBVB form this adapter can run (the rule of `ssbvb render`; \
+                     {} only on a CPU adapter)",
+                    CPU_ONLY_FORMS.join(", ")
+                )
             };
             return Ok((name.to_string(), resolved, verdict, reason));
         }

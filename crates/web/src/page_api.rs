@@ -151,6 +151,7 @@ fn stats_object(app: &App) -> JsValue {
     put("pipeline", info.pipeline.as_str().into());
     put("pipeline_reason", info.pipeline_reason.as_str().into());
     put("adapter", info.adapter.as_str().into());
+    put("adapter_is_software", info.adapter_is_software.into());
     put("width", info.size.0.into());
     put("height", info.size.1.into());
     put("prepare_ms", info.prepare_ms.into());

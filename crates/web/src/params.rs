@@ -9,6 +9,7 @@ pub const SCENES: &[&str] = &["default", "bunnies_64", "bunnies_4096"];
 /// The bundled pipelines the page offers (file stems under `assets/pipelines/`): the SSBVB
 /// forms, then the ray casters.
 pub const PIPELINES: &[&str] = &[
+    "ssbvb_direct",
     "ssbvb_pixel",
     "ssbvb",
     "ssbvb_splat",
@@ -19,8 +20,14 @@ pub const PIPELINES: &[&str] = &[
 ];
 
 /// The SSBVB forms the default is chosen among, fastest first: the rule of `ssbvb render`
-/// (`pipeline_choice::FORMS` in the frontend), the first whose needs the adapter meets.
-pub const DEFAULT_FORMS: &[&str] = &["ssbvb_pixel", "ssbvb"];
+/// (`pipeline_choice::FORMS` in the frontend), the first whose needs the adapter meets and
+/// that is not in [`CPU_ONLY_FORMS`] unless the adapter is a CPU.
+pub const DEFAULT_FORMS: &[&str] = &["ssbvb_direct", "ssbvb_pixel", "ssbvb"];
+
+/// The default forms chosen only on a CPU adapter (a browser's fallback adapter, which wgpu
+/// reports as `DeviceType::Cpu`): measured fastest there, their work is fragment
+/// work, slow on data-centre GPUs (`pipeline_choice::Form::cpu_only` in the frontend).
+pub const CPU_ONLY_FORMS: &[&str] = &["ssbvb_direct"];
 
 /// The largest frame edge the page renders at (WebGPU's default texture limit is 8192).
 pub const MAX_EDGE: u32 = 4096;
@@ -145,6 +152,9 @@ mod tests {
         }
         for f in DEFAULT_FORMS {
             assert!(PIPELINES.contains(f), "{f}");
+        }
+        for f in CPU_ONLY_FORMS {
+            assert!(DEFAULT_FORMS.contains(f), "{f}");
         }
     }
 }

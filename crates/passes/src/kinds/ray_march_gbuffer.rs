@@ -39,8 +39,8 @@ use ssbvb_gpu::shaders;
 
 use super::gbuffer::STENCIL_VOXEL;
 
-/// What the pass binds itself: the counters and tile flags (`filter_words`), and the
-/// scene's page feedback (group 0 shows it to compute shaders only).
+/// What the pass binds itself: the counters and tile flags (`filter_words`), and its own
+/// page feedback, merged into the scene's after the draw (see the WGSL).
 pub const OWN: &[OwnBinding] = &[
     OwnBinding {
         name: "filter_words",
@@ -54,6 +54,10 @@ pub const OWN: &[OwnBinding] = &[
 
 /// The word counting the pixels written (`HITS_AT` in the WGSL): after the counters.
 const HITS_AT: u64 = COUNTER_WORDS as u64;
+
+/// The most workgroups `merge_feedback` is dispatched with (a dimension's limit in
+/// WebGPU); its threads loop over the words beyond.
+const MAX_GROUPS: u64 = 65_535;
 
 /// The word where the tile flags start (`FLAGS_AT` in the WGSL): after the hits.
 const FLAGS_AT: u64 = HITS_AT + 1;
@@ -73,6 +77,10 @@ const TILE_VERTICES: [wgpu::VertexBufferLayout<'static>; 1] = [wgpu::VertexBuffe
 pub struct RayMarchGBuffer {
     /// Flags the tiles with a proxy.
     mark_tiles: wgpu::ComputePipeline,
+    /// ORs the pass's page feedback into the scene's.
+    merge_feedback: wgpu::ComputePipeline,
+    /// The pass's page feedback, the size of the scene's.
+    feedback: Option<wgpu::Buffer>,
     /// The march and its G-buffer writes, one pipeline per variant a frame has needed.
     draws: Vec<(MainVariant, wgpu::RenderPipeline)>,
     module: wgpu::ShaderModule,
@@ -114,14 +122,17 @@ impl PassImpl for RayMarchGBuffer {
             ("FLAGS_AT", FLAGS_AT as f64),
         ];
         let label = format!("pass `{}`: ray_march_gbuffer pipelines", pass.name);
-        let (mark_tiles, layout, bindings) = ctx.validated(&label, |d| {
+        let (mark_tiles, merge_feedback, layout, bindings) = ctx.validated(&label, |d| {
             let bindings = PassBindings::new(ctx, pipeline, pass, OWN);
             let layout = pipeline_layout(d, &label, scene, Some(&bindings));
             let mark = compute_pipeline(d, &layout, &module, "mark_tiles", &constants);
-            (mark, layout, bindings)
+            let merge = compute_pipeline(d, &layout, &module, "merge_feedback", &constants);
+            (mark, merge, layout, bindings)
         })?;
         let mut this = Self {
             mark_tiles,
+            merge_feedback,
+            feedback: None,
             draws: Vec::new(),
             module,
             layout,
@@ -198,6 +209,20 @@ impl RayMarchGBuffer {
         self.words = Some((words, flags, tiles));
         Ok(())
     }
+
+    /// The pass's page feedback, made again when the scene's changes size.
+    fn feedback(&mut self, ctx: &GpuContext, scene_feedback: &wgpu::Buffer) -> Result<(), PassError> {
+        let size = scene_feedback.size();
+        if self.feedback.as_ref().is_none_or(|b| b.size() != size) {
+            self.feedback = Some(ctx.checked_buffer(&wgpu::BufferDescriptor {
+                label: Some("ray_march_gbuffer page feedback"),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })?);
+        }
+        Ok(())
+    }
 }
 
 impl PassNode for RayMarchGBuffer {
@@ -224,16 +249,21 @@ impl PassNode for RayMarchGBuffer {
             paged: rec.scene.streaming.is_some(),
         };
         self.draw(rec.gpu, variant)?;
+        self.feedback(rec.gpu, rec.scene.page_feedback())?;
         let (words, flags, _) = self.words.as_ref().expect("made above");
+        let feedback = self.feedback.as_ref().expect("made above");
         let bind_group = self.bindings.bind_group(
             rec,
             &[
                 ("filter_words", words.as_entire_binding()),
-                ("page_feedback", rec.scene.page_feedback().as_entire_binding()),
+                ("page_feedback", feedback.as_entire_binding()),
             ],
         )?;
         let from = if self.counted { 0 } else { FLAGS_AT * 4 };
         encoder.clear_buffer(words, from, None);
+        if variant.paged {
+            encoder.clear_buffer(feedback, 0, None);
+        }
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some(&rec.pass.name),
@@ -247,14 +277,28 @@ impl PassNode for RayMarchGBuffer {
         }
         encoder.copy_buffer_to_buffer(words, FLAGS_AT * 4, flags, 0, tiles * 4);
         let draw = &self.draws.iter().find(|(v, _)| *v == variant).expect("compiled above").1;
-        let mut pass =
-            begin_gbuffer_pass_timed(encoder, rec, STENCIL_VOXEL, rec.span_end_timestamps());
-        pass.set_pipeline(draw);
-        pass.set_bind_group(0, &rec.scene.bind_group, &[]);
-        pass.set_bind_group(1, &bind_group, &[]);
-        pass.set_vertex_buffer(0, flags.slice(..));
-        // Six vertices (two triangles) per tile; unflagged tiles collapse (see the WGSL).
-        pass.draw(0..6, 0..tiles as u32);
+        {
+            let mut pass =
+                begin_gbuffer_pass_timed(encoder, rec, STENCIL_VOXEL, rec.span_end_timestamps());
+            pass.set_pipeline(draw);
+            pass.set_bind_group(0, &rec.scene.bind_group, &[]);
+            pass.set_bind_group(1, &bind_group, &[]);
+            pass.set_vertex_buffer(0, flags.slice(..));
+            // Six vertices (two triangles) per tile; unflagged tiles collapse (see the WGSL).
+            pass.draw(0..6, 0..tiles as u32);
+        }
+        if variant.paged {
+            // After the pass's timed span: a dispatch over the feedback words (tiny).
+            let groups = (feedback.size() / 4).div_ceil(64).min(MAX_GROUPS);
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("ray_march_gbuffer merge_feedback"),
+                timestamp_writes: None,
+            });
+            pass.set_bind_group(0, &rec.scene.bind_group, &[]);
+            pass.set_bind_group(1, &bind_group, &[]);
+            pass.set_pipeline(&self.merge_feedback);
+            pass.dispatch_workgroups(groups as u32, 1, 1);
+        }
         Ok(())
     }
 
