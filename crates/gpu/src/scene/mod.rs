@@ -538,8 +538,8 @@ impl GpuScene {
     }
 
     /// The buffer group 0 binds as the page feedback (binding 3; a small unused one
-    /// without a budget), for a fragment shader that marches, which binds it in its own
-    /// group (group 0's binding is visible to compute shaders only).
+    /// without a budget): its size is the size of a pass's own feedback buffer (a
+    /// fragment shader that marches sets its bits there and merges them in compute).
     pub fn page_feedback(&self) -> &wgpu::Buffer {
         self.streaming
             .as_ref()

@@ -19,9 +19,12 @@
 //! counters are the filter's (rays, steps, boxes, marches, lookup words, tiles), and the
 //! fill count is the pixels written (the entries the pixel form's SSBVB would hold).
 //!
-//! A fragment shader cannot see group 0's page feedback (compute only), so under a GPU
-//! budget the pass binds the scene's feedback buffer in group 1 (`page_feedback`). The
-//! prepass must be at the screen's size (one ray per pixel): checked when recording.
+//! A fragment shader cannot see group 0's page feedback (compute only), and WebGPU refuses
+//! a draw or dispatch whose groups bind one buffer writable twice (Dawn checks every
+//! group of the layout, whatever its stages), so under a GPU budget the fragment shader
+//! sets page bits in the pass's own buffer (group 1, `page_feedback`) and `merge_feedback`
+//! ORs them into the scene's after the draw. The prepass must be at the screen's size (one
+//! ray per pixel): checked when recording.
 
 use ssbvb_gpu::{GpuContext, wgpu};
 use ssbvb_graph::{MarchMode, RayMarchGBufferParams};
