@@ -37,7 +37,7 @@ use crate::runtime::bindings::PassBindings;
 use crate::runtime::registry::{OwnBinding, OwnKind};
 use crate::runtime::counters::{FrameCounters, check_steps_histogram, histogram_quantile};
 use crate::runtime::recorder::Recorder;
-use crate::runtime::pipelines::{compute_pipeline, pipeline_layout};
+use crate::runtime::pipelines::{VariantCache, compute_pipeline, pipeline_layout};
 use crate::runtime::registry::{KindNeeds, PassImpl, PassInit};
 use crate::error::PassError;
 use crate::runtime::node::{CounterSource, PassNode};
@@ -284,7 +284,7 @@ struct MainPipelines {
     /// The pass's own overrides (from its parameters).
     constants: [(&'static str, f64); 7],
     label: String,
-    built: Vec<(MainVariant, wgpu::ComputePipeline)>,
+    built: VariantCache<MainVariant, wgpu::ComputePipeline>,
 }
 
 impl MainPipelines {
@@ -293,19 +293,16 @@ impl MainPipelines {
         ctx: &GpuContext,
         variant: MainVariant,
     ) -> Result<&wgpu::ComputePipeline, PassError> {
-        let i = match self.built.iter().position(|(v, _)| *v == variant) {
-            Some(i) => i,
-            None => {
-                let mut constants = self.constants.to_vec();
-                constants.extend(variant.constants());
-                let pipeline = ctx.validated(&format!("{} ({variant:?})", self.label), |d| {
-                    compute_pipeline(d, &self.layout, &self.module, "main", &constants)
-                })?;
-                self.built.push((variant, pipeline));
-                self.built.len() - 1
-            }
-        };
-        Ok(&self.built[i].1)
+        let (layout, module, label) = (&self.layout, &self.module, &self.label);
+        let constants = &self.constants;
+        self.built.get_or_build(variant, || {
+            let mut constants = constants.to_vec();
+            constants.extend(variant.constants());
+            ctx.validated(&format!("{label} ({variant:?})"), |d| {
+                compute_pipeline(d, layout, module, "main", &constants)
+            })
+            .map_err(PassError::from)
+        })
     }
 }
 
@@ -372,7 +369,7 @@ impl PassImpl for RayMarchFilter {
             layout,
             constants,
             label,
-            built: Vec::new(),
+            built: VariantCache::default(),
         };
         // Without unique_voxels the shader never touches the claims: the smallest table.
         // The tiles are sized by the first frame.

@@ -35,7 +35,9 @@ use crate::error::PassError;
 use crate::runtime::bindings::PassBindings;
 use crate::runtime::counters::FrameCounters;
 use crate::runtime::node::{CounterSource, PassNode};
-use crate::runtime::pipelines::{RenderSpec, compute_pipeline, pipeline_layout, render_pipeline};
+use crate::runtime::pipelines::{
+    RenderSpec, VariantCache, compute_pipeline, pipeline_layout, render_pipeline,
+};
 use crate::runtime::recorder::Recorder;
 use crate::runtime::registry::{KindNeeds, OwnBinding, OwnKind, PassImpl, PassInit};
 use ssbvb_gpu::shaders;
@@ -85,7 +87,7 @@ pub struct RayMarchGBuffer {
     /// The pass's page feedback, the size of the scene's.
     feedback: Option<wgpu::Buffer>,
     /// The march and its G-buffer writes, one pipeline per variant a frame has needed.
-    draws: Vec<(MainVariant, wgpu::RenderPipeline)>,
+    draws: VariantCache<MainVariant, wgpu::RenderPipeline>,
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
     targets: [Option<wgpu::ColorTargetState>; 4],
@@ -136,7 +138,7 @@ impl PassImpl for RayMarchGBuffer {
             mark_tiles,
             merge_feedback,
             feedback: None,
-            draws: Vec::new(),
+            draws: VariantCache::default(),
             module,
             layout,
             targets: gbuffer_targets(ctx, pipeline, pass),
@@ -165,28 +167,25 @@ impl RayMarchGBuffer {
         ctx: &GpuContext,
         variant: MainVariant,
     ) -> Result<&wgpu::RenderPipeline, PassError> {
-        let i = match self.draws.iter().position(|(v, _)| *v == variant) {
-            Some(i) => i,
-            None => {
-                let mut constants = self.constants.to_vec();
-                constants.extend(variant.constants());
-                let label = format!("{} ({variant:?})", self.label);
-                let pipeline = ctx.validated(&label, |d| {
-                    render_pipeline(
-                        d,
-                        &RenderSpec {
-                            constants: &constants,
-                            depth_stencil: Some(self.depth_stencil.clone()),
-                            buffers: &[Some(TILE_VERTICES[0].clone())],
-                            ..RenderSpec::new(&label, &self.module, &self.layout, &self.targets)
-                        },
-                    )
-                })?;
-                self.draws.push((variant, pipeline));
-                self.draws.len() - 1
-            }
-        };
-        Ok(&self.draws[i].1)
+        let (module, layout, targets) = (&self.module, &self.layout, &self.targets);
+        let (own_constants, depth_stencil) = (&self.constants, &self.depth_stencil);
+        let label = format!("{} ({variant:?})", self.label);
+        self.draws.get_or_build(variant, || {
+            let mut constants = own_constants.to_vec();
+            constants.extend(variant.constants());
+            ctx.validated(&label, |d| {
+                render_pipeline(
+                    d,
+                    &RenderSpec {
+                        constants: &constants,
+                        depth_stencil: Some(depth_stencil.clone()),
+                        buffers: &[Some(TILE_VERTICES[0].clone())],
+                        ..RenderSpec::new(&label, module, layout, targets)
+                    },
+                )
+            })
+            .map_err(PassError::from)
+        })
     }
 
     /// The counters and flags for `tiles` tiles, and the flags' vertex buffer (made again
@@ -279,7 +278,7 @@ impl PassNode for RayMarchGBuffer {
             pass.dispatch_workgroups(w.div_ceil(TILE), h.div_ceil(TILE), 1);
         }
         encoder.copy_buffer_to_buffer(words, FLAGS_AT * 4, flags, 0, tiles * 4);
-        let draw = &self.draws.iter().find(|(v, _)| *v == variant).expect("compiled above").1;
+        let draw = self.draws.get(variant).expect("compiled above");
         {
             let mut pass =
                 begin_gbuffer_pass_timed(encoder, rec, STENCIL_VOXEL, rec.span_end_timestamps());

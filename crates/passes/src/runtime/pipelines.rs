@@ -132,3 +132,41 @@ pub fn compute_pipeline(
         cache: None,
     })
 }
+
+/// Pipelines of one pass compiled per variant of its overrides (which code a frame needs:
+/// counting, several instances, pages), each when a frame first needs it.
+pub struct VariantCache<V, P> {
+    built: Vec<(V, P)>,
+}
+
+impl<V: PartialEq + Copy, P> Default for VariantCache<V, P> {
+    fn default() -> Self {
+        Self { built: Vec::new() }
+    }
+}
+
+impl<V: PartialEq + Copy, P> VariantCache<V, P> {
+    /// The pipeline of `variant`, made by `build` the first time it is asked for.
+    pub fn get_or_build<E>(
+        &mut self,
+        variant: V,
+        build: impl FnOnce() -> Result<P, E>,
+    ) -> Result<&P, E> {
+        let i = match self.built.iter().position(|(v, _)| *v == variant) {
+            Some(i) => i,
+            None => {
+                self.built.push((variant, build()?));
+                self.built.len() - 1
+            }
+        };
+        Ok(&self.built[i].1)
+    }
+
+    /// The pipeline of `variant`, if built.
+    pub fn get(&self, variant: V) -> Option<&P> {
+        self.built
+            .iter()
+            .find(|(v, _)| *v == variant)
+            .map(|(_, p)| p)
+    }
+}
