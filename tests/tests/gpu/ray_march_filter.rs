@@ -240,6 +240,42 @@ fn a_wall_before_the_prepass_instance_in_a_proxy_holding_the_camera_is_found() {
     assert!(run.hits.iter().flatten().all(|h| h.instance == 0), "{r:?}");
 }
 
+/// Nine small overlapping instances well under a world unit from the camera: the walk's
+/// floor (each ray's prepass entry less its margin) lies below one unit there, and an
+/// instance whose voxel is in front of the prepass instance's hit, or behind a missed
+/// prepass instance, must still be found (a floor that is too high loses those pixels).
+#[test]
+fn a_close_crowd_of_overlapping_instances_matches_the_reference() {
+    let xfs = (0..9)
+        .map(|k| {
+            let (i, j) = ((k % 3) as f64 - 1.0, (k / 3) as f64 - 1.0);
+            DAffine3::from_scale_rotation_translation(
+                DVec3::splat(0.12),
+                DQuat::from_rotation_y(0.7 * k as f64),
+                DVec3::new(i * 0.18, j * 0.15, -0.1 * k as f64),
+            )
+        })
+        .collect();
+    let scene = Scene {
+        objects: vec![VoxelObject {
+            asset: model_asset("bunny.obj", 5),
+            instances: xfs,
+            lod: LodPolicy::Fixed(5),
+        }],
+        ..Default::default()
+    };
+    let camera = Camera::new(DVec3::new(0.1, 0.15, 0.55), DVec3::new(0.0, 0.0, -0.4));
+    let run = run_filter(&scene, &camera, SIZE, 1024);
+    assert_eq!(run.frame.scene.visible.len(), 9);
+    assert!(run.frame.scene.visible.iter().all(|v| !v.back_faces));
+    let r = check_against_reference("close_crowd", &scene, &camera, SIZE);
+    assert!(r.covered_reference > 5000, "{r:?}");
+    let mut instances: Vec<u32> = run.hits.iter().flatten().map(|h| h.instance).collect();
+    instances.sort();
+    instances.dedup();
+    assert!(instances.len() >= 6, "{instances:?}");
+}
+
 #[test]
 fn max_steps_is_applied() {
     // One step per ray cannot get from the box entry to the bunny's voxels: almost nothing

@@ -96,6 +96,7 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
             "ray_march_gbuffer::",
             "scale::counters",
             "scale::a_grid",
+            "peel::",
         ],
     ),
     (
