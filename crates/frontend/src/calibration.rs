@@ -102,11 +102,16 @@ pub struct CalibrationFile {
 /// The file format's version.
 pub const VERSION: u32 = 1;
 
-/// The forms measured, in the rule's order of preference (ties go to the earlier).
-pub const FORMS: [&str; 5] = [
+/// The forms measured, in the rule's order of preference (ties go to the earlier). The
+/// compute forms are no rule's choice, so only a calibration picks them: the one with the
+/// prepass in compute, and the one with the smoothing and the composite in compute too (for
+/// adapters whose fragment work is slow, such as data-centre GPUs; the bench's paper preset
+/// then compares it with ESVO's form with the same compute stages, `esvo-all-compute`).
+pub const FORMS: [&str; 6] = [
     "pipelines/ssbvb_direct.ron",
     "pipelines/ssbvb_pixel.ron",
     "pipelines/ssbvb_compute.ron",
+    "pipelines/ssbvb_all_compute.ron",
     "pipelines/ssbvb_splat.ron",
     "pipelines/ssbvb.ron",
 ];

@@ -8,9 +8,10 @@
 //! lavapipe; a data-centre GPU, the H200; `docs/benchmarks.md`): the frame without
 //! billboards (each pixel's hit written at its pixel) before rasterized billboards. The
 //! splatted billboards (`ssbvb_splat.ron`) need what the first form needs, so they are no
-//! fallback. The form with the prepass in compute too (`ssbvb_compute.ron`) is no rule's
-//! choice: on lavapipe it is slower than the rasterized prepass, and no GPU has measured it
-//! yet, so only a calibration that measured it fastest picks it. The paper's rasterized
+//! fallback. The forms with the prepass in compute too (`ssbvb_compute.ron`), and with the
+//! smoothing and the composite in compute as well (`ssbvb_all_compute.ron`), are no rule's
+//! choice: on lavapipe they are slower than the rasterized stages, and no GPU has measured
+//! them yet, so only a calibration that measured one fastest picks it. The paper's rasterized
 //! form stays one flag away (`--pipeline assets/pipelines/ssbvb.ron`).
 
 use std::path::PathBuf;

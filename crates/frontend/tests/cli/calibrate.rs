@@ -40,9 +40,9 @@ fn calibration_sets_the_default_form_for_its_own_adapter_only() {
     let mut json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
     let entry = &json["entries"][0];
-    // Lavapipe runs all five forms; each was timed.
+    // Lavapipe runs all six forms; each was timed.
     let forms = entry["forms"].as_array().unwrap();
-    assert_eq!(forms.len(), 5, "{json}");
+    assert_eq!(forms.len(), 6, "{json}");
     assert!(
         forms.iter().all(|f| f["frame_ms"].as_f64().unwrap() > 0.0),
         "{json}"

@@ -284,8 +284,10 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
 
 /// The techniques of `--preset paper`: SSBVB with rasterized billboards (fast march), the same
 /// with the exact march, and every ray caster (the octree casters in both forms); then the
-/// SSBVB frame with splatted billboards and the default SSBVB frame `render` chooses on
-/// this adapter (appended: earlier columns keep their order).
+/// SSBVB frame with splatted billboards, the default SSBVB frame `render` chooses on this
+/// adapter, and ESVO's compute form with the smoothing and the composite in compute too
+/// (the fair baseline where a calibration made the default the all-compute form; appended:
+/// earlier columns keep their order).
 pub(crate) const PAPER_TECHNIQUES: &[&str] = &[
     "ssbvb-unique",
     "ssbvb-exact",
@@ -296,6 +298,7 @@ pub(crate) const PAPER_TECHNIQUES: &[&str] = &[
     "octree-compute",
     "ssbvb-splat",
     "ssbvb",
+    "esvo-all-compute",
 ];
 
 /// Techniques left out unless named: the raster form by another name, the direct form (the
