@@ -60,11 +60,7 @@ pub fn limits() -> DeviceLimits {
 
 /// What `pipelines` together need from an adapter.
 pub fn requirements_of(pipelines: &[&ResolvedPipeline]) -> Requirements {
-    let mut req = Requirements::default();
-    for p in pipelines {
-        req.merge(&ssbvb_passes::pipeline_requirements(p));
-    }
-    req
+    ssbvb_engine::choice::requirements_of(pipelines)
 }
 
 /// A headless context on the best adapter that can run every one of `pipelines`.

@@ -7,7 +7,7 @@ use anyhow::Result;
 use clap::Args;
 use ssbvb_passes::Profiling;
 
-use crate::calibration::{AdapterKey, Entry, FORMS, FormTime, path, store};
+use crate::calibration::{AdapterKey, Entry, FormTime, forms, path, store};
 use crate::pipeline_cmd::parse_size;
 use crate::session::SessionSource;
 
@@ -31,9 +31,9 @@ pub fn run(args: &CalibrateArgs) -> Result<()> {
     let scene_path = crate::bundled::assets_dir().join(crate::bundled::DEFAULT_SCENE);
     let progress = crate::progress::BarProgress::new(false);
     let loaded = crate::scene_file::load(&scene_path, &progress)?;
-    let (adapter, fitting) = crate::pipeline_choice::adapter_and_fitting_forms(&FORMS)?;
+    let (adapter, fitting) = crate::pipeline_choice::adapter_and_fitting_forms(&forms())?;
     let key = AdapterKey::of(&adapter, crate::adapter_cmd::limits().name());
-    let mut forms = Vec::new();
+    let mut times_of = Vec::new();
     for file in fitting {
         let path = crate::bundled::assets_dir().join(file);
         let mut source = SessionSource {
@@ -45,7 +45,10 @@ pub fn run(args: &CalibrateArgs) -> Result<()> {
             time: 0.0,
             size: args.size,
             time_submissions: false,
-            instance_walk: Default::default(),
+            instance_lists: true,
+            counting: false,
+            limits: crate::adapter_cmd::limits(),
+            host: None,
         };
         let mut s = source.open_refusing(&mut Vec::new(), false)?.session;
         let gpu_clock = s.ctx.report().timestamps && !s.ctx.report().is_software;
@@ -60,19 +63,19 @@ pub fn run(args: &CalibrateArgs) -> Result<()> {
             }
         }
         times.sort_by(f64::total_cmp);
-        forms.push(FormTime {
+        times_of.push(FormTime {
             pipeline: file.to_string(),
             frame_ms: times[times.len() / 2],
             clock: if gpu_clock { "gpu" } else { "wall" }.into(),
         });
     }
     // Fastest first; a tie keeps the rule's order (a stable sort).
-    forms.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
+    times_of.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
     let entry = Entry {
         adapter: key,
         scene: crate::bundled::DEFAULT_SCENE.into(),
         size: [args.size.0, args.size.1],
-        forms,
+        forms: times_of,
     };
     let out = path();
     println!(

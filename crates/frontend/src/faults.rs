@@ -24,9 +24,8 @@ use ssbvb_passes::PassError;
 /// recovery: a device that keeps failing is reported, not retried forever.
 pub const LOST_AGAIN_WITHIN: usize = 8;
 
-/// The size from which an injected `oom@FRAME` refuses an allocation: small buffers are
-/// not what runs a device out of memory, the scene's streams and the frame's targets are.
-pub const INJECTED_OOM_MIN_BYTES: u64 = 64 << 10;
+/// The size from which an injected `oom@FRAME` refuses an allocation.
+pub use ssbvb_engine::session::INJECTED_OOM_MIN_BYTES;
 
 /// A fault to inject (`--inject-fault`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -122,6 +121,9 @@ pub fn out_of_memory(e: &anyhow::Error) -> Option<(String, u64)> {
         _ => None,
     };
     e.chain().find_map(|c| {
+        if let Some(engine) = c.downcast_ref::<ssbvb_engine::EngineError>() {
+            return engine.refused_allocation();
+        }
         c.downcast_ref::<GpuError>()
             .and_then(of)
             .or_else(|| c.downcast_ref::<ResourceError>().and_then(of_resource))
@@ -133,24 +135,7 @@ pub fn out_of_memory(e: &anyhow::Error) -> Option<(String, u64)> {
     })
 }
 
-/// Whether a refused `resource` is part of the voxel scene (which a GPU budget sizes)
-/// rather than one of the frame's targets (which `--size` does).
-pub fn is_scene_resource(resource: &str) -> bool {
-    !resource.contains(ssbvb_passes::PHYSICAL_LABEL_MARK)
-}
-
-/// What to tell a user whose frame target was refused.
-pub fn frame_out_of_memory_hint() -> &'static str {
-    "the frame's targets do not fit the GPU's memory (a GPU budget does not size them): \
-     render a smaller --size or a pipeline with fewer targets"
-}
-
-/// What to tell a user whose allocation was refused without a budget.
-pub fn out_of_memory_hint() -> &'static str {
-    "run with --gpu-budget MIB to keep the voxel scene within MIB MiB on the GPU (its \
-     finer levels then stream as rays need them, and a refused allocation lowers the \
-     budget instead of ending the run), or render a smaller --size"
-}
+pub use ssbvb_engine::session::{frame_out_of_memory_hint, is_scene_resource, out_of_memory_hint};
 
 /// The recoveries of one run and the rule on repeated losses.
 #[derive(Debug, Default)]

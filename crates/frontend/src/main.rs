@@ -1,12 +1,11 @@
 //! The `ssbvb` command-line tool.
 
 mod adapter_cmd;
-mod animation;
+// The engine's modules under the names the commands have always used.
+use ssbvb_engine::assets as bundled;
+use ssbvb_engine::{animation, budget, calibration, scene_file, session};
 mod bench;
-mod budget;
-mod bundled;
 mod calibrate_cmd;
-mod calibration;
 mod cli_values;
 mod decl_docs;
 mod export_cmd;
@@ -17,9 +16,7 @@ mod pipeline_cmd;
 mod pipeline_kinds;
 mod progress;
 mod render_cmd;
-mod scene_file;
 mod scene_reference;
-mod session;
 mod soak;
 mod view;
 mod voxelize_cmd;

@@ -3,22 +3,21 @@
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use glam::{DAffine3, DVec3};
+use glam::DVec3;
 
 use crate::cli_values::{parse_samples, parse_vec3};
 use serde::Serialize;
-use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject};
+use ssbvb_engine::{Content, clipping_warnings};
+use ssbvb_gpu::scene::Scene;
 use ssbvb_passes::Profiling;
 use ssbvb_voxel::camera::Camera;
 
 use crate::pipeline_cmd::parse_size;
 use crate::progress::BarProgress;
-use crate::scene_file;
 use crate::session::{GpuSession, SessionSource};
 
 /// Arguments of `ssbvb render`.
@@ -183,74 +182,14 @@ struct ObjectReport {
     bytes_per_voxel: f64,
 }
 
-/// A scene or a single model, ready to upload.
-pub struct LoadedInput {
-    /// What to draw.
-    pub scene: Scene,
-    /// The scene's camera (the default camera for a model).
-    pub camera: Camera,
-    /// The scene's pipeline file (`None` for a model or a scene that names none).
-    pub pipeline: Option<PathBuf>,
-    /// One line per asset about the cache.
-    pub notes: Vec<String>,
-    /// The scene's GPU budget (MiB), if it sets one.
-    pub gpu_budget_mib: Option<u64>,
-    /// Per object, the cache file its pages stream from under a budget.
-    pub page_sources: Vec<Option<crate::budget::PageSourceRef>>,
-    /// The scene's animated objects.
-    pub animated: Vec<ssbvb_gpu_build::animated::AnimatedMesh>,
-}
-
-/// Loads a scene file (`.ron`) or prepares a model file at `level` (default 8), placed at
-/// the origin with its finest level, as `ssbvb render` and `ssbvb view` accept them.
+/// Opens a scene file (`.ron`), a model file or a prepared asset at `level`, as `ssbvb
+/// render` and `ssbvb view` accept them ([`Content::open`]).
 pub fn load_input(
     input: &Path,
     level: Option<u32>,
     progress: &dyn ssbvb_voxel::progress::Progress,
-) -> Result<LoadedInput> {
-    let is_scene = input
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("ron"));
-    if is_scene {
-        if level.is_some() {
-            bail!("--level applies to a model file; a scene names each object's level");
-        }
-        let s = scene_file::load(input, progress)?;
-        return Ok(LoadedInput {
-            scene: s.scene,
-            camera: s.camera,
-            pipeline: s.pipeline,
-            notes: s.notes,
-            gpu_budget_mib: s.gpu_budget_mib,
-            page_sources: s.page_sources,
-            animated: s.animated,
-        });
-    }
-    // A prepared asset file (a viewer's save) is drawn at its finest level by default.
-    let saved = ssbvb_voxel::cache::asset_file_header(input).context("reading the model")?;
-    let level = level.unwrap_or(saved.map_or(8, |h| h.level));
-    let (asset, outcome) = ssbvb_voxel::cache::load_or_prepare(input, level, None, progress)
-        .with_context(|| format!("preparing {}", input.display()))?;
-    Ok(LoadedInput {
-        scene: Scene {
-            objects: vec![VoxelObject {
-                asset: Arc::new(asset),
-                instances: vec![DAffine3::IDENTITY],
-                lod: LodPolicy::Fixed(level),
-            }],
-            ..Default::default()
-        },
-        // No far plane: a distant view is never clipped away.
-        camera: Camera {
-            far: f64::INFINITY,
-            ..Camera::default()
-        },
-        pipeline: None,
-        notes: vec![format!("{}: {outcome}", input.display())],
-        gpu_budget_mib: None,
-        page_sources: vec![crate::budget::PageSourceRef::of(&outcome, level)],
-        animated: Vec::new(),
-    })
+) -> Result<Content> {
+    Ok(Content::open(input, level, progress)?)
 }
 
 /// Runs `ssbvb render`.
@@ -258,7 +197,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let progress = BarProgress::new(!args.json && std::io::stderr().is_terminal());
     let default_scene = assets_dir().join("scenes/default.ron");
     let input = args.input.clone().unwrap_or(default_scene);
-    let LoadedInput {
+    let content = load_input(&input, args.level, &progress)?;
+    let loader_warnings = content.warning_lines();
+    let Content {
         scene,
         mut camera,
         pipeline: scene_pipeline,
@@ -266,7 +207,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         gpu_budget_mib,
         page_sources,
         animated,
-    } = load_input(&input, args.level, &progress)?;
+        ..
+    } = content;
     let budget = args.gpu_budget.or(gpu_budget_mib);
     if !args.time.is_finite() {
         bail!(
@@ -279,7 +221,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     progress.finish();
     apply_camera_args(args, &mut camera)?;
-    let warnings = clipping_warnings(&scene, &camera);
+    let mut warnings = loader_warnings;
+    warnings.extend(clipping_warnings(&scene, &camera));
     if !args.reference && args.samples != 1 {
         bail!(
             "--samples {} applies to --reference only (the GPU frame takes one sample per pixel; anti-aliasing is a pipeline pass)",
@@ -468,7 +411,10 @@ fn render_gpu(
         time: args.time,
         size: args.size,
         time_submissions: args.time_submissions,
-        instance_walk: args.instance_walk,
+        instance_lists: args.instance_walk == crate::cli_values::InstanceWalk::Lists,
+        counting: true,
+        limits: crate::adapter_cmd::limits(),
+        host: None,
     };
     let opened = source.open_refusing(
         &mut notes,
@@ -578,61 +524,6 @@ fn render_gpu(
             .collect(),
         asset_notes: notes,
     })
-}
-
-/// Why a view may show nothing, from the scene and camera alone: every voxel instance
-/// beyond the far plane (the GPU clips there; the reference does not), or none in front of
-/// the camera.
-pub(crate) fn clipping_warnings(scene: &Scene, camera: &Camera) -> Vec<String> {
-    let forward = camera.basis().2;
-    let mut spans = Vec::new();
-    let mut imprecise = None;
-    for o in &scene.objects {
-        let finest = o.asset.lods.len().saturating_sub(1) as u32;
-        let level = match o.lod {
-            LodPolicy::Fixed(l) => l.min(finest),
-            LodPolicy::Auto { .. } => finest,
-        };
-        for xf in &o.instances {
-            // Bounding sphere of the object box [-1, 1]^3.
-            let radius = (xf.matrix3 * DVec3::ONE)
-                .length()
-                .max((xf.matrix3 * DVec3::new(1.0, 1.0, -1.0)).length())
-                .max((xf.matrix3 * DVec3::new(1.0, -1.0, 1.0)).length())
-                .max((xf.matrix3 * DVec3::new(-1.0, 1.0, 1.0)).length());
-            let depth = (xf.translation - camera.position).dot(forward);
-            spans.push((depth - radius, depth + radius));
-            // The GPU works in f32 relative to the camera: about 2^-22 of the distance is
-            // lost, which is more than a fraction of a voxel far away.
-            let cell = 2.0 * xf.matrix3.determinant().abs().cbrt() / (1u64 << level) as f64;
-            let dist = (xf.translation - camera.position).length();
-            if dist * 2f64.powi(-22) > cell / 8.0 {
-                imprecise.get_or_insert((dist, cell));
-            }
-        }
-    }
-    let mut out = Vec::new();
-    if let Some((dist, cell)) = imprecise {
-        out.push(format!(
-            "an object is {dist:.3e} units from the camera with voxels of {cell:.3e}: the GPU's \
-             f32 camera-relative rays lose about {:.1e} units there, so voxels may be missing \
-             (known limit; `--reference` is exact)",
-            dist * 2f64.powi(-22)
-        ));
-    }
-    if spans.is_empty() {
-        return out;
-    }
-    if spans.iter().all(|&(_, far_end)| far_end <= 0.0) {
-        out.push("every voxel object is behind the camera: nothing to draw".to_string());
-    } else if !camera.is_infinite() && spans.iter().all(|&(near_end, _)| near_end >= camera.far) {
-        out.push(format!(
-            "every voxel object lies beyond the far plane ({}): the GPU draws nothing; use \
-             --far 0 (no far plane) or a larger --far",
-            camera.far
-        ));
-    }
-    out
 }
 
 /// RGBA8 bytes of an output texture (sRGB or not, RGBA or BGRA).

@@ -17,7 +17,7 @@ use crate::app::{App, PageInfo, draw_and_report};
 use crate::dom::{
     document, fetch_bytes, fetch_text, js_text, now_ms, show_error, status, window, yield_now,
 };
-use crate::params::{CPU_ONLY_FORMS, DEFAULT_FORMS, PageParams};
+use crate::params::PageParams;
 use crate::present::Presenter;
 use crate::scene_build;
 use crate::view::View;
@@ -120,7 +120,7 @@ async fn run() -> Result<(), WebError> {
     yield_now().await;
     let mut view = View::open(
         &ctx,
-        parsed.build(assets),
+        parsed.build(assets)?,
         parsed.camera(),
         pipeline.clone(),
         size,
@@ -197,12 +197,19 @@ async fn choose_pipeline(
     adapter: &wgpu::Adapter,
 ) -> Result<(String, ResolvedPipeline, Verdict, String), WebError> {
     let cpu = adapter.get_info().device_type == wgpu::DeviceType::Cpu;
+    // The rule of the engine's form table: its forms in order, CPU-only ones on a CPU.
+    let rule = ssbvb_engine::forms::rule_forms();
+    let cpu_only: Vec<&str> = rule
+        .iter()
+        .filter(|f| f.cpu_only)
+        .map(|f| f.stem())
+        .collect();
     let candidates: Vec<&str> = match &params.pipeline {
         Some(p) => vec![p.as_str()],
-        None => DEFAULT_FORMS
+        None => rule
             .iter()
-            .copied()
-            .filter(|f| cpu || !CPU_ONLY_FORMS.contains(f))
+            .filter(|f| cpu || !f.cpu_only)
+            .map(|f| f.stem())
             .collect(),
     };
     let mut refused = Vec::new();
@@ -223,7 +230,7 @@ async fn choose_pipeline(
                 format!(
                     "the fastest SSBVB form this adapter can run (the rule of `ssbvb render`; \
                      {} only on a CPU adapter)",
-                    CPU_ONLY_FORMS.join(", ")
+                    cpu_only.join(", ")
                 )
             };
             return Ok((name.to_string(), resolved, verdict, reason));

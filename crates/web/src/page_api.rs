@@ -9,7 +9,7 @@ use wasm_bindgen_futures::future_to_promise;
 
 use crate::app::{App, draw_and_report, load_model};
 use crate::dom::{document, element, show_error};
-use crate::params::{PIPELINES, PageParams, SCENES};
+use crate::params::{PageParams, SCENES, pipelines};
 
 /// Fills the scene and pipeline menus and makes a choice reload the page with it.
 pub fn setup_controls(params: &PageParams) {
@@ -34,7 +34,7 @@ pub fn setup_controls(params: &PageParams) {
     };
     fill("scene", SCENES, None, &params.scene);
     let chosen = params.pipeline.as_deref().unwrap_or("default");
-    fill("pipeline", PIPELINES, Some("default"), chosen);
+    fill("pipeline", &pipelines(), Some("default"), chosen);
 }
 
 fn reload_with_choices() {

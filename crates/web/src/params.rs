@@ -6,28 +6,19 @@ use crate::WebError;
 /// The bundled scenes the page offers (file stems under `assets/scenes/`).
 pub const SCENES: &[&str] = &["default", "bunnies_64", "bunnies_4096"];
 
+/// The ray casters the page offers besides the SSBVB forms (file stems under
+/// `assets/pipelines/`).
+pub const RAY_CASTERS: &[&str] = &["esvo", "octree_ray_cast"];
+
 /// The bundled pipelines the page offers (file stems under `assets/pipelines/`): the SSBVB
-/// forms, then the ray casters.
-pub const PIPELINES: &[&str] = &[
-    "ssbvb_direct",
-    "ssbvb_pixel",
-    "ssbvb",
-    "ssbvb_splat",
-    "ssbvb_compute",
-    "ssbvb_all_compute",
-    "esvo",
-    "octree_ray_cast",
-];
-
-/// The SSBVB forms the default is chosen among, fastest first: the rule of `ssbvb render`
-/// (`pipeline_choice::FORMS` in the frontend), the first whose needs the adapter meets and
-/// that is not in [`CPU_ONLY_FORMS`] unless the adapter is a CPU.
-pub const DEFAULT_FORMS: &[&str] = &["ssbvb_direct", "ssbvb_pixel", "ssbvb"];
-
-/// The default forms chosen only on a CPU adapter (a browser's fallback adapter, which wgpu
-/// reports as `DeviceType::Cpu`): measured fastest there, their work is fragment
-/// work, slow on data-centre GPUs (`pipeline_choice::Form::cpu_only` in the frontend).
-pub const CPU_ONLY_FORMS: &[&str] = &["ssbvb_direct"];
+/// forms of the engine's table ([`ssbvb_engine::FORMS`]), then the ray casters.
+pub fn pipelines() -> Vec<&'static str> {
+    ssbvb_engine::FORMS
+        .iter()
+        .map(|f| f.stem())
+        .chain(RAY_CASTERS.iter().copied())
+        .collect()
+}
 
 /// The largest frame edge the page renders at (WebGPU's default texture limit is 8192).
 pub const MAX_EDGE: u32 = 4096;
@@ -57,7 +48,7 @@ impl PageParams {
         for (key, value) in pairs {
             match key {
                 "scene" => p.scene = one_of("scene", value, SCENES)?,
-                "pipeline" => p.pipeline = Some(one_of("pipeline", value, PIPELINES)?),
+                "pipeline" => p.pipeline = Some(one_of("pipeline", value, &pipelines())?),
                 "size" => p.size = Some(parse_size(value)?),
                 _ => {}
             }
@@ -140,21 +131,19 @@ mod tests {
         }
     }
 
-    /// Every name the page offers is a bundled file, and the default forms are offered.
+    /// Every name the page offers is a bundled file, and every form of the table is offered.
     #[test]
     fn every_offered_name_is_a_bundled_file() {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
         for s in SCENES {
             assert!(root.join(format!("scenes/{s}.ron")).is_file(), "{s}");
         }
-        for p in PIPELINES {
+        let offered = pipelines();
+        for p in &offered {
             assert!(root.join(format!("pipelines/{p}.ron")).is_file(), "{p}");
         }
-        for f in DEFAULT_FORMS {
-            assert!(PIPELINES.contains(f), "{f}");
-        }
-        for f in CPU_ONLY_FORMS {
-            assert!(DEFAULT_FORMS.contains(f), "{f}");
+        for f in &ssbvb_engine::FORMS {
+            assert!(offered.contains(&f.stem()), "{}", f.name);
         }
     }
 }

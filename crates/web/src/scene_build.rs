@@ -1,8 +1,7 @@
 //! Scenes in the page: a bundled scene file's text and its models' bytes (fetched, not
-//! read from disk) made into what the GPU draws, the same way `ssbvb render` makes them
-//! (the frontend's `scene_file::load`: levels, LOD policy, instances, ground planes), so
-//! that the page and the CLI draw the same scene. A model dropped on the page becomes a
-//! scene of its own.
+//! read from disk) made into what the GPU draws by the engine's scene building
+//! ([`ssbvb_engine::scene_file`], what `ssbvb render` uses too), with the models prepared
+//! in the page's worker. A model dropped on the page becomes a scene of its own.
 //!
 //! What a scene file may hold that needs the file system or GPU-side preparation
 //! (animated meshes, brush edits, translucent volumes, a GPU budget with pages streamed
@@ -11,11 +10,10 @@
 use std::sync::Arc;
 
 use glam::{DAffine3, DVec3};
+use ssbvb_engine::scene_file::{Prepared, SceneDescription};
 use ssbvb_gpu::scene::{LodPolicy, Scene, TriangleObject, VoxelObject};
-use ssbvb_scene_file::{InstanceDesc, LodDesc, SceneFile, TriangleDesc};
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
-use ssbvb_voxel::load::{Format, LoadOptions};
 
 use crate::WebError;
 
@@ -32,12 +30,14 @@ pub const MAX_MODEL_BYTES: usize = 256 << 20;
 pub struct ParsedScene {
     /// Where it came from, for messages.
     pub name: String,
-    file: SceneFile,
+    description: SceneDescription,
 }
 
 /// Parses a scene file's text; `name` names it in errors.
 pub fn parse_scene(text: &str, name: &str) -> Result<ParsedScene, WebError> {
-    let file = ssbvb_scene_file::parse(text, name).map_err(|e| WebError::Scene(e.to_string()))?;
+    let description =
+        SceneDescription::parse(text, name).map_err(|e| WebError::Scene(e.to_string()))?;
+    let file = &description.file;
     let refuse = |field: String| {
         Err(WebError::Scene(format!(
             "{name}: {field} is not supported in the browser (use `ssbvb render`)"
@@ -59,60 +59,30 @@ pub fn parse_scene(text: &str, name: &str) -> Result<ParsedScene, WebError> {
     }
     Ok(ParsedScene {
         name: name.to_string(),
-        file,
+        description,
     })
 }
 
 impl ParsedScene {
     /// Each object's model path (relative to the scene file) and level, in object order.
     pub fn models(&self) -> Vec<(String, u32)> {
-        self.file
-            .objects
-            .iter()
-            .map(|o| (o.model.clone(), o.level))
-            .collect()
+        self.description.models()
     }
 
     /// The scene's camera.
     pub fn camera(&self) -> Camera {
-        self.file.camera.camera()
+        self.description.camera()
     }
 
     /// The scene with `assets[i]` as object `i`'s asset (prepared at its level).
-    pub fn build(&self, assets: Vec<Arc<VoxelAsset>>) -> Scene {
-        let mut scene = Scene {
-            light: self.file.light.unwrap_or_default(),
-            ..Default::default()
+    pub fn build(&self, assets: Vec<Arc<VoxelAsset>>) -> Result<Scene, WebError> {
+        let source = Prepared {
+            assets: self.models().into_iter().zip(assets).collect(),
         };
-        for (o, asset) in self.file.objects.iter().zip(assets) {
-            let lod = match o.lod {
-                None => LodPolicy::Fixed(o.level),
-                Some(LodDesc::Fixed(l)) => LodPolicy::Fixed(l),
-                Some(LodDesc::Auto { bias, pixel_error }) => LodPolicy::Auto { bias, pixel_error },
-            };
-            let instances = match &o.instances {
-                Some(list) => list.iter().map(InstanceDesc::transform).collect(),
-                None => vec![DAffine3::IDENTITY],
-            };
-            scene.objects.push(VoxelObject {
-                asset,
-                instances,
-                lod,
-            });
-        }
-        for t in &self.file.triangles {
-            let TriangleDesc::Plane {
-                center,
-                half_size,
-                color,
-            } = *t;
-            scene.triangles.push(TriangleObject::ground_plane(
-                DVec3::new(center.0, center.1, center.2),
-                half_size,
-                [color.0, color.1, color.2, color.3],
-            ));
-        }
-        scene
+        self.description
+            .build(&source, &ssbvb_voxel::progress::NoProgress)
+            .map(|c| c.scene)
+            .map_err(|e| WebError::Scene(e.to_string()))
     }
 }
 
@@ -140,20 +110,11 @@ pub fn prepare_model_with(
             MAX_MODEL_BYTES >> 20
         )));
     }
-    let path = std::path::Path::new(name);
-    let format = Format::from_path(path)
-        .or_else(|| Format::sniff(&bytes[..bytes.len().min(64)]))
-        .ok_or_else(|| {
-            bad("not a model the page reads (OBJ, PLY, glTF/GLB, VOX, raw grid)".into())
-        })?;
-    let loaded =
-        ssbvb_voxel::load::load_from_bytes(bytes, format, path, None, &LoadOptions::default())
-            .map_err(|e| bad(e.to_string()))?;
-    for w in &loaded.warnings {
-        log::warn!("{name}: {w}");
-    }
-    let (asset, _) = ssbvb_voxel::prepare::prepare_asset(&loaded.model, level, progress)
+    let (asset, warnings) = ssbvb_engine::scene_file::prepare_bytes(bytes, name, level, progress)
         .map_err(|e| bad(e.to_string()))?;
+    for w in &warnings {
+        log::warn!("{w}");
+    }
     Ok(asset)
 }
 
@@ -243,7 +204,7 @@ mod tests {
         assert_eq!(s.models(), vec![("../models/a.obj".to_string(), 3)]);
         let asset = Arc::new(prepare_model(TRI, "a.obj", 3).unwrap());
         assert_eq!(asset.lods.len(), 4);
-        let scene = s.build(vec![asset]);
+        let scene = s.build(vec![asset]).unwrap();
         assert_eq!(scene.objects[0].lod, LodPolicy::Fixed(2));
         assert_eq!(scene.objects[0].instances.len(), 2);
         assert_eq!(
@@ -262,7 +223,7 @@ mod tests {
         let e = prepare_model(b"\x00\x01garbage", "thing.bin", 4)
             .unwrap_err()
             .to_string();
-        assert!(e.contains("thing.bin: not a model the page reads"), "{e}");
+        assert!(e.contains("thing.bin: not a model ssbvb reads"), "{e}");
         let e = prepare_model(TRI, "a.obj", 40).unwrap_err().to_string();
         assert!(e.starts_with("a.obj: "), "{e}");
         let e = prepare_model(&vec![b' '; MAX_MODEL_BYTES + 1], "big.obj", 4)

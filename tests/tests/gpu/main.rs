@@ -16,6 +16,7 @@ mod edge_aa;
 mod embed;
 mod empty_space;
 mod empty_space_compute;
+mod engine;
 mod esvo_ray_cast;
 mod gpu_sort;
 mod gpu_voxelize;

@@ -42,7 +42,7 @@ use winit::event_loop::EventLoop;
 
 use crate::pipeline_cmd::parse_size;
 use crate::progress::BarProgress;
-use crate::render_cmd::{LoadedInput, assets_dir, load_input};
+use crate::render_cmd::{assets_dir, load_input};
 
 /// Arguments of `ssbvb view`.
 #[derive(Args, Debug)]
@@ -156,7 +156,9 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         .input
         .clone()
         .unwrap_or_else(|| assets_dir().join("scenes/default.ron"));
-    let LoadedInput {
+    let content = load_input(&input, args.level, &progress)?;
+    let warnings = content.warning_lines();
+    let ssbvb_engine::Content {
         scene,
         camera,
         pipeline,
@@ -164,7 +166,9 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         gpu_budget_mib,
         page_sources,
         animated,
-    } = load_input(&input, args.level, &progress)?;
+        ..
+    } = content;
+    notes.extend(warnings.iter().map(|w| format!("warning: {w}")));
     if !animated.is_empty() && args.gpu_budget.or(gpu_budget_mib).is_some() {
         anyhow::bail!("animated objects cannot be paged under a GPU budget; drop --gpu-budget");
     }

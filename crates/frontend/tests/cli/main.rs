@@ -6,6 +6,7 @@ mod calibrate;
 mod cone_trace;
 mod device_loss;
 mod docs_commands;
+mod engine;
 mod export;
 mod gl;
 mod limits;

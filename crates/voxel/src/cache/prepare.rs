@@ -53,6 +53,11 @@ pub struct PrepareOutcome {
     /// Set when the rebuilt asset could not be written to the cache (the asset is still
     /// returned; the next run rebuilds again).
     pub cache_write_error: Option<String>,
+    /// What the model's load could not do (a missing MTL library or texture, an image that
+    /// does not decode), each line naming its file; kept beside the cache file, so a cache
+    /// hit says them again.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 impl std::fmt::Display for PrepareOutcome {
@@ -174,6 +179,7 @@ fn obtain(
                         status: CacheStatus::Hit,
                         stats: None,
                         cache_write_error: None,
+                        warnings: read_warnings(&dir, key),
                     };
                     return Ok((Some(asset), outcome));
                 }
@@ -191,9 +197,7 @@ fn obtain(
         None => "cache missing".to_string(),
     };
     let loaded = load_model_with(model_path, &LoadOptions::default())?;
-    for w in &loaded.warnings {
-        log::warn!("{w}");
-    }
+    let warnings = loaded.warnings.clone();
     // The model file itself is the first source; its hash is the list's name.
     let now: Vec<Dependency> = loaded
         .sources
@@ -214,12 +218,14 @@ fn obtain(
                 PrepareToFileError::Cache(e) => PrepareError::Cache(e),
             })?;
         deps::write_list(&list, &now).map_err(|e| CacheError::io(&list, e))?;
+        write_warnings(&dir, key, &warnings).map_err(|e| CacheError::io(&dir, e))?;
         let outcome = PrepareOutcome {
             cache_path,
             cache_key: key,
             status: CacheStatus::Rebuilt { reason },
             stats: Some(stats),
             cache_write_error: None,
+            warnings,
         };
         return Ok((None, outcome));
     }
@@ -231,6 +237,7 @@ fn obtain(
     drop(loaded);
     let cache_write_error = write_cache(&cache_path, &asset, key, level)
         .and_then(|()| deps::write_list(&list, &now).map_err(|e| CacheError::io(&list, e)))
+        .and_then(|()| write_warnings(&dir, key, &warnings).map_err(|e| CacheError::io(&dir, e)))
         .err()
         .map(|e| e.to_string());
     let outcome = PrepareOutcome {
@@ -239,6 +246,7 @@ fn obtain(
         status: CacheStatus::Rebuilt { reason },
         stats: Some(stats),
         cache_write_error,
+        warnings,
     };
     Ok((Some(asset), outcome))
 }
@@ -268,8 +276,43 @@ fn asset_file(
         // A budgeted run at a level coarser than the file's finest cannot page from the
         // file (`PageFile::open` says so) and streams from memory.
         cache_write_error: None,
+        warnings: Vec::new(),
     };
     Ok(Some((Some(asset), outcome)))
+}
+
+/// The warnings file of cache key `key`: one warning per line (line breaks inside a
+/// warning become spaces).
+fn warnings_path(dir: &Path, key: u128) -> PathBuf {
+    dir.join(format!("{key:032x}.warnings"))
+}
+
+/// The warnings recorded with cache key `key` (none when the file is missing).
+fn read_warnings(dir: &Path, key: u128) -> Vec<String> {
+    std::fs::read_to_string(warnings_path(dir, key))
+        .map(|t| t.lines().map(str::to_string).collect())
+        .unwrap_or_default()
+}
+
+/// Records the load's warnings for cache key `key` (temporary file, then renamed); none
+/// removes the file.
+fn write_warnings(dir: &Path, key: u128, warnings: &[String]) -> io::Result<()> {
+    let path = warnings_path(dir, key);
+    if warnings.is_empty() {
+        return match std::fs::remove_file(&path) {
+            Err(e) if e.kind() != io::ErrorKind::NotFound => Err(e),
+            _ => Ok(()),
+        };
+    }
+    let text: String = warnings
+        .iter()
+        .map(|w| w.replace(['\n', '\r'], " ") + "\n")
+        .collect();
+    std::fs::create_dir_all(dir)?;
+    let mut tmp = tempfile::NamedTempFile::new_in(dir)?;
+    io::Write::write_all(&mut tmp, text.as_bytes())?;
+    tmp.persist(&path).map_err(|e| e.error)?;
+    Ok(())
 }
 
 /// The level limit [`prepare_asset`] applies, for the streaming path that bypasses it.

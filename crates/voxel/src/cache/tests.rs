@@ -606,3 +606,38 @@ fn damaged_headers_and_sections_are_named() {
         ]
     );
 }
+
+/// A missing MTL library and a missing texture are warnings of the load, said on the
+/// rebuild and again on a cache hit; a fixed model (the files put back) says none.
+#[test]
+fn load_warnings_name_missing_materials_and_survive_a_cache_hit() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("m.obj");
+    std::fs::write(
+        &obj,
+        "mtllib gone.mtl\nmtllib here.mtl\nusemtl red\nv -1 -1 -1\nv 1 -1 0\nv 0 1 1\nf 1 2 3\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("here.mtl"),
+        "newmtl red\nKd 1 0 0\nmap_Kd missing.png\n",
+    )
+    .unwrap();
+    let cache = dir.path().join("cache");
+    let (_, first) = load_or_prepare(&obj, 3, Some(&cache), &NoProgress).unwrap();
+    assert!(matches!(first.status, CacheStatus::Rebuilt { .. }));
+    let said = |o: &PrepareOutcome, what: &str| o.warnings.iter().any(|w| w.contains(what));
+    assert!(said(&first, "gone.mtl"), "{:?}", first.warnings);
+    assert!(said(&first, "missing.png"), "{:?}", first.warnings);
+    let (_, hit) = load_or_prepare(&obj, 3, Some(&cache), &NoProgress).unwrap();
+    assert_eq!(hit.status, CacheStatus::Hit);
+    assert_eq!(hit.warnings, first.warnings);
+    // The library and the texture put in place: another cache key, and no warning.
+    std::fs::write(dir.path().join("gone.mtl"), "newmtl blue\nKd 0 0 1\n").unwrap();
+    image::RgbaImage::new(1, 1)
+        .save(dir.path().join("missing.png"))
+        .unwrap();
+    let (_, fixed) = load_or_prepare(&obj, 3, Some(&cache), &NoProgress).unwrap();
+    assert!(matches!(fixed.status, CacheStatus::Rebuilt { .. }));
+    assert!(fixed.warnings.is_empty(), "{:?}", fixed.warnings);
+}

@@ -53,6 +53,7 @@
 #[cfg(test)]
 mod attribute_tests;
 mod attributes;
+mod cells;
 mod geometry;
 mod mesh;
 mod regions;
@@ -69,6 +70,7 @@ use crate::model::ObjectSpace;
 use crate::svo::LevelVoxels;
 
 pub(crate) use attributes::gradient_26;
+pub use cells::voxels_from_cells;
 pub use geometry::triangle_box_overlap;
 pub use mesh::{mesh_bounds, mesh_object_space, voxelize_mesh, voxelize_mesh_in};
 pub use regions::voxelize_mesh_regions;
@@ -142,6 +144,10 @@ pub enum VoxelizeError {
     /// Nothing to voxelize.
     #[error("the model has nothing to voxelize: {0}")]
     Empty(String),
+    /// Cells given one by one do not fit their grid or their colours
+    /// ([`voxels_from_cells`]).
+    #[error("{0}")]
+    BadCells(String),
     /// A vertex lies outside the object space the mesh was asked to be voxelized in.
     #[error("the mesh leaves the object space it was given (a vertex maps outside [-1, 1]³)")]
     OutsideObjectSpace,

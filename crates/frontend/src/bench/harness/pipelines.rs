@@ -36,6 +36,15 @@ pub(crate) fn with_kind_edit(
 pub(crate) fn technique_pipeline(t: &Technique) -> Result<ResolvedPipeline> {
     let p = match t.pipeline {
         PipelineSource::File(f) => bundled_pipeline(f)?,
+        PipelineSource::Form(name) => {
+            let Some(form) = ssbvb_engine::forms::by_name(name) else {
+                bail!(
+                    "technique `{}`: no form `{name}` in the engine's table",
+                    t.name
+                );
+            };
+            crate::adapter_cmd::resolve(&assets_dir().join(form.file))?
+        }
         PipelineSource::SharedStagesInCompute(f) => {
             with_shared_stages_in_compute(&bundled_pipeline(f)?)?
         }

@@ -12,7 +12,9 @@ use crate::bench::args::{BenchArgs, Preset};
 pub(crate) enum PipelineSource {
     /// A bundled pipeline file (in `assets/pipelines`).
     File(&'static str),
-    /// The SSBVB form `render` chooses on this adapter ([`crate::pipeline_choice`]).
+    /// The SSBVB form of that name in the engine's table ([`ssbvb_engine::FORMS`]).
+    Form(&'static str),
+    /// The SSBVB form `render` chooses on this adapter ([`ssbvb_engine::choice`]).
     AdapterDefault,
     /// A bundled pipeline file with its smoothing and composite in compute
     /// ([`super::pipelines::with_shared_stages_in_compute`]).
@@ -82,7 +84,7 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
     // appended once.
     Technique {
         name: "ssbvb-unique",
-        pipeline: PipelineSource::File("ssbvb.ron"),
+        pipeline: PipelineSource::Form("ssbvb-unique"),
         edit: None,
         max_level: 16,
     },
@@ -140,14 +142,14 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
     // The SSBVB frame with the billboards splatted in compute.
     Technique {
         name: "ssbvb-splat",
-        pipeline: PipelineSource::File("ssbvb_splat.ron"),
+        pipeline: PipelineSource::Form("ssbvb-splat"),
         edit: None,
         max_level: 16,
     },
     // No billboard: each pixel's hit written at its pixel (`SplatBillboards(mode: Pixel)`).
     Technique {
         name: "ssbvb-pixel",
-        pipeline: PipelineSource::File("ssbvb_pixel.ron"),
+        pipeline: PipelineSource::Form("ssbvb-pixel"),
         edit: None,
         max_level: 16,
     },
@@ -155,7 +157,7 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
     // (`RayMarchGBuffer`).
     Technique {
         name: "ssbvb-direct",
-        pipeline: PipelineSource::File("ssbvb_direct.ron"),
+        pipeline: PipelineSource::Form("ssbvb-direct"),
         edit: None,
         max_level: 16,
     },
@@ -163,7 +165,7 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
     // work left in the SSBVB's own stages.
     Technique {
         name: "ssbvb-compute",
-        pipeline: PipelineSource::File("ssbvb_compute.ron"),
+        pipeline: PipelineSource::Form("ssbvb-compute"),
         edit: None,
         max_level: 16,
     },

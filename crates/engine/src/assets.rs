@@ -1,4 +1,5 @@
-//! The bundled assets (default scene, pipelines, the bunny) found wherever the binary runs.
+//! The bundled assets (default scene, pipelines, the bunny) found wherever a program built
+//! on the engine runs.
 //!
 //! `assets/` of the working directory wins when it has the default scene (a checkout), then
 //! the source tree the binary was built from. A binary copied elsewhere has neither: its
@@ -148,7 +149,7 @@ fn extract_or_warn() -> PathBuf {
         Ok(dir) => dir,
         Err(e) => {
             // Reads of the assets will fail and name the path; say why here once.
-            eprintln!(
+            log::warn!(
                 "warning: cannot write the bundled assets under {}: {e}",
                 cache.display()
             );

@@ -1,7 +1,7 @@
-//! The calibration of the default pipeline (`ssbvb calibrate`, `crate::calibrate_cmd`):
-//! each SSBVB form measured once on an adapter, fastest first, in `calibration.json`
-//! beside the asset cache, where the default pipeline's choice
-//! ([`crate::pipeline_choice`]) finds it before its rule.
+//! The calibration of the default pipeline (`ssbvb calibrate`): each SSBVB form that
+//! [`crate::forms::FORMS`] marks `calibrated` measured once on an adapter, fastest first,
+//! in `calibration.json` beside the asset cache, where the default pipeline's choice
+//! ([`crate::choice`]) finds it before its rule.
 //!
 //! An entry is keyed by the adapter's name, backend, device type and driver (with its
 //! version) and the device limits it was measured under: another adapter, another driver
@@ -11,9 +11,10 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
 use ssbvb_gpu::AdapterVerdict;
+
+use crate::EngineError;
 
 /// What identifies the adapter an entry was measured on.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -102,19 +103,15 @@ pub struct CalibrationFile {
 /// The file format's version.
 pub const VERSION: u32 = 1;
 
-/// The forms measured, in the rule's order of preference (ties go to the earlier). The
-/// compute forms are no rule's choice, so only a calibration picks them: the one with the
-/// prepass in compute, and the one with the smoothing and the composite in compute too (for
-/// adapters whose fragment work is slow, such as data-centre GPUs; the bench's paper preset
-/// then compares it with ESVO's form with the same compute stages, `esvo-all-compute`).
-pub const FORMS: [&str; 6] = [
-    "pipelines/ssbvb_direct.ron",
-    "pipelines/ssbvb_pixel.ron",
-    "pipelines/ssbvb_compute.ron",
-    "pipelines/ssbvb_all_compute.ron",
-    "pipelines/ssbvb_splat.ron",
-    "pipelines/ssbvb.ron",
-];
+/// The forms measured, in the rule's order of preference (ties go to the earlier): the
+/// pipeline files of the forms [`crate::forms::FORMS`] marks `calibrated`.
+pub fn forms() -> Vec<&'static str> {
+    crate::forms::FORMS
+        .iter()
+        .filter(|f| f.calibrated)
+        .map(|f| f.file)
+        .collect()
+}
 
 /// Where the calibration lives: `calibration.json` in the asset cache's folder.
 pub fn path() -> PathBuf {
@@ -123,20 +120,21 @@ pub fn path() -> PathBuf {
 
 /// Reads the file: `Ok(None)` where there is none, an error naming the file where it cannot
 /// be read or parsed or has another version.
-pub fn load(path: &Path) -> Result<Option<CalibrationFile>> {
+pub fn load(path: &Path) -> Result<Option<CalibrationFile>, EngineError> {
     let text = match std::fs::read_to_string(path) {
         Ok(t) => t,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
+        Err(e) => return Err(EngineError::io(path, e)),
     };
-    let file: CalibrationFile = serde_json::from_str(&text)
-        .with_context(|| format!("{}: not a calibration file", path.display()))?;
+    let file: CalibrationFile = serde_json::from_str(&text).map_err(|e| {
+        EngineError::Invalid(format!("{}: not a calibration file: {e}", path.display()))
+    })?;
     if file.version != VERSION {
-        bail!(
+        return Err(EngineError::Invalid(format!(
             "{}: calibration format {} (this ssbvb reads {VERSION})",
             path.display(),
             file.version
-        );
+        )));
     }
     Ok(Some(file))
 }
@@ -149,7 +147,7 @@ pub fn lookup<'a>(file: &'a CalibrationFile, key: &AdapterKey) -> Option<&'a Ent
 /// Writes `entry` into the file at `path`, replacing the entry of the same adapter key and
 /// keeping the others (an unreadable file is replaced whole), through a temporary file
 /// renamed over it.
-pub fn store(path: &Path, entry: Entry) -> Result<()> {
+pub fn store(path: &Path, entry: Entry) -> Result<(), EngineError> {
     let mut file = load(path).ok().flatten().unwrap_or_default();
     file.version = VERSION;
     file.entries.retain(|e| e.adapter != entry.adapter);
@@ -158,13 +156,15 @@ pub fn store(path: &Path, entry: Entry) -> Result<()> {
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let mut tmp = tempfile::NamedTempFile::new_in(dir)
-        .with_context(|| format!("creating a temporary file in {}", dir.display()))?;
-    serde_json::to_writer_pretty(&mut tmp, &file)?;
-    tmp.as_file().sync_all()?;
+    std::fs::create_dir_all(dir).map_err(|e| EngineError::io(dir, e))?;
+    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(|e| EngineError::io(dir, e))?;
+    serde_json::to_writer_pretty(&mut tmp, &file)
+        .map_err(|e| EngineError::io(path, std::io::Error::other(e)))?;
+    tmp.as_file()
+        .sync_all()
+        .map_err(|e| EngineError::io(path, e))?;
     tmp.persist(path)
-        .with_context(|| format!("writing {}", path.display()))?;
+        .map_err(|e| EngineError::io(path, e.error))?;
     Ok(())
 }
 

@@ -1,17 +1,18 @@
-//! `--gpu-budget` and `gpu_budget_mib`: a scene uploaded under a GPU memory budget, its
-//! pages streamed from the assets' cache files (`ssbvb_gpu::scene::streaming`), and what the
-//! commands report about it.
+//! A GPU memory budget (`--gpu-budget`, `gpu_budget_mib`): a scene uploaded under it, its
+//! pages streamed from the assets' cache files (`ssbvb_gpu::scene::streaming`), and what a
+//! render reports about it.
 
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use anyhow::Result;
 use serde::Serialize;
 use ssbvb_gpu::GpuContext;
 use ssbvb_gpu::scene::{GpuScene, StreamingOptions, StreamingStats};
 use ssbvb_passes::{Profiling, Renderer};
 use ssbvb_voxel::cache::{PageFile, PrepareOutcome};
 use ssbvb_voxel::camera::Camera;
+
+use crate::EngineError;
 
 /// Largest budget accepted (MiB): 1 TiB, as in scene files.
 pub const MAX_BUDGET_MIB: u64 = ssbvb_scene_file::MAX_GPU_BUDGET_MIB;
@@ -43,9 +44,11 @@ pub fn options(
     sources: &[Option<PageSourceRef>],
     max_pages_per_frame: usize,
     notes: &mut Vec<String>,
-) -> Result<StreamingOptions> {
+) -> Result<StreamingOptions, EngineError> {
     if mib == 0 || mib > MAX_BUDGET_MIB {
-        anyhow::bail!("--gpu-budget must be 1..={MAX_BUDGET_MIB} MiB, got {mib}");
+        return Err(EngineError::Invalid(format!(
+            "--gpu-budget must be 1..={MAX_BUDGET_MIB} MiB, got {mib}"
+        )));
     }
     let page_files = sources
         .iter()
@@ -150,7 +153,7 @@ pub fn converge(
     scene: &mut GpuScene,
     camera: &Camera,
     max_frames: usize,
-) -> Result<(usize, bool)> {
+) -> Result<(usize, bool), EngineError> {
     let mut frames = 0;
     loop {
         renderer.render(ctx, scene, camera, Profiling::Off)?;

@@ -5,12 +5,13 @@
 
 use std::sync::Arc;
 
-use anyhow::{Context, Result};
 use serde::Serialize;
 use ssbvb_gpu::GpuContext;
 use ssbvb_gpu::scene::{DynamicRoom, GpuScene, Scene};
 use ssbvb_gpu_build::animated::{AnimatedMesh, Animator, UpdateTimes};
 use ssbvb_gpu_build::voxelize::GpuVoxelizeMethod;
+
+use crate::EngineError;
 
 /// Voxel room reserved per level for an animated object, as a multiple of its rest pose.
 const GROWTH: f64 = 1.5;
@@ -56,12 +57,12 @@ pub fn update_all(
     animator: &Animator,
     animated: &[AnimatedMesh],
     t: f64,
-) -> Result<AnimationReport> {
+) -> Result<AnimationReport, EngineError> {
     let mut objects = Vec::new();
     for a in animated {
-        let times = animator
-            .update(ctx, scene, a, t)
-            .with_context(|| format!("animating object {} at t = {t} s", a.object))?;
+        let times = animator.update(ctx, scene, a, t).map_err(|e| {
+            EngineError::from(e).context(format!("animating object {} at t = {t} s", a.object))
+        })?;
         objects.push(ObjectUpdate {
             object: a.object,
             total_ms: times.total_ms(),
@@ -77,12 +78,12 @@ pub fn update_all(
 
 /// `scene` with each animated object's asset replaced by its pose at `t`, prepared on the
 /// CPU (what the reference renders).
-pub fn posed(scene: &Scene, animated: &[AnimatedMesh], t: f64) -> Result<Scene> {
+pub fn posed(scene: &Scene, animated: &[AnimatedMesh], t: f64) -> Result<Scene, EngineError> {
     let mut out = scene.clone();
     for a in animated {
-        let asset = a
-            .cpu_asset(t)
-            .with_context(|| format!("posing object {} at t = {t} s", a.object))?;
+        let asset = a.cpu_asset(t).map_err(|e| {
+            EngineError::from(e).context(format!("posing object {} at t = {t} s", a.object))
+        })?;
         out.objects[a.object].asset = Arc::new(asset);
     }
     Ok(out)

@@ -1,0 +1,134 @@
+//! Cameras for content: an orbit around a target, and the framing of a scene (every voxel
+//! instance's box in view), so a program handed voxels needs no camera arithmetic of its
+//! own.
+
+use glam::DVec3;
+use ssbvb_gpu::scene::Scene;
+use ssbvb_voxel::camera::Camera;
+
+/// A camera on a sphere of `distance` around `target`: `azimuth_deg` about +Y from +Z
+/// (90° looks from +X), `elevation_deg` above the horizontal plane (clamped to ±89.9° so
+/// the view never aligns with up), +Y up, with a `fov_y_deg` field of view and no far
+/// plane.
+pub fn orbit(
+    target: DVec3,
+    distance: f64,
+    azimuth_deg: f64,
+    elevation_deg: f64,
+    fov_y_deg: f64,
+) -> Camera {
+    let (az, el) = (
+        azimuth_deg.to_radians(),
+        elevation_deg.clamp(-89.9, 89.9).to_radians(),
+    );
+    let dir = DVec3::new(el.cos() * az.sin(), el.sin(), el.cos() * az.cos());
+    let distance = if distance.is_finite() && distance > 0.0 {
+        distance
+    } else {
+        1.0
+    };
+    Camera {
+        fov_y_deg,
+        near: (distance * 1e-3).max(1e-6),
+        far: f64::INFINITY,
+        ..Camera::new(target + dir * distance, target)
+    }
+}
+
+/// The centre and radius of a sphere holding every voxel instance's object box
+/// (`[-1, 1]³` placed by its instance); `None` for a scene without voxel instances.
+pub fn bounding_sphere(scene: &Scene) -> Option<(DVec3, f64)> {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for o in &scene.objects {
+        for xf in &o.instances {
+            for i in 0..8 {
+                let corner = DVec3::new(
+                    if i & 1 == 0 { -1.0 } else { 1.0 },
+                    if i & 2 == 0 { -1.0 } else { 1.0 },
+                    if i & 4 == 0 { -1.0 } else { 1.0 },
+                );
+                let p = xf.transform_point3(corner);
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+    }
+    if !lo.is_finite() || !hi.is_finite() {
+        return None;
+    }
+    Some(((lo + hi) * 0.5, ((hi - lo) * 0.5).length().max(1e-9)))
+}
+
+/// A camera that frames every voxel instance of `scene`: it looks at the centre of their
+/// bounding sphere from 30° of azimuth and 20° of elevation, far enough that the sphere
+/// fits the `fov_y_deg` field of view. Without voxel instances: [`Camera::default`].
+pub fn frame_scene(scene: &Scene, fov_y_deg: f64) -> Camera {
+    let Some((center, radius)) = bounding_sphere(scene) else {
+        return Camera::default();
+    };
+    let half = (fov_y_deg.clamp(1.0, 179.0) * 0.5).to_radians();
+    orbit(center, radius / half.sin() * 1.05, 30.0, 20.0, fov_y_deg)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DAffine3;
+
+    #[test]
+    fn an_orbit_looks_at_its_target_from_its_angles() {
+        let c = orbit(DVec3::new(1.0, 2.0, 3.0), 5.0, 90.0, 0.0, 40.0);
+        assert!(
+            (c.position - DVec3::new(6.0, 2.0, 3.0)).length() < 1e-9,
+            "{c:?}"
+        );
+        let top = orbit(DVec3::ZERO, 2.0, 0.0, 90.0, 40.0);
+        assert!(top.position.y > 1.99 && top.position.y < 2.0, "{top:?}");
+        assert!(
+            orbit(DVec3::ZERO, f64::NAN, 0.0, 0.0, 40.0)
+                .position
+                .is_finite()
+        );
+    }
+
+    /// Every corner of every instance box projects inside the framed view.
+    #[test]
+    fn framing_keeps_every_instance_box_in_view() {
+        let mut scene = Scene::default();
+        assert_eq!(frame_scene(&scene, 45.0), Camera::default());
+        let model = ssbvb_voxel::model::Model::Voxels(ssbvb_voxel::model::VoxelModel {
+            voxels: vec![[0, 0, 0]],
+            colors: vec![[1.0; 4]],
+        });
+        let (asset, _) =
+            ssbvb_voxel::prepare::prepare_asset(&model, 1, &ssbvb_voxel::progress::NoProgress)
+                .unwrap();
+        let asset = std::sync::Arc::new(asset);
+        scene.objects.push(ssbvb_gpu::scene::VoxelObject {
+            asset,
+            instances: vec![
+                DAffine3::from_translation(DVec3::new(10.0, 0.0, 0.0)),
+                DAffine3::from_scale(DVec3::splat(0.5)),
+            ],
+            lod: ssbvb_gpu::scene::LodPolicy::Fixed(0),
+        });
+        let cam = frame_scene(&scene, 45.0);
+        let (right, up, fwd) = cam.basis();
+        let tan = (45f64.to_radians() * 0.5).tan();
+        for xf in &scene.objects[0].instances {
+            for i in 0..8 {
+                let c = DVec3::new(
+                    if i & 1 == 0 { -1.0 } else { 1.0 },
+                    if i & 2 == 0 { -1.0 } else { 1.0 },
+                    if i & 4 == 0 { -1.0 } else { 1.0 },
+                );
+                let d = xf.transform_point3(c) - cam.position;
+                let z = d.dot(fwd);
+                assert!(z > 0.0);
+                assert!(d.dot(up).abs() / z <= tan, "corner {c} leaves the view");
+                assert!(d.dot(right).abs() / z <= tan * 100.0);
+            }
+        }
+    }
+}

@@ -1,0 +1,303 @@
+//! [`Engine`]: content on a device with the pipeline chosen for it, rendered frame by frame
+//! and read back. The one object a program needs to draw ssbvb content.
+
+use std::path::{Path, PathBuf};
+
+use ssbvb_gpu::scene::ObjectMemory;
+use ssbvb_gpu::{DeviceLimits, wgpu};
+use ssbvb_passes::{FrameCounters, PassTiming, Profiling};
+use ssbvb_voxel::camera::Camera;
+
+use crate::choice::{choose, resolve_pipeline};
+use crate::forms::PipelineChoice;
+use crate::session::{GpuSession, HostDevice, SessionSource};
+use crate::{Content, EngineError, Warning};
+
+/// How an [`Engine`] renders.
+#[derive(Clone)]
+pub struct RenderOptions {
+    /// Image size (width, height), each 1 or more.
+    pub size: (u32, u32),
+    /// A pipeline file (`None`: the content's, else the form chosen for the adapter).
+    pub pipeline: Option<PathBuf>,
+    /// The limits an own device is made with.
+    pub limits: DeviceLimits,
+    /// GPU budget (MiB) for the voxel scene (`None`: the content's, else none): finer
+    /// levels stream in as rays need them.
+    pub gpu_budget_mib: Option<u64>,
+    /// Most frames rendered per [`Engine::render`] until no page is missing.
+    pub max_frames: usize,
+    /// Seconds at which animated objects are drawn.
+    pub time: f64,
+    /// Count each frame's work (march steps, rays: [`Engine::counters`]).
+    pub count_work: bool,
+    /// Rays find their instances in their screen tile's list (`false`: the hierarchy).
+    pub instance_lists: bool,
+    /// A host's device to draw with (`None`: the engine makes its own).
+    pub host: Option<HostDevice>,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        Self {
+            size: (640, 480),
+            pipeline: None,
+            limits: DeviceLimits::Adapter,
+            gpu_budget_mib: None,
+            max_frames: 64,
+            time: 0.0,
+            count_work: false,
+            instance_lists: true,
+            host: None,
+        }
+    }
+}
+
+/// What one [`Engine::render`] did.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct FrameReport {
+    /// Per-pass times of the frame (GPU timestamps; on a software adapter also each pass's
+    /// wall time, submitted and waited alone).
+    pub passes: Vec<PassTiming>,
+    /// Wall time of the frame, ms.
+    pub frame_wall_ms: f64,
+    /// Instances drawn after culling.
+    pub visible_instances: usize,
+    /// Frames rendered before it until no page was missing (1 without a budget).
+    pub frames_to_converge: usize,
+    /// Whether no page was missing within [`RenderOptions::max_frames`].
+    pub converged: bool,
+}
+
+/// Content on a device, ready to render.
+pub struct Engine {
+    source: SessionSource,
+    gpu: GpuSession,
+    choice: PipelineChoice,
+    camera: Camera,
+    warnings: Vec<Warning>,
+    notes: Vec<String>,
+    max_frames: usize,
+}
+
+impl Engine {
+    /// Chooses the pipeline (the options', the content's, else the adapter's form), makes
+    /// or takes the device and uploads the content. Sizes of 0 are refused.
+    pub fn open(content: Content, options: &RenderOptions) -> Result<Self, EngineError> {
+        let (w, h) = options.size;
+        if w == 0 || h == 0 {
+            return Err(EngineError::Invalid(format!(
+                "the image size must be at least 1x1, got {w}x{h}"
+            )));
+        }
+        let choice = match &options.host {
+            Some(host) => crate::choice::choose_for_host(
+                options.pipeline.clone(),
+                content.pipeline.clone(),
+                host,
+            )?,
+            None => choose(
+                options.pipeline.clone(),
+                content.pipeline.clone(),
+                options.limits,
+            )?,
+        };
+        let mut warnings = choice.warnings.clone();
+        warnings.extend(content.warnings.iter().cloned());
+        let mut source = SessionSource {
+            pipeline: resolve_pipeline(&choice.path())?,
+            scene: content.scene,
+            budget: options.gpu_budget_mib.or(content.gpu_budget_mib),
+            page_sources: content.page_sources,
+            animated: content.animated,
+            time: options.time,
+            size: options.size,
+            time_submissions: false,
+            instance_lists: options.instance_lists,
+            counting: options.count_work,
+            limits: options.limits,
+            host: options.host.clone(),
+        };
+        let mut notes = content.notes;
+        let opened = source.open_refusing(&mut notes, false)?;
+        warnings.extend(
+            opened
+                .warnings
+                .iter()
+                .map(|w| Warning::new("GPU memory", w)),
+        );
+        Ok(Self {
+            source,
+            gpu: opened.session,
+            choice,
+            camera: content.camera,
+            warnings,
+            notes,
+            max_frames: options.max_frames.max(1),
+        })
+    }
+
+    /// The camera the next frame is seen by.
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// Sets the camera of the next frame ([`crate::camera`] has orbits and framing).
+    pub fn set_camera(&mut self, camera: Camera) {
+        self.camera = camera;
+    }
+
+    /// Renders a frame: under a budget, frames until no page is missing, then the frame
+    /// with its pass times. A device lost on the way is made again once and the frame
+    /// drawn again.
+    pub fn render(&mut self) -> Result<FrameReport, EngineError> {
+        match self.render_once() {
+            Err(e) if self.gpu.ctx.lost().is_some() && self.source.host.is_none() => {
+                let why = self.gpu.ctx.lost().unwrap_or_default();
+                let opened = self
+                    .source
+                    .reopen(&self.camera, self.max_frames, false)
+                    .map_err(|e2| e2.context(format!("recreating the lost device ({why}): {e}")))?;
+                self.gpu = opened.session;
+                self.warnings.push(Warning::new(
+                    "GPU device",
+                    format!("lost and recreated: {why}"),
+                ));
+                self.render_once()
+            }
+            other => other,
+        }
+    }
+
+    fn render_once(&mut self) -> Result<FrameReport, EngineError> {
+        let s = &mut self.gpu;
+        let (frames, converged) = crate::budget::converge(
+            &s.ctx,
+            &mut s.renderer,
+            &mut s.scene,
+            &self.camera,
+            self.max_frames,
+        )?;
+        let profiling = if s.ctx.report().is_software {
+            Profiling::TimestampsAndWall
+        } else {
+            Profiling::Timestamps
+        };
+        let stats = s
+            .renderer
+            .render(&s.ctx, &mut s.scene, &self.camera, profiling)?;
+        Ok(FrameReport {
+            passes: stats.passes,
+            frame_wall_ms: stats.frame_wall_ms,
+            visible_instances: stats.visible_instances,
+            frames_to_converge: frames,
+            converged,
+        })
+    }
+
+    /// Renders a frame for each camera, and reads each back as RGBA8.
+    pub fn render_many(&mut self, cameras: &[Camera]) -> Result<Vec<Vec<u8>>, EngineError> {
+        let mut out = Vec::with_capacity(cameras.len());
+        for c in cameras {
+            self.camera = *c;
+            self.render()?;
+            out.push(self.read_rgba8()?);
+        }
+        Ok(out)
+    }
+
+    /// The last frame as RGBA8, row-major, row 0 at the top (`width · height · 4` bytes).
+    pub fn read_rgba8(&self) -> Result<Vec<u8>, EngineError> {
+        let s = &self.gpu;
+        let out = s
+            .ctx
+            .read_texture(&s.renderer.output().texture, wgpu::TextureAspect::All)?;
+        Ok(out.to_rgba8()?)
+    }
+
+    /// Per pixel of the last frame, the distance from the eye to what it shows (`inf`
+    /// where it shows no voxel); needs a G-buffer pipeline.
+    pub fn read_depth(&self) -> Result<Vec<f32>, EngineError> {
+        let s = &self.gpu;
+        let hits = ssbvb_passes::measure::gbuffer_hits(&s.ctx, &s.renderer)?;
+        Ok(hits
+            .iter()
+            .map(|h| h.as_ref().map_or(f32::INFINITY, |h| h.t as f32))
+            .collect())
+    }
+
+    /// Per pixel of the last frame, the scene instance it shows (instances numbered over
+    /// the objects in order; `u32::MAX` where none); needs a pipeline with an SSBVB.
+    pub fn read_instance_ids(&self) -> Result<Vec<u32>, EngineError> {
+        let s = &self.gpu;
+        let hits = ssbvb_passes::measure::gbuffer_hits_in(&s.ctx, &s.renderer, &s.scene)?;
+        Ok(hits
+            .iter()
+            .map(|h| h.as_ref().map_or(u32::MAX, |h| h.instance))
+            .collect())
+    }
+
+    /// Writes the last frame as a PNG (to a temporary file, then renamed).
+    pub fn save_png(&self, path: &Path) -> Result<(), EngineError> {
+        let (w, h) = self.size();
+        let rgba = self.read_rgba8()?;
+        Ok(ssbvb_gpu::readback::write_png_rgba8(path, w, h, &rgba)?)
+    }
+
+    /// Changes the image size: the frame's targets are made again, the scene stays.
+    pub fn resize(&mut self, size: (u32, u32)) -> Result<(), EngineError> {
+        if size.0 == 0 || size.1 == 0 {
+            return Err(EngineError::Invalid(format!(
+                "the image size must be at least 1x1, got {}x{}",
+                size.0, size.1
+            )));
+        }
+        let s = &mut self.gpu;
+        let mut renderer =
+            ssbvb_passes::Renderer::new(&s.ctx, &s.scene, self.source.pipeline.clone(), size)?;
+        renderer.set_counting(self.source.counting);
+        s.renderer = renderer;
+        self.source.size = size;
+        Ok(())
+    }
+
+    /// The image size.
+    pub fn size(&self) -> (u32, u32) {
+        self.source.size
+    }
+
+    /// The pipeline used, who chose it and why.
+    pub fn choice(&self) -> &PipelineChoice {
+        &self.choice
+    }
+
+    /// What the content and the device said (missing textures, a budget lowered, …).
+    pub fn warnings(&self) -> &[Warning] {
+        &self.warnings
+    }
+
+    /// One line per asset about the cache.
+    pub fn notes(&self) -> &[String] {
+        &self.notes
+    }
+
+    /// The adapter (`name [backend, type]`).
+    pub fn adapter(&self) -> String {
+        self.gpu.ctx.report().to_string()
+    }
+
+    /// What the last frame counted (with [`RenderOptions::count_work`]).
+    pub fn counters(&self) -> Result<FrameCounters, EngineError> {
+        Ok(self.gpu.renderer.counters(&self.gpu.ctx)?)
+    }
+
+    /// GPU memory per voxel object.
+    pub fn memory(&self) -> &[ObjectMemory] {
+        &self.gpu.scene.memory
+    }
+
+    /// The device, scene and renderer, for what this API does not cover.
+    pub fn gpu(&mut self) -> &mut GpuSession {
+        &mut self.gpu
+    }
+}
