@@ -240,7 +240,7 @@ pub fn prepare(
 
 impl Content {
     /// Voxels from arrays as content: the grid placed in the world at its finest level,
-    /// the camera framing it ([`crate::camera::frame_box`]). An empty grid is an empty
+    /// the camera framing it ([`crate::camera::frame_scene`]). An empty grid is an empty
     /// scene with a warning.
     pub fn from_arrays(
         arrays: &VoxelArrays<'_>,

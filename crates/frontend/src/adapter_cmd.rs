@@ -129,7 +129,7 @@ pub fn run(path: &Path, chosen_because: &str) -> Result<ExitCode> {
 pub fn gpu_fallbacks(
     ctx: &ssbvb_gpu::GpuContext,
     pipeline: &ssbvb_graph::ResolvedPipeline,
-    animation: Option<&crate::animation::AnimationReport>,
+    animation: Option<&ssbvb_engine::animation::AnimationReport>,
 ) -> Vec<String> {
     let mut fallbacks = ctx.report().fallbacks.clone();
     let flags = ctx.adapter.get_downlevel_capabilities().flags;

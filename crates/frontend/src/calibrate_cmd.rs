@@ -1,15 +1,15 @@
 //! `ssbvb calibrate`: the bundled default scene drawn with each SSBVB form that fits the
 //! adapter the default pipeline's rule picks, timed, and stored fastest first
-//! (`crate::calibration`), so that `render`, `view`, `adapter` and the bench's `ssbvb` use
+//! (`ssbvb_engine::calibration`), so that `render`, `view`, `adapter` and the bench's `ssbvb` use
 //! the form measured fastest on this adapter, driver and limits.
 
 use anyhow::Result;
 use clap::Args;
 use ssbvb_passes::Profiling;
 
-use crate::calibration::{AdapterKey, Entry, FormTime, forms, path, store};
 use crate::pipeline_cmd::parse_size;
-use crate::session::SessionSource;
+use ssbvb_engine::calibration::{AdapterKey, Entry, FormTime, forms, path, store};
+use ssbvb_engine::session::SessionSource;
 
 /// Arguments of `ssbvb calibrate`.
 #[derive(Args, Debug)]
@@ -28,14 +28,14 @@ pub struct CalibrateArgs {
 /// Runs `ssbvb calibrate`: the bundled default scene drawn with each form that fits the
 /// adapter the rule would pick, the median of `frames` frames each, stored fastest first.
 pub fn run(args: &CalibrateArgs) -> Result<()> {
-    let scene_path = crate::bundled::assets_dir().join(crate::bundled::DEFAULT_SCENE);
+    let scene_path = ssbvb_engine::assets::assets_dir().join(ssbvb_engine::assets::DEFAULT_SCENE);
     let progress = crate::progress::BarProgress::new(false);
-    let loaded = crate::scene_file::load(&scene_path, &progress)?;
+    let loaded = ssbvb_engine::scene_file::load(&scene_path, &progress)?;
     let (adapter, fitting) = crate::pipeline_choice::adapter_and_fitting_forms(&forms())?;
     let key = AdapterKey::of(&adapter, crate::adapter_cmd::limits().name());
     let mut times_of = Vec::new();
     for file in fitting {
-        let path = crate::bundled::assets_dir().join(file);
+        let path = ssbvb_engine::assets::assets_dir().join(file);
         let mut source = SessionSource {
             scene: loaded.scene.clone(),
             pipeline: crate::adapter_cmd::resolve(&path)?,
@@ -73,7 +73,7 @@ pub fn run(args: &CalibrateArgs) -> Result<()> {
     times_of.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
     let entry = Entry {
         adapter: key,
-        scene: crate::bundled::DEFAULT_SCENE.into(),
+        scene: ssbvb_engine::assets::DEFAULT_SCENE.into(),
         size: [args.size.0, args.size.1],
         forms: times_of,
     };

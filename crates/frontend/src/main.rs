@@ -1,9 +1,6 @@
 //! The `ssbvb` command-line tool.
 
 mod adapter_cmd;
-// The engine's modules under the names the commands have always used.
-use ssbvb_engine::assets as bundled;
-use ssbvb_engine::{animation, budget, calibration, scene_file, session};
 mod bench;
 mod calibrate_cmd;
 mod cli_values;

@@ -71,7 +71,7 @@ fn meanings(kind: &PassKind) -> Vec<String> {
 
 /// The kinds' reference as text: every kind in one line each, or one kind (`name`) whole.
 pub fn text(name: Option<&str>) -> Result<String> {
-    let users = users(&crate::bundled::assets_dir());
+    let users = users(&ssbvb_engine::assets::assets_dir());
     let kinds = PassKind::all_defaults();
     let Some(name) = name else {
         let mut out = String::new();
@@ -132,7 +132,7 @@ pub fn text(name: Option<&str>) -> Result<String> {
 
 /// The reference as Markdown (`docs/pipelines.md`).
 pub fn markdown() -> String {
-    markdown_with(&crate::bundled::assets_dir())
+    markdown_with(&ssbvb_engine::assets::assets_dir())
 }
 
 /// [`markdown`] with the bundled pipelines read from `assets`.

@@ -18,7 +18,7 @@ use ssbvb_voxel::camera::Camera;
 
 use crate::pipeline_cmd::parse_size;
 use crate::progress::BarProgress;
-use crate::session::{GpuSession, SessionSource};
+use ssbvb_engine::session::{GpuSession, SessionSource};
 
 /// Arguments of `ssbvb render`.
 #[derive(Args, Debug)]
@@ -119,7 +119,7 @@ pub struct RenderArgs {
     pub instance_walk: crate::cli_values::InstanceWalk,
 }
 
-pub use crate::bundled::assets_dir;
+pub use ssbvb_engine::assets::assets_dir;
 
 #[derive(Serialize)]
 struct Report {
@@ -157,7 +157,7 @@ struct Report {
     /// coarser than asked (a budget too small for the view).
     warnings: Vec<String>,
     /// Under a GPU budget: how streaming converged and what is resident (`null` without).
-    streaming: Option<crate::budget::StreamingReport>,
+    streaming: Option<ssbvb_engine::budget::StreamingReport>,
     /// With `--frames N > 1`: memory at the start and end of the soak (`null` without).
     soak: Option<crate::soak::SoakReport>,
     /// Times the soak lost the GPU device and recreated it (0 without a soak).
@@ -167,7 +167,7 @@ struct Report {
     submissions: Vec<ssbvb_gpu::submissions::SubmissionTimes>,
     /// With animated objects: the time drawn and each update's cost by stage.
     #[serde(skip_serializing_if = "Option::is_none")]
-    animation: Option<crate::animation::AnimationReport>,
+    animation: Option<ssbvb_engine::animation::AnimationReport>,
     gpu_memory_bytes: Vec<ObjectReport>,
     asset_notes: Vec<String>,
 }
@@ -312,7 +312,7 @@ fn render_reference(
     if args.voxel_mask.is_some() {
         bail!("--voxel-mask reads a GPU frame's stencil; the CPU reference (--reference) has none");
     }
-    let scene = crate::animation::posed(scene, animated, args.time)?;
+    let scene = ssbvb_engine::animation::posed(scene, animated, args.time)?;
     let mut instances = Vec::new();
     let mut lod_histogram = std::collections::BTreeMap::new();
     for o in &scene.objects {
@@ -363,7 +363,7 @@ fn render_reference(
         soak: None,
         device_recoveries: 0,
         submissions: Vec::new(),
-        animation: (!animated.is_empty()).then(|| crate::animation::AnimationReport {
+        animation: (!animated.is_empty()).then(|| ssbvb_engine::animation::AnimationReport {
             time_s: args.time,
             method: None,
             objects: Vec::new(),
@@ -379,7 +379,7 @@ struct GpuInput {
     scene: Scene,
     pipeline: Option<PathBuf>,
     budget: Option<u64>,
-    page_sources: Vec<Option<crate::budget::PageSourceRef>>,
+    page_sources: Vec<Option<ssbvb_engine::budget::PageSourceRef>>,
     animated: Vec<ssbvb_gpu_build::animated::AnimatedMesh>,
 }
 
@@ -429,15 +429,16 @@ fn render_gpu(
     };
     // Warm-up frames (pipeline caches, lazy allocations; under a budget, until no page
     // is missing), then the measured one.
-    let (frames, converged) = crate::budget::converge(
+    let (frames, converged) = ssbvb_engine::budget::converge(
         &session.ctx,
         &mut session.renderer,
         &mut session.scene,
         &camera,
         args.max_frames,
     )?;
-    let mut streaming = crate::budget::StreamingReport::of(&session.scene, frames, converged);
-    crate::budget::streaming_warnings(streaming.as_ref(), frames, &mut warnings);
+    let mut streaming =
+        ssbvb_engine::budget::StreamingReport::of(&session.scene, frames, converged);
+    ssbvb_engine::budget::streaming_warnings(streaming.as_ref(), frames, &mut warnings);
     let soak = if args.frames > 1 {
         let (s, r) = crate::soak::run(
             session,
@@ -452,7 +453,7 @@ fn render_gpu(
         warnings.extend(r.warnings.iter().cloned());
         // The written frame is the scene's camera converged again: under a budget the
         // soak's path (and a recovery's fresh pool) left other pages resident.
-        let (frames, converged) = crate::budget::converge(
+        let (frames, converged) = ssbvb_engine::budget::converge(
             &session.ctx,
             &mut session.renderer,
             &mut session.scene,
@@ -461,7 +462,8 @@ fn render_gpu(
         )?;
         if source.budget != budget {
             // A rebuild lowered the budget: report the scene the frame is drawn from.
-            streaming = crate::budget::StreamingReport::of(&session.scene, frames, converged);
+            streaming =
+                ssbvb_engine::budget::StreamingReport::of(&session.scene, frames, converged);
         }
         Some(r)
     } else {

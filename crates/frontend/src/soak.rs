@@ -23,7 +23,7 @@ use ssbvb_passes::Profiling;
 use ssbvb_voxel::camera::Camera;
 
 use crate::faults::{Fault, Recoveries, loses_device_at, runs_out_of_memory_at};
-use crate::session::{GpuSession, SessionSource};
+use ssbvb_engine::session::{GpuSession, SessionSource};
 
 /// How the camera moves during a soak.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]

@@ -79,7 +79,7 @@ fn arrays_render_what_the_reference_sees_and_dense_equals_sparse() {
     let hits = ssbvb_passes::measure::gbuffer_hits(&gpu.ctx, &gpu.renderer).unwrap();
     let reference = ssbvb_tests::reference_of(&scene, &camera, SIZE);
     let level = scene.objects[0].asset.lods.len() - 1;
-    assert_eq!(level, 5, "20 cells need the 32-cell grid");
+    assert_eq!(level, 4, "the ball's 15 cells across need the 16-cell grid");
     let r = accuracy::compare(&reference, &hits, &[PLACEMENT.voxel_size]).unwrap();
     eprintln!(
         "arrays ({}): IoU {:.4}, same voxel {:.4}, {} px",
@@ -89,7 +89,7 @@ fn arrays_render_what_the_reference_sees_and_dense_equals_sparse() {
         r.covered_reference
     );
     // The framing keeps the whole ball in view, and it fills a good part of it.
-    assert!(r.covered_reference > 800, "{r:?}");
+    assert!(r.covered_reference > 600, "{r:?}");
     assert!(r.coverage_iou >= 0.98, "{r:?}");
     assert!(r.depth_error_voxels.median <= 0.75, "{r:?}");
 

@@ -65,11 +65,11 @@ fn check(args: &BenchArgs) -> Result<()> {
         .gpu_budget
         .iter()
         .flatten()
-        .find(|&&b| b == 0 || b > crate::budget::MAX_BUDGET_MIB)
+        .find(|&&b| b == 0 || b > ssbvb_engine::budget::MAX_BUDGET_MIB)
     {
         anyhow::bail!(
             "--gpu-budget: {b} is not a budget from 1 to {} MiB",
-            crate::budget::MAX_BUDGET_MIB
+            ssbvb_engine::budget::MAX_BUDGET_MIB
         );
     }
     Ok(())

@@ -450,7 +450,7 @@ impl Viewer {
         // Animated objects at the time since start.
         if let Some(animator) = &self.animator {
             let t = self.started.elapsed().as_secs_f64();
-            match crate::animation::update_all(
+            match ssbvb_engine::animation::update_all(
                 &self.gpu.ctx,
                 &mut self.scene,
                 animator,

@@ -214,7 +214,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     // Pages streamed per frame at most: a camera cut fills the view over a few frames
     // rather than stalling one.
     let streaming = match args.gpu_budget.or(gpu_budget_mib) {
-        Some(mib) => Some(crate::budget::options(
+        Some(mib) => Some(ssbvb_engine::budget::options(
             mib,
             &page_sources,
             VIEW_PAGES_PER_FRAME,

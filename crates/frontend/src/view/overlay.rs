@@ -529,7 +529,7 @@ fn budget(
     ui.horizontal(|ui| {
         ui.add(
             egui::DragValue::new(draft)
-                .range(1..=crate::budget::MAX_BUDGET_MIB)
+                .range(1..=ssbvb_engine::budget::MAX_BUDGET_MIB)
                 .suffix(" MiB"),
         );
         if ui.button("Apply budget").clicked() && *draft != current {

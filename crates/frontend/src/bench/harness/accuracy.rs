@@ -103,7 +103,7 @@ pub(crate) fn measure(s: &Setup, pipeline: ResolvedPipeline, with_psnr: bool) ->
         None => GpuScene::new(ctx, scene)?,
     };
     let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, s.size)?;
-    crate::budget::converge(ctx, &mut renderer, &mut gpu_scene, s.camera, 64)?;
+    ssbvb_engine::budget::converge(ctx, &mut renderer, &mut gpu_scene, s.camera, 64)?;
     // A temporal pipeline's still frame is measured converged: a whole jitter sequence.
     let warmup = if has_temporal_pass(&renderer.pipeline) {
         s.warmup

@@ -9,7 +9,7 @@ use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::cache::PrepareOutcome;
 use ssbvb_voxel::camera::Camera;
 
-use crate::bundled::assets_dir;
+use ssbvb_engine::assets::assets_dir;
 
 /// The bundled model `file` (relative to `assets`) at `level`, every coarser level
 /// included, from the asset cache (prepared on a miss), and how the cache answered.

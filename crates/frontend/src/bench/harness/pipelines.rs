@@ -6,7 +6,7 @@ use ssbvb_graph::{
 };
 
 use super::techniques::{PipelineSource, Technique};
-use crate::bundled::assets_dir;
+use ssbvb_engine::assets::assets_dir;
 
 /// The bundled pipeline `file` (in `assets/pipelines`), resolved.
 pub(crate) fn bundled_pipeline(file: &str) -> Result<ResolvedPipeline> {

@@ -31,7 +31,7 @@ use ssbvb_voxel::svo::LevelVoxels;
 use crate::bench::args::BenchArgs;
 use crate::bench::harness::{bench_camera, bundled_pipeline, median, one_object};
 use crate::bench::table::{Column, Fmt, Table, Value, size, write_report};
-use crate::bundled::assets_dir;
+use ssbvb_engine::assets::assets_dir;
 
 const DEFAULT_LEVELS: [u32; 3] = [7, 8, 9];
 /// Time step between animated frames (s) and the twist rate (degrees per second).

@@ -21,7 +21,7 @@ use ssbvb_voxel::reference;
 use crate::bench::args::BenchArgs;
 use crate::bench::harness::techniques::{Technique, refused};
 use crate::bench::harness::{bundled_asset, median, technique_pipeline, timed_frames};
-use crate::budget::PageSourceRef;
+use ssbvb_engine::budget::PageSourceRef;
 
 /// The paper's level (2048³).
 const LEVEL: u32 = 11;
@@ -131,7 +131,7 @@ pub(crate) fn run(
     };
     for t in techniques {
         let mut notes = Vec::new();
-        let options = crate::budget::options(budget_mib, &sources, usize::MAX, &mut notes)?;
+        let options = ssbvb_engine::budget::options(budget_mib, &sources, usize::MAX, &mut notes)?;
         let what = format!(
             "{} Figure 8 ({} objects, level {level})",
             t.name, out.objects
@@ -139,7 +139,8 @@ pub(crate) fn run(
         let measured = (|| -> Result<Figure8Time> {
             let mut s = GpuScene::streamed(ctx, scene.clone(), &options)?;
             let mut r = Renderer::new(ctx, &s, technique_pipeline(t)?, size)?;
-            let (n, converged) = crate::budget::converge(ctx, &mut r, &mut s, &camera, MAX_FRAMES)?;
+            let (n, converged) =
+                ssbvb_engine::budget::converge(ctx, &mut r, &mut s, &camera, MAX_FRAMES)?;
             let mut times = timed_frames(ctx, &mut r, &mut s, &camera, args.frames.unwrap_or(3))?;
             let hits = ssbvb_passes::measure::gbuffer_hits(ctx, &r)?;
             let acc = ssbvb_voxel::accuracy::compare(&reference, &hits, &cells)

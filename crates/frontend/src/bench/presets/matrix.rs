@@ -23,7 +23,7 @@ use crate::bench::harness::{
     technique_pipeline,
 };
 use crate::bench::report::{Results, Row};
-use crate::bundled::assets_dir;
+use ssbvb_engine::assets::assets_dir;
 
 /// The main matrix measured, and what its report needs besides.
 pub(crate) struct Measured {

@@ -128,7 +128,7 @@ fn measure(
     };
     let full = s.total_memory();
     let mut r = Renderer::new(ctx, &s, bundled_pipeline("ssbvb.ron")?, size)?;
-    let (n, converged) = crate::budget::converge(ctx, &mut r, &mut s, camera, MAX_FRAMES)?;
+    let (n, converged) = ssbvb_engine::budget::converge(ctx, &mut r, &mut s, camera, MAX_FRAMES)?;
     let times = timed_frames(ctx, &mut r, &mut s, camera, frames)?;
     let hits = ssbvb_passes::measure::gbuffer_hits(ctx, &r)?;
     let acc = ssbvb_voxel::accuracy::compare(reference, &hits, &[2.0 / (1u64 << level) as f64])
@@ -234,13 +234,18 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
 fn measure_level(cfg: &Config, level: u32, out: &mut Outcome) -> Result<()> {
     let (ctx, size) = (cfg.ctx, cfg.size);
     let (asset, outcome) = bundled_bunny(level)?;
-    let source = [crate::budget::PageSourceRef::of(&outcome, level)];
+    let source = [ssbvb_engine::budget::PageSourceRef::of(&outcome, level)];
     let reference = reference_at(&asset, level, cfg.camera, size);
     let mut base_ms = None;
     for budget in std::iter::once(None).chain(cfg.budgets.iter().map(|&b| Some(b))) {
         let mut notes = Vec::new();
         let options = match budget {
-            Some(b) => Some(crate::budget::options(b, &source, usize::MAX, &mut notes)?),
+            Some(b) => Some(ssbvb_engine::budget::options(
+                b,
+                &source,
+                usize::MAX,
+                &mut notes,
+            )?),
             None => None,
         };
         let what = format!(
@@ -290,7 +295,8 @@ fn measure_level(cfg: &Config, level: u32, out: &mut Outcome) -> Result<()> {
     }
     if level == FLY.0 {
         let mut notes = Vec::new();
-        let options = crate::budget::options(FLY.1, &source, FLY_PAGES_PER_FRAME, &mut notes)?;
+        let options =
+            ssbvb_engine::budget::options(FLY.1, &source, FLY_PAGES_PER_FRAME, &mut notes)?;
         match fly_through(ctx, &asset, level, size, &options) {
             Ok(f) => out.fly = Some(f),
             Err(e) if does_not_fit(&e) => out.skipped.push(format!("fly-through: {e:#}")),
@@ -356,7 +362,7 @@ fn fly_through(
     let mut s = GpuScene::streamed(ctx, one_object(asset, LodPolicy::Fixed(level)), options)?;
     let mut r = Renderer::new(ctx, &s, bundled_pipeline("ssbvb.ron")?, size)?;
     // The first view converges first (a start-up, not a stall).
-    crate::budget::converge(ctx, &mut r, &mut s, &fly_camera(0, n), MAX_FRAMES)?;
+    ssbvb_engine::budget::converge(ctx, &mut r, &mut s, &fly_camera(0, n), MAX_FRAMES)?;
     let start = s.streaming_stats().map_or(0, |st| st.pages_streamed);
     let (mut times, mut per_frame, mut resident) = (Vec::new(), Vec::new(), 0u64);
     let mut last = start;

@@ -28,7 +28,7 @@ use crate::bench::args::BenchArgs;
 use crate::bench::harness::{TimedFrames, bundled_pipeline};
 use crate::bench::plot::{Series, plot};
 use crate::bench::table::{Column, Fmt, Table, Value, size, write_report};
-use crate::bundled::assets_dir;
+use ssbvb_engine::assets::assets_dir;
 
 /// Monte Carlo rays per term and receiver.
 const SAMPLES: u32 = 256;
@@ -206,7 +206,8 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         ("default.ron", default_scene_knobs(d)),
         ("bunnies_64.ron", wide_scene_knobs(d)),
     ] {
-        let loaded = crate::scene_file::load(&assets_dir().join("scenes").join(file), &NoProgress)?;
+        let loaded =
+            ssbvb_engine::scene_file::load(&assets_dir().join("scenes").join(file), &NoProgress)?;
         let s = SceneRun {
             ctx: &ctx,
             scene: &loaded.scene,

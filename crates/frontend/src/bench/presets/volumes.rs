@@ -35,7 +35,7 @@ use ssbvb_voxel::rgba_volume::sources::{Cloud, from_mesh_coverage};
 use crate::bench::args::BenchArgs;
 use crate::bench::harness::TimedFrames;
 use crate::bench::table::{Column, Fmt, Table, size, write_report};
-use crate::bundled::assets_dir;
+use ssbvb_engine::assets::assets_dir;
 
 /// The default knobs as `volumetric.ron` writes them (the rows replace this text).
 const DEFAULT_KNOBS: &str = "VolumeSlices(slice_spacing: 0.5, mip_bias: 0.0)";

@@ -53,7 +53,7 @@ impl GpuParts {
             ctx.refuse_allocation(crate::faults::INJECTED_OOM_MIN_BYTES);
         }
         let blit = Blit::new(ctx, gpu.config.format)?;
-        let mut rooms = crate::animation::rooms(&loaded.animated);
+        let mut rooms = ssbvb_engine::animation::rooms(&loaded.animated);
         rooms.extend(loaded.brush.iter().flat_map(|b| b.rooms()));
         let scene = loaded.scene.clone();
         let scene = match &loaded.streaming {
