@@ -10,8 +10,9 @@ use ssbvb_gpu::AdapterVerdict;
 use crate::adapter_cmd::limits;
 
 fn said(c: PipelineChoice) -> PipelineChoice {
+    // The message names the file already (`the calibration was ignored (FILE: why)`).
     for w in &c.warnings {
-        eprintln!("warning: {w}");
+        eprintln!("warning: {}", w.message);
     }
     c
 }
