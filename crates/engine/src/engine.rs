@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use ssbvb_gpu::scene::ObjectMemory;
 use ssbvb_gpu::{DeviceLimits, wgpu};
-use ssbvb_passes::{FrameCounters, PassTiming, Profiling};
+use ssbvb_passes::PassTiming;
 use ssbvb_voxel::camera::Camera;
 
 use crate::choice::{choose, resolve_pipeline};
@@ -29,8 +29,6 @@ pub struct RenderOptions {
     pub max_frames: usize,
     /// Seconds at which animated objects are drawn.
     pub time: f64,
-    /// Count each frame's work (march steps, rays: [`Engine::counters`]).
-    pub count_work: bool,
     /// Rays find their instances in their screen tile's list (`false`: the hierarchy).
     pub instance_lists: bool,
     /// A host's device to draw with (`None`: the engine makes its own).
@@ -46,7 +44,6 @@ impl Default for RenderOptions {
             gpu_budget_mib: None,
             max_frames: 64,
             time: 0.0,
-            count_work: false,
             instance_lists: true,
             host: None,
         }
@@ -114,7 +111,7 @@ impl Engine {
             size: options.size,
             time_submissions: false,
             instance_lists: options.instance_lists,
-            counting: options.count_work,
+            counting: false,
             limits: options.limits,
             host: options.host.clone(),
         };
@@ -178,14 +175,8 @@ impl Engine {
             &self.camera,
             self.max_frames,
         )?;
-        let profiling = if s.ctx.report().is_software {
-            Profiling::TimestampsAndWall
-        } else {
-            Profiling::Timestamps
-        };
-        let stats = s
-            .renderer
-            .render(&s.ctx, &mut s.scene, &self.camera, profiling)?;
+        let stats =
+            crate::timing::profiled_frame(&s.ctx, &mut s.renderer, &mut s.scene, &self.camera)?;
         Ok(FrameReport {
             passes: stats.passes,
             frame_wall_ms: stats.frame_wall_ms,
@@ -253,9 +244,8 @@ impl Engine {
             )));
         }
         let s = &mut self.gpu;
-        let mut renderer =
+        let renderer =
             ssbvb_passes::Renderer::new(&s.ctx, &s.scene, self.source.pipeline.clone(), size)?;
-        renderer.set_counting(self.source.counting);
         s.renderer = renderer;
         self.source.size = size;
         Ok(())
@@ -286,9 +276,12 @@ impl Engine {
         self.gpu.ctx.report().to_string()
     }
 
-    /// What the last frame counted (with [`RenderOptions::count_work`]).
-    pub fn counters(&self) -> Result<FrameCounters, EngineError> {
-        Ok(self.gpu.renderer.counters(&self.gpu.ctx)?)
+    /// Draws the camera's view once more counting its work (march steps, rays, boxes
+    /// tested, the SSBVB fill), untimed: the counters of the frame [`Engine::render`] drew
+    /// and timed without them ([`crate::timing`]). The image stays that frame's.
+    pub fn count(&mut self) -> Result<crate::timing::Counted, EngineError> {
+        let s = &mut self.gpu;
+        crate::timing::counted_frame(&s.ctx, &mut s.renderer, &mut s.scene, &self.camera)
     }
 
     /// GPU memory per voxel object.

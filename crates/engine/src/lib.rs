@@ -59,6 +59,7 @@ mod error;
 pub mod forms;
 pub mod scene_file;
 pub mod session;
+pub mod timing;
 mod warning;
 
 pub use content::{Content, DEFAULT_MODEL_LEVEL, clipping_warnings};

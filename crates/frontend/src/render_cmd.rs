@@ -13,7 +13,6 @@ use crate::cli_values::{parse_samples, parse_vec3};
 use serde::Serialize;
 use ssbvb_engine::{Content, clipping_warnings};
 use ssbvb_gpu::scene::Scene;
-use ssbvb_passes::Profiling;
 use ssbvb_voxel::camera::Camera;
 
 use crate::pipeline_cmd::parse_size;
@@ -412,7 +411,7 @@ fn render_gpu(
         size: args.size,
         time_submissions: args.time_submissions,
         instance_lists: args.instance_walk == crate::cli_values::InstanceWalk::Lists,
-        counting: true,
+        counting: false,
         limits: crate::adapter_cmd::limits(),
         host: None,
     };
@@ -422,11 +421,6 @@ fn render_gpu(
     )?;
     warnings.extend(opened.warnings);
     let mut session = opened.session;
-    let profiling = if session.ctx.report().is_software {
-        Profiling::TimestampsAndWall
-    } else {
-        Profiling::Timestamps
-    };
     // Warm-up frames (pipeline caches, lazy allocations; under a budget, until no page
     // is missing), then the measured one.
     let (frames, converged) = ssbvb_engine::budget::converge(
@@ -475,7 +469,8 @@ fn render_gpu(
         mut renderer,
         animation,
     } = session;
-    let stats = renderer.render(&ctx, &mut gpu_scene, &camera, profiling)?;
+    // Timed without counters; the work is counted in a frame of its own below.
+    let stats = ssbvb_engine::timing::profiled_frame(&ctx, &mut renderer, &mut gpu_scene, &camera)?;
     let out = ctx.read_texture(
         &renderer.output().texture,
         ssbvb_gpu::wgpu::TextureAspect::All,
@@ -485,8 +480,9 @@ fn render_gpu(
     if let Some(path) = &args.voxel_mask {
         write_voxel_mask(&ctx, &renderer, path, (w, h))?;
     }
-    let fill = renderer.fill_count(&ctx)?;
-    let counters = renderer.counters(&ctx)?;
+    let counted =
+        ssbvb_engine::timing::counted_frame(&ctx, &mut renderer, &mut gpu_scene, &camera)?;
+    let (fill, counters) = (counted.fill_count, counted.counters);
     Ok(Report {
         output: args.output.display().to_string(),
         mode: "gpu",

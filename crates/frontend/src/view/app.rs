@@ -470,8 +470,9 @@ impl Viewer {
         // Counted from the last rebuild, so a new pipeline is measured at its first frame.
         let sample_frame = self.frame - self.sample_base;
         let profiling = self.stats.profiling(sample_frame);
-        // The sampled frame counts its work: the direct form (`RayMarchGBuffer`) has a fill
-        // count only then; other frames run the passes' uncounted variants.
+        // The counted frame (never a timed one) counts its work: the direct form
+        // (`RayMarchGBuffer`) has a fill count only then; other frames run the passes'
+        // uncounted variants.
         self.renderer
             .set_counting(Stats::samples_fill(sample_frame));
         match self
@@ -521,6 +522,7 @@ impl Viewer {
             size: self.gpu.size(),
             streaming: self.scene.streaming_stats(),
             brush: self.brush.as_ref().map(|b| b.view()),
+            warnings: &options.warnings,
         };
         let overlay_state = &mut self.overlay;
         let mut actions = Vec::new();

@@ -168,7 +168,9 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         animated,
         ..
     } = content;
-    notes.extend(warnings.iter().map(|w| format!("warning: {w}")));
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
     if !animated.is_empty() && args.gpu_budget.or(gpu_budget_mib).is_some() {
         anyhow::bail!("animated objects cannot be paged under a GPU budget; drop --gpu-budget");
     }
@@ -244,6 +246,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         save_on_exit: args.save_on_exit.clone(),
         faults: args.inject_fault.clone(),
         orbit_deg: args.orbit,
+        warnings,
     };
     let mut app = app::App::new(
         options,

@@ -122,6 +122,8 @@ pub struct OverlayView<'a> {
     pub streaming: Option<&'a ssbvb_gpu::scene::StreamingStats>,
     /// With --brush: its settings and state.
     pub brush: Option<BrushView>,
+    /// The content's and the choice's warnings, each naming its file or field.
+    pub warnings: &'a [String],
 }
 
 /// Overlay state kept between frames: knob values being edited.
@@ -165,6 +167,12 @@ pub fn draw(ctx: &egui::Context, view: &OverlayView<'_>, state: &mut OverlayStat
         .show(ctx, |ui| {
             if let Some(n) = view.notice {
                 ui.colored_label(Color32::from_rgb(255, 190, 90), n);
+                ui.separator();
+            }
+            for w in view.warnings {
+                ui.colored_label(Color32::from_rgb(255, 190, 90), format!("warning: {w}"));
+            }
+            if !view.warnings.is_empty() {
                 ui.separator();
             }
             performance(ui, view);

@@ -82,9 +82,11 @@ impl Stats {
         }
     }
 
-    /// Whether frame `frame` should read the fill count back.
+    /// Whether frame `frame` counts its work and reads the fill count back: the frame after
+    /// a wall-time sample, never a profiled frame, so pass times are of frames that do the
+    /// work of every other frame (`ssbvb_engine::timing`).
     pub fn samples_fill(frame: u64) -> bool {
-        frame.is_multiple_of(SLOW_SAMPLE_EVERY)
+        frame % SLOW_SAMPLE_EVERY == 1
     }
 
     /// Takes in what `Renderer::render` returned.
@@ -139,6 +141,21 @@ mod tests {
             .count();
         assert_eq!(sampled, 10);
         assert_eq!(s.profiling(0), Profiling::TimestampsAndWall);
+    }
+
+    /// No frame is both timed and counted: the counted variants' atomics never reach the
+    /// pass times shown.
+    #[test]
+    fn counted_frames_are_never_profiled_frames() {
+        for software in [true, false] {
+            let s = Stats::new(&adapter(true, software));
+            let counted: Vec<u64> = (0..300).filter(|f| Stats::samples_fill(*f)).collect();
+            assert_eq!(counted.len(), 10);
+            assert!(
+                counted.iter().all(|f| s.profiling(*f) == Profiling::Off),
+                "software {software}"
+            );
+        }
     }
 
     #[test]

@@ -14,7 +14,7 @@ use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::reference::{ReferenceImage, SampleGrid};
 
-use super::frames::{gpu_timed_frames, profiling, timed_frames};
+use super::frames::{gpu_timed_frames, timed_frames};
 use super::models::one_object;
 
 /// What one measured configuration gave.
@@ -117,11 +117,12 @@ pub(crate) fn measure(s: &Setup, pipeline: ResolvedPipeline, with_psnr: bool) ->
     ctx.wait_idle()?;
     let times = timed_frames(ctx, &mut renderer, &mut gpu_scene, s.camera, s.frames)?;
     let gpu_times = gpu_timed_frames(ctx, &mut renderer, &mut gpu_scene, s.camera, s.frames)?;
-    // Only the profiled frame counts its work (the timed ones pay for no counters).
-    renderer.set_counting(true);
-    let stats = renderer.render(ctx, &mut gpu_scene, s.camera, profiling(ctx))?;
-    let fill = renderer.fill_count(ctx)?;
-    let counters = renderer.counters(ctx)?;
+    // Pass times from a frame doing the timed frames' work; the work counted in a frame
+    // of its own.
+    let stats = ssbvb_engine::timing::profiled_frame(ctx, &mut renderer, &mut gpu_scene, s.camera)?;
+    let counted =
+        ssbvb_engine::timing::counted_frame(ctx, &mut renderer, &mut gpu_scene, s.camera)?;
+    let (fill, counters) = (counted.fill_count, counted.counters);
     let hits = ssbvb_passes::measure::gbuffer_hits(ctx, &renderer)?;
     let acc = ssbvb_voxel::accuracy::compare(s.reference, &hits, &[2.0 / (1u64 << s.level) as f64])
         .map_err(|e| anyhow::anyhow!("{e}"))?;

@@ -62,19 +62,10 @@ pub(crate) fn gpu_timed_frames(
     Ok(Some(times))
 }
 
-/// The profiling of a measured frame: per-pass wall times on a software adapter, whose
-/// timestamps are unreliable; GPU timestamps elsewhere.
-pub(crate) fn profiling(ctx: &GpuContext) -> Profiling {
-    if ctx.report().is_software {
-        Profiling::TimestampsAndWall
-    } else {
-        Profiling::Timestamps
-    }
-}
-
 /// Frames of one renderer: its median frame time over `frames` timed frames after one
-/// warm-up, then one profiled frame (see [`profiling`]) that also counts the frame's work
-/// (`Renderer::counters`).
+/// warm-up, one profiled frame doing the same work (`ssbvb_engine::timing`), then one
+/// frame of its own that counts the work (`Renderer::counters` and the fill count read
+/// after [`TimedFrames::run`] are that frame's).
 pub(crate) struct TimedFrames {
     /// Median wall time of the timed frames (ms).
     pub(crate) frame_ms: f64,
@@ -95,15 +86,16 @@ impl TimedFrames {
         camera: &Camera,
         frames: usize,
     ) -> Result<Self> {
-        // Timed frames pay for no counters; the profiled frame counts for the report.
+        // Neither the timed nor the profiled frames pay for counters.
         renderer.set_counting(false);
         renderer.render(ctx, gpu_scene, camera, Profiling::Off)?;
         ctx.wait_idle()?;
         let mut times = timed_frames(ctx, renderer, gpu_scene, camera, frames)?;
         let frame_gpu_ms =
             gpu_timed_frames(ctx, renderer, gpu_scene, camera, frames)?.map(|mut g| median(&mut g));
-        renderer.set_counting(true);
-        let stats = renderer.render(ctx, gpu_scene, camera, profiling(ctx))?;
+        let stats = ssbvb_engine::timing::profiled_frame(ctx, renderer, gpu_scene, camera)?;
+        // Counted last, so what callers read back after this is the counted frame's.
+        ssbvb_engine::timing::counted_frame(ctx, renderer, gpu_scene, camera)?;
         Ok(Self {
             frame_ms: median(&mut times),
             frame_gpu_ms,

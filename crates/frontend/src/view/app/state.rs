@@ -44,6 +44,9 @@ pub struct Options {
     pub faults: Vec<crate::faults::Fault>,
     /// Automation: degrees the orbit camera turns every frame after the first.
     pub orbit_deg: Option<f64>,
+    /// What the content's preparation and the pipeline's choice said (a missing material
+    /// or texture, …): shown in the overlay.
+    pub warnings: Vec<String>,
 }
 
 /// What is loaded before the window exists.
