@@ -119,8 +119,76 @@ struct Step {
     stdout: String,
 }
 
-/// The steps, cheapest first (see the module docs).
-fn steps(out: &Path, frames: u32, skip_paper: bool) -> Vec<Step> {
+/// One SSBVB form of the engine's table, as `ssbvb pipeline forms --json` lists it.
+#[derive(Debug, Clone, PartialEq)]
+struct Form {
+    /// Its technique name (`ssbvb-direct`).
+    name: String,
+    /// Its pipeline file, relative to `assets/`.
+    file: String,
+}
+
+impl Form {
+    /// Its label in the render step's file names (`direct`; the paper's raster form keeps
+    /// its old label, `raster`).
+    fn label(&self) -> String {
+        match self.name.as_str() {
+            "ssbvb-unique" => "raster".into(),
+            n => n.trim_start_matches("ssbvb-").into(),
+        }
+    }
+}
+
+/// The forms of the engine's table, from the binary that will be measured.
+fn forms_of(bin: &Path, root: &Path) -> Result<Vec<Form>> {
+    let out = ssbvb(bin, root)
+        .args(["pipeline", "forms", "--json"])
+        .output()
+        .context("running ssbvb pipeline forms")?;
+    if !out.status.success() {
+        bail!(
+            "ssbvb pipeline forms --json failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let table: serde_json::Value =
+        serde_json::from_slice(&out.stdout).context("reading ssbvb pipeline forms --json")?;
+    let text = |f: &serde_json::Value, key: &str| f[key].as_str().map(str::to_string);
+    table
+        .as_array()
+        .and_then(|forms| {
+            forms
+                .iter()
+                .map(|f| {
+                    Some(Form {
+                        name: text(f, "name")?,
+                        file: text(f, "file")?,
+                    })
+                })
+                .collect::<Option<Vec<Form>>>()
+        })
+        .filter(|f| !f.is_empty())
+        .context("ssbvb pipeline forms --json: not a list of forms with a name and a file")
+}
+
+/// The ESVO and octree baselines measured beside the forms.
+const BASELINES: &str = "esvo,esvo-compute,esvo-all-compute";
+
+/// The steps, cheapest first (see the module docs), over the engine's `forms`.
+fn steps(out: &Path, frames: u32, skip_paper: bool, forms: &[Form]) -> Vec<Step> {
+    let names = |keep: &dyn Fn(&Form) -> bool| -> Vec<String> {
+        forms
+            .iter()
+            .filter(|f| keep(f))
+            .map(|f| f.name.clone())
+            .collect()
+    };
+    // Every form; the crowd leaves out the paper's raster form (one billboard per visible
+    // voxel of 4096 bunnies) and adds the peeled filter.
+    let all = names(&|_| true).join(",");
+    let crowd = names(&|f| f.name != "ssbvb-unique").join(",");
+    let forms_techniques = format!("ssbvb,{all},{BASELINES},octree,octree-compute");
+    let crowd_techniques = format!("ssbvb,{crowd},ssbvb-peel,{BASELINES},octree-compute");
     let o = |sub: &str| out.join(sub).display().to_string();
     let f = frames.to_string();
     let mut v = vec![Step {
@@ -139,7 +207,7 @@ fn steps(out: &Path, frames: u32, skip_paper: bool) -> Vec<Step> {
             "--sizes",
             "1280x720,1920x1080",
             "--techniques",
-            "ssbvb,ssbvb-direct,ssbvb-pixel,ssbvb-compute,ssbvb-all-compute,ssbvb-unique,ssbvb-splat,esvo,esvo-compute,esvo-all-compute,octree,octree-compute",
+            &forms_techniques,
             "--frames",
             &f,
             "--out",
@@ -153,13 +221,13 @@ fn steps(out: &Path, frames: u32, skip_paper: bool) -> Vec<Step> {
         ("bunny", "assets/scenes/default.ron"),
         ("grid4096", "assets/scenes/bunnies_4096.ron"),
     ];
-    let forms = [
-        ("default", None),
-        ("direct", Some("assets/pipelines/ssbvb_direct.ron")),
-        ("raster", Some("assets/pipelines/ssbvb.ron")),
-        ("splat", Some("assets/pipelines/ssbvb_splat.ron")),
-        ("compute", Some("assets/pipelines/ssbvb_compute.ron")),
-    ];
+    let rendered: Vec<(String, Option<String>)> = std::iter::once(("default".into(), None))
+        .chain(
+            forms
+                .iter()
+                .map(|f| (f.label(), Some(format!("assets/{}", f.file)))),
+        )
+        .collect();
     v.push(Step {
         name: "crowd".into(),
         args: [
@@ -171,7 +239,7 @@ fn steps(out: &Path, frames: u32, skip_paper: bool) -> Vec<Step> {
             "--sizes",
             "1280x720",
             "--techniques",
-            "ssbvb,ssbvb-direct,ssbvb-pixel,ssbvb-compute,ssbvb-all-compute,ssbvb-peel,ssbvb-splat,esvo,esvo-compute,esvo-all-compute,octree-compute",
+            &crowd_techniques,
             "--frames",
             &f,
             "--out",
@@ -182,7 +250,7 @@ fn steps(out: &Path, frames: u32, skip_paper: bool) -> Vec<Step> {
         stdout: "crowd/scale.log".into(),
     });
     for (scene_name, scene) in scenes {
-        for (form_name, pipeline) in forms {
+        for (form_name, pipeline) in &rendered {
             let name = format!("{scene_name}_{form_name}");
             let mut args: Vec<String> = [
                 "render",
@@ -272,7 +340,17 @@ pub fn run(root: &Path, args: &[String]) -> Result<bool> {
             .out
             .clone()
             .unwrap_or_else(|| root.join("docs/bench/<gpu>"));
-        for s in steps(&out, o.frames, o.skip_paper) {
+        let forms = if bin.is_file() {
+            forms_of(&bin, root)?
+        } else {
+            eprintln!(
+                "xtask: no {}: the forms come from the binary (`ssbvb pipeline forms`); \
+                 build it (cargo build --release -p ssbvb) to list every step",
+                bin.display()
+            );
+            Vec::new()
+        };
+        for s in steps(&out, o.frames, o.skip_paper, &forms) {
             println!("{}: ssbvb {} > {}", s.name, s.args.join(" "), s.stdout);
         }
         return Ok(true);
@@ -307,7 +385,8 @@ pub fn run(root: &Path, args: &[String]) -> Result<bool> {
     let mut summary =
         format!("# gpu-bench on {adapter}\n\n| step | status | s |\n|---|---|---:|\n");
     let mut all_ok = true;
-    for s in steps(&out, o.frames, o.skip_paper) {
+    let forms = forms_of(&bin, root)?;
+    for s in steps(&out, o.frames, o.skip_paper, &forms) {
         eprintln!("xtask: gpu-bench: {} (ssbvb {})", s.name, s.args.join(" "));
         let start = Instant::now();
         let result = ssbvb(&bin, root).args(&s.args).output();
@@ -405,19 +484,45 @@ mod tests {
         assert_eq!(chosen_adapter("adapters:\n  (none)\n"), None);
     }
 
+    /// The engine's table as `ssbvb pipeline forms --json` printed it at the time of
+    /// writing (the binary is not built by this test).
+    fn table() -> Vec<Form> {
+        [
+            ("ssbvb-direct", "pipelines/ssbvb_direct.ron"),
+            ("ssbvb-pixel", "pipelines/ssbvb_pixel.ron"),
+            ("ssbvb-compute", "pipelines/ssbvb_compute.ron"),
+            ("ssbvb-all-compute", "pipelines/ssbvb_all_compute.ron"),
+            ("ssbvb-splat", "pipelines/ssbvb_splat.ron"),
+            ("ssbvb-unique", "pipelines/ssbvb.ron"),
+        ]
+        .map(|(name, file)| Form {
+            name: name.into(),
+            file: file.into(),
+        })
+        .to_vec()
+    }
+
     #[test]
     fn the_breakdown_runs_before_the_paper_preset_and_every_form_is_rendered() {
-        let s = steps(Path::new("/o"), 5, false);
+        let s = steps(Path::new("/o"), 5, false, &table());
         assert_eq!(s.first().unwrap().name, "calibrate");
         assert_eq!(s[1].name, "forms");
         assert_eq!(s[2].name, "crowd");
         assert_eq!(s.last().unwrap().name, "paper");
         assert!(s[1].args.join(" ").contains(
-            "ssbvb,ssbvb-direct,ssbvb-pixel,ssbvb-compute,ssbvb-all-compute,ssbvb-unique,\
-             ssbvb-splat,esvo,esvo-compute,esvo-all-compute"
+            "ssbvb,ssbvb-direct,ssbvb-pixel,ssbvb-compute,ssbvb-all-compute,ssbvb-splat,\
+             ssbvb-unique,esvo,esvo-compute,esvo-all-compute"
         ));
+        assert!(!s[2].args.join(" ").contains("ssbvb-unique"));
+        assert!(s[2].args.join(" ").contains("ssbvb-peel"));
         let renders: Vec<&Step> = s.iter().filter(|s| s.args[0] == "render").collect();
-        assert_eq!(renders.len(), 10);
+        // Two scenes, the default and each of the six forms.
+        assert_eq!(renders.len(), 14);
+        assert!(
+            renders
+                .iter()
+                .any(|r| r.args.join(" ").contains("render/bunny_raster.png"))
+        );
         assert!(
             renders
                 .iter()
@@ -433,7 +538,7 @@ mod tests {
             s.iter()
                 .all(|s| s.args.contains(&"5".to_string()) || s.args[0] == "render")
         );
-        let skipped = steps(Path::new("/o"), 5, true);
+        let skipped = steps(Path::new("/o"), 5, true, &table());
         assert!(skipped.iter().all(|s| s.name != "paper"));
     }
 }

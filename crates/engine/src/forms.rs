@@ -17,7 +17,7 @@ use serde::Serialize;
 use ssbvb_gpu::AdapterVerdict;
 
 /// One SSBVB form.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub struct Form {
     /// Its name: the bench technique and what a user names it by (`ssbvb-direct`).
     pub name: &'static str,

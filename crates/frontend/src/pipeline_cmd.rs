@@ -29,6 +29,14 @@ pub enum PipelineCommand {
         #[arg(long, conflicts_with = "name")]
         markdown: bool,
     },
+    /// List the SSBVB forms (the engine's one table): each form's name, pipeline file,
+    /// what it is, whether the adapter rule may choose it (and why) and whether the
+    /// calibration measures it.
+    Forms {
+        /// Print the table as JSON (what `cargo xtask gpu-bench` reads).
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 /// Parses `WxH`.
@@ -59,6 +67,10 @@ pub fn run(cmd: &PipelineCommand) -> anyhow::Result<ExitCode> {
             }
             Ok(ExitCode::SUCCESS)
         }
+        PipelineCommand::Forms { json } => {
+            print!("{}", forms_text(*json)?);
+            Ok(ExitCode::SUCCESS)
+        }
         PipelineCommand::Check { file, size } => match ssbvb_graph::resolve_file(file) {
             Ok(p) => {
                 print!("{}", p.describe(*size));
@@ -70,4 +82,26 @@ pub fn run(cmd: &PipelineCommand) -> anyhow::Result<ExitCode> {
             }
         },
     }
+}
+
+/// `pipeline forms`: the engine's table of forms as text or JSON.
+fn forms_text(json: bool) -> anyhow::Result<String> {
+    let forms = &ssbvb_engine::FORMS;
+    if json {
+        return Ok(serde_json::to_string_pretty(forms)? + "\n");
+    }
+    let mut out = String::from("SSBVB forms, in the order the rule and the calibration prefer:\n");
+    for f in forms {
+        let rule = match (f.rule, f.cpu_only) {
+            (Some(_), true) => "the rule's choice on CPU adapters",
+            (Some(_), false) => "the rule's choice where it fits",
+            (None, _) => "only a calibration picks it",
+        };
+        let calibrated = if f.calibrated { ", calibrated" } else { "" };
+        out.push_str(&format!(
+            "  {:<18} assets/{:<32} {}; {rule}{calibrated}\n",
+            f.name, f.file, f.what
+        ));
+    }
+    Ok(out)
 }
