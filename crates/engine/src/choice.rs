@@ -12,6 +12,30 @@ use crate::assets::assets_dir;
 use crate::forms::{Form, PipelineChoice, choose_among, rule_forms};
 use crate::{EngineError, Warning};
 
+/// The limits a program's devices are made with when it does not say otherwise: set once
+/// by a command line's `--limits` ([`set_process_limits`]).
+static PROCESS_LIMITS: std::sync::OnceLock<DeviceLimits> = std::sync::OnceLock::new();
+
+/// Sets the limits of this process's devices (the first call wins).
+pub fn set_process_limits(limits: DeviceLimits) {
+    let _ = PROCESS_LIMITS.set(limits);
+}
+
+/// The limits of this process's devices ([`DeviceLimits::Adapter`] unless set).
+pub fn process_limits() -> DeviceLimits {
+    PROCESS_LIMITS.get().copied().unwrap_or_default()
+}
+
+/// A headless device on the best adapter that runs every one of `pipelines`, under
+/// [`process_limits`].
+pub fn headless_context(pipelines: &[&ResolvedPipeline]) -> Result<GpuContext, EngineError> {
+    Ok(GpuContext::new_headless(&ssbvb_gpu::ContextOptions {
+        requirements: Some(requirements_of(pipelines)),
+        limits: process_limits(),
+        ..Default::default()
+    })?)
+}
+
 /// Resolves a pipeline file; the error lists every problem of the file with its line.
 pub fn resolve_pipeline(path: &Path) -> Result<ResolvedPipeline, EngineError> {
     ssbvb_graph::resolve_file(path).map_err(|e| EngineError::Pipeline(e.to_string()))

@@ -56,10 +56,12 @@ pub mod choice;
 mod content;
 mod engine;
 mod error;
+pub mod faults;
 pub mod forms;
 pub mod scene_file;
 pub mod session;
 pub mod timing;
+pub mod values;
 mod warning;
 
 pub use content::{Content, DEFAULT_MODEL_LEVEL, clipping_warnings};

@@ -3,7 +3,6 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::OnceLock;
 
 use anyhow::Result;
 use clap::Args;
@@ -44,18 +43,14 @@ impl LimitsArg {
     }
 }
 
-/// The limits every device of this process is created with: one per command, set from
-/// its `--limits` before it runs ([`set_limits`]).
-static LIMITS: OnceLock<DeviceLimits> = OnceLock::new();
-
-/// Sets the limits of this process's devices (the first call wins).
+/// Sets the limits of this process's devices from `--limits` (the first call wins).
 pub fn set_limits(limits: LimitsArg) {
-    let _ = LIMITS.set(limits.device());
+    ssbvb_engine::choice::set_process_limits(limits.device());
 }
 
 /// The limits of this process's devices.
 pub fn limits() -> DeviceLimits {
-    LIMITS.get().copied().unwrap_or_default()
+    ssbvb_engine::choice::process_limits()
 }
 
 /// What `pipelines` together need from an adapter.
@@ -65,11 +60,7 @@ pub fn requirements_of(pipelines: &[&ResolvedPipeline]) -> Requirements {
 
 /// A headless context on the best adapter that can run every one of `pipelines`.
 pub fn headless_context(pipelines: &[&ResolvedPipeline]) -> Result<GpuContext> {
-    Ok(GpuContext::new_headless(&ContextOptions {
-        requirements: Some(requirements_of(pipelines)),
-        limits: limits(),
-        ..Default::default()
-    })?)
+    Ok(ssbvb_engine::choice::headless_context(pipelines)?)
 }
 
 /// Resolves a pipeline file with the graph's error report as the message.

@@ -2,16 +2,7 @@
 
 use glam::DVec3;
 
-/// Parses a sample count of `--samples` (1 to 1024).
-pub(crate) fn parse_samples(s: &str) -> Result<u32, String> {
-    let n: u32 = s
-        .trim()
-        .parse()
-        .map_err(|e| format!("bad sample count `{s}`: {e}"))?;
-    ssbvb_voxel::reference::SampleGrid::from_count(n)
-        .map(|g| g.count())
-        .map_err(|e| e.to_string())
-}
+pub(crate) use ssbvb_engine::values::parse_samples;
 
 /// Parses `x,y,z`.
 pub fn parse_vec3(s: &str) -> Result<DVec3, String> {

@@ -1,13 +1,10 @@
 //! The `ssbvb` command-line tool.
 
 mod adapter_cmd;
-mod bench;
 mod calibrate_cmd;
 mod cli_values;
 mod decl_docs;
 mod export_cmd;
-mod faults;
-mod flip;
 mod pipeline_choice;
 mod pipeline_cmd;
 mod pipeline_kinds;
@@ -42,7 +39,7 @@ enum Command {
     Render(render_cmd::RenderArgs),
     /// Benchmark techniques × levels × resolutions against the CPU reference (CSV, JSON,
     /// Markdown).
-    Bench(bench::BenchArgs),
+    Bench(ssbvb_bench::BenchArgs),
     /// Voxelize a model: every LOD, sparse lookup pages, proxy meshes; cached on disk.
     Voxelize(voxelize_cmd::VoxelizeArgs),
     /// Measure each SSBVB form on this adapter (the bundled default scene) and keep the
@@ -80,7 +77,7 @@ fn main() -> ExitCode {
     }
     match &cli.command {
         Command::Adapter(a) => adapter_cmd::set_limits(a.limits),
-        Command::Bench(a) => adapter_cmd::set_limits(a.limits),
+        Command::Bench(a) => ssbvb_engine::choice::set_process_limits(a.limits),
         Command::Render(a) => adapter_cmd::set_limits(a.limits),
         Command::View(a) => adapter_cmd::set_limits(a.limits),
         Command::Calibrate(a) => adapter_cmd::set_limits(a.limits),
@@ -90,7 +87,7 @@ fn main() -> ExitCode {
         Command::Pipeline(c) => pipeline_cmd::run(&c),
         Command::Adapter(a) => pipeline_choice::choose(a.pipeline.clone(), None)
             .and_then(|c| adapter_cmd::run(&c.path(), &c.line())),
-        Command::Bench(a) => bench::run(&a).map(|_| ExitCode::SUCCESS),
+        Command::Bench(a) => ssbvb_bench::run(&a).map(|_| ExitCode::SUCCESS),
         Command::Render(a) => render_cmd::run(&a).map(|_| ExitCode::SUCCESS),
         Command::View(a) => view::run(&a).map(|_| ExitCode::SUCCESS),
         Command::Voxelize(a) => voxelize_cmd::run(&a).map(|_| ExitCode::SUCCESS),

@@ -23,11 +23,6 @@ pub fn choose(flag: Option<PathBuf>, scene: Option<PathBuf>) -> Result<PipelineC
     Ok(said(ssbvb_engine::choice::choose(flag, scene, limits())?))
 }
 
-/// The choice for this process's adapter and limits.
-pub fn default_for_adapter() -> Result<PipelineChoice> {
-    Ok(said(ssbvb_engine::choice::default_for_adapter(limits())?))
-}
-
 /// The adapter the rule picks and which of `files` it fits.
 pub fn adapter_and_fitting_forms(
     files: &[&'static str],

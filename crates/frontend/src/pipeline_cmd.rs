@@ -39,22 +39,7 @@ pub enum PipelineCommand {
     },
 }
 
-/// Parses `WxH`.
-pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("expected WxH, got `{s}`"))?;
-    let p = |v: &str| {
-        v.trim()
-            .parse::<u32>()
-            .map_err(|e| format!("bad size `{s}`: {e}"))
-    };
-    let (w, h) = (p(w)?, p(h)?);
-    if w == 0 || h == 0 || w > 16384 || h > 16384 {
-        return Err(format!("size must be 1..=16384 per side, got {w}x{h}"));
-    }
-    Ok((w, h))
-}
+pub use ssbvb_engine::values::parse_size;
 
 /// Runs a pipeline subcommand.
 pub fn run(cmd: &PipelineCommand) -> anyhow::Result<ExitCode> {

@@ -99,8 +99,8 @@ pub struct RenderArgs {
     /// `oom@FRAME` refuses the next large allocation and rebuilds the session there
     /// (`oom@0` without a soak: the first upload); under a budget the budget is halved
     /// until the scene fits, without one the run ends naming the resource.
-    #[arg(long, hide = true, value_parser = crate::faults::parse_fault)]
-    pub inject_fault: Vec<crate::faults::Fault>,
+    #[arg(long, hide = true, value_parser = ssbvb_engine::faults::parse_fault)]
+    pub inject_fault: Vec<ssbvb_engine::faults::Fault>,
     /// Time each GPU submission alone (the scene upload, the warm-up, the soak and the
     /// written frame) and list the longest per kind in `--json` `submissions` (a driver
     /// resets the GPU when one runs too long). Serializes the CPU and the GPU. After a
@@ -234,7 +234,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.reference && !args.inject_fault.is_empty() {
         bail!("--inject-fault injects GPU faults; --reference renders on the CPU");
     }
-    crate::faults::check_faults(&args.inject_fault, args.frames)?;
+    ssbvb_engine::faults::check_faults(&args.inject_fault, args.frames)?;
     let report = if args.reference {
         render_reference(args, &scene, &animated, camera, warnings, notes)?
     } else {
@@ -417,7 +417,7 @@ fn render_gpu(
     };
     let opened = source.open_refusing(
         &mut notes,
-        crate::faults::runs_out_of_memory_at(&args.inject_fault, 0) && args.frames == 1,
+        ssbvb_engine::faults::runs_out_of_memory_at(&args.inject_fault, 0) && args.frames == 1,
     )?;
     warnings.extend(opened.warnings);
     let mut session = opened.session;

@@ -9,7 +9,7 @@
 //!
 //! A frame whose device is lost (a driver reset, or `--inject-fault device-lost@FRAME`)
 //! opens a new session from the CPU-side state and is drawn again
-//! (`crate::faults`); the report counts the recoveries. `oom@FRAME` rebuilds the session
+//! (`ssbvb_engine::faults`); the report counts the recoveries. `oom@FRAME` rebuilds the session
 //! at that frame with its first large allocation refused.
 
 use std::time::Instant;
@@ -22,7 +22,7 @@ use ssbvb_gpu::scene::GpuScene;
 use ssbvb_passes::Profiling;
 use ssbvb_voxel::camera::Camera;
 
-use crate::faults::{Fault, Recoveries, loses_device_at, runs_out_of_memory_at};
+use ssbvb_engine::faults::{Fault, Recoveries, loses_device_at, runs_out_of_memory_at};
 use ssbvb_engine::session::{GpuSession, SessionSource};
 
 /// How the camera moves during a soak.
@@ -191,7 +191,7 @@ fn growth(start: u64, end: u64) -> f64 {
 /// by `faults`) opens a new session from `source` (warmed up to that frame's camera, at
 /// most `max_frames` frames) and is drawn again, unless the device was lost shortly
 /// before too. An `oom@FRAME` fault rebuilds the session at that frame with its first
-/// large allocation refused (`crate::faults`). Returns the session the soak ended on.
+/// large allocation refused (`ssbvb_engine::faults`). Returns the session the soak ended on.
 pub fn run(
     mut session: GpuSession,
     source: &mut SessionSource,

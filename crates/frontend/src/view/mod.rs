@@ -119,8 +119,8 @@ pub struct ViewArgs {
     /// Fault injection for tests: `device-lost@FRAME` destroys the device before frame
     /// FRAME, `oom@FRAME` rebuilds the GPU side there with its first large allocation
     /// refused (repeatable); the viewer recovers, keeping the brush edits.
-    #[arg(long, hide = true, value_parser = crate::faults::parse_fault)]
-    pub inject_fault: Vec<crate::faults::Fault>,
+    #[arg(long, hide = true, value_parser = ssbvb_engine::faults::parse_fault)]
+    pub inject_fault: Vec<ssbvb_engine::faults::Fault>,
     /// The device's limits: `adapter` (its own) or `webgpu` (WebGPU's defaults and no
     /// optional feature).
     #[arg(long, value_enum, default_value = "adapter")]

@@ -20,7 +20,7 @@ use super::super::overlay::OverlayState;
 use super::super::stats::Stats;
 use super::super::surface::WindowGpu;
 use super::state::{Loaded, Options, Viewer};
-use crate::faults::Recoveries;
+use ssbvb_engine::faults::Recoveries;
 
 /// Everything on the device.
 pub(super) struct GpuParts {
@@ -50,7 +50,7 @@ impl GpuParts {
         let gpu = WindowGpu::new(window.clone(), display.clone(), &requirements)?;
         let ctx = &gpu.ctx;
         if refuse {
-            ctx.refuse_allocation(crate::faults::INJECTED_OOM_MIN_BYTES);
+            ctx.refuse_allocation(ssbvb_engine::faults::INJECTED_OOM_MIN_BYTES);
         }
         let blit = Blit::new(ctx, gpu.config.format)?;
         let mut rooms = ssbvb_engine::animation::rooms(&loaded.animated);
@@ -114,9 +114,12 @@ impl GpuParts {
                 }
                 Err(e) => e,
             };
-            match (crate::faults::out_of_memory(&e), &mut loaded.streaming) {
-                (Some((resource, _)), _) if !crate::faults::is_scene_resource(&resource) => {
-                    return Err(e.context(crate::faults::frame_out_of_memory_hint()));
+            match (
+                ssbvb_engine::faults::out_of_memory(e.as_ref()),
+                &mut loaded.streaming,
+            ) {
+                (Some((resource, _)), _) if !ssbvb_engine::faults::is_scene_resource(&resource) => {
+                    return Err(e.context(ssbvb_engine::faults::frame_out_of_memory_hint()));
                 }
                 (Some((resource, bytes)), Some(o)) if o.budget_bytes > 1 << 20 => {
                     let mib = o.budget_bytes >> 20;
@@ -136,11 +139,11 @@ impl GpuParts {
 
 /// `e` with the flag that would help when it is a refused allocation without a budget.
 fn explain_out_of_memory(e: anyhow::Error, budgeted: bool) -> anyhow::Error {
-    match (crate::faults::out_of_memory(&e), budgeted) {
+    match (ssbvb_engine::faults::out_of_memory(e.as_ref()), budgeted) {
         (None, _) => e,
         (Some(_), false) => e.context(format!(
             "the scene does not fit the GPU's memory; {}",
-            crate::faults::out_of_memory_hint()
+            ssbvb_engine::faults::out_of_memory_hint()
         )),
         (Some(_), true) => {
             e.context("the scene does not fit the GPU's memory even under a 1 MiB budget")
@@ -167,7 +170,7 @@ impl Viewer {
             )))
         })?);
         let display = event_loop.owned_display_handle();
-        let refuse = crate::faults::runs_out_of_memory_at(&options.faults, 0);
+        let refuse = ssbvb_engine::faults::runs_out_of_memory_at(&options.faults, 0);
         let pipeline = loaded.watcher.current().clone();
         let mut loaded = loaded;
         let (parts, lowered) =

@@ -4,7 +4,7 @@
 //! policies set in the overlay), the pipeline file with its knob edits, the camera, the
 //! budget (pages stream in again over the next frames) and the brush edits, replayed in
 //! order so the rooms end as they were. The overlay and the window title say it happened.
-//! A device lost again within [`crate::faults::LOST_AGAIN_WITHIN`] frames ends the viewer
+//! A device lost again within [`ssbvb_engine::faults::LOST_AGAIN_WITHIN`] frames ends the viewer
 //! with an error.
 
 use anyhow::Result;
@@ -22,10 +22,10 @@ impl Viewer {
         let frame = self.frame as usize;
         if self.faults_injected_at != Some(self.frame) {
             self.faults_injected_at = Some(self.frame);
-            if crate::faults::loses_device_at(&options.faults, frame) {
+            if ssbvb_engine::faults::loses_device_at(&options.faults, frame) {
                 self.gpu.ctx.inject_device_loss();
             }
-            if frame > 0 && crate::faults::runs_out_of_memory_at(&options.faults, frame) {
+            if frame > 0 && ssbvb_engine::faults::runs_out_of_memory_at(&options.faults, frame) {
                 return Some(Fault::OutOfMemory);
             }
         }

@@ -19,7 +19,7 @@ use super::super::input::CameraInput;
 use super::super::overlay::OverlayState;
 use super::super::stats::Stats;
 use super::super::surface::WindowGpu;
-use crate::faults::Recoveries;
+use ssbvb_engine::faults::Recoveries;
 
 /// Options from the command line.
 pub struct Options {
@@ -41,7 +41,7 @@ pub struct Options {
     /// Where the edited objects are saved when the viewer closes.
     pub save_on_exit: Option<PathBuf>,
     /// Faults injected before given frames (`--inject-fault`, tests).
-    pub faults: Vec<crate::faults::Fault>,
+    pub faults: Vec<ssbvb_engine::faults::Fault>,
     /// Automation: degrees the orbit camera turns every frame after the first.
     pub orbit_deg: Option<f64>,
     /// What the content's preparation and the pipeline's choice said (a missing material

@@ -15,7 +15,7 @@ use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject, choose_level};
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
 
-use crate::bench::harness::{bench_camera, bundled_bunny, grid, grid_camera, one_object};
+use crate::harness::{bench_camera, bundled_bunny, grid, grid_camera, one_object};
 
 /// The finest level of the bunny asset.
 pub(super) const LEVEL: u32 = 8;

@@ -203,7 +203,7 @@ fn composite_error(
         &renderer.output().texture,
         ssbvb_gpu::wgpu::TextureAspect::All,
     )?;
-    let gpu = crate::render_cmd::to_rgba8(&out)?;
+    let gpu = crate::harness::engine::to_rgba8(&out)?;
     let reference = s.reference.to_rgba8();
     if gpu.len() != reference.len() || hits.len() * 4 != gpu.len() {
         bail!(

@@ -80,7 +80,7 @@ pub struct BenchArgs {
     pub levels: Option<Vec<u32>>,
     /// Image sizes to run instead of the preset's (comma-separated, e.g.
     /// `640x480,1280x720`).
-    #[arg(long, value_delimiter = ',', value_parser = crate::pipeline_cmd::parse_size)]
+    #[arg(long, value_delimiter = ',', value_parser = ssbvb_engine::values::parse_size)]
     pub sizes: Option<Vec<(u32, u32)>>,
     /// Techniques to run (comma-separated names; default: all).
     #[arg(long, value_delimiter = ',')]
@@ -102,19 +102,19 @@ pub struct BenchArgs {
     pub gpu_budget: Option<Vec<u64>>,
     /// Samples per pixel of the supersampled reference that `flip_mean` is measured
     /// against (1 to 1024).
-    #[arg(long, default_value_t = 16, value_parser = crate::cli_values::parse_samples)]
+    #[arg(long, default_value_t = 16, value_parser = ssbvb_engine::values::parse_samples)]
     pub flip_samples: u32,
     /// Fault injection for tests: `device-lost@ROW` destroys the device before the main
     /// matrix measures row ROW (from 0; repeatable). That row is reported failed and the
     /// rows after it run on a new device. `oom@ROW` refuses that row's first large
     /// allocation: the row is reported failed with the resource named.
-    #[arg(long, hide = true, value_parser = crate::faults::parse_fault)]
-    pub inject_fault: Vec<crate::faults::Fault>,
+    #[arg(long, hide = true, value_parser = ssbvb_engine::faults::parse_fault)]
+    pub inject_fault: Vec<ssbvb_engine::faults::Fault>,
     /// The device's limits: `adapter` (its own) or `webgpu` (WebGPU's defaults and no
     /// optional feature; the techniques' pipelines are checked against them up front, and
     /// what they need beyond them is named).
-    #[arg(long, value_enum, default_value = "adapter")]
-    pub limits: crate::adapter_cmd::LimitsArg,
+    #[arg(long, default_value = "adapter", value_parser = ssbvb_engine::values::parse_limits)]
+    pub limits: ssbvb_gpu::DeviceLimits,
 }
 
 impl BenchArgs {

@@ -32,9 +32,9 @@ use ssbvb_voxel::rgba_volume::integrate::{self, PlacedVolume};
 use ssbvb_voxel::rgba_volume::slicing::{SliceSettings, slice};
 use ssbvb_voxel::rgba_volume::sources::{Cloud, from_mesh_coverage};
 
-use crate::bench::args::BenchArgs;
-use crate::bench::harness::TimedFrames;
-use crate::bench::table::{Column, Fmt, Table, size, write_report};
+use crate::args::BenchArgs;
+use crate::harness::TimedFrames;
+use crate::table::{Column, Fmt, Table, size, write_report};
 use ssbvb_engine::assets::assets_dir;
 
 /// The default knobs as `volumetric.ron` writes them (the rows replace this text).
@@ -254,7 +254,7 @@ impl Volumetric {
 /// Runs `ssbvb bench --preset volumes`.
 pub(crate) fn run(args: &BenchArgs) -> Result<()> {
     let pipelines = Volumetric::load()?;
-    let ctx = crate::adapter_cmd::headless_context(&[&pipelines.default])?;
+    let ctx = ssbvb_engine::choice::headless_context(&[&pipelines.default])?;
     let frames = args.frames.unwrap_or(3).max(1);
     let models = assets_dir().join("models");
     let load_mesh =

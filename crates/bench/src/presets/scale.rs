@@ -21,11 +21,11 @@ use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::reference;
 
-use crate::bench::args::BenchArgs;
-use crate::bench::harness::techniques::{self, Technique};
-use crate::bench::harness::{TimedFrames, bundled_bunny, grid, grid_camera, technique_pipeline};
-use crate::bench::plot::{PlotInfo, Series, plot};
-use crate::bench::table::{Column, Fmt, Table, Value, write_report};
+use crate::args::BenchArgs;
+use crate::harness::techniques::{self, Technique};
+use crate::harness::{TimedFrames, bundled_bunny, grid, grid_camera, technique_pipeline};
+use crate::plot::{PlotInfo, Series, plot};
+use crate::table::{Column, Fmt, Table, Value, write_report};
 
 /// The finest level of the bunny asset (the table: level 8).
 const LEVEL: u32 = 8;
@@ -118,7 +118,7 @@ pub(crate) fn run_with(args: &BenchArgs, print_report: bool) -> Result<Vec<Scale
         .iter()
         .map(|t| technique_pipeline(t))
         .collect::<Result<Vec<_>>>()?;
-    let ctx = crate::adapter_cmd::headless_context(&pipelines.iter().collect::<Vec<_>>())?;
+    let ctx = ssbvb_engine::choice::headless_context(&pipelines.iter().collect::<Vec<_>>())?;
     let (asset, _) = bundled_bunny(LEVEL)?;
     let (rows, skipped) = measure_views(args, &ctx, &asset, &techniques, &pipelines)?;
     std::fs::create_dir_all(&args.out)
@@ -519,7 +519,7 @@ fn markdown(r: &ScaleReport) -> String {
         s.push_str(&format!("\nSkipped: {k}\n"));
     }
     if !r.plots.is_empty() {
-        s.push_str(&crate::bench::plot::markdown(&r.plots));
+        s.push_str(&crate::plot::markdown(&r.plots));
     }
     s
 }

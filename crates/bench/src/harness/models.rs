@@ -90,7 +90,7 @@ mod tests {
         assert!((g[1].translation - DVec3::new(-5.5, 0.0, -7.7)).length() < 1e-12);
         let want = glam::DMat3::from_rotation_y(293f64.to_radians());
         assert!(g[1].matrix3.abs_diff_eq(want, 1e-12), "{:?}", g[1].matrix3);
-        let text = include_str!("../../../../../assets/scenes/bunnies_64.ron");
+        let text = include_str!("../../../../assets/scenes/bunnies_64.ron");
         assert!(text.contains("(translation: (-5.5, 0.0, -7.7), rotation_y_deg: 293.0)"));
         assert_eq!(grid(1)[0].translation, DVec3::ZERO);
         assert_eq!(grid(3).len(), 3);

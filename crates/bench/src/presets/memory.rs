@@ -20,11 +20,11 @@ use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::reference::ReferenceImage;
 
-use crate::bench::args::BenchArgs;
-use crate::bench::harness::{
+use crate::args::BenchArgs;
+use crate::harness::{
     bench_camera, bundled_bunny, bundled_pipeline, median, one_object, reference_at, timed_frames,
 };
-use crate::bench::table::{Column, Fmt, Table, write_report};
+use crate::table::{Column, Fmt, Table, write_report};
 
 const DEFAULT_LEVELS: [u32; 7] = [7, 8, 9, 10, 11, 12, 13];
 const DEFAULT_BUDGETS: [u64; 3] = [32, 128, 512];
@@ -191,7 +191,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
     let size = args.first_size((640, 480));
     let camera = bench_camera();
     let pipeline = bundled_pipeline("ssbvb.ron")?;
-    let ctx = crate::adapter_cmd::headless_context(&[&pipeline])?;
+    let ctx = ssbvb_engine::choice::headless_context(&[&pipeline])?;
     let cfg = Config {
         ctx: &ctx,
         budgets: &budgets,

@@ -38,11 +38,11 @@ use serde::Serialize;
 use ssbvb_gpu::scene::DEFAULT_LOD_HYSTERESIS;
 use ssbvb_voxel::reference::{self, SampleGrid};
 
-use crate::bench::args::BenchArgs;
-use crate::bench::harness::technique_pipeline;
-use crate::bench::harness::techniques::{self, Technique};
-use crate::bench::table::{Column, Fmt, Table, write_report};
+use crate::args::BenchArgs;
 use crate::flip::{flip_map_rgb8, flip_rgb8};
+use crate::harness::technique_pipeline;
+use crate::harness::techniques::{self, Technique};
+use crate::table::{Column, Fmt, Table, write_report};
 use measure::{
     Drawn, ReferenceLevels, SameLevels, flicker, lod_switches, reference_frames, technique_frames,
 };
@@ -116,7 +116,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         .iter()
         .map(|t| technique_pipeline(t))
         .collect::<Result<Vec<_>>>()?;
-    let ctx = crate::adapter_cmd::headless_context(&pipelines.iter().collect::<Vec<_>>())?;
+    let ctx = ssbvb_engine::choice::headless_context(&pipelines.iter().collect::<Vec<_>>())?;
     let sizes = args.sizes.clone().unwrap_or_else(|| vec![(320, 240)]);
     let n = args.frames.unwrap_or(12).max(2);
     let grid = args.flip_samples_grid();

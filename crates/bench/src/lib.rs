@@ -1,4 +1,5 @@
-//! `ssbvb bench`: technique × model × level × resolution on one adapter, with warm-up
+//! `ssbvb bench` (this crate, `ssbvb-bench`, built on the engine): technique × model ×
+//! level × resolution on one adapter, with warm-up
 //! frames, timed frames (median and spread), per-pass times, the SSBVB fill count, GPU
 //! memory, and accuracy against the CPU reference. Writes CSV, JSON and a Markdown table,
 //! PNG plots, and with `--sweep` (or `--preset full`) speed–accuracy knob sweeps.
@@ -14,6 +15,7 @@
 //! `plot` and `report`; nothing imports a preset but [`run()`].
 
 mod args;
+mod flip;
 mod harness;
 mod plot;
 mod presets;

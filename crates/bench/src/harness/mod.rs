@@ -5,6 +5,7 @@
 //! (`techniques`). Presets import this module; it imports no preset.
 
 mod accuracy;
+pub(crate) mod engine;
 mod frames;
 mod models;
 mod pipelines;

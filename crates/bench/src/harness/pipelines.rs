@@ -43,15 +43,15 @@ pub(crate) fn technique_pipeline(t: &Technique) -> Result<ResolvedPipeline> {
                     t.name
                 );
             };
-            crate::adapter_cmd::resolve(&assets_dir().join(form.file))?
+            crate::harness::engine::resolve(&assets_dir().join(form.file))?
         }
         PipelineSource::SharedStagesInCompute(f) => {
             with_shared_stages_in_compute(&bundled_pipeline(f)?)?
         }
         PipelineSource::AdapterDefault => {
-            let choice = crate::pipeline_choice::default_for_adapter()?;
+            let choice = crate::harness::engine::default_form()?;
             log::info!("bench: technique `{}`: {}", t.name, choice.line());
-            crate::adapter_cmd::resolve(&choice.path())?
+            crate::harness::engine::resolve(&choice.path())?
         }
     };
     match t.edit {

@@ -28,9 +28,9 @@ use ssbvb_voxel::local_edit::LocalEditor;
 use ssbvb_voxel::model::{Mesh, Model};
 use ssbvb_voxel::svo::LevelVoxels;
 
-use crate::bench::args::BenchArgs;
-use crate::bench::harness::{bench_camera, bundled_pipeline, median, one_object};
-use crate::bench::table::{Column, Fmt, Table, Value, size, write_report};
+use crate::args::BenchArgs;
+use crate::harness::{bench_camera, bundled_pipeline, median, one_object};
+use crate::table::{Column, Fmt, Table, Value, size, write_report};
 use ssbvb_engine::assets::assets_dir;
 
 const DEFAULT_LEVELS: [u32; 3] = [7, 8, 9];
@@ -124,7 +124,7 @@ impl Bench<'_> {
 /// Runs `ssbvb bench --preset dynamic`.
 pub(crate) fn run(args: &BenchArgs) -> Result<()> {
     let pipeline = bundled_pipeline("ssbvb.ron")?;
-    let ctx = crate::adapter_cmd::headless_context(&[&pipeline])?;
+    let ctx = ssbvb_engine::choice::headless_context(&[&pipeline])?;
     let animator = Animator::new(&ctx)?;
     let model = assets_dir().join("models/bunny.obj");
     let Model::Mesh(mesh) = ssbvb_voxel::load::load_model(&model)? else {

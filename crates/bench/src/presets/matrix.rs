@@ -16,13 +16,13 @@ use ssbvb_gpu::scene::LodPolicy;
 use ssbvb_graph::PassKind;
 use ssbvb_voxel::camera::Camera;
 
-use crate::bench::args::{BenchArgs, Preset};
-use crate::bench::harness::techniques::{self, Technique};
-use crate::bench::harness::{
+use crate::args::{BenchArgs, Preset};
+use crate::harness::techniques::{self, Technique};
+use crate::harness::{
     Setup, bench_camera, measure, median, reference_at, supersampled_reference_at,
     technique_pipeline,
 };
-use crate::bench::report::{Results, Row};
+use crate::report::{Results, Row};
 use ssbvb_engine::assets::assets_dir;
 
 /// The main matrix measured, and what its report needs besides.
@@ -58,7 +58,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<Measured> {
 struct Device<'a> {
     ctx: GpuContext,
     /// Faults to inject (`--inject-fault device-lost@ROW`).
-    faults: &'a [crate::faults::Fault],
+    faults: &'a [ssbvb_engine::faults::Fault],
     /// Rows begun so far.
     rows: usize,
     /// Whether the last row lost the device (a second loss in a row ends the run).
@@ -71,7 +71,9 @@ fn open_context(techniques: &[&Technique]) -> Result<GpuContext> {
         .iter()
         .map(|t| technique_pipeline(t))
         .collect::<Result<Vec<_>>>()?;
-    crate::adapter_cmd::headless_context(&pipelines.iter().collect::<Vec<_>>())
+    Ok(ssbvb_engine::choice::headless_context(
+        &pipelines.iter().collect::<Vec<_>>(),
+    )?)
 }
 
 /// A benchmarked model.
@@ -307,13 +309,13 @@ fn run_cell(
             "{} on {} level {level} {}x{}",
             t.name, cell.model, cell.size.0, cell.size.1
         );
-        if crate::faults::loses_device_at(device.faults, device.rows) {
+        if ssbvb_engine::faults::loses_device_at(device.faults, device.rows) {
             device.ctx.inject_device_loss();
         }
-        if crate::faults::runs_out_of_memory_at(device.faults, device.rows) {
+        if ssbvb_engine::faults::runs_out_of_memory_at(device.faults, device.rows) {
             device
                 .ctx
-                .refuse_allocation(crate::faults::INJECTED_OOM_MIN_BYTES);
+                .refuse_allocation(ssbvb_engine::faults::INJECTED_OOM_MIN_BYTES);
         }
         device.rows += 1;
         let result = run_one(&device.ctx, t, cell);
@@ -346,7 +348,7 @@ fn run_cell(
             // What the device cannot hold is a result, not a failure of the run.
             // A refused allocation fails the row, with the resource named; the next row
             // asks again.
-            Err(e) if crate::faults::out_of_memory(&e).is_some() => {
+            Err(e) if ssbvb_engine::faults::out_of_memory(e.as_ref()).is_some() => {
                 if log {
                     eprintln!("failed {what}: {e:#}");
                 }

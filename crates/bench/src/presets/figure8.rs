@@ -18,9 +18,9 @@ use ssbvb_passes::Renderer;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::reference;
 
-use crate::bench::args::BenchArgs;
-use crate::bench::harness::techniques::{Technique, refused};
-use crate::bench::harness::{bundled_asset, median, technique_pipeline, timed_frames};
+use crate::args::BenchArgs;
+use crate::harness::techniques::{Technique, refused};
+use crate::harness::{bundled_asset, median, technique_pipeline, timed_frames};
 use ssbvb_engine::budget::PageSourceRef;
 
 /// The paper's level (2048³).
@@ -189,7 +189,7 @@ fn write_frame(ctx: &GpuContext, r: &Renderer, path: &Path, size: (u32, u32)) ->
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
     let out = ctx.read_texture(&r.output().texture, ssbvb_gpu::wgpu::TextureAspect::All)?;
-    let rgba = crate::render_cmd::to_rgba8(&out)?;
+    let rgba = crate::harness::engine::to_rgba8(&out)?;
     ssbvb_gpu::readback::write_png_rgba8(path, size.0, size.1, &rgba)?;
     Ok(())
 }

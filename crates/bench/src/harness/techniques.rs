@@ -5,7 +5,7 @@
 use anyhow::{Context, Result};
 use ssbvb_graph::{BillboardMode, MarchMode, PassKind};
 
-use crate::bench::args::{BenchArgs, Preset};
+use crate::args::{BenchArgs, Preset};
 
 /// Where a technique's pipeline comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -390,7 +390,7 @@ pub(crate) fn refused(e: &anyhow::Error) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::harness::pipelines::technique_pipeline;
+    use crate::harness::pipelines::technique_pipeline;
 
     /// Every technique with a file of its own resolves with its edit.
     #[test]

@@ -13,8 +13,8 @@ use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::reference::{self, SampleGrid};
 
 use super::views::QualityView;
-use crate::bench::harness::median;
 use crate::flip::{flip_rgb8, over_black};
+use crate::harness::median;
 
 /// Per frame, the level each instance was drawn at (by scene index; `None`: not drawn).
 pub(super) type Levels = Vec<Option<u32>>;
@@ -70,7 +70,7 @@ pub(super) fn technique_frames(
         }
         let rejected = renderer.history_rejected_share(ctx)?;
         Ok((
-            over_black(&crate::render_cmd::to_rgba8(&out)?),
+            over_black(&crate::harness::engine::to_rgba8(&out)?),
             levels,
             ms,
             rejected,

@@ -14,12 +14,12 @@ use ssbvb_graph::{PassKind, ResolvedPipeline};
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
 
-use crate::bench::args::{BenchArgs, Preset};
-use crate::bench::harness::{
+use crate::args::{BenchArgs, Preset};
+use crate::harness::{
     Measured, Setup, bundled_bunny, bundled_pipeline, measure, median, reference_at,
     with_filter_scale, with_kind_edit,
 };
-use crate::bench::report::SweepRow;
+use crate::report::SweepRow;
 
 /// The knob sweeps on the bunny, with `--sweep` or the full preset (never for the study),
 /// on `ctx` seen from `camera`; empty otherwise.

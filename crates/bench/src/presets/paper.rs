@@ -11,12 +11,12 @@
 use anyhow::Result;
 use serde::Serialize;
 
-use crate::bench::args::{BenchArgs, Preset};
-use crate::bench::harness::techniques::PAPER_TECHNIQUES;
-use crate::bench::presets::figure8::{self, Figure8};
-use crate::bench::presets::{matrix, scale};
-use crate::bench::report;
-use crate::bench::table::{Column, Fmt, Table, write_report};
+use crate::args::{BenchArgs, Preset};
+use crate::harness::techniques::PAPER_TECHNIQUES;
+use crate::presets::figure8::{self, Figure8};
+use crate::presets::{matrix, scale};
+use crate::report;
+use crate::table::{Column, Fmt, Table, write_report};
 
 /// The paper's Table 2 bunny row at level 9, 720p: SSBVB render time over ESVO's
 /// (2.59 ms / 9.32 ms).
@@ -202,7 +202,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         }
     }
     rows.push(grid_row);
-    let techniques = crate::bench::harness::techniques::select(args)?;
+    let techniques = crate::harness::techniques::select(args)?;
     let fig = figure8::run(args, &m.ctx, matrix::PAPER_MODELS, &techniques)?;
     let mut fig_row = PaperRow {
         scene: format!(

@@ -255,7 +255,7 @@ struct Report<'a> {
     timing: &'static str,
     /// The pipeline of technique `ssbvb` (the SSBVB form `render` chooses on this adapter)
     /// and why; `null` where the run has no `ssbvb` row.
-    pipeline_choice: Option<crate::pipeline_choice::PipelineChoice>,
+    pipeline_choice: Option<ssbvb_engine::PipelineChoice>,
     preset: String,
     camera: Camera,
     rows: Table<'a, Row>,
@@ -303,7 +303,7 @@ pub(crate) fn write(
         adapter_is_software: software,
         timing: timing(software),
         pipeline_choice: if results.rows.iter().any(|r| r.technique == "ssbvb") {
-            Some(crate::pipeline_choice::default_for_adapter()?)
+            Some(crate::harness::engine::default_form()?)
         } else {
             None
         },

@@ -24,10 +24,10 @@ use ssbvb_voxel::lighting::LightingSample;
 use ssbvb_voxel::lighting::volume::RadianceVolume;
 use ssbvb_voxel::progress::NoProgress;
 
-use crate::bench::args::BenchArgs;
-use crate::bench::harness::{TimedFrames, bundled_pipeline};
-use crate::bench::plot::{Series, plot};
-use crate::bench::table::{Column, Fmt, Table, Value, size, write_report};
+use crate::args::BenchArgs;
+use crate::harness::{TimedFrames, bundled_pipeline};
+use crate::plot::{Series, plot};
+use crate::table::{Column, Fmt, Table, Value, size, write_report};
 use ssbvb_engine::assets::assets_dir;
 
 /// Monte Carlo rays per term and receiver.
@@ -190,7 +190,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
     let base = std::fs::read_to_string(&vct_path)
         .with_context(|| format!("reading {}", vct_path.display()))?;
     let vct = bundled_pipeline("ssbvb_vct.ron")?;
-    let ctx = crate::adapter_cmd::headless_context(&[&plain, &vct])?;
+    let ctx = ssbvb_engine::choice::headless_context(&[&plain, &vct])?;
     let size = args.first_size((640, 480));
     let frames = args.frames.unwrap_or(3).max(1);
     let d = Knobs {

@@ -34,12 +34,12 @@ use ssbvb_voxel::reference::{self, Instance, ReferenceImage};
 use ssbvb_voxel::shading::Light;
 use ssbvb_voxel::surface::{FaceLod, SurfaceModel, select_chunks};
 
-use crate::bench::args::BenchArgs;
-use crate::bench::harness::{
+use crate::args::BenchArgs;
+use crate::harness::{
     bench_camera, bundled_asset, bundled_pipeline, covered_rgba, grid, grid_camera, median,
     timed_frames, with_kind_edit,
 };
-use crate::bench::table::{Column, Fmt, Table, Value, size, write_report};
+use crate::table::{Column, Fmt, Table, Value, size, write_report};
 
 /// Pixel errors of the sweep (0 is the baseline of the ratios; 1 the paper's setting).
 const PIXEL_ERRORS: [f32; 4] = [0.0, 1.0, 2.0, 4.0];
@@ -343,7 +343,7 @@ fn compare_drawn(
         &renderer.output().texture,
         ssbvb_gpu::wgpu::TextureAspect::All,
     )?;
-    let gpu_rgba = crate::render_cmd::to_rgba8(&out)?;
+    let gpu_rgba = crate::harness::engine::to_rgba8(&out)?;
     let ref_rgba = reference.to_rgba8();
     let (a, b) = covered_rgba(&hits, &reference.hits, &gpu_rgba, &ref_rgba);
     Ok(DrawnAccuracy {
@@ -359,7 +359,7 @@ fn compare_drawn(
 pub(crate) fn run(args: &BenchArgs) -> Result<()> {
     let log = !args.json;
     let base = bundled_pipeline("rastavox.ron")?;
-    let ctx = crate::adapter_cmd::headless_context(&[&base])?;
+    let ctx = ssbvb_engine::choice::headless_context(&[&base])?;
     let builder = SurfaceBuilder::new(&ctx)?;
     let levels = args.levels.clone().unwrap_or(DEFAULT_LEVELS.to_vec());
     let mut models = Vec::new();

@@ -1,8 +1,9 @@
-//! GPU faults and the hidden `--inject-fault` that causes them in tests.
+//! GPU faults and the hidden `--inject-fault` that causes them in tests (`render`, `view`
+//! and `bench` take it).
 //!
 //! - **Device loss** (a driver reset, the GPU removed or switched): a soak opens a new
-//!   session from the CPU-side state and draws the frame again (`crate::soak`), the viewer
-//!   rebuilds every GPU resource (`crate::view`), the bench reports the row failed and
+//!   session from the CPU-side state and draws the frame again (`ssbvb render`), the viewer
+//!   rebuilds every GPU resource (`ssbvb view`), the bench reports the row failed and
 //!   goes on on a new device; a device lost again soon after is an error.
 //! - **Out of memory**: an allocation the driver refuses is
 //!   [`ssbvb_gpu::GpuError::OutOfMemory`] naming the resource and its size
@@ -16,16 +17,14 @@
 //! without a soak and the viewer at frame 0 refuse in their first upload. A refusal that
 //! did not fire is disarmed once the work it was meant for is done.
 
-use anyhow::{Result, bail};
 use ssbvb_gpu::{GpuError, ResourceError};
 use ssbvb_passes::PassError;
+
+use crate::EngineError;
 
 /// Frames within which a second loss after a recovery is an error rather than another
 /// recovery: a device that keeps failing is reported, not retried forever.
 pub const LOST_AGAIN_WITHIN: usize = 8;
-
-/// The size from which an injected `oom@FRAME` refuses an allocation.
-pub use ssbvb_engine::session::INJECTED_OOM_MIN_BYTES;
 
 /// A fault to inject (`--inject-fault`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -91,7 +90,7 @@ pub fn runs_out_of_memory_at(faults: &[Fault], frame: usize) -> bool {
 /// Checks `faults` against a render of `frames` frames (1: no soak): each must fall
 /// inside it. A device loss needs a soak (the first frame has no device to lose yet); an
 /// out-of-memory fault at frame 0 hits the first upload.
-pub fn check_faults(faults: &[Fault], frames: u64) -> Result<()> {
+pub fn check_faults(faults: &[Fault], frames: u64) -> Result<(), EngineError> {
     for f in faults {
         let frame = f.frame();
         let ok = match f {
@@ -99,19 +98,21 @@ pub fn check_faults(faults: &[Fault], frames: u64) -> Result<()> {
             Fault::OutOfMemory { .. } => frame == 0 || (frame as u64) < frames,
         };
         if !ok {
-            bail!(
+            return Err(EngineError::Invalid(format!(
                 "--inject-fault {} needs a soak of more than {frame} frames (--frames {} or \
                  more): faults are injected into the soak's frames",
                 f.spelled(),
                 (frame + 1).max(2)
-            );
+            )));
         }
     }
     Ok(())
 }
 
-/// The refused allocation (resource, bytes) when `e` is an out-of-memory error.
-pub fn out_of_memory(e: &anyhow::Error) -> Option<(String, u64)> {
+/// The refused allocation (resource, bytes) when `e`, or any error it wraps (its
+/// `source()` chain: an `anyhow` context, an [`EngineError`], a pass or resource error),
+/// is an out-of-memory error from the driver.
+pub fn out_of_memory(e: &(dyn std::error::Error + 'static)) -> Option<(String, u64)> {
     let of = |g: &GpuError| match g {
         GpuError::OutOfMemory { resource, bytes } => Some((resource.clone(), *bytes)),
         _ => None,
@@ -120,22 +121,32 @@ pub fn out_of_memory(e: &anyhow::Error) -> Option<(String, u64)> {
         ResourceError::Gpu(g) => of(g),
         _ => None,
     };
-    e.chain().find_map(|c| {
-        if let Some(engine) = c.downcast_ref::<ssbvb_engine::EngineError>() {
-            return engine.refused_allocation();
-        }
-        c.downcast_ref::<GpuError>()
-            .and_then(of)
-            .or_else(|| c.downcast_ref::<ResourceError>().and_then(of_resource))
-            .or_else(|| match c.downcast_ref::<PassError>() {
+    let mut next = Some(e);
+    while let Some(c) = next {
+        let found = if let Some(engine) = c.downcast_ref::<EngineError>() {
+            engine.refused_allocation()
+        } else if let Some(g) = c.downcast_ref::<GpuError>() {
+            of(g)
+        } else if let Some(r) = c.downcast_ref::<ResourceError>() {
+            of_resource(r)
+        } else {
+            match c.downcast_ref::<PassError>() {
                 Some(PassError::Gpu(g)) => of(g),
                 Some(PassError::Resource(r)) => of_resource(r),
                 _ => None,
-            })
-    })
+            }
+        };
+        if found.is_some() {
+            return found;
+        }
+        next = c.source();
+    }
+    None
 }
 
-pub use ssbvb_engine::session::{frame_out_of_memory_hint, is_scene_resource, out_of_memory_hint};
+pub use crate::session::{
+    INJECTED_OOM_MIN_BYTES, frame_out_of_memory_hint, is_scene_resource, out_of_memory_hint,
+};
 
 /// The recoveries of one run and the rule on repeated losses.
 #[derive(Debug, Default)]
@@ -148,15 +159,15 @@ pub struct Recoveries {
 impl Recoveries {
     /// Records a loss at soak frame `frame`, or fails when it comes within
     /// [`LOST_AGAIN_WITHIN`] frames of the last recovery.
-    pub fn lost_at(&mut self, frame: usize, reason: &str) -> Result<()> {
+    pub fn lost_at(&mut self, frame: usize, reason: &str) -> Result<(), EngineError> {
         if let Some(last) = self.last
             && frame - last < LOST_AGAIN_WITHIN
         {
-            bail!(
+            return Err(EngineError::Invalid(format!(
                 "the GPU device was lost again at frame {frame}, {} frames after it was \
                  recreated at frame {last} ({reason}); giving up rather than retrying",
                 frame - last
-            );
+            )));
         }
         self.count += 1;
         self.last = Some(frame);
@@ -211,17 +222,19 @@ mod tests {
             bytes: 3 << 20,
         };
         let want = Some(("voxel colours 0".to_string(), 3 << 20));
-        let direct = anyhow::Error::new(refused()).context("uploading");
+        let direct = refused();
         assert_eq!(out_of_memory(&direct), want);
-        let scene = anyhow::Error::new(ResourceError::Gpu(refused())).context("opening");
+        let scene = EngineError::Resource(ResourceError::Gpu(refused())).context("opening");
         assert_eq!(out_of_memory(&scene), want);
-        let pass = anyhow::Error::new(PassError::Resource(ResourceError::Gpu(refused())));
+        let pass = PassError::Resource(ResourceError::Gpu(refused()));
         assert_eq!(out_of_memory(&pass), want);
-        assert_eq!(
-            out_of_memory(&anyhow::Error::new(PassError::Gpu(refused()))),
-            want
-        );
-        let other = anyhow::Error::new(ResourceError::TooLarge("x".into()));
+        assert_eq!(out_of_memory(&PassError::Gpu(refused())), want);
+        // Wrapped as a source of another error (how `anyhow` contexts chain).
+        #[derive(Debug, thiserror::Error)]
+        #[error("rendering")]
+        struct Outer(#[source] PassError);
+        assert_eq!(out_of_memory(&Outer(PassError::Gpu(refused()))), want);
+        let other = ResourceError::TooLarge("x".into());
         assert_eq!(out_of_memory(&other), None);
         assert!(
             refused()
