@@ -63,6 +63,8 @@ struct Report {
     bytes: u64,
     prepare_ms: f64,
     write_ms: f64,
+    /// What the model's load could not do (a missing material or texture), naming the file.
+    warnings: Vec<String>,
 }
 
 /// Runs `ssbvb export`.
@@ -80,7 +82,19 @@ pub fn run(args: &ExportArgs) -> Result<()> {
     export::check_size(format, 1 << args.level)?;
     let t0 = Instant::now();
     let progress = BarProgress::new(!args.json && std::io::stderr().is_terminal());
-    let (asset, _) = ssbvb_voxel::cache::load_or_prepare(&args.model, args.level, None, &progress)
+    // The model through the engine, as `render` opens it (a scene file is refused: it
+    // holds several objects).
+    if args
+        .model
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ron"))
+    {
+        bail!(
+            "{}: export writes one model; give a model file, not a scene",
+            args.model.display()
+        );
+    }
+    let content = ssbvb_engine::Content::open(&args.model, Some(args.level), &progress)
         .with_context(|| {
             format!(
                 "{}: cannot prepare it at level {}",
@@ -88,6 +102,16 @@ pub fn run(args: &ExportArgs) -> Result<()> {
                 args.level
             )
         })?;
+    let warnings = content.warning_lines();
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    let asset = content
+        .scene
+        .objects
+        .first()
+        .map(|o| o.asset.clone())
+        .context("the model holds no voxel object")?;
     let prepare_ms = t0.elapsed().as_secs_f64() * 1e3;
     let t1 = Instant::now();
     let written = export::write(format, &args.output, &asset, args.level)
@@ -107,6 +131,7 @@ pub fn run(args: &ExportArgs) -> Result<()> {
         bytes: std::fs::metadata(&args.output).map_or(0, |m| m.len()),
         prepare_ms,
         write_ms: t1.elapsed().as_secs_f64() * 1e3,
+        warnings,
     };
     if args.json {
         println!("{}", serde_json::to_string(&report)?);
