@@ -51,6 +51,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let content = Content::from_arrays(&arrays, placement, &NoProgress)?;
     let prepared_ms = ms(t0);
     let mut from_arrays = Engine::open(content, &options)?;
+    let opened_ms = ms(t0);
     from_arrays.set_camera(camera);
     from_arrays.render()?;
     let image = from_arrays.read_rgba8()?;
@@ -65,7 +66,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let model_image = from_model.read_rgba8()?;
     println!(
         "{{\"voxels\": {n}, \"size\": [{}, {}], \"adapter\": {:?}, \"pipeline\": {:?}, \
-         \"arrays_prepared_ms\": {prepared_ms:.1}, \"arrays_first_frame_ms\": {first_ms:.1}, \
+         \"arrays_prepared_ms\": {prepared_ms:.1}, \"arrays_opened_ms\": {opened_ms:.1}, \
+         \"arrays_first_frame_ms\": {first_ms:.1}, \
          \"arrays_frame_ms\": {arrays_ms:.1}, \"model_frame_ms\": {model_ms:.1}, \
          \"arrays_covered_px\": {}, \"model_covered_px\": {}}}",
         size.0,

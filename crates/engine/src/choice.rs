@@ -106,20 +106,15 @@ fn rule_choice(
     limits: DeviceLimits,
 ) -> Result<(PipelineChoice, Option<(usize, AdapterVerdict)>), EngineError> {
     let forms = rule_forms();
-    let per_form = forms
+    let requirements = forms
         .iter()
-        .map(|f| verdicts_on(f, limits))
-        .collect::<Result<Vec<_>, _>>()?;
+        .map(|f| {
+            let pipeline = resolve_pipeline(&assets_dir().join(f.file))?;
+            Ok(requirements_of(&[&pipeline]))
+        })
+        .collect::<Result<Vec<_>, EngineError>>()?;
+    let per_form = GpuContext::list_adapters_for(&requirements, limits);
     Ok(choose_among(&forms, under(limits), &per_form, file_of))
-}
-
-/// Every adapter's verdict on form `f` under `limits`, best first.
-fn verdicts_on(f: &Form, limits: DeviceLimits) -> Result<Vec<AdapterVerdict>, EngineError> {
-    let pipeline = resolve_pipeline(&assets_dir().join(f.file))?;
-    Ok(GpuContext::list_adapters(
-        &requirements_of(&[&pipeline]),
-        limits,
-    ))
 }
 
 /// A form's pipeline file as a choice names it.

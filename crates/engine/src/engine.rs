@@ -60,7 +60,7 @@ pub struct FrameReport {
     pub frame_wall_ms: f64,
     /// Instances drawn after culling.
     pub visible_instances: usize,
-    /// Frames rendered before it until no page was missing (1 without a budget).
+    /// Frames rendered before it until no page was missing (0 without a budget).
     pub frames_to_converge: usize,
     /// Whether no page was missing within [`RenderOptions::max_frames`].
     pub converged: bool,
@@ -168,13 +168,19 @@ impl Engine {
 
     fn render_once(&mut self) -> Result<FrameReport, EngineError> {
         let s = &mut self.gpu;
-        let (frames, converged) = crate::budget::converge(
-            &s.ctx,
-            &mut s.renderer,
-            &mut s.scene,
-            &self.camera,
-            self.max_frames,
-        )?;
+        // Under a budget, frames until no page is missing; without one, the timed frame is
+        // the first.
+        let (frames, converged) = if s.scene.streaming_stats().is_some() {
+            crate::budget::converge(
+                &s.ctx,
+                &mut s.renderer,
+                &mut s.scene,
+                &self.camera,
+                self.max_frames,
+            )?
+        } else {
+            (0, true)
+        };
         let stats =
             crate::timing::profiled_frame(&s.ctx, &mut s.renderer, &mut s.scene, &self.camera)?;
         Ok(FrameReport {

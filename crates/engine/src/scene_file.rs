@@ -102,6 +102,57 @@ impl ModelSource for Files {
     }
 }
 
+/// Models given as bytes by the name the scene gives them (fetched over a network, held
+/// in memory), prepared here with no file involved ([`prepare_bytes`]).
+#[derive(Default)]
+pub struct ModelBytes {
+    /// `(model as the scene names it, its bytes)`.
+    pub files: Vec<(String, Vec<u8>)>,
+}
+
+impl ModelBytes {
+    fn bytes_of(&self, model: &str) -> Result<&[u8], EngineError> {
+        self.files
+            .iter()
+            .find(|(m, _)| m == model)
+            .map(|(_, b)| b.as_slice())
+            .ok_or_else(|| EngineError::Invalid(format!("{model}: no bytes were given for it")))
+    }
+}
+
+impl ModelSource for ModelBytes {
+    fn prepare(
+        &self,
+        model: &str,
+        level: u32,
+        progress: &dyn Progress,
+    ) -> Result<PreparedModel, EngineError> {
+        let (asset, warnings) = prepare_bytes(self.bytes_of(model)?, model, level, progress)?;
+        Ok(PreparedModel {
+            asset: Arc::new(asset),
+            note: None,
+            page_source: None,
+            warnings,
+        })
+    }
+
+    fn load(&self, model: &str) -> Result<Model, EngineError> {
+        use ssbvb_voxel::load::{Format, LoadOptions};
+        let bytes = self.bytes_of(model)?;
+        let path = Path::new(model);
+        let format = Format::from_path(path)
+            .or_else(|| Format::sniff(&bytes[..bytes.len().min(64)]))
+            .ok_or_else(|| EngineError::Invalid(format!("{model}: not a model ssbvb reads")))?;
+        let loaded =
+            ssbvb_voxel::load::load_from_bytes(bytes, format, path, None, &LoadOptions::default())?;
+        Ok(loaded.model)
+    }
+
+    fn path_of(&self, _: &str) -> Option<PathBuf> {
+        None
+    }
+}
+
 /// Models prepared elsewhere (the web page prepares fetched bytes in a worker), by the
 /// name and level the scene gives them.
 #[derive(Default)]
@@ -640,5 +691,53 @@ mod edit_tests {
             e.contains("objects[0]: edits and animate together are not supported yet"),
             "{e}"
         );
+    }
+}
+
+/// The same scene from the file system (through the asset cache) and from bytes in
+/// memory: the same objects, instances, LOD, finest voxels, triangles, light and camera.
+#[cfg(test)]
+mod source_tests {
+    use super::*;
+    use ssbvb_voxel::progress::NoProgress;
+
+    #[test]
+    fn a_scene_from_bytes_is_the_scene_from_files() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes");
+        let cache = tempfile::tempdir().unwrap();
+        for stem in ["default", "bunnies_64"] {
+            let path = root.join(format!("{stem}.ron"));
+            let files = load_with_cache(&path, Some(cache.path()), &NoProgress).unwrap();
+            let description = SceneDescription::read(&path).unwrap();
+            let bytes = ModelBytes {
+                files: description
+                    .models()
+                    .into_iter()
+                    .map(|(m, _)| (m.clone(), std::fs::read(root.join(&m)).unwrap()))
+                    .collect(),
+            };
+            let memory = description.build(&bytes, &NoProgress).unwrap();
+            let (a, b) = (&files.scene, &memory.scene);
+            assert_eq!(a.objects.len(), b.objects.len(), "{stem}");
+            for (p, q) in a.objects.iter().zip(&b.objects) {
+                assert_eq!(p.instances, q.instances, "{stem}");
+                assert_eq!(p.lod, q.lod, "{stem}");
+                let finest = |o: &VoxelObject| o.asset.lods.last().unwrap().point_cloud.clone();
+                assert!(finest(p) == finest(q), "{stem}: the finest voxels differ");
+            }
+            assert_eq!(format!("{:?}", a.triangles), format!("{:?}", b.triangles));
+            assert_eq!(a.light, b.light);
+            assert_eq!(files.camera, memory.camera);
+            // Bytes have no file to page from, and no path for the pipeline.
+            assert!(memory.page_sources.iter().all(Option::is_none));
+            assert!(files.page_sources.iter().all(Option::is_some));
+        }
+        let e = SceneDescription::parse("Scene(objects: [(model: \"x.obj\", level: 3)])", "s.ron")
+            .unwrap()
+            .build(&ModelBytes::default(), &NoProgress)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("x.obj: no bytes were given for it"), "{e}");
     }
 }

@@ -453,22 +453,39 @@ impl GpuContext {
     /// Every adapter the headless instance sees, best first, each with its verdict on
     /// `requirements` and whether `SSBVB_ADAPTER` allows it.
     pub fn list_adapters(requirements: &Requirements, limits: DeviceLimits) -> Vec<AdapterVerdict> {
+        Self::list_adapters_for(std::slice::from_ref(requirements), limits)
+            .pop()
+            .unwrap_or_default()
+    }
+
+    /// [`GpuContext::list_adapters`] for several requirements at once, the adapters
+    /// enumerated once (an instance and its adapters cost a driver's start-up each time):
+    /// per requirement, every adapter best first with its verdict.
+    pub fn list_adapters_for(
+        requirements: &[Requirements],
+        limits: DeviceLimits,
+    ) -> Vec<Vec<AdapterVerdict>> {
         let choice = AdapterChoice::parse(&std::env::var("SSBVB_ADAPTER").unwrap_or_default());
         let (instance, backends) = headless_instance();
         let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
         adapters.sort_by_key(|a| rank(&a.get_info()));
-        adapters
+        requirements
             .iter()
-            .map(|a| {
-                let info = a.get_info();
-                AdapterVerdict {
-                    name: info.name.clone(),
-                    backend: format!("{:?}", info.backend),
-                    device_type: format!("{:?}", info.device_type),
-                    driver: driver_text(&info),
-                    allowed: choice.allows(&info),
-                    verdict: requirements.check_under(a, &limits.on(a)),
-                }
+            .map(|req| {
+                adapters
+                    .iter()
+                    .map(|a| {
+                        let info = a.get_info();
+                        AdapterVerdict {
+                            name: info.name.clone(),
+                            backend: format!("{:?}", info.backend),
+                            device_type: format!("{:?}", info.device_type),
+                            driver: driver_text(&info),
+                            allowed: choice.allows(&info),
+                            verdict: req.check_under(a, &limits.on(a)),
+                        }
+                    })
+                    .collect()
             })
             .collect()
     }
