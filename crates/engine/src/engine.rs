@@ -241,8 +241,19 @@ impl Engine {
         Ok(ssbvb_gpu::readback::write_png_rgba8(path, w, h, &rgba)?)
     }
 
-    /// Changes the image size: the frame's targets are made again, the scene stays.
+    /// Changes the image size: the frame's targets are made again, the scene stays. A
+    /// host's target texture has its own size: drawing into one, make a new engine.
     pub fn resize(&mut self, size: (u32, u32)) -> Result<(), EngineError> {
+        if self
+            .source
+            .host
+            .as_ref()
+            .is_some_and(|h| h.target.is_some())
+        {
+            return Err(EngineError::Invalid(
+                "the frame is drawn into the host's texture, whose size is the host's".into(),
+            ));
+        }
         if size.0 == 0 || size.1 == 0 {
             return Err(EngineError::Invalid(format!(
                 "the image size must be at least 1x1, got {}x{}",

@@ -21,7 +21,8 @@ use crate::budget::PageSourceRef;
 use crate::choice::requirements_of;
 
 /// A device a host program already has: the engine draws with it instead of making its
-/// own (the host keeps its features, limits and error handler).
+/// own (the host keeps its features, limits and error handler), optionally into the host's
+/// own texture.
 #[derive(Clone)]
 pub struct HostDevice {
     /// The host's instance.
@@ -32,6 +33,10 @@ pub struct HostDevice {
     pub device: wgpu::Device,
     /// Its queue.
     pub queue: wgpu::Queue,
+    /// The host's texture the frame is drawn into, as the pipeline's output (its size and
+    /// format those of the output, its usage at least what the pipeline needs); `None`:
+    /// the engine's own.
+    pub target: Option<wgpu::Texture>,
 }
 
 /// What a GPU session is made from.
@@ -221,7 +226,20 @@ impl SessionSource {
                 self.time,
             )?)
         };
-        let mut renderer = Renderer::new(ctx, &gpu_scene, self.pipeline.clone(), self.size)?;
+        let target = self.host.as_ref().and_then(|h| h.target.clone());
+        let mut renderer = match target {
+            Some(texture) => {
+                let output = self.pipeline.resources[self.pipeline.output].name.clone();
+                Renderer::with_imports(
+                    ctx,
+                    &gpu_scene,
+                    self.pipeline.clone(),
+                    self.size,
+                    &[(output.as_str(), texture)],
+                )?
+            }
+            None => Renderer::new(ctx, &gpu_scene, self.pipeline.clone(), self.size)?,
+        };
         renderer.set_counting(self.counting);
         Ok((gpu_scene, renderer, animation))
     }

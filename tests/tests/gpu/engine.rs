@@ -17,6 +17,7 @@ fn host() -> HostDevice {
         adapter: c.adapter.clone(),
         device: c.device.clone(),
         queue: c.queue.clone(),
+        target: None,
     }
 }
 
@@ -138,4 +139,62 @@ fn an_empty_grid_draws_an_empty_frame_with_a_warning() {
     assert_eq!(frame.visible_instances, 0);
     let depth = engine.read_depth().unwrap();
     assert!(depth.iter().all(|d| d.is_infinite()));
+}
+
+/// A host's texture as the frame's target: the frame drawn into it is the frame the engine
+/// draws into its own (read back through the host's handle, not the engine's).
+#[test]
+fn the_frame_is_drawn_into_the_hosts_texture() {
+    let (rgba, _, _) = ball();
+    let dense = || {
+        VoxelArrays::Dense(Array {
+            shape: vec![20, 12, 16, 4],
+            data: ArrayData::U8(&rgba),
+        })
+    };
+    let content = Content::from_arrays(&dense(), PLACEMENT, &NoProgress).unwrap();
+    let mut own = Engine::open(content, &options()).unwrap();
+    own.render().unwrap();
+    let want = own.read_rgba8().unwrap();
+    let out = &own.gpu().renderer.output().texture;
+    let (format, usage) = (out.format(), out.usage());
+    let c = ssbvb_tests::ctx();
+    let target = c
+        .device
+        .create_texture(&ssbvb_gpu::wgpu::TextureDescriptor {
+            label: Some("host target"),
+            size: ssbvb_gpu::wgpu::Extent3d {
+                width: SIZE.0,
+                height: SIZE.1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: ssbvb_gpu::wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        });
+    let content = Content::from_arrays(&dense(), PLACEMENT, &NoProgress).unwrap();
+    let mut into_host = Engine::open(
+        content,
+        &RenderOptions {
+            host: Some(HostDevice {
+                target: Some(target.clone()),
+                ..host()
+            }),
+            ..options()
+        },
+    )
+    .unwrap();
+    into_host.render().unwrap();
+    let got = c
+        .read_texture(&target, ssbvb_gpu::wgpu::TextureAspect::All)
+        .unwrap()
+        .to_rgba8()
+        .unwrap();
+    assert!(want.chunks(4).filter(|p| p[3] > 0).count() > 600);
+    let differ = want.iter().zip(&got).filter(|(a, b)| a != b).count();
+    assert_eq!(differ, 0, "{differ} bytes differ");
+    assert!(into_host.resize((10, 10)).is_err());
 }
