@@ -40,6 +40,9 @@ pub struct PageInfo {
     pub frame_ms: f64,
     /// Per-pass GPU times of the last frame read (empty without timestamps).
     pub passes: Vec<PassTiming>,
+    /// What the models' loads could not do (a missing material or texture), each naming
+    /// its file.
+    pub warnings: Vec<String>,
 }
 
 /// The page's state once the device exists.
@@ -122,6 +125,9 @@ fn show_stats(app: &App) {
     if !timed.is_empty() {
         text.push_str(&format!("\nGPU ms per pass: {}", timed.join(", ")));
     }
+    for w in &info.warnings {
+        text.push_str(&format!("\nwarning: {w}"));
+    }
     if let Some(e) = document().get_element_by_id("stats") {
         e.set_text_content(Some(&text));
     }
@@ -169,6 +175,7 @@ pub async fn load_model(
         let mut info = app.info.borrow_mut();
         info.scene = name.to_string();
         info.prepare_ms = prepare_ms;
+        info.warnings = crate::worker_client::take_warnings();
     }
     draw_and_report(app).await?;
     status("");

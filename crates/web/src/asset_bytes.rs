@@ -130,7 +130,9 @@ mod tests {
     #[test]
     fn an_asset_comes_back_whole_and_damage_is_an_error() {
         let tri = b"v -1 -1 -1\nv 1 -1 0\nv 0 1 1\nf 1 2 3\n";
-        let asset = crate::scene_build::prepare_model(tri, "t.obj", 5).unwrap();
+        let asset = crate::scene_build::prepare_model(tri, "t.obj", 5)
+            .unwrap()
+            .0;
         let bytes = encode(&asset);
         assert!(decode(&bytes).unwrap() == asset);
         for cut in [0, 3, 20, bytes.len() / 2, bytes.len() - 1] {

@@ -148,6 +148,7 @@ async fn run() -> Result<(), WebError> {
             adapter_is_software: adapter_is_cpu,
             size,
             prepare_ms,
+            warnings: crate::worker_client::take_warnings(),
             ..Default::default()
         }),
         pipeline,

@@ -163,6 +163,11 @@ fn stats_object(app: &App) -> JsValue {
         let _ = js_sys::Reflect::set(&passes, &p.name.as_str().into(), &v);
     }
     put("passes_gpu_ms", passes.into());
+    let warnings = js_sys::Array::new();
+    for w in &info.warnings {
+        warnings.push(&w.as_str().into());
+    }
+    put("warnings", warnings.into());
     let (updates, in_worker) = crate::worker_client::counts();
     put("progress_updates", updates.into());
     put("models_prepared_in_worker", in_worker.into());

@@ -86,9 +86,13 @@ impl ParsedScene {
     }
 }
 
+/// A model prepared from its bytes, with what its load could not do (each line naming the
+/// file: a material or texture a model's bytes refer to is not fetched).
+pub type PreparedModel = (VoxelAsset, Vec<String>);
+
 /// Loads a model from its bytes (`name`'s extension, else its first bytes, say the format)
 /// and prepares it at `level`: the asset `ssbvb voxelize` would write to its cache.
-pub fn prepare_model(bytes: &[u8], name: &str, level: u32) -> Result<VoxelAsset, WebError> {
+pub fn prepare_model(bytes: &[u8], name: &str, level: u32) -> Result<PreparedModel, WebError> {
     prepare_model_with(bytes, name, level, &ssbvb_voxel::progress::NoProgress)
 }
 
@@ -98,7 +102,7 @@ pub fn prepare_model_with(
     name: &str,
     level: u32,
     progress: &dyn ssbvb_voxel::progress::Progress,
-) -> Result<VoxelAsset, WebError> {
+) -> Result<PreparedModel, WebError> {
     let bad = |message: String| WebError::Model {
         name: name.to_string(),
         message,
@@ -112,10 +116,7 @@ pub fn prepare_model_with(
     }
     let (asset, warnings) = ssbvb_engine::scene_file::prepare_bytes(bytes, name, level, progress)
         .map_err(|e| bad(e.to_string()))?;
-    for w in &warnings {
-        log::warn!("{w}");
-    }
-    Ok(asset)
+    Ok((asset, warnings.iter().map(ToString::to_string).collect()))
 }
 
 /// A dropped model's scene: the model at the origin on a ground plane under its lowest
@@ -202,7 +203,7 @@ mod tests {
         )
         .unwrap();
         assert_eq!(s.models(), vec![("../models/a.obj".to_string(), 3)]);
-        let asset = Arc::new(prepare_model(TRI, "a.obj", 3).unwrap());
+        let asset = Arc::new(prepare_model(TRI, "a.obj", 3).unwrap().0);
         assert_eq!(asset.lods.len(), 4);
         let scene = s.build(vec![asset]).unwrap();
         assert_eq!(scene.objects[0].lod, LodPolicy::Fixed(2));
@@ -216,6 +217,14 @@ mod tests {
 
     #[test]
     fn bad_models_name_the_file_and_why() {
+        // A model whose MTL library is not among the bytes: a warning naming it.
+        let (_, warnings) = prepare_model(
+            b"mtllib m.mtl\nusemtl red\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            "a.obj",
+            3,
+        )
+        .unwrap();
+        assert!(warnings.iter().any(|w| w.contains("m.mtl")), "{warnings:?}");
         let e = prepare_model(b"ply\nformat nonsense\nend_header\n", "broken.ply", 4)
             .unwrap_err()
             .to_string();
@@ -236,7 +245,7 @@ mod tests {
     /// voxel, and the camera is the default scene's.
     #[test]
     fn a_dropped_model_stands_on_its_ground() {
-        let asset = Arc::new(prepare_model(TRI, "a.obj", 4).unwrap());
+        let asset = Arc::new(prepare_model(TRI, "a.obj", 4).unwrap().0);
         let (scene, camera) = model_scene(asset);
         assert_eq!(scene.objects[0].lod, LodPolicy::Fixed(4));
         // The triangle's lowest corner is at y = -1: the lowest cell starts there.

@@ -1,6 +1,7 @@
 //! The page's voxelizing worker (`static/worker.js` runs this module's export in a Web
 //! Worker): a model is loaded and prepared off the page's thread, its stages posted to the
-//! page as they go, and the asset posted back as bytes ([`crate::asset_bytes`]).
+//! page as they go, then its load's warnings, and the asset posted back as bytes
+//! ([`crate::asset_bytes`]).
 
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -15,8 +16,14 @@ use crate::{asset_bytes, scene_build};
 #[wasm_bindgen]
 pub fn prepare_model_in_worker(name: &str, bytes: &[u8], level: u32) -> Result<Vec<u8>, JsValue> {
     let progress = PostedProgress::default();
-    let asset = scene_build::prepare_model_with(bytes, name, level, &progress)
+    let (asset, warnings) = scene_build::prepare_model_with(bytes, name, level, &progress)
         .map_err(|e| JsValue::from_str(&e.to_string()))?;
+    for w in &warnings {
+        let message = js_sys::Object::new();
+        let _ = js_sys::Reflect::set(&message, &"warning".into(), &w.as_str().into());
+        let scope: web_sys::DedicatedWorkerGlobalScope = js_sys::global().unchecked_into();
+        let _ = scope.post_message(&message);
+    }
     Ok(asset_bytes::encode(&asset))
 }
 

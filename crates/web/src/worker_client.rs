@@ -19,6 +19,13 @@ thread_local! {
     static LABEL: RefCell<String> = const { RefCell::new(String::new()) };
     static UPDATES: Cell<u32> = const { Cell::new(0) };
     static PREPARED_IN_WORKER: Cell<u32> = const { Cell::new(0) };
+    static WARNINGS: RefCell<Vec<String>> = const { RefCell::new(Vec::new()) };
+}
+
+/// The warnings of the models prepared since the last call (a missing material or
+/// texture), each naming its file.
+pub fn take_warnings() -> Vec<String> {
+    WARNINGS.with(|w| std::mem::take(&mut *w.borrow_mut()))
 }
 
 /// Progress messages shown so far, and models prepared in the worker.
@@ -34,7 +41,9 @@ pub async fn prepare(name: &str, bytes: Vec<u8>, level: u32) -> Result<VoxelAsse
     LABEL.with(|l| *l.borrow_mut() = label);
     let Some(worker) = worker() else {
         yield_now().await;
-        return scene_build::prepare_model(&bytes, name, level);
+        let (asset, warnings) = scene_build::prepare_model(&bytes, name, level)?;
+        WARNINGS.with(|w| w.borrow_mut().extend(warnings));
+        return Ok(asset);
     };
     let (tx, rx) = oneshot::channel();
     PENDING.with(|p| *p.borrow_mut() = Some(tx));
@@ -116,6 +125,8 @@ fn on_message(e: web_sys::MessageEvent) {
         };
         status(&format!("{label}: {stage}{share}"));
         UPDATES.with(|n| n.set(n.get() + 1));
+    } else if let Some(warning) = get("warning").as_string() {
+        WARNINGS.with(|w| w.borrow_mut().push(warning));
     } else if let Some(message) = get("error").as_string() {
         reply(Err(message));
     } else {

@@ -1,6 +1,6 @@
 // The page's voxelizing worker (crates/web/src/worker.rs): prepares a model off the page's
-// thread. In: {name, bytes, level}. Out: {stage, done, total} as it goes, then {asset}
-// (the prepared asset's bytes) or {error}.
+// thread. In: {name, bytes, level}. Out: {stage, done, total} as it goes, {warning} for
+// each thing its load could not do, then {asset} (the prepared asset's bytes) or {error}.
 import init, { prepare_model_in_worker } from "./pkg/ssbvb_web.js";
 
 const ready = init();

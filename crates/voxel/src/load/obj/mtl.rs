@@ -95,9 +95,11 @@ pub(super) fn load_libraries(
     let mut library = HashMap::new();
     let Some(dir) = base_dir else {
         if !mtllibs.is_empty() {
+            let names: Vec<&str> = mtllibs.iter().map(|(_, n)| n.as_str()).collect();
             warnings.push(format!(
-                "{}: MTL libraries not loaded (no base folder given)",
-                obj_path.display()
+                "{}: MTL libraries not loaded (no base folder given): {}",
+                obj_path.display(),
+                names.join(", ")
             ));
         }
         return Ok(library);
