@@ -262,7 +262,7 @@ impl Engine {
         }
         let s = &mut self.gpu;
         let renderer =
-            ssbvb_passes::Renderer::new(&s.ctx, &s.scene, self.source.pipeline.clone(), size)?;
+            crate::upload::renderer(&s.ctx, &s.scene, self.source.pipeline.clone(), size)?;
         s.renderer = renderer;
         self.source.size = size;
         Ok(())

@@ -57,19 +57,10 @@ impl EngineError {
     /// The refused allocation (resource, bytes) when this is an out-of-memory error from
     /// the driver, through any wrapper.
     pub fn refused_allocation(&self) -> Option<(String, u64)> {
-        let of = |g: &GpuError| match g {
-            GpuError::OutOfMemory { resource, bytes } => Some((resource.clone(), *bytes)),
-            _ => None,
-        };
-        let of_resource = |r: &ResourceError| match r {
-            ResourceError::Gpu(g) => of(g),
-            _ => None,
-        };
         match self {
-            EngineError::Gpu(g) => of(g),
-            EngineError::Resource(r) => of_resource(r),
-            EngineError::Pass(PassError::Gpu(g)) => of(g),
-            EngineError::Pass(PassError::Resource(r)) => of_resource(r),
+            EngineError::Gpu(g) => refused_by_gpu(g),
+            EngineError::Resource(r) => refused_by_resource(r),
+            EngineError::Pass(p) => refused_by_pass(p),
             EngineError::Context { error, .. } => error.refused_allocation(),
             _ => None,
         }
@@ -89,6 +80,31 @@ impl EngineError {
             path: path.display().to_string(),
             error,
         }
+    }
+}
+
+/// The refused allocation (resource, bytes) of a driver's out-of-memory error.
+pub(crate) fn refused_by_gpu(g: &GpuError) -> Option<(String, u64)> {
+    match g {
+        GpuError::OutOfMemory { resource, bytes } => Some((resource.clone(), *bytes)),
+        _ => None,
+    }
+}
+
+/// [`refused_by_gpu`] of a resource error.
+pub(crate) fn refused_by_resource(r: &ResourceError) -> Option<(String, u64)> {
+    match r {
+        ResourceError::Gpu(g) => refused_by_gpu(g),
+        _ => None,
+    }
+}
+
+/// [`refused_by_gpu`] of a pass error.
+pub(crate) fn refused_by_pass(p: &PassError) -> Option<(String, u64)> {
+    match p {
+        PassError::Gpu(g) => refused_by_gpu(g),
+        PassError::Resource(r) => refused_by_resource(r),
+        _ => None,
     }
 }
 

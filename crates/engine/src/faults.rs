@@ -113,28 +113,17 @@ pub fn check_faults(faults: &[Fault], frames: u64) -> Result<(), EngineError> {
 /// `source()` chain: an `anyhow` context, an [`EngineError`], a pass or resource error),
 /// is an out-of-memory error from the driver.
 pub fn out_of_memory(e: &(dyn std::error::Error + 'static)) -> Option<(String, u64)> {
-    let of = |g: &GpuError| match g {
-        GpuError::OutOfMemory { resource, bytes } => Some((resource.clone(), *bytes)),
-        _ => None,
-    };
-    let of_resource = |r: &ResourceError| match r {
-        ResourceError::Gpu(g) => of(g),
-        _ => None,
-    };
+    use crate::error::{refused_by_gpu, refused_by_pass, refused_by_resource};
     let mut next = Some(e);
     while let Some(c) = next {
         let found = if let Some(engine) = c.downcast_ref::<EngineError>() {
             engine.refused_allocation()
         } else if let Some(g) = c.downcast_ref::<GpuError>() {
-            of(g)
+            refused_by_gpu(g)
         } else if let Some(r) = c.downcast_ref::<ResourceError>() {
-            of_resource(r)
+            refused_by_resource(r)
         } else {
-            match c.downcast_ref::<PassError>() {
-                Some(PassError::Gpu(g)) => of(g),
-                Some(PassError::Resource(r)) => of_resource(r),
-                _ => None,
-            }
+            c.downcast_ref::<PassError>().and_then(refused_by_pass)
         };
         if found.is_some() {
             return found;

@@ -61,6 +61,7 @@ pub mod forms;
 pub mod scene_file;
 pub mod session;
 pub mod timing;
+pub mod upload;
 pub mod values;
 mod warning;
 

@@ -19,6 +19,7 @@ use crate::EngineError;
 use crate::animation::AnimationReport;
 use crate::budget::PageSourceRef;
 use crate::choice::requirements_of;
+use crate::upload::{Residency, upload_scene};
 
 /// A device a host program already has: the engine draws with it instead of making its
 /// own (the host keeps its features, limits and error handler), optionally into the host's
@@ -206,12 +207,12 @@ impl SessionSource {
             Some(mib) => {
                 // Offline: stream every page a frame asks for before the next one.
                 let options = crate::budget::options(mib, &self.page_sources, usize::MAX, notes)?;
-                GpuScene::streamed(ctx, scene, &options)?
+                upload_scene(ctx, scene, Residency::Streamed(&options))?
             }
-            None if !self.animated.is_empty() => {
-                GpuScene::with_dynamic(ctx, scene, &crate::animation::rooms(&self.animated))?
+            None => {
+                let rooms = crate::animation::rooms(&self.animated);
+                upload_scene(ctx, scene, Residency::Dynamic(&rooms))?
             }
-            None => GpuScene::new(ctx, scene)?,
         };
         gpu_scene.instance_lists = self.instance_lists;
         let animation = if self.animated.is_empty() {
@@ -238,7 +239,7 @@ impl SessionSource {
                     &[(output.as_str(), texture)],
                 )?
             }
-            None => Renderer::new(ctx, &gpu_scene, self.pipeline.clone(), self.size)?,
+            None => crate::upload::renderer(ctx, &gpu_scene, self.pipeline.clone(), self.size)?,
         };
         renderer.set_counting(self.counting);
         Ok((gpu_scene, renderer, animation))

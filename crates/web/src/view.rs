@@ -92,8 +92,11 @@ impl View {
         presenter: Option<Presenter>,
     ) -> Result<Self, WebError> {
         let gpu = |e: &dyn std::fmt::Display| WebError::Gpu(e.to_string());
-        let scene = GpuScene::new(ctx, scene).map_err(|e| gpu(&e))?;
-        let renderer = Renderer::new(ctx, &scene, pipeline, size).map_err(|e| gpu(&e))?;
+        let scene =
+            ssbvb_engine::upload::upload_scene(ctx, scene, ssbvb_engine::upload::Residency::Whole)
+                .map_err(|e| gpu(&e))?;
+        let renderer =
+            ssbvb_engine::upload::renderer(ctx, &scene, pipeline, size).map_err(|e| gpu(&e))?;
         Ok(View {
             scene,
             renderer,
@@ -108,7 +111,7 @@ impl View {
     /// resources and the canvas's configuration are made again.
     pub fn resize(&mut self, ctx: &GpuContext, size: (u32, u32)) -> Result<(), WebError> {
         let pipeline = self.renderer.pipeline.clone();
-        self.renderer = Renderer::new(ctx, &self.scene, pipeline, size)
+        self.renderer = ssbvb_engine::upload::renderer(ctx, &self.scene, pipeline, size)
             .map_err(|e| WebError::Gpu(e.to_string()))?;
         if let Some(p) = self.presenter.take() {
             let output = &self.renderer.output().texture;

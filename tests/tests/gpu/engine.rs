@@ -198,3 +198,65 @@ fn the_frame_is_drawn_into_the_hosts_texture() {
     assert_eq!(differ, 0, "{differ} bytes differ");
     assert!(into_host.resize((10, 10)).is_err());
 }
+
+/// A host's device with less than the adapter offers: under WebGPU's default limits the
+/// engine picks a form that device runs and says why it passed over others; under the
+/// downlevel limits no form fits, and opening is an error naming what the device lacks,
+/// not a validation error.
+#[test]
+fn a_hosts_device_gets_a_form_it_runs_or_the_reason_it_runs_none() {
+    let (rgba, _, _) = ball();
+    let dense = || {
+        VoxelArrays::Dense(Array {
+            shape: vec![20, 12, 16, 4],
+            data: ArrayData::U8(&rgba),
+        })
+    };
+    let on = |ctx: &ssbvb_gpu::GpuContext| HostDevice {
+        instance: ctx.instance.clone(),
+        adapter: ctx.adapter.clone(),
+        device: ctx.device.clone(),
+        queue: ctx.queue.clone(),
+        target: None,
+    };
+    let (webgpu, errors) = ssbvb_tests::device_on_shared_adapter(
+        "host with WebGPU's limits",
+        ssbvb_gpu::wgpu::Features::empty(),
+        ssbvb_gpu::wgpu::Limits::default(),
+    );
+    let content = Content::from_arrays(&dense(), PLACEMENT, &NoProgress).unwrap();
+    let options = |host| RenderOptions {
+        host: Some(host),
+        ..options()
+    };
+    let mut engine = Engine::open(content, &options(on(&webgpu))).unwrap();
+    eprintln!("host under WebGPU's limits: {:?}", engine.choice());
+    assert!(engine.choice().reason.contains("(the host's device)"));
+    engine.render().unwrap();
+    assert!(engine.read_rgba8().unwrap().chunks(4).any(|p| p[3] > 0));
+    assert!(
+        errors.lock().unwrap().is_empty(),
+        "{:?}",
+        errors.lock().unwrap()
+    );
+
+    let (small, errors) = ssbvb_tests::device_on_shared_adapter(
+        "host with the downlevel limits",
+        ssbvb_gpu::wgpu::Features::empty(),
+        ssbvb_gpu::wgpu::Limits::downlevel_defaults(),
+    );
+    let content = Content::from_arrays(&dense(), PLACEMENT, &NoProgress).unwrap();
+    let e = match Engine::open(content, &options(on(&small))) {
+        Ok(engine) => panic!("opened with {:?}", engine.choice()),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        e.contains("the host's device") && e.contains("cannot run this pipeline: it lacks"),
+        "{e}"
+    );
+    assert!(
+        errors.lock().unwrap().is_empty(),
+        "{:?}",
+        errors.lock().unwrap()
+    );
+}

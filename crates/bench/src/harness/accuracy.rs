@@ -6,7 +6,7 @@ use std::sync::Arc;
 use anyhow::{Result, bail};
 use glam::DAffine3;
 use ssbvb_gpu::GpuContext;
-use ssbvb_gpu::scene::{GpuScene, LodPolicy, StreamingOptions};
+use ssbvb_gpu::scene::{LodPolicy, StreamingOptions};
 use ssbvb_graph::ResolvedPipeline;
 use ssbvb_passes::{Profiling, Renderer};
 use ssbvb_voxel::accuracy::GpuHit;
@@ -99,10 +99,16 @@ pub(crate) fn measure(s: &Setup, pipeline: ResolvedPipeline, with_psnr: bool) ->
     let ctx = s.ctx;
     let scene = one_object(s.asset, s.lod);
     let mut gpu_scene = match &s.streaming {
-        Some(o) => GpuScene::streamed(ctx, scene, o)?,
-        None => GpuScene::new(ctx, scene)?,
+        Some(o) => ssbvb_engine::upload::upload_scene(
+            ctx,
+            scene,
+            ssbvb_engine::upload::Residency::Streamed(o),
+        )?,
+        None => {
+            ssbvb_engine::upload::upload_scene(ctx, scene, ssbvb_engine::upload::Residency::Whole)?
+        }
     };
-    let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, s.size)?;
+    let mut renderer = ssbvb_engine::upload::renderer(ctx, &gpu_scene, pipeline, s.size)?;
     ssbvb_engine::budget::converge(ctx, &mut renderer, &mut gpu_scene, s.camera, 64)?;
     // A temporal pipeline's still frame is measured converged: a whole jitter sequence.
     let warmup = if has_temporal_pass(&renderer.pipeline) {

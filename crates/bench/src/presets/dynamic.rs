@@ -115,7 +115,8 @@ impl Bench<'_> {
 
     /// A renderer of `gpu_scene` at the bench's size, its first frame rendered (untimed).
     fn renderer(&self, gpu_scene: &mut GpuScene) -> Result<Renderer> {
-        let mut renderer = Renderer::new(self.ctx, gpu_scene, self.pipeline.clone(), self.size)?;
+        let mut renderer =
+            ssbvb_engine::upload::renderer(self.ctx, gpu_scene, self.pipeline.clone(), self.size)?;
         self.frame(gpu_scene, &mut renderer)?;
         Ok(renderer)
     }
@@ -191,7 +192,11 @@ fn measure_level(b: &Bench, level: u32) -> Result<DynamicRow> {
         object: 0,
         growth: 1.5,
     };
-    let mut gpu_scene = GpuScene::with_dynamic(b.ctx, scene, &[room])?;
+    let mut gpu_scene = ssbvb_engine::upload::upload_scene(
+        b.ctx,
+        scene,
+        ssbvb_engine::upload::Residency::Dynamic(&[room]),
+    )?;
     let mut renderer = b.renderer(&mut gpu_scene)?;
     let animated = animate(b, &anim, &mut gpu_scene, &mut renderer)?;
     let finest = ssbvb_voxel::edit::level_voxels(&rest.lods[level as usize]);
@@ -232,7 +237,8 @@ fn measure_level(b: &Bench, level: u32) -> Result<DynamicRow> {
 
 /// The static bunny's median frame (the CPU-prepared asset uploaded once).
 fn static_frame_ms(b: &Bench, scene: Scene) -> Result<f64> {
-    let mut gpu_scene = GpuScene::new(b.ctx, scene)?;
+    let mut gpu_scene =
+        ssbvb_engine::upload::upload_scene(b.ctx, scene, ssbvb_engine::upload::Residency::Whole)?;
     let mut renderer = b.renderer(&mut gpu_scene)?;
     Ok(median_of(
         (0..b.frames)

@@ -13,7 +13,7 @@ use std::sync::Arc;
 use anyhow::{Context, Result};
 use glam::{DAffine3, DQuat, DVec3};
 use ssbvb_gpu::GpuContext;
-use ssbvb_gpu::scene::{GpuScene, LodPolicy, Scene, VoxelObject};
+use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject};
 use ssbvb_passes::Renderer;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::reference;
@@ -137,8 +137,12 @@ pub(crate) fn run(
             t.name, out.objects
         );
         let measured = (|| -> Result<Figure8Time> {
-            let mut s = GpuScene::streamed(ctx, scene.clone(), &options)?;
-            let mut r = Renderer::new(ctx, &s, technique_pipeline(t)?, size)?;
+            let mut s = ssbvb_engine::upload::upload_scene(
+                ctx,
+                scene.clone(),
+                ssbvb_engine::upload::Residency::Streamed(&options),
+            )?;
+            let mut r = ssbvb_engine::upload::renderer(ctx, &s, technique_pipeline(t)?, size)?;
             let (n, converged) =
                 ssbvb_engine::budget::converge(ctx, &mut r, &mut s, &camera, MAX_FRAMES)?;
             let mut times = timed_frames(ctx, &mut r, &mut s, &camera, args.frames.unwrap_or(3))?;

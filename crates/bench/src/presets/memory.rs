@@ -13,9 +13,9 @@ use std::time::Instant;
 use anyhow::Result;
 use glam::DVec3;
 use serde::Serialize;
-use ssbvb_gpu::scene::{GpuScene, LodPolicy, StreamingOptions};
+use ssbvb_gpu::scene::{LodPolicy, StreamingOptions};
 use ssbvb_gpu::{GpuContext, ResourceError};
-use ssbvb_passes::{PassError, Profiling, Renderer};
+use ssbvb_passes::{PassError, Profiling};
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::reference::ReferenceImage;
@@ -123,11 +123,19 @@ fn measure(
     reference: &ReferenceImage,
 ) -> Result<Measured> {
     let mut s = match options {
-        Some(o) => GpuScene::streamed(ctx, one_object(asset, LodPolicy::Fixed(level)), o)?,
-        None => GpuScene::new(ctx, one_object(asset, LodPolicy::Fixed(level)))?,
+        Some(o) => ssbvb_engine::upload::upload_scene(
+            ctx,
+            one_object(asset, LodPolicy::Fixed(level)),
+            ssbvb_engine::upload::Residency::Streamed(o),
+        )?,
+        None => ssbvb_engine::upload::upload_scene(
+            ctx,
+            one_object(asset, LodPolicy::Fixed(level)),
+            ssbvb_engine::upload::Residency::Whole,
+        )?,
     };
     let full = s.total_memory();
-    let mut r = Renderer::new(ctx, &s, bundled_pipeline("ssbvb.ron")?, size)?;
+    let mut r = ssbvb_engine::upload::renderer(ctx, &s, bundled_pipeline("ssbvb.ron")?, size)?;
     let (n, converged) = ssbvb_engine::budget::converge(ctx, &mut r, &mut s, camera, MAX_FRAMES)?;
     let times = timed_frames(ctx, &mut r, &mut s, camera, frames)?;
     let hits = ssbvb_passes::measure::gbuffer_hits(ctx, &r)?;
@@ -359,8 +367,12 @@ fn fly_through(
     options: &StreamingOptions,
 ) -> Result<FlyThrough> {
     let (_, _, n) = FLY;
-    let mut s = GpuScene::streamed(ctx, one_object(asset, LodPolicy::Fixed(level)), options)?;
-    let mut r = Renderer::new(ctx, &s, bundled_pipeline("ssbvb.ron")?, size)?;
+    let mut s = ssbvb_engine::upload::upload_scene(
+        ctx,
+        one_object(asset, LodPolicy::Fixed(level)),
+        ssbvb_engine::upload::Residency::Streamed(options),
+    )?;
+    let mut r = ssbvb_engine::upload::renderer(ctx, &s, bundled_pipeline("ssbvb.ron")?, size)?;
     // The first view converges first (a start-up, not a stall).
     ssbvb_engine::budget::converge(ctx, &mut r, &mut s, &fly_camera(0, n), MAX_FRAMES)?;
     let start = s.streaming_stats().map_or(0, |st| st.pages_streamed);

@@ -23,7 +23,7 @@ use glam::DAffine3;
 use serde::Serialize;
 use ssbvb_gpu::GpuContext;
 use ssbvb_gpu::scene::ObjectMemory;
-use ssbvb_gpu::scene::{GpuScene, LodPolicy, Scene, VoxelObject};
+use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject};
 use ssbvb_gpu_build::surface_build::SurfaceBuilder;
 use ssbvb_graph::PassKind;
 use ssbvb_passes::{Profiling, Renderer};
@@ -243,7 +243,8 @@ fn sweep_scene(ctx: &GpuContext, s: &SweepScene, log: bool) -> Result<Vec<SweepR
         .collect();
     let light = scene.light;
     let finest = reference::render(&finest_instances, &s.camera, s.size.0, s.size.1, &light);
-    let mut gpu_scene = GpuScene::new(ctx, scene)?;
+    let mut gpu_scene =
+        ssbvb_engine::upload::upload_scene(ctx, scene, ssbvb_engine::upload::Residency::Whole)?;
     let mut rows: Vec<SweepRow> = Vec::new();
     for pe in PIXEL_ERRORS {
         let pipeline = with_kind_edit(&base, "pixel_error", |k| match k {
@@ -253,7 +254,7 @@ fn sweep_scene(ctx: &GpuContext, s: &SweepScene, log: bool) -> Result<Vec<SweepR
             }
             _ => false,
         })?;
-        let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, s.size)?;
+        let mut renderer = ssbvb_engine::upload::renderer(ctx, &gpu_scene, pipeline, s.size)?;
         // The first frame builds the surface model: not timed.
         renderer.render(ctx, &mut gpu_scene, &s.camera, Profiling::Off)?;
         ctx.wait_idle()?;

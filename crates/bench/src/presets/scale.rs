@@ -14,9 +14,9 @@ use anyhow::{Context, Result};
 use glam::DVec3;
 use serde::Serialize;
 use ssbvb_gpu::GpuContext;
-use ssbvb_gpu::scene::{GpuScene, LodPolicy, Scene, VoxelObject};
+use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject};
 use ssbvb_graph::ResolvedPipeline;
-use ssbvb_passes::{FrameCounters, Renderer};
+use ssbvb_passes::FrameCounters;
 use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::reference;
@@ -333,8 +333,12 @@ fn measure(
     pipeline: ResolvedPipeline,
     v: &View,
 ) -> Result<ScaleRow> {
-    let mut gpu_scene = GpuScene::new(ctx, v.scene.clone())?;
-    let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, v.size)?;
+    let mut gpu_scene = ssbvb_engine::upload::upload_scene(
+        ctx,
+        v.scene.clone(),
+        ssbvb_engine::upload::Residency::Whole,
+    )?;
+    let mut renderer = ssbvb_engine::upload::renderer(ctx, &gpu_scene, pipeline, v.size)?;
     let timed = TimedFrames::run(ctx, &mut renderer, &mut gpu_scene, v.camera, v.frames)?;
     let counters = renderer.counters(ctx)?;
     let hits = ssbvb_passes::measure::gbuffer_hits(ctx, &renderer)?;

@@ -15,9 +15,8 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use serde::Serialize;
 use ssbvb_gpu::GpuContext;
-use ssbvb_gpu::scene::{GpuScene, Scene};
+use ssbvb_gpu::scene::Scene;
 use ssbvb_graph::ResolvedPipeline;
-use ssbvb_passes::Renderer;
 use ssbvb_passes::measure::lighting::{LitFrame, compare, monte_carlo_reference};
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::lighting::LightingSample;
@@ -293,8 +292,12 @@ fn measure_cones(
         k.resolution,
     );
     let build_ms = t0.elapsed().as_secs_f64() * 1e3;
-    let mut gpu_scene = GpuScene::new(ctx, scene.clone())?;
-    let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, s.size)?;
+    let mut gpu_scene = ssbvb_engine::upload::upload_scene(
+        ctx,
+        scene.clone(),
+        ssbvb_engine::upload::Residency::Whole,
+    )?;
+    let mut renderer = ssbvb_engine::upload::renderer(ctx, &gpu_scene, pipeline, s.size)?;
     let timed = TimedFrames::run(ctx, &mut renderer, &mut gpu_scene, s.camera, s.frames)?;
     let lit = LitFrame::read(ctx, &renderer)?;
     // The finest level drawn sets the reference's ray offset: a voxel diagonal.
@@ -342,8 +345,12 @@ fn measure_cones(
 /// The plain SSBVB frame of the scene: the baseline row.
 fn measure_plain(s: &SceneRun, plain: &ResolvedPipeline) -> Result<VctRow> {
     let (ctx, size) = (s.ctx, s.size);
-    let mut gpu_scene = GpuScene::new(ctx, s.scene.clone())?;
-    let mut renderer = Renderer::new(ctx, &gpu_scene, plain.clone(), size)?;
+    let mut gpu_scene = ssbvb_engine::upload::upload_scene(
+        ctx,
+        s.scene.clone(),
+        ssbvb_engine::upload::Residency::Whole,
+    )?;
+    let mut renderer = ssbvb_engine::upload::renderer(ctx, &gpu_scene, plain.clone(), size)?;
     let timed = TimedFrames::run(ctx, &mut renderer, &mut gpu_scene, s.camera, s.frames)?;
     Ok(VctRow {
         scene: s.file.into(),

@@ -22,9 +22,8 @@ use anyhow::{Context, Result};
 use glam::{DAffine3, DMat4, DVec3, DVec4};
 use serde::Serialize;
 use ssbvb_gpu::GpuContext;
-use ssbvb_gpu::scene::{GpuScene, Scene, TriangleObject, VolumeObject};
+use ssbvb_gpu::scene::{Scene, TriangleObject, VolumeObject};
 use ssbvb_graph::ResolvedPipeline;
-use ssbvb_passes::Renderer;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::model::{Mesh, ObjectSpace};
 use ssbvb_voxel::rgba_volume::RgbaVolume;
@@ -159,8 +158,9 @@ fn render_frame(
     size: (u32, u32),
     frames: usize,
 ) -> Result<(TimedFrames, Vec<u8>)> {
-    let mut gpu_scene = GpuScene::new(ctx, scene)?;
-    let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline.clone(), size)?;
+    let mut gpu_scene =
+        ssbvb_engine::upload::upload_scene(ctx, scene, ssbvb_engine::upload::Residency::Whole)?;
+    let mut renderer = ssbvb_engine::upload::renderer(ctx, &gpu_scene, pipeline.clone(), size)?;
     let timed = TimedFrames::run(ctx, &mut renderer, &mut gpu_scene, camera, frames)?;
     let i = renderer
         .resource("color")

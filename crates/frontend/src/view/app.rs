@@ -5,9 +5,7 @@
 use std::time::{Duration, Instant};
 
 use anyhow::Result;
-use ssbvb_gpu::scene::GpuScene;
 use ssbvb_graph::{PipelineWatcher, ReloadOutcome, ResolvedPipeline};
-use ssbvb_passes::Renderer;
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, WindowEvent};
 use winit::event_loop::ActiveEventLoop;
@@ -291,7 +289,8 @@ impl Viewer {
     fn rebuild(&mut self) -> bool {
         self.needs_rebuild = false;
         let pipeline = self.effective_pipeline();
-        match Renderer::new(&self.gpu.ctx, &self.scene, pipeline, self.gpu.size()) {
+        match ssbvb_engine::upload::renderer(&self.gpu.ctx, &self.scene, pipeline, self.gpu.size())
+        {
             Ok(r) => {
                 self.renderer = r;
                 self.error = None;
@@ -388,7 +387,11 @@ impl Viewer {
         let mut options = options.clone();
         options.budget_bytes = mib << 20;
         let scene = self.scene.scene.clone();
-        match GpuScene::streamed(&self.gpu.ctx, scene, &options) {
+        match ssbvb_engine::upload::upload_scene(
+            &self.gpu.ctx,
+            scene,
+            ssbvb_engine::upload::Residency::Streamed(&options),
+        ) {
             Ok(s) => {
                 self.scene = s;
                 self.streaming = Some(options);

@@ -6,9 +6,9 @@ use std::time::Instant;
 
 use anyhow::Result;
 use ssbvb_gpu::GpuContext;
-use ssbvb_gpu::scene::{GpuScene, choose_level_held};
+use ssbvb_gpu::scene::choose_level_held;
 use ssbvb_graph::ResolvedPipeline;
-use ssbvb_passes::{Profiling, Renderer};
+use ssbvb_passes::Profiling;
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::reference::{self, SampleGrid};
 
@@ -46,9 +46,13 @@ pub(super) fn technique_frames(
     size: (u32, u32),
     hysteresis: f64,
 ) -> Result<Drawn> {
-    let mut gpu_scene = GpuScene::new(ctx, view.scene.clone())?;
+    let mut gpu_scene = ssbvb_engine::upload::upload_scene(
+        ctx,
+        view.scene.clone(),
+        ssbvb_engine::upload::Residency::Whole,
+    )?;
     gpu_scene.lod_hysteresis = hysteresis;
-    let mut renderer = Renderer::new(ctx, &gpu_scene, pipeline, size)?;
+    let mut renderer = ssbvb_engine::upload::renderer(ctx, &gpu_scene, pipeline, size)?;
     let instances = view
         .scene
         .objects

@@ -57,9 +57,21 @@ impl GpuParts {
         rooms.extend(loaded.brush.iter().flat_map(|b| b.rooms()));
         let scene = loaded.scene.clone();
         let scene = match &loaded.streaming {
-            Some(o) => GpuScene::streamed(ctx, scene, o),
-            None if !rooms.is_empty() => GpuScene::with_dynamic(ctx, scene, &rooms),
-            None => GpuScene::new(ctx, scene),
+            Some(o) => ssbvb_engine::upload::upload_scene(
+                ctx,
+                scene,
+                ssbvb_engine::upload::Residency::Streamed(o),
+            ),
+            None if !rooms.is_empty() => ssbvb_engine::upload::upload_scene(
+                ctx,
+                scene,
+                ssbvb_engine::upload::Residency::Dynamic(&rooms),
+            ),
+            None => ssbvb_engine::upload::upload_scene(
+                ctx,
+                scene,
+                ssbvb_engine::upload::Residency::Whole,
+            ),
         }
         .context("uploading the scene")?;
         let animator = if loaded.animated.is_empty() {
@@ -67,7 +79,7 @@ impl GpuParts {
         } else {
             Some(ssbvb_gpu_build::animated::Animator::new(ctx)?)
         };
-        let renderer = Renderer::new(ctx, &scene, pipeline, gpu.size())
+        let renderer = ssbvb_engine::upload::renderer(ctx, &scene, pipeline, gpu.size())
             .with_context(|| format!("building {}", loaded.watcher.path().display()))?;
         let egui_ctx = egui::Context::default();
         let egui_state = egui_winit::State::new(
