@@ -3,10 +3,10 @@
 //! engine's own session: whole, streamed under a budget, or with room for changing
 //! objects.
 
-use ssbvb_gpu::GpuContext;
 use ssbvb_gpu::scene::{DynamicRoom, GpuScene, Scene, StreamingOptions};
+use ssbvb_gpu::{GpuContext, ResourceError};
 use ssbvb_graph::ResolvedPipeline;
-use ssbvb_passes::Renderer;
+use ssbvb_passes::{PassError, Renderer};
 
 use crate::EngineError;
 
@@ -21,28 +21,29 @@ pub enum Residency<'a> {
     Dynamic(&'a [DynamicRoom]),
 }
 
-/// `scene` uploaded to `ctx` with `residency`.
+/// `scene` uploaded to `ctx` with `residency`. The error is the resource error itself, so
+/// a caller can tell a scene too large or a budget too small from other failures.
 pub fn upload_scene(
     ctx: &GpuContext,
     scene: Scene,
     residency: Residency<'_>,
-) -> Result<GpuScene, EngineError> {
-    Ok(match residency {
-        Residency::Whole => GpuScene::new(ctx, scene)?,
-        Residency::Streamed(options) => GpuScene::streamed(ctx, scene, options)?,
-        Residency::Dynamic([]) => GpuScene::new(ctx, scene)?,
-        Residency::Dynamic(rooms) => GpuScene::with_dynamic(ctx, scene, rooms)?,
-    })
+) -> Result<GpuScene, ResourceError> {
+    match residency {
+        Residency::Whole | Residency::Dynamic([]) => GpuScene::new(ctx, scene),
+        Residency::Streamed(options) => GpuScene::streamed(ctx, scene, options),
+        Residency::Dynamic(rooms) => GpuScene::with_dynamic(ctx, scene, rooms),
+    }
 }
 
-/// The renderer of `pipeline` over `scene` at `size` (its pipelines compiled here).
+/// The renderer of `pipeline` over `scene` at `size` (its pipelines compiled here); the
+/// error is the pass error itself (a pipeline that needs whole levels, one too large).
 pub fn renderer(
     ctx: &GpuContext,
     scene: &GpuScene,
     pipeline: ResolvedPipeline,
     size: (u32, u32),
-) -> Result<Renderer, EngineError> {
-    Ok(Renderer::new(ctx, scene, pipeline, size)?)
+) -> Result<Renderer, PassError> {
+    Renderer::new(ctx, scene, pipeline, size)
 }
 
 /// [`upload_scene`] then [`renderer`].
