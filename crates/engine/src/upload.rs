@@ -8,7 +8,6 @@ use ssbvb_gpu::{GpuContext, ResourceError};
 use ssbvb_graph::ResolvedPipeline;
 use ssbvb_passes::{PassError, Renderer};
 
-use crate::EngineError;
 
 /// How a scene's voxels live on the GPU.
 #[derive(Clone, Copy)]
@@ -44,17 +43,4 @@ pub fn renderer(
     size: (u32, u32),
 ) -> Result<Renderer, PassError> {
     Renderer::new(ctx, scene, pipeline, size)
-}
-
-/// [`upload_scene`] then [`renderer`].
-pub fn scene_and_renderer(
-    ctx: &GpuContext,
-    scene: Scene,
-    residency: Residency<'_>,
-    pipeline: ResolvedPipeline,
-    size: (u32, u32),
-) -> Result<(GpuScene, Renderer), EngineError> {
-    let scene = upload_scene(ctx, scene, residency)?;
-    let renderer = renderer(ctx, &scene, pipeline, size)?;
-    Ok((scene, renderer))
 }
