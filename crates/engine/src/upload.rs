@@ -8,7 +8,6 @@ use ssbvb_gpu::{GpuContext, ResourceError};
 use ssbvb_graph::ResolvedPipeline;
 use ssbvb_passes::{PassError, Renderer};
 
-
 /// How a scene's voxels live on the GPU.
 #[derive(Clone, Copy)]
 pub enum Residency<'a> {
