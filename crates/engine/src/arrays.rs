@@ -421,11 +421,12 @@ fn sparse_cells(coords: &Array<'_>, colors: &Array<'_>) -> Result<Cells, EngineE
     for axis in 0..3 {
         let lo = cells.iter().map(|c| c[axis]).min().unwrap_or(0);
         let hi = cells.iter().map(|c| c[axis]).max().unwrap_or(0);
-        let extent = (hi - lo + 1) as u64;
-        if extent > MAX_AXIS_CELLS {
+        // In i128: coordinates at both ends of i64 span more than an i64 holds.
+        let extent = i128::from(hi) - i128::from(lo) + 1;
+        if extent > i128::from(MAX_AXIS_CELLS) {
             return Err(ArrayError::TooLarge {
                 axis,
-                cells: extent,
+                cells: u64::try_from(extent).unwrap_or(u64::MAX),
             }
             .into());
         }
@@ -550,6 +551,22 @@ mod tests {
             Placement::default(),
         );
         assert!(e.contains("9001 cells along axis 0"), "{e}");
+        // Coordinates at both ends of i64: refused, not overflowed.
+        let coords = [i64::MIN, 0, 0, i64::MAX, 0, 0];
+        let e = err(
+            VoxelArrays::Sparse {
+                coords: Array {
+                    shape: vec![2, 3],
+                    data: ArrayData::I64(&coords),
+                },
+                colors: Array {
+                    shape: vec![2, 4],
+                    data: ArrayData::U8(&rgba),
+                },
+            },
+            Placement::default(),
+        );
+        assert!(e.contains("cells along axis 0"), "{e}");
     }
 
     #[test]
