@@ -16,7 +16,7 @@ use crate::{Content, EngineError, Warning};
 /// How an [`Engine`] renders.
 #[derive(Clone)]
 pub struct RenderOptions {
-    /// Image size (width, height), each 1 or more.
+    /// Image size (width, height), each side 1 to 16384.
     pub size: (u32, u32),
     /// A pipeline file (`None`: the content's, else the form chosen for the adapter).
     pub pipeline: Option<PathBuf>,
@@ -66,6 +66,18 @@ pub struct FrameReport {
     pub converged: bool,
 }
 
+/// Refuses an image size with a side of 0 or above [`crate::values::MAX_EDGE`] before any
+/// GPU work.
+fn check_size((w, h): (u32, u32)) -> Result<(), EngineError> {
+    let max = crate::values::MAX_EDGE;
+    if w == 0 || h == 0 || w > max || h > max {
+        return Err(EngineError::Invalid(format!(
+            "the image size must be 1..={max} per side, got {w}x{h}"
+        )));
+    }
+    Ok(())
+}
+
 /// Content on a device, ready to render.
 pub struct Engine {
     source: SessionSource,
@@ -79,14 +91,9 @@ pub struct Engine {
 
 impl Engine {
     /// Chooses the pipeline (the options', the content's, else the adapter's form), makes
-    /// or takes the device and uploads the content. Sizes of 0 are refused.
+    /// or takes the device and uploads the content. A side of 0 or above 16384 is refused.
     pub fn open(content: Content, options: &RenderOptions) -> Result<Self, EngineError> {
-        let (w, h) = options.size;
-        if w == 0 || h == 0 {
-            return Err(EngineError::Invalid(format!(
-                "the image size must be at least 1x1, got {w}x{h}"
-            )));
-        }
+        check_size(options.size)?;
         let choice = match &options.host {
             Some(host) => crate::choice::choose_for_host(
                 options.pipeline.clone(),
@@ -254,12 +261,7 @@ impl Engine {
                 "the frame is drawn into the host's texture, whose size is the host's".into(),
             ));
         }
-        if size.0 == 0 || size.1 == 0 {
-            return Err(EngineError::Invalid(format!(
-                "the image size must be at least 1x1, got {}x{}",
-                size.0, size.1
-            )));
-        }
+        check_size(size)?;
         let s = &mut self.gpu;
         let renderer =
             crate::upload::renderer(&s.ctx, &s.scene, self.source.pipeline.clone(), size)?;
