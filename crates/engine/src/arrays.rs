@@ -150,6 +150,18 @@ pub enum ArrayError {
     /// An origin with a coordinate that is not finite.
     #[error("origin must be finite, got {0:?}")]
     Origin([f64; 3]),
+    /// More voxels set than a level holds (checked before any of them is copied).
+    #[error("{count} voxels set: a level holds at most {max}")]
+    TooManyVoxels {
+        /// Voxels set.
+        count: u64,
+        /// The most a level holds (`ssbvb_voxel::voxelize::MAX_VOXELS`).
+        max: u64,
+    },
+    /// The grid's world placement is not representable (an origin or voxel size so large
+    /// that the grid's corner or centre is not a finite number).
+    #[error("origin and voxel_size place the grid outside finite world coordinates: {0}")]
+    Placement(String),
     /// More cells along an axis than the finest level holds.
     #[error("{cells} cells along axis {axis}: a grid holds at most {MAX_AXIS_CELLS} (level 13)")]
     TooLarge {
@@ -218,6 +230,9 @@ pub fn prepare(
     let corner = DVec3::from(placement.origin)
         + DVec3::new(min[0] as f64, min[1] as f64, min[2] as f64) * placement.voxel_size;
     let center = corner + DVec3::splat(half);
+    if !(half.is_finite() && center.is_finite() && corner.is_finite()) {
+        return Err(ArrayError::Placement(format!("corner {corner}, half edge {half}")).into());
+    }
     let set = ssbvb_voxel::voxelize::VoxelSet {
         object_space: ObjectSpace {
             center,
@@ -321,6 +336,18 @@ fn grid_extent(shape: &[usize]) -> Result<[usize; 3], ArrayError> {
     Ok([shape[0], shape[1], shape[2]])
 }
 
+/// Refuses `count` voxels above what a level holds, before they are copied.
+fn check_count(count: usize) -> Result<(), ArrayError> {
+    let max = ssbvb_voxel::voxelize::MAX_VOXELS;
+    if count as u64 > max {
+        return Err(ArrayError::TooManyVoxels {
+            count: count as u64,
+            max,
+        });
+    }
+    Ok(())
+}
+
 fn linear(c: [u8; 4]) -> [f32; 4] {
     let f = |x: u8| srgb_to_linear(f32::from(x) / 255.0);
     [f(c[0]), f(c[1]), f(c[2]), f32::from(c[3]) / 255.0]
@@ -344,8 +371,10 @@ fn dense_cells(a: &Array<'_>) -> Result<Cells, EngineError> {
         &[None, None, None, Some(4)],
     )?;
     let [_, ny, nz] = grid_extent(&shape)?;
-    let mut cells = Vec::new();
-    let mut colors = Vec::new();
+    let count = data.chunks_exact(4).filter(|px| px[3] != 0).count();
+    check_count(count)?;
+    let mut cells = Vec::with_capacity(count);
+    let mut colors = Vec::with_capacity(count);
     for (i, px) in data.chunks_exact(4).enumerate() {
         if px[3] == 0 {
             continue;
@@ -360,9 +389,9 @@ fn dense_cells(a: &Array<'_>) -> Result<Cells, EngineError> {
 fn occupancy_cells(a: &Array<'_>, color: [u8; 4]) -> Result<Cells, EngineError> {
     let shape = check_shape("occupancy grid", a, "(X, Y, Z)", &[None, None, None])?;
     let [_, ny, nz] = grid_extent(&shape)?;
-    let set: Vec<bool> = match a.data {
-        ArrayData::Bool(d) => d.to_vec(),
-        ArrayData::U8(d) => d.iter().map(|&v| v != 0).collect(),
+    let cells = match a.data {
+        ArrayData::Bool(d) => occupied_cells(d, |v| *v, ny, nz)?,
+        ArrayData::U8(d) => occupied_cells(d, |v| *v != 0, ny, nz)?,
         other => {
             return Err(ArrayError::Dtype {
                 name: "occupancy grid",
@@ -372,22 +401,33 @@ fn occupancy_cells(a: &Array<'_>, color: [u8; 4]) -> Result<Cells, EngineError> 
             .into());
         }
     };
-    let cells: Vec<[i64; 3]> = set
-        .iter()
+    let colors = vec![linear(color); cells.len()];
+    Ok((cells, colors))
+}
+
+/// The cells of a C-order `(X, ny, nz)` grid whose element is `set`, counted (and refused
+/// above what a level holds) before any is copied.
+fn occupied_cells<T>(
+    d: &[T],
+    set: impl Fn(&T) -> bool,
+    ny: usize,
+    nz: usize,
+) -> Result<Vec<[i64; 3]>, ArrayError> {
+    check_count(d.iter().filter(|v| set(v)).count())?;
+    Ok(d.iter()
         .enumerate()
-        .filter(|(_, s)| **s)
+        .filter(|(_, v)| set(v))
         .map(|(i, _)| {
             let (x, rest) = (i / (ny * nz), i % (ny * nz));
             [x as i64, (rest / nz) as i64, (rest % nz) as i64]
         })
-        .collect();
-    let colors = vec![linear(color); cells.len()];
-    Ok((cells, colors))
+        .collect())
 }
 
 fn sparse_cells(coords: &Array<'_>, colors: &Array<'_>) -> Result<Cells, EngineError> {
     let n = coords.shape.first().copied().unwrap_or(0);
     check_shape("sparse coordinates", coords, "(N, 3)", &[None, Some(3)])?;
+    check_count(n)?;
     check_shape(
         "sparse colours",
         colors,
@@ -518,6 +558,23 @@ mod tests {
             },
         );
         assert!(e.contains("origin must be finite"), "{e}");
+        // Finite inputs whose grid does not fit f64 world coordinates (a 3-cell row needs
+        // the 4-cell grid: twice 1e308 across).
+        let row = [true; 3];
+        let e = err(
+            VoxelArrays::Occupancy {
+                occupied: Array {
+                    shape: vec![3, 1, 1],
+                    data: ArrayData::Bool(&row),
+                },
+                color: [255; 4],
+            },
+            Placement {
+                voxel_size: 1e308,
+                ..p
+            },
+        );
+        assert!(e.contains("outside finite world coordinates"), "{e}");
     }
 
     /// A grid past level 13 is refused from its shape alone: the 8193³ array is never

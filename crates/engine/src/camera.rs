@@ -8,8 +8,8 @@ use ssbvb_voxel::camera::Camera;
 
 /// A camera on a sphere of `distance` around `target`: `azimuth_deg` about +Y from +Z
 /// (90° looks from +X), `elevation_deg` above the horizontal plane (clamped to ±89.9° so
-/// the view never aligns with up), +Y up, with a `fov_y_deg` field of view and no far
-/// plane.
+/// the view never aligns with up), +Y up, with a `fov_y_deg` field of view (clamped to
+/// 1°..179°; 45° when not a number) and no far plane.
 pub fn orbit(
     target: DVec3,
     distance: f64,
@@ -26,6 +26,11 @@ pub fn orbit(
         distance
     } else {
         1.0
+    };
+    let fov_y_deg = if fov_y_deg.is_finite() {
+        fov_y_deg.clamp(1.0, 179.0)
+    } else {
+        45.0
     };
     Camera {
         fov_y_deg,

@@ -167,6 +167,9 @@ impl Engine {
                     "GPU device",
                     format!("lost and recreated: {why}"),
                 ));
+                let lowered = opened.warnings.iter();
+                self.warnings
+                    .extend(lowered.map(|w| Warning::new("GPU memory", w)));
                 self.render_once()
             }
             other => other,

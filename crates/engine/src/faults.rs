@@ -102,7 +102,7 @@ pub fn check_faults(faults: &[Fault], frames: u64) -> Result<(), EngineError> {
                 "--inject-fault {} needs a soak of more than {frame} frames (--frames {} or \
                  more): faults are injected into the soak's frames",
                 f.spelled(),
-                (frame + 1).max(2)
+                frame.saturating_add(1).max(2)
             )));
         }
     }
@@ -150,12 +150,14 @@ impl Recoveries {
     /// [`LOST_AGAIN_WITHIN`] frames of the last recovery.
     pub fn lost_at(&mut self, frame: usize, reason: &str) -> Result<(), EngineError> {
         if let Some(last) = self.last
-            && frame - last < LOST_AGAIN_WITHIN
+            && frame
+                .checked_sub(last)
+                .is_some_and(|d| d < LOST_AGAIN_WITHIN)
         {
             return Err(EngineError::Invalid(format!(
                 "the GPU device was lost again at frame {frame}, {} frames after it was \
                  recreated at frame {last} ({reason}); giving up rather than retrying",
-                frame - last
+                frame.saturating_sub(last)
             )));
         }
         self.count += 1;

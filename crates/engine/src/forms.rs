@@ -157,7 +157,10 @@ pub fn choose_among(
 ) -> (PipelineChoice, Option<(usize, AdapterVerdict)>) {
     let adapters = per_form.iter().map(Vec::len).max().unwrap_or(0);
     for a in 0..adapters {
-        let verdicts: Vec<Option<&AdapterVerdict>> = per_form.iter().map(|v| v.get(a)).collect();
+        // A form without a row of verdicts counts as one no adapter is listed for.
+        let verdicts: Vec<Option<&AdapterVerdict>> = (0..forms.len())
+            .map(|k| per_form.get(k).and_then(|v| v.get(a)))
+            .collect();
         if !verdicts.iter().flatten().any(|v| v.allowed) {
             continue;
         }
@@ -167,7 +170,9 @@ pub fn choose_among(
         let Some(k) = (0..forms.len()).find(|&k| verdicts[k].is_some_and(|v| suits(k, v))) else {
             continue;
         };
-        let adapter = verdicts[k].expect("found above");
+        let Some(adapter) = verdicts[k] else {
+            continue;
+        };
         let name = format!(
             "{} [{}, {}]",
             adapter.name, adapter.backend, adapter.device_type
@@ -193,7 +198,8 @@ pub fn choose_among(
         };
         return (choice, Some((a, adapter.clone())));
     }
-    let last = forms.last().expect("at least one form");
+    // With no form given, the table's last (the paper's raster form).
+    let last = forms.last().unwrap_or(&FORMS[FORMS.len() - 1]);
     let choice = PipelineChoice {
         pipeline: file_of(last),
         by: "adapter",

@@ -410,7 +410,13 @@ fn edited(
     level: u32,
     edits: &[ssbvb_voxel::edit::Edit],
 ) -> Result<(VoxelAsset, ssbvb_voxel::edit::EditReport), EngineError> {
-    let finest = ssbvb_voxel::edit::level_voxels(&asset.lods[level as usize]);
+    let lod = asset.lods.get(level as usize).ok_or_else(|| {
+        EngineError::Invalid(format!(
+            "edits at level {level}, but the asset holds levels 0..={}",
+            asset.lods.len().saturating_sub(1)
+        ))
+    })?;
+    let finest = ssbvb_voxel::edit::level_voxels(lod);
     let (voxels, report) = ssbvb_voxel::edit::apply_edits(&finest, edits)
         .map_err(|e| EngineError::Invalid(e.to_string()))?;
     if voxels.is_empty() {
