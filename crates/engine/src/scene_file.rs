@@ -116,7 +116,7 @@ impl ModelBytes {
             .iter()
             .find(|(m, _)| m == model)
             .map(|(_, b)| b.as_slice())
-            .ok_or_else(|| EngineError::Invalid(format!("{model}: no bytes were given for it")))
+            .ok_or_else(|| EngineError::Invalid(format!("no bytes were given for {model}")))
     }
 }
 
@@ -215,10 +215,8 @@ impl SceneDescription {
 
     /// Reads and parses the scene file at `path`.
     pub fn read(path: &Path) -> Result<Self, EngineError> {
-        let text = std::fs::read_to_string(path).map_err(|e| EngineError::Io {
-            path: format!("cannot read scene {}", path.display()),
-            error: e,
-        })?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| EngineError::io(path, e).context("cannot read the scene"))?;
         Self::parse(&text, &path.display().to_string())
     }
 
@@ -744,6 +742,9 @@ mod source_tests {
             .err()
             .unwrap()
             .to_string();
-        assert!(e.contains("x.obj: no bytes were given for it"), "{e}");
+        assert!(
+            e.contains("object x.obj: no bytes were given for x.obj"),
+            "{e}"
+        );
     }
 }
