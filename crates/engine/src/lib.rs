@@ -60,6 +60,7 @@ pub mod faults;
 pub mod forms;
 pub mod scene_file;
 pub mod session;
+pub mod sources;
 pub mod timing;
 pub mod upload;
 pub mod values;
