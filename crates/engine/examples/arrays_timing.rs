@@ -19,6 +19,8 @@ use ssbvb_voxel::progress::NoProgress;
 const RECORD: usize = 22;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
+    // SAFETY: first thing in `main`, before any other thread exists.
+    unsafe { ssbvb_engine::platform::quiet_window_system_probe() };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let [npy, model, level, size] = args.as_slice() else {
         return Err("usage: arrays_timing SPARSE.npy MODEL LEVEL WxH".into());

@@ -9,6 +9,8 @@ use ssbvb_engine::{Content, Engine, RenderOptions};
 use ssbvb_voxel::progress::NoProgress;
 
 fn main() -> ExitCode {
+    // SAFETY: first thing in `main`, before any other thread exists.
+    unsafe { ssbvb_engine::platform::quiet_window_system_probe() };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let [scene, out, size] = args.as_slice() else {
         eprintln!("usage: render_scene SCENE OUT.png WxH");

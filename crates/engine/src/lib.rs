@@ -58,6 +58,7 @@ mod engine;
 mod error;
 pub mod faults;
 pub mod forms;
+pub mod platform;
 pub mod scene_file;
 pub mod session;
 pub mod sources;

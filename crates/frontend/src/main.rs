@@ -73,7 +73,8 @@ fn main() -> ExitCode {
     unsafe { ssbvb_gpu::context::prefer_gles_on_mesa() };
     let cli = Cli::parse();
     if !matches!(cli.command, Command::View(_)) {
-        quiet_window_system_probe();
+        // SAFETY: first thing in `main` after the arguments, before any other thread exists.
+        unsafe { ssbvb_engine::platform::quiet_window_system_probe() };
     }
     match &cli.command {
         Command::Adapter(a) => adapter_cmd::set_limits(a.limits),
@@ -105,42 +106,4 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
-}
-
-/// Commands that open no window still load Mesa's Vulkan window-system code, which asks
-/// libwayland for `XDG_RUNTIME_DIR` and prints `error: XDG_RUNTIME_DIR is invalid or not set`
-/// per device when it is unset (headless machines, containers). Point it at a private empty
-/// folder instead: no Wayland socket is found there, silently, and nothing else reads it.
-fn quiet_window_system_probe() {
-    if !cfg!(target_os = "linux") {
-        return;
-    }
-    let valid = std::env::var_os("XDG_RUNTIME_DIR")
-        .filter(|d| !d.is_empty())
-        .is_some_and(|d| std::path::Path::new(&d).is_dir());
-    if valid {
-        return;
-    }
-    // One folder per user (not per process: nothing accumulates in the temp folder).
-    #[cfg(unix)]
-    let user = {
-        use std::os::unix::fs::MetadataExt;
-        std::fs::metadata("/proc/self")
-            .map(|m| m.uid())
-            .unwrap_or(0)
-    };
-    #[cfg(not(unix))]
-    let user = 0;
-    let dir = std::env::temp_dir().join(format!("ssbvb-xdg-runtime-{user}"));
-    if std::fs::create_dir_all(&dir).is_err() {
-        return;
-    }
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700));
-    }
-    // SAFETY: called first thing in `main`, before any other thread exists, so nothing
-    // reads the environment concurrently.
-    unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
 }
