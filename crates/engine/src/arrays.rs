@@ -592,37 +592,28 @@ mod tests {
             Placement::default(),
         );
         assert!(e.contains("8193 cells along axis 0"), "{e}");
-        let coords = [0i64, 0, 0, 9000, 0, 0];
-        let rgba = [255u8; 8];
-        let e = err(
-            VoxelArrays::Sparse {
-                coords: Array {
-                    shape: vec![2, 3],
-                    data: ArrayData::I64(&coords),
+        // Two sparse voxels at x = `a` and x = `b`.
+        let two = |a: i64, b: i64| {
+            let coords = [a, 0, 0, b, 0, 0];
+            let rgba = [255u8; 8];
+            err(
+                VoxelArrays::Sparse {
+                    coords: Array {
+                        shape: vec![2, 3],
+                        data: ArrayData::I64(&coords),
+                    },
+                    colors: Array {
+                        shape: vec![2, 4],
+                        data: ArrayData::U8(&rgba),
+                    },
                 },
-                colors: Array {
-                    shape: vec![2, 4],
-                    data: ArrayData::U8(&rgba),
-                },
-            },
-            Placement::default(),
-        );
+                Placement::default(),
+            )
+        };
+        let e = two(0, 9000);
         assert!(e.contains("9001 cells along axis 0"), "{e}");
         // Coordinates at both ends of i64: refused, not overflowed.
-        let coords = [i64::MIN, 0, 0, i64::MAX, 0, 0];
-        let e = err(
-            VoxelArrays::Sparse {
-                coords: Array {
-                    shape: vec![2, 3],
-                    data: ArrayData::I64(&coords),
-                },
-                colors: Array {
-                    shape: vec![2, 4],
-                    data: ArrayData::U8(&rgba),
-                },
-            },
-            Placement::default(),
-        );
+        let e = two(i64::MIN, i64::MAX);
         assert!(e.contains("cells along axis 0"), "{e}");
     }
 
