@@ -10,7 +10,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use ssbvb_engine::arrays::{Array, ArrayData, Placement, VoxelArrays};
+use ssbvb_engine::arrays::{Array, ArrayData, Placement, SparseColors, VoxelArrays};
 use ssbvb_engine::{Content, Engine, RenderOptions};
 use ssbvb_voxel::progress::NoProgress;
 
@@ -37,14 +37,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let t0 = Instant::now();
     let arrays = VoxelArrays::Sparse {
-        coords: Array {
-            shape: vec![n, 3],
-            data: ArrayData::I32(&coords),
-        },
-        colors: Array {
-            shape: vec![n, 4],
-            data: ArrayData::U8(&colors),
-        },
+        coords: Array::new(vec![n, 3], ArrayData::I32(&coords)),
+        colors: SparseColors::Each(Array::new(vec![n, 4], ArrayData::U8(&colors))),
     };
     let placement = Placement {
         origin: [-1.0; 3],

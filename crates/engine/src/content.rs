@@ -18,7 +18,7 @@ use crate::{EngineError, Warning};
 pub const DEFAULT_MODEL_LEVEL: u32 = 8;
 
 /// A scene ready to upload, with what its preparation said.
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub struct Content {
     /// What to draw.
     pub scene: Scene,
@@ -108,6 +108,44 @@ impl Content {
             far: f64::INFINITY,
             ..Camera::default()
         }
+    }
+
+    /// Adds `other`'s objects, volumes, triangles and animated objects, each placed by
+    /// `transform` after its own placement, with their notes and warnings. The camera,
+    /// light, pipeline and budget stay `self`'s (a program composing content frames it
+    /// with [`crate::camera::frame_scene`]).
+    pub fn merge(&mut self, other: Content, transform: DAffine3) {
+        let first = self.scene.objects.len();
+        let Scene {
+            objects,
+            triangles,
+            volumes,
+            ..
+        } = other.scene;
+        self.scene.objects.extend(objects.into_iter().map(|mut o| {
+            o.instances.iter_mut().for_each(|i| *i = transform * *i);
+            o
+        }));
+        self.scene
+            .triangles
+            .extend(triangles.into_iter().map(|mut t| {
+                t.transform = transform * t.transform;
+                t
+            }));
+        self.scene.volumes.extend(volumes.into_iter().map(|mut v| {
+            v.instances.iter_mut().for_each(|i| *i = transform * *i);
+            v
+        }));
+        self.page_sources.resize(first, None);
+        self.page_sources.extend(other.page_sources);
+        self.page_sources.resize(self.scene.objects.len(), None);
+        self.animated
+            .extend(other.animated.into_iter().map(|mut a| {
+                a.object += first;
+                a
+            }));
+        self.notes.extend(other.notes);
+        self.warnings.extend(other.warnings);
     }
 
     /// The warnings as lines (`file: what`).

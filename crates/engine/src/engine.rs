@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use ssbvb_gpu::scene::ObjectMemory;
 use ssbvb_gpu::{DeviceLimits, wgpu};
+use ssbvb_graph::{PassKind, ResolvedPipeline};
 use ssbvb_passes::PassTiming;
 use ssbvb_voxel::camera::Camera;
 
@@ -33,6 +34,10 @@ pub struct RenderOptions {
     pub instance_lists: bool,
     /// A host's device to draw with (`None`: the engine makes its own).
     pub host: Option<HostDevice>,
+    /// The paper's Gaussian smoothing of normals (`false`: each voxel shaded by its own
+    /// normal, the exact cubes' look; the smoothing pass is kept with a zero offset, so
+    /// every form and file takes it).
+    pub smoothing: bool,
 }
 
 impl Default for RenderOptions {
@@ -46,6 +51,7 @@ impl Default for RenderOptions {
             time: 0.0,
             instance_lists: true,
             host: None,
+            smoothing: true,
         }
     }
 }
@@ -76,6 +82,34 @@ fn check_size((w, h): (u32, u32)) -> Result<(), EngineError> {
         )));
     }
     Ok(())
+}
+
+/// `pipeline` with its smoothing passes' offset set to 0 when `off` (each pixel samples
+/// only its own normal).
+fn without_smoothing(pipeline: ResolvedPipeline, off: bool) -> ResolvedPipeline {
+    if !off {
+        return pipeline;
+    }
+    let mut p = pipeline;
+    let names: Vec<(String, PassKind)> = p
+        .passes
+        .iter()
+        .filter_map(|s| {
+            let mut kind = s.kind.clone();
+            match &mut kind {
+                PassKind::Smooth(k) => k.max_i = 0.0,
+                PassKind::SmoothCompute(k) => k.max_i = 0.0,
+                _ => return None,
+            }
+            Some((s.name.clone(), kind))
+        })
+        .collect();
+    for (name, kind) in names {
+        if let Some(edited) = p.with_pass_kind(&name, &kind) {
+            p = edited;
+        }
+    }
+    p
 }
 
 /// Content on a device, ready to render.
@@ -109,7 +143,7 @@ impl Engine {
         let mut warnings = choice.warnings.clone();
         warnings.extend(content.warnings.iter().cloned());
         let mut source = SessionSource {
-            pipeline: resolve_pipeline(&choice.path())?,
+            pipeline: without_smoothing(resolve_pipeline(&choice.path())?, !options.smoothing),
             scene: content.scene,
             budget: options.gpu_budget_mib.or(content.gpu_budget_mib),
             page_sources: content.page_sources,
@@ -316,3 +350,11 @@ impl Engine {
         &mut self.gpu
     }
 }
+
+/// Natively an engine can move between threads (a host renders on a worker, Python
+/// renders with the GIL released).
+#[cfg(not(target_arch = "wasm32"))]
+const _: fn() = || {
+    fn send<T: Send>() {}
+    send::<Engine>();
+};

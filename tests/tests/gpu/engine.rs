@@ -3,7 +3,7 @@
 //! the same image, an empty grid drawing an empty frame with a warning, resizing.
 
 use glam::DVec3;
-use ssbvb_engine::arrays::{Array, ArrayData, Placement, VoxelArrays};
+use ssbvb_engine::arrays::{Array, ArrayData, Placement, SparseColors, VoxelArrays};
 use ssbvb_engine::{Content, Engine, HostDevice, RenderOptions};
 use ssbvb_voxel::accuracy;
 use ssbvb_voxel::progress::NoProgress;
@@ -64,10 +64,7 @@ const PLACEMENT: Placement = Placement {
 #[test]
 fn arrays_render_what_the_reference_sees_and_dense_equals_sparse() {
     let (rgba, coords, colors) = ball();
-    let dense = VoxelArrays::Dense(Array {
-        shape: vec![20, 12, 16, 4],
-        data: ArrayData::U8(&rgba),
-    });
+    let dense = VoxelArrays::Dense(Array::new(vec![20, 12, 16, 4], ArrayData::U8(&rgba)));
     let content = Content::from_arrays(&dense, PLACEMENT, &NoProgress).unwrap();
     assert!(content.warnings.is_empty(), "{:?}", content.warnings);
     let scene = content.scene.clone();
@@ -95,14 +92,11 @@ fn arrays_render_what_the_reference_sees_and_dense_equals_sparse() {
     assert!(r.depth_error_voxels.median <= 0.75, "{r:?}");
 
     let sparse = VoxelArrays::Sparse {
-        coords: Array {
-            shape: vec![coords.len() / 3, 3],
-            data: ArrayData::I32(&coords),
-        },
-        colors: Array {
-            shape: vec![colors.len() / 4, 4],
-            data: ArrayData::U8(&colors),
-        },
+        coords: Array::new(vec![coords.len() / 3, 3], ArrayData::I32(&coords)),
+        colors: SparseColors::Each(Array::new(
+            vec![colors.len() / 4, 4],
+            ArrayData::U8(&colors),
+        )),
     };
     let content = Content::from_arrays(&sparse, PLACEMENT, &NoProgress).unwrap();
     assert_eq!(content.camera, camera);
@@ -125,10 +119,7 @@ fn arrays_render_what_the_reference_sees_and_dense_equals_sparse() {
 fn an_empty_grid_draws_an_empty_frame_with_a_warning() {
     let none = vec![false; 4 * 4 * 4];
     let arrays = VoxelArrays::Occupancy {
-        occupied: Array {
-            shape: vec![4, 4, 4],
-            data: ArrayData::Bool(&none),
-        },
+        occupied: Array::new(vec![4, 4, 4], ArrayData::Bool(&none)),
         color: [255; 4],
     };
     let content = Content::from_arrays(&arrays, Placement::default(), &NoProgress).unwrap();
@@ -146,12 +137,7 @@ fn an_empty_grid_draws_an_empty_frame_with_a_warning() {
 #[test]
 fn the_frame_is_drawn_into_the_hosts_texture() {
     let (rgba, _, _) = ball();
-    let dense = || {
-        VoxelArrays::Dense(Array {
-            shape: vec![20, 12, 16, 4],
-            data: ArrayData::U8(&rgba),
-        })
-    };
+    let dense = || VoxelArrays::Dense(Array::new(vec![20, 12, 16, 4], ArrayData::U8(&rgba)));
     let content = Content::from_arrays(&dense(), PLACEMENT, &NoProgress).unwrap();
     let mut own = Engine::open(content, &options()).unwrap();
     own.render().unwrap();
@@ -206,12 +192,7 @@ fn the_frame_is_drawn_into_the_hosts_texture() {
 #[test]
 fn a_hosts_device_gets_a_form_it_runs_or_the_reason_it_runs_none() {
     let (rgba, _, _) = ball();
-    let dense = || {
-        VoxelArrays::Dense(Array {
-            shape: vec![20, 12, 16, 4],
-            data: ArrayData::U8(&rgba),
-        })
-    };
+    let dense = || VoxelArrays::Dense(Array::new(vec![20, 12, 16, 4], ArrayData::U8(&rgba)));
     let on = |ctx: &ssbvb_gpu::GpuContext| HostDevice {
         instance: ctx.instance.clone(),
         adapter: ctx.adapter.clone(),

@@ -8,8 +8,21 @@ use super::recorder::Recorder;
 use super::resources::{FrameResources, FrameTexture};
 use crate::error::PassError;
 
+/// Natively a pass is `Send + Sync` (as wgpu's resources are), so a renderer can move to
+/// another thread, or render with a caller's lock released (Python's GIL); in the browser
+/// wgpu's resources are neither, and neither is a pass.
+#[cfg(not(target_arch = "wasm32"))]
+pub trait MaybeSendSync: Send + Sync {}
+#[cfg(not(target_arch = "wasm32"))]
+impl<T: Send + Sync> MaybeSendSync for T {}
+/// In the browser, no bound (see the native definition).
+#[cfg(target_arch = "wasm32")]
+pub trait MaybeSendSync {}
+#[cfg(target_arch = "wasm32")]
+impl<T> MaybeSendSync for T {}
+
 /// A pass ready to record: pipelines compiled once, bind groups made per frame.
-pub trait PassNode {
+pub trait PassNode: MaybeSendSync {
     /// Records the pass's work for one frame.
     fn record(
         &mut self,
