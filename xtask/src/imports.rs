@@ -23,6 +23,7 @@ pub const NO_CIRCLES: &[&str] = &[
     "crates/gpu-build",
     "crates/graph",
     "crates/passes",
+    "crates/python",
     "crates/scene-file",
     "crates/voxel",
     "crates/web",

@@ -8,6 +8,7 @@ mod gpu_bench;
 mod imports;
 mod layout_check;
 mod mutate;
+mod python_test;
 mod shaders;
 mod standalone;
 mod system;
@@ -44,7 +45,9 @@ const USAGE: &str = "usage:
   cargo xtask web [--serve] [--port P]       build the browser page into target/web/ (wasm32 + WebGPU);
                                              with --serve, serve it at http://127.0.0.1:P/
   cargo xtask web-test                       build the page and check it in headless Chromium against
-                                             native renders (part of `cargo xtask test`)";
+                                             native renders (part of `cargo xtask test`)
+  cargo xtask python-test                    build the Python module into target/python-venv (maturin) and
+                                             run its pytest suite (part of `cargo xtask test`)";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -57,6 +60,7 @@ fn main() -> ExitCode {
         Some("gpu-bench") => gpu_bench::run(&run_root(), &args[1..]),
         Some("web") => web::run(&workspace_root(), &args[1..]),
         Some("web-test") => web_test::run(&workspace_root()),
+        Some("python-test") => python_test::run(&workspace_root()),
         Some("-h" | "--help") | None => {
             println!("{USAGE}");
             Ok(true)
@@ -295,6 +299,14 @@ fn test(extra: &[String]) -> Result<bool> {
         eprintln!("xtask: the core frame tests on GL (WGPU_BACKEND=gl)");
         if !gl.status().context("running cargo test on GL")?.success() {
             eprintln!("xtask: the core frame tests failed on the GL backend");
+            return Ok(false);
+        }
+    }
+    // The Python module's suite (numpy in, pixels out) against the CLI.
+    if extra.is_empty() {
+        eprintln!("xtask: the Python module (cargo xtask python-test)");
+        if !python_test::run(&root)? {
+            eprintln!("xtask: the Python tests failed");
             return Ok(false);
         }
     }

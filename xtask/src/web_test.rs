@@ -295,7 +295,7 @@ fn iou(a: &[u8], b: &[u8]) -> f64 {
 }
 
 /// The native `ssbvb` binary (built in the test profile the test run just used).
-fn native_binary(root: &Path) -> Result<PathBuf> {
+pub fn native_binary(root: &Path) -> Result<PathBuf> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let ok = Command::new(cargo)
         .current_dir(root)

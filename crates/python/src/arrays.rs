@@ -1,7 +1,8 @@
-//! numpy arrays handed to the engine in place: a C- or Fortran-contiguous array of a type
-//! the engine reads (bool, uint8/16/32, int32/64, float32/64) is borrowed with its strides,
-//! no copy; any other layout is made C-contiguous and any other integer or float type cast
-//! (numpy's `ascontiguousarray`, `astype`) first.
+//! numpy arrays handed to the engine in place: an array of a type the engine reads (bool,
+//! uint8/16/32, int32/64, float32/64) is borrowed with its strides, no copy, whether C- or
+//! Fortran-ordered, a slice or a broadcast view; one with a backward stride, or unaligned
+//! data, is made C-contiguous first, and any other integer or float type cast (numpy's
+//! `ascontiguousarray`, `astype`).
 
 use numpy::{
     Element, PyArrayDescrMethods, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArray,
@@ -28,6 +29,8 @@ pub(crate) struct Input<'py> {
     held: Held<'py>,
     shape: Vec<usize>,
     strides: Vec<usize>,
+    /// Elements from the first to the last the shape and strides reach.
+    len: usize,
 }
 
 impl Input<'_> {
@@ -48,27 +51,33 @@ impl Input<'_> {
 
     /// The engine's view of the array, with its first three axes reversed when
     /// `reverse_grid_axes` (`order="zyx"`).
-    pub(crate) fn array(&self, reverse_grid_axes: bool) -> PyResult<Array<'_>> {
-        fn slice<'a, T: Element>(a: &'a PyReadonlyArrayDyn<'_, T>) -> PyResult<&'a [T]> {
-            a.as_slice()
-                .map_err(|e| PyValueError::new_err(format!("reading the array: {e}")))
+    pub(crate) fn array(&self, reverse_grid_axes: bool) -> Array<'_> {
+        fn slice<'a, T: Element>(a: &'a PyReadonlyArrayDyn<'_, T>, len: usize) -> &'a [T] {
+            if len == 0 {
+                return &[];
+            }
+            // SAFETY: `input` checked that the data is aligned for `T`, in native order,
+            // and that every element the non-negative strides reach lies in the `len`
+            // elements from the data pointer, inside the array's buffer; the read-only
+            // borrow keeps the array alive and unwritten from Rust while `a` lives.
+            unsafe { std::slice::from_raw_parts(a.data(), len) }
         }
         let data = match &self.held {
-            Held::Bool(a) => ArrayData::Bool(slice(a)?),
-            Held::U8(a) => ArrayData::U8(slice(a)?),
-            Held::U16(a) => ArrayData::U16(slice(a)?),
-            Held::U32(a) => ArrayData::U32(slice(a)?),
-            Held::I32(a) => ArrayData::I32(slice(a)?),
-            Held::I64(a) => ArrayData::I64(slice(a)?),
-            Held::F32(a) => ArrayData::F32(slice(a)?),
-            Held::F64(a) => ArrayData::F64(slice(a)?),
+            Held::Bool(a) => ArrayData::Bool(slice(a, self.len)),
+            Held::U8(a) => ArrayData::U8(slice(a, self.len)),
+            Held::U16(a) => ArrayData::U16(slice(a, self.len)),
+            Held::U32(a) => ArrayData::U32(slice(a, self.len)),
+            Held::I32(a) => ArrayData::I32(slice(a, self.len)),
+            Held::I64(a) => ArrayData::I64(slice(a, self.len)),
+            Held::F32(a) => ArrayData::F32(slice(a, self.len)),
+            Held::F64(a) => ArrayData::F64(slice(a, self.len)),
         };
         let (mut shape, mut strides) = (self.shape.clone(), self.strides.clone());
         if reverse_grid_axes && shape.len() >= 3 {
             shape[..3].reverse();
             strides[..3].reverse();
         }
-        Ok(Array::strided(shape, strides, data))
+        Array::strided(shape, strides, data)
     }
 }
 
@@ -76,11 +85,7 @@ impl Input<'_> {
 pub(crate) fn input<'py>(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<Input<'py>> {
     let py = obj.py();
     let np = py.import("numpy")?;
-    let mut a = np.call_method1("asarray", (obj,))?;
-    let untyped = a.cast::<PyUntypedArray>()?.clone();
-    if !untyped.is_contiguous() {
-        a = np.call_method1("ascontiguousarray", (&a,))?;
-    }
+    let a = np.call_method1("asarray", (obj,))?;
     let untyped = a.cast::<PyUntypedArray>()?.clone();
     let descr = untyped.dtype();
     let is = |d: Bound<'py, numpy::PyArrayDescr>| descr.is_equiv_to(&d);
@@ -111,12 +116,35 @@ pub(crate) fn input<'py>(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<Input<
     let itemsize = descr.itemsize() as isize;
     let shape = untyped.shape().to_vec();
     // Axes of one element may carry any stride (numpy's relaxed strides): 0 there.
-    let strides = untyped
+    let byte_strides: Vec<isize> = untyped
         .strides()
         .iter()
         .zip(&shape)
-        .map(|(&s, &n)| if n <= 1 { 0 } else { (s / itemsize) as usize })
+        .map(|(&s, &n)| if n <= 1 { 0 } else { s })
         .collect();
+    // Read in place unless a stride runs backwards or splits elements, or the data is
+    // unaligned (a field of a record array): then numpy makes a C-contiguous copy.
+    let aligned: bool = a.getattr("flags")?.getattr("aligned")?.extract()?;
+    let in_place = aligned && byte_strides.iter().all(|&s| s >= 0 && s % itemsize == 0);
+    if !in_place {
+        let copy = np.call_method1("ascontiguousarray", (&a,))?;
+        return input(name, &copy);
+    }
+    let strides: Vec<usize> = byte_strides
+        .iter()
+        .map(|&s| (s / itemsize) as usize)
+        .collect();
+    // The elements the shape and strides reach: up to the last one, from the first.
+    let len = if shape.contains(&0) {
+        0
+    } else {
+        shape
+            .iter()
+            .zip(&strides)
+            .map(|(&n, &s)| (n - 1) * s)
+            .sum::<usize>()
+            + 1
+    };
     fn hold<'py, T: Element>(a: &Bound<'py, PyAny>) -> PyResult<PyReadonlyArrayDyn<'py, T>> {
         Ok(a.cast::<PyArrayDyn<T>>()?.try_readonly()?)
     }
@@ -134,6 +162,7 @@ pub(crate) fn input<'py>(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<Input<
         held,
         shape,
         strides,
+        len,
     })
 }
 

@@ -36,6 +36,8 @@ pub struct Renderer {
     issued: Vec<String>,
     engine: Option<Engine>,
     last: Option<FrameReport>,
+    /// Wall time of the last frame inside the engine: render and readback (ms).
+    engine_ms: Option<f64>,
 }
 
 /// The pipeline file `name` stands for.
@@ -102,7 +104,6 @@ impl Renderer {
             for item in &self.items {
                 content.merge(item.clone(), DAffine3::IDENTITY);
             }
-            content.warnings.clear();
             content.camera = match self.file_camera {
                 Some(c) if self.items.len() == 1 => c,
                 _ => ssbvb_engine::camera::frame_scene(&content.scene, 40.0),
@@ -133,15 +134,18 @@ impl Renderer {
         let default = self.engine(py)?.camera().to_owned();
         let engine = self.engine.as_mut().expect("opened above");
         let camera = camera.map_or(default, |c| c.inner);
-        let (report, rgba) = py
+        let (report, rgba, engine_ms) = py
             .detach(|| {
+                let t0 = std::time::Instant::now();
                 engine.set_camera(camera);
                 let report = engine.render()?;
-                Ok((report, engine.read_rgba8()?))
+                let rgba = engine.read_rgba8()?;
+                Ok((report, rgba, t0.elapsed().as_secs_f64() * 1e3))
             })
             .map_err(to_py)?;
         engine.set_camera(default);
         self.last = Some(report);
+        self.engine_ms = Some(engine_ms);
         Ok(rgba)
     }
 
@@ -211,6 +215,7 @@ impl Renderer {
             issued: Vec::new(),
             engine: None,
             last: None,
+            engine_ms: None,
         })
     }
 
@@ -342,11 +347,13 @@ impl Renderer {
     }
 
     /// What the renderer chose and measured: the pipeline form and why, the adapter, the
-    /// last frame's per-pass times (ms), its wall time, the instances drawn, GPU memory per
-    /// object and the warnings.
+    /// last frame's per-pass times (ms), its wall time, the instances drawn, the wall time
+    /// of the last `render` inside the engine (`engine_ms`: the frame and its readback, what
+    /// the Python call adds nothing to), GPU memory per object and the warnings.
     #[getter]
     fn info<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let last = self.last.clone();
+        let engine_ms = self.engine_ms;
         let engine = self.engine(py)?;
         let choice = engine.choice();
         let form = ssbvb_engine::FORMS
@@ -361,6 +368,7 @@ impl Renderer {
             "adapter": engine.adapter(),
             "size": engine.size(),
             "frame": last,
+            "engine_ms": engine_ms,
             "memory": engine.memory(),
             "warnings": engine.warnings().iter().map(ToString::to_string).collect::<Vec<_>>(),
         });

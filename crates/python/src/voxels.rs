@@ -163,13 +163,13 @@ impl Voxels {
         let grid = input("array", array)?;
         let palette = palette.map(|p| input("palette", p)).transpose()?;
         let color = color.map(|c| color_arg("color", c)).transpose()?;
-        let a = grid.array(reverse)?;
+        let a = grid.array(reverse);
         let shape = a.shape().to_vec();
         let arrays = match (shape.len(), &palette) {
             (4, _) => VoxelArrays::Dense(a),
             (3, Some(p)) if !grid.is_bool() && !grid.is_float() => VoxelArrays::Labels {
                 labels: a,
-                palette: p.array(false)?,
+                palette: p.array(false),
             },
             (3, None) if !grid.is_bool() && !grid.is_float() && color.is_none() => {
                 return Err(PyValueError::new_err(
@@ -221,8 +221,8 @@ impl Voxels {
             (Some(_), Some(_)) => {
                 return Err(PyValueError::new_err("give colors= or palette=, not both"));
             }
-            (Some(c), None) => SparseColors::Each(c.array(false)?),
-            (None, Some(p)) => SparseColors::Palette(p.array(false)?),
+            (Some(c), None) => SparseColors::Each(c.array(false)),
+            (None, Some(p)) => SparseColors::Palette(p.array(false)),
             (None, None) if labelled => {
                 return Err(PyValueError::new_err(
                     "coords of shape (N, 4) are [x, y, z, label] rows: give palette= (one \
@@ -232,7 +232,7 @@ impl Voxels {
             (None, None) => SparseColors::One(color.unwrap_or(DEFAULT_COLOR)),
         };
         let arrays = VoxelArrays::Sparse {
-            coords: coords.array(false)?,
+            coords: coords.array(false),
             colors: sparse_colors,
         };
         Self::prepare(py, &arrays, placement(origin.into(), voxel_size), None)
