@@ -277,7 +277,7 @@ fn test(extra: &[String]) -> Result<bool> {
     if std::env::var_os("WGPU_BACKEND").is_none() {
         cmd.env("WGPU_BACKEND", "vulkan");
     }
-    private_runtime_dir(&mut cmd);
+    system::private_runtime_dir(&mut cmd);
     if !cmd.status().context("running cargo test")?.success() {
         return Ok(false);
     }
@@ -295,7 +295,7 @@ fn test(extra: &[String]) -> Result<bool> {
                 "core_frames::",
             ])
             .env("WGPU_BACKEND", "gl");
-        private_runtime_dir(&mut gl);
+        system::private_runtime_dir(&mut gl);
         eprintln!("xtask: the core frame tests on GL (WGPU_BACKEND=gl)");
         if !gl.status().context("running cargo test on GL")?.success() {
             eprintln!("xtask: the core frame tests failed on the GL backend");
@@ -326,23 +326,6 @@ fn test(extra: &[String]) -> Result<bool> {
         return fuzz::run(&root, &smoke);
     }
     Ok(true)
-}
-
-/// Mesa's Vulkan WSI probes XDG_RUNTIME_DIR and prints an error per device when it is unset
-/// (typical in CI containers): gives `cmd` a private folder then.
-fn private_runtime_dir(cmd: &mut Command) {
-    if std::env::var_os("XDG_RUNTIME_DIR").is_some() {
-        return;
-    }
-    let dir = std::env::temp_dir().join("ssbvb-xdg-runtime");
-    if std::fs::create_dir_all(&dir).is_ok() {
-        #[cfg(unix)]
-        {
-            use std::os::unix::fs::PermissionsExt;
-            let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700));
-        }
-        cmd.env("XDG_RUNTIME_DIR", &dir);
-    }
 }
 
 /// Seconds per fuzz target in `cargo xtask test`.

@@ -46,7 +46,7 @@ pub fn run(root: &Path) -> Result<bool> {
     if std::env::var_os("WGPU_BACKEND").is_none() {
         cmd.env("WGPU_BACKEND", "vulkan");
     }
-    crate::private_runtime_dir(&mut cmd);
+    crate::system::private_runtime_dir(&mut cmd);
     let out = cmd.output().context("running pytest")?;
     let stdout = String::from_utf8_lossy(&out.stdout);
     print!("{stdout}");

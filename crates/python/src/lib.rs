@@ -1,9 +1,9 @@
 //! `ssbvb._ssbvb`: the Python extension of ssbvb, a thin layer over `ssbvb-engine` (the
 //! package `ssbvb` re-exports it with an image type and the one-call `render`).
 //!
-//! - [`voxels::Voxels`]: voxels from a model file (`voxelize`), a dense grid or sparse
+//! - `Voxels` (`voxels`): voxels from a model file (`voxelize`), a dense grid or sparse
 //!   coordinates, read back as numpy arrays;
-//! - [`renderer::Renderer`] and [`camera::Camera`]: content on a device, rendered into
+//! - `Renderer` and `Camera` (`renderer`, `camera`): content on a device, rendered into
 //!   `(H, W, 4)` `uint8` arrays.
 //!
 //! Every engine error becomes a Python exception (`TypeError` or `ValueError` for an

@@ -38,6 +38,9 @@ pub struct Renderer {
     last: Option<FrameReport>,
     /// Wall time of the last frame inside the engine: render and readback (ms).
     engine_ms: Option<f64>,
+    /// The last frame's counters, counted in a frame of their own when `info` is first
+    /// read after it.
+    counted: Option<serde_json::Value>,
 }
 
 /// The pipeline file `name` stands for.
@@ -96,6 +99,21 @@ fn transform_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<DAffine3> {
 }
 
 impl Renderer {
+    /// The last frame's counters (counted once per frame, in a frame of their own).
+    fn count(&mut self, py: Python<'_>) -> PyResult<serde_json::Value> {
+        if let Some(c) = &self.counted {
+            return Ok(c.clone());
+        }
+        let engine = self.engine(py)?;
+        let counted = py.detach(|| engine.count()).map_err(to_py)?;
+        let json = serde_json::json!({
+            "counters": counted.counters,
+            "fill_count": counted.fill_count,
+        });
+        self.counted = Some(json.clone());
+        Ok(json)
+    }
+
     /// The engine for the content added so far, opened (with the GIL released) if content
     /// was added since the last frame.
     fn engine(&mut self, py: Python<'_>) -> PyResult<&mut Engine> {
@@ -146,6 +164,7 @@ impl Renderer {
         engine.set_camera(default);
         self.last = Some(report);
         self.engine_ms = Some(engine_ms);
+        self.counted = None;
         Ok(rgba)
     }
 
@@ -216,6 +235,7 @@ impl Renderer {
             engine: None,
             last: None,
             engine_ms: None,
+            counted: None,
         })
     }
 
@@ -281,6 +301,8 @@ impl Renderer {
             .extend(content.warnings.iter().map(ToString::to_string));
         self.items.push(content);
         self.engine = None;
+        self.last = None;
+        self.counted = None;
         Ok(())
     }
 
@@ -328,16 +350,12 @@ impl Renderer {
     }
 
     /// One more frame of the last view, counting its work: march steps, rays, billboards
-    /// and the other counters of the form, as a dict.
+    /// and the other counters of the form (`counters`), and the billboards the SSBVB was
+    /// filled with (`fill_count`), as a dict.
     fn counters<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let engine = self.engine(py)?;
-        let counted = py.detach(|| engine.count()).map_err(to_py)?;
-        let json = serde_json::json!({
-            "counters": counted.counters,
-            "fill_count": counted.fill_count,
-        });
+        let counted = self.count(py)?;
         py.import("json")?
-            .call_method1("loads", (json.to_string(),))
+            .call_method1("loads", (counted.to_string(),))
     }
 
     /// The image size, `(width, height)`.
@@ -349,11 +367,16 @@ impl Renderer {
     /// What the renderer chose and measured: the pipeline form and why, the adapter, the
     /// last frame's per-pass times (ms), its wall time, the instances drawn, the wall time
     /// of the last `render` inside the engine (`engine_ms`: the frame and its readback, what
-    /// the Python call adds nothing to), GPU memory per object and the warnings.
+    /// the Python call adds nothing to), its counters (`counted`, counted in one more frame
+    /// of the same view when first read), GPU memory per object and the warnings.
     #[getter]
     fn info<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let last = self.last.clone();
         let engine_ms = self.engine_ms;
+        let counted = match last {
+            Some(_) => Some(self.count(py)?),
+            None => None,
+        };
         let engine = self.engine(py)?;
         let choice = engine.choice();
         let form = ssbvb_engine::FORMS
@@ -369,6 +392,7 @@ impl Renderer {
             "size": engine.size(),
             "frame": last,
             "engine_ms": engine_ms,
+            "counted": counted,
             "memory": engine.memory(),
             "warnings": engine.warnings().iter().map(ToString::to_string).collect::<Vec<_>>(),
         });
@@ -382,6 +406,7 @@ impl Renderer {
     fn close(&mut self) {
         self.engine = None;
         self.last = None;
+        self.counted = None;
     }
 
     fn __repr__(&self) -> String {

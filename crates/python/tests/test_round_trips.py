@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import ssbvb
-from conftest import ball
+from conftest import ball, read_png
 
 
 def cells(v):
@@ -133,10 +133,14 @@ def test_two_objects_with_transforms_and_instance_ids():
     assert cols0.mean() < cols1.mean()
 
 
-def test_the_image_shows_in_jupyter_and_is_a_plain_array_too():
+def test_the_image_shows_in_jupyter_and_is_a_plain_array_too(tmp_path):
     image = ssbvb.render(ssbvb.Voxels.from_dense(ball(8)), size=(32, 24))
     png = image._repr_png_()
     assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    # The PNG holds the pixels (read back by an independent decoder).
+    image.save(tmp_path / "ball.png")
+    assert np.array_equal(read_png(tmp_path / "ball.png"), np.asarray(image))
+    assert not list(tmp_path.glob("*.tmp"))
     plain = np.asarray(image)
     assert type(plain) is np.ndarray and plain.shape == (24, 32, 4)
     r = ssbvb.Renderer(size=(32, 24))
@@ -146,6 +150,10 @@ def test_the_image_shows_in_jupyter_and_is_a_plain_array_too():
     assert info["form"] in ssbvb.forms() or info["pipeline"]
     assert info["frame"]["passes"] and info["adapter"]
     assert info["memory"][0]["voxels"] > 0
+    assert info["engine_ms"] > 0
+    # The counters of the frame: the march took steps.
+    counters = info["counted"]["counters"]
+    assert any(isinstance(v, (int, float)) and v > 0 for v in counters.values()), counters
 
 
 @pytest.mark.parametrize("pipeline", ["ssbvb-pixel", "esvo"])

@@ -21,11 +21,35 @@ missing file, else ``ssbvb.Error``; what the engine did instead of what was aske
 ``warnings.warn`` of ``ssbvb.SsbvbWarning``.
 """
 
+import os
+import sys
+import tempfile
 from os import PathLike
 from typing import Optional, Tuple, Union
 
-from ._image import Image
-from ._ssbvb import (
+
+def _quiet_window_system_probe() -> None:
+    """Mesa's Vulkan driver probes Wayland, which prints an error per device where
+    XDG_RUNTIME_DIR is unset (headless machines, containers): point it at a private empty
+    folder first, as the engine's programs do (``ssbvb_engine::platform``)."""
+    if not sys.platform.startswith("linux"):
+        return
+    current = os.environ.get("XDG_RUNTIME_DIR")
+    if current and os.path.isdir(current):
+        return
+    folder = os.path.join(tempfile.gettempdir(), f"ssbvb-xdg-runtime-{os.getuid()}")
+    try:
+        os.makedirs(folder, mode=0o700, exist_ok=True)
+        os.chmod(folder, 0o700)
+    except OSError:
+        return
+    os.environ["XDG_RUNTIME_DIR"] = folder
+
+
+_quiet_window_system_probe()
+
+from ._image import Image  # noqa: E402
+from ._ssbvb import (  # noqa: E402
     Camera,
     Error,
     Renderer,

@@ -25,6 +25,10 @@ class Image(np.ndarray):
         try:
             with os.fdopen(fd, "wb") as f:
                 f.write(data)
+            # mkstemp makes the file private; give it the mode a new file gets here.
+            mask = os.umask(0)
+            os.umask(mask)
+            os.chmod(tmp, 0o666 & ~mask)
             os.replace(tmp, path)
         except BaseException:
             if os.path.exists(tmp):
