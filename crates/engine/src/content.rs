@@ -208,3 +208,50 @@ pub fn clipping_warnings(scene: &Scene, camera: &Camera) -> Vec<String> {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ssbvb_voxel::voxelize::{VoxelSet, voxels_from_cells};
+
+    fn one_voxel() -> Arc<VoxelAsset> {
+        let voxels = voxels_from_cells(1, &[[0, 0, 0]], &[[1.0, 0.5, 0.25, 1.0]]).unwrap();
+        let set = VoxelSet {
+            object_space: ssbvb_voxel::model::ObjectSpace {
+                center: DVec3::ZERO,
+                scale: 1.0,
+            },
+            voxels,
+            report: Default::default(),
+        };
+        let (asset, _) =
+            ssbvb_voxel::prepare::prepare_voxel_set(set, &ssbvb_voxel::progress::NoProgress);
+        Arc::new(asset)
+    }
+
+    /// Merged content keeps the first's camera and objects, places the second's after
+    /// the transform, and keeps one page source per object.
+    #[test]
+    fn merge_places_the_added_objects_and_keeps_the_first_camera() {
+        let asset = one_voxel();
+        let mut a = Content::of_asset(asset.clone(), 1);
+        a.camera = Camera::new(DVec3::new(5.0, 0.0, 0.0), DVec3::ZERO);
+        a.page_sources.clear();
+        let mut b = Content::of_asset(asset, 1);
+        b.scene.objects[0].instances = vec![DAffine3::from_scale(DVec3::splat(2.0))];
+        b.warnings.push(Warning::new("b.obj", "missing texture"));
+        let shift = DAffine3::from_translation(DVec3::new(0.0, 3.0, 0.0));
+        a.merge(b, shift);
+        assert_eq!(a.scene.objects.len(), 2);
+        assert_eq!(a.page_sources.len(), 2);
+        assert_eq!(a.camera.position, DVec3::new(5.0, 0.0, 0.0));
+        assert_eq!(a.scene.objects[0].instances, vec![DAffine3::IDENTITY]);
+        let placed = a.scene.objects[1].instances[0];
+        // The object's own scale first, then the shift.
+        assert_eq!(
+            placed.transform_point3(DVec3::ONE),
+            DVec3::new(2.0, 5.0, 2.0)
+        );
+        assert_eq!(a.warnings.len(), 1);
+    }
+}
