@@ -4,6 +4,7 @@
 
 use glam::DVec3;
 use ssbvb_gpu::scene::Scene;
+use ssbvb_voxel::asset::VoxelAsset;
 use ssbvb_voxel::camera::Camera;
 
 /// A camera on a sphere of `distance` around `target`: `azimuth_deg` about +Y from +Z
@@ -40,18 +41,44 @@ pub fn orbit(
     }
 }
 
-/// The centre and radius of a sphere holding every voxel instance's object box
-/// (`[-1, 1]³` placed by its instance); `None` for a scene without voxel instances.
+/// The object-space box of an asset's voxels: its finest level's occupied cells (the whole
+/// `[-1, 1]³` when it holds none).
+pub fn occupied_box(asset: &VoxelAsset) -> (DVec3, DVec3) {
+    let Some(lod) = asset.lods.last() else {
+        return (DVec3::NEG_ONE, DVec3::ONE);
+    };
+    let mut lo = [u32::MAX; 3];
+    let mut hi = [0u32; 3];
+    for v in &lod.point_cloud.voxels {
+        let c = v.cell();
+        for k in 0..3 {
+            lo[k] = lo[k].min(c[k]);
+            hi[k] = hi[k].max(c[k]);
+        }
+    }
+    if lo[0] == u32::MAX {
+        return (DVec3::NEG_ONE, DVec3::ONE);
+    }
+    let cell = 2.0 / f64::from(1u32 << lod.level.min(31));
+    let corner = |c: [u32; 3], add: f64| {
+        DVec3::new(f64::from(c[0]), f64::from(c[1]), f64::from(c[2])) * cell - 1.0 + add * cell
+    };
+    (corner(lo, 0.0), corner(hi, 1.0))
+}
+
+/// The centre and radius of a sphere holding every voxel instance's occupied box
+/// ([`occupied_box`] placed by the instance); `None` for a scene without voxel instances.
 pub fn bounding_sphere(scene: &Scene) -> Option<(DVec3, f64)> {
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
     for o in &scene.objects {
+        let (blo, bhi) = occupied_box(&o.asset);
         for xf in &o.instances {
             for i in 0..8 {
                 let corner = DVec3::new(
-                    if i & 1 == 0 { -1.0 } else { 1.0 },
-                    if i & 2 == 0 { -1.0 } else { 1.0 },
-                    if i & 4 == 0 { -1.0 } else { 1.0 },
+                    if i & 1 == 0 { blo.x } else { bhi.x },
+                    if i & 2 == 0 { blo.y } else { bhi.y },
+                    if i & 4 == 0 { blo.z } else { bhi.z },
                 );
                 let p = xf.transform_point3(corner);
                 lo = lo.min(p);
@@ -65,8 +92,8 @@ pub fn bounding_sphere(scene: &Scene) -> Option<(DVec3, f64)> {
     Some(((lo + hi) * 0.5, ((hi - lo) * 0.5).length().max(1e-9)))
 }
 
-/// A camera that frames every voxel instance of `scene`: it looks at the centre of their
-/// bounding sphere from 30° of azimuth and 20° of elevation, far enough that the sphere
+/// A camera that frames every voxel instance of `scene` (the boxes of their voxels, not of
+/// their grids): it looks at the centre of their bounding sphere from 30° of azimuth and 20° of elevation, far enough that the sphere
 /// fits the `fov_y_deg` field of view. Without voxel instances: [`Camera::default`].
 pub fn frame_scene(scene: &Scene, fov_y_deg: f64) -> Camera {
     let Some((center, radius)) = bounding_sphere(scene) else {
@@ -97,18 +124,25 @@ mod tests {
         );
     }
 
-    /// Every corner of every instance box projects inside the framed view.
+    /// Every corner of every instance's voxel box projects inside the framed view, and the
+    /// box is the voxels', not the grid's.
     #[test]
     fn framing_keeps_every_instance_box_in_view() {
         let mut scene = Scene::default();
         assert_eq!(frame_scene(&scene, 45.0), Camera::default());
-        let model = ssbvb_voxel::model::Model::Voxels(ssbvb_voxel::model::VoxelModel {
-            voxels: vec![[0, 0, 0]],
-            colors: vec![[1.0; 4]],
-        });
+        // One voxel, cell (0, 0, 0) of a level-2 grid: the box [-1, -0.5]³.
+        let voxels =
+            ssbvb_voxel::voxelize::voxels_from_cells(2, &[[0, 0, 0]], &[[1.0; 4]]).unwrap();
+        let set = ssbvb_voxel::voxelize::VoxelSet {
+            object_space: ssbvb_voxel::model::ObjectSpace {
+                center: DVec3::ZERO,
+                scale: 1.0,
+            },
+            voxels,
+            report: Default::default(),
+        };
         let (asset, _) =
-            ssbvb_voxel::prepare::prepare_asset(&model, 1, &ssbvb_voxel::progress::NoProgress)
-                .unwrap();
+            ssbvb_voxel::prepare::prepare_voxel_set(set, &ssbvb_voxel::progress::NoProgress);
         let asset = std::sync::Arc::new(asset);
         scene.objects.push(ssbvb_gpu::scene::VoxelObject {
             asset,
@@ -118,15 +152,24 @@ mod tests {
             ],
             lod: ssbvb_gpu::scene::LodPolicy::Fixed(0),
         });
+        let (blo, bhi) = occupied_box(&scene.objects[0].asset);
+        assert_eq!((blo, bhi), (DVec3::NEG_ONE, DVec3::splat(-0.5)));
+        // The sphere holds the two placed voxel boxes, x 9..9.5 and -0.5..-0.25 (not the
+        // grids' boxes, whose centre would be (4.5, 0, 0)).
+        let (center, _) = bounding_sphere(&scene).unwrap();
+        assert!(
+            (center - DVec3::new(4.5, -0.625, -0.625)).length() < 1e-12,
+            "{center}"
+        );
         let cam = frame_scene(&scene, 45.0);
         let (right, up, fwd) = cam.basis();
         let tan = (45f64.to_radians() * 0.5).tan();
         for xf in &scene.objects[0].instances {
             for i in 0..8 {
                 let c = DVec3::new(
-                    if i & 1 == 0 { -1.0 } else { 1.0 },
-                    if i & 2 == 0 { -1.0 } else { 1.0 },
-                    if i & 4 == 0 { -1.0 } else { 1.0 },
+                    if i & 1 == 0 { blo.x } else { bhi.x },
+                    if i & 2 == 0 { blo.y } else { bhi.y },
+                    if i & 4 == 0 { blo.z } else { bhi.z },
                 );
                 let d = xf.transform_point3(c) - cam.position;
                 let z = d.dot(fwd);
