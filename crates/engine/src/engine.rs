@@ -121,6 +121,10 @@ pub struct Engine {
     warnings: Vec<Warning>,
     notes: Vec<String>,
     max_frames: usize,
+    /// What it was opened with (a content change that cannot keep the device opens anew).
+    options: RenderOptions,
+    /// The pipeline file the content named.
+    content_pipeline: Option<PathBuf>,
 }
 
 impl Engine {
@@ -142,6 +146,7 @@ impl Engine {
         };
         let mut warnings = choice.warnings.clone();
         warnings.extend(content.warnings.iter().cloned());
+        let content_pipeline = content.pipeline.clone();
         let mut source = SessionSource {
             pipeline: without_smoothing(resolve_pipeline(&choice.path())?, !options.smoothing),
             scene: content.scene,
@@ -172,7 +177,36 @@ impl Engine {
             warnings,
             notes,
             max_frames: options.max_frames.max(1),
+            options: options.clone(),
+            content_pipeline,
         })
+    }
+
+    /// Draws `content` from now on, on the same device: its scene is uploaded in place of
+    /// the current one, the compiled pipelines kept when they draw it as pipelines made for
+    /// it would ([`ssbvb_passes::Renderer::draws_as_made_for`]: the SSBVB forms for scenes
+    /// taking the same bindings), else made again. Content naming another pipeline file,
+    /// with animated objects or another budget, opens anew as [`Engine::open`] would. The
+    /// camera becomes the content's; the warnings are the choice's and the content's.
+    /// Returns whether the compiled pipelines were kept.
+    pub fn set_content(&mut self, content: Content) -> Result<bool, EngineError> {
+        let budget = self.options.gpu_budget_mib.or(content.gpu_budget_mib);
+        let same_pipeline =
+            self.options.pipeline.is_some() || content.pipeline == self.content_pipeline;
+        if !same_pipeline || !content.animated.is_empty() || budget != self.source.budget {
+            *self = Engine::open(content, &self.options.clone())?;
+            return Ok(false);
+        }
+        let mut notes = content.notes;
+        self.source.scene = content.scene;
+        self.source.page_sources = content.page_sources;
+        self.source.animated = Vec::new();
+        let kept = self.source.replace_scene(&mut self.gpu, &mut notes)?;
+        self.camera = content.camera;
+        self.notes = notes;
+        self.warnings = self.choice.warnings.clone();
+        self.warnings.extend(content.warnings);
+        Ok(kept)
     }
 
     /// The camera the next frame is seen by.

@@ -227,22 +227,60 @@ impl SessionSource {
                 self.time,
             )?)
         };
+        let renderer = self.build_renderer(ctx, &gpu_scene)?;
+        Ok((gpu_scene, renderer, animation))
+    }
+
+    /// The pipeline's renderer over `gpu_scene` (into the host's target when it has one).
+    fn build_renderer(
+        &self,
+        ctx: &GpuContext,
+        gpu_scene: &GpuScene,
+    ) -> Result<Renderer, EngineError> {
         let target = self.host.as_ref().and_then(|h| h.target.clone());
         let mut renderer = match target {
             Some(texture) => {
                 let output = self.pipeline.resources[self.pipeline.output].name.clone();
                 Renderer::with_imports(
                     ctx,
-                    &gpu_scene,
+                    gpu_scene,
                     self.pipeline.clone(),
                     self.size,
                     &[(output.as_str(), texture)],
                 )?
             }
-            None => crate::upload::renderer(ctx, &gpu_scene, self.pipeline.clone(), self.size)?,
+            None => crate::upload::renderer(ctx, gpu_scene, self.pipeline.clone(), self.size)?,
         };
         renderer.set_counting(self.counting);
-        Ok((gpu_scene, renderer, animation))
+        Ok(renderer)
+    }
+
+    /// Uploads `self.scene` (which has no animated object) to `gpu`'s device in place of
+    /// its scene, keeping the renderer when it draws the new scene as one made for it
+    /// would ([`Renderer::draws_as_made_for`]: no pipeline compiled again), else building
+    /// one. Returns whether the renderer was kept.
+    pub fn replace_scene(
+        &self,
+        gpu: &mut GpuSession,
+        notes: &mut Vec<String>,
+    ) -> Result<bool, EngineError> {
+        let ctx = &gpu.ctx;
+        let scene = self.scene.clone();
+        let mut gpu_scene = match self.budget {
+            Some(mib) => {
+                let options = crate::budget::options(mib, &self.page_sources, usize::MAX, notes)?;
+                upload_scene(ctx, scene, Residency::Streamed(&options))?
+            }
+            None => upload_scene(ctx, scene, Residency::Whole)?,
+        };
+        gpu_scene.instance_lists = self.instance_lists;
+        let kept = gpu.renderer.draws_as_made_for(&gpu_scene);
+        if !kept {
+            gpu.renderer = self.build_renderer(ctx, &gpu_scene)?;
+        }
+        gpu.scene = gpu_scene;
+        gpu.animation = None;
+        Ok(kept)
     }
 
     /// [`SessionSource::open_refusing`] after a device loss or a refused allocation: the

@@ -41,6 +41,10 @@ pub struct Renderer {
     /// The last frame's counters, counted in a frame of their own when `info` is first
     /// read after it.
     counted: Option<serde_json::Value>,
+    /// Content was added or cleared since the engine last took it.
+    dirty: bool,
+    /// Whether the engine kept its compiled pipelines when it last took new content.
+    pipelines_kept: Option<bool>,
 }
 
 /// The pipeline file `name` stands for.
@@ -114,26 +118,43 @@ impl Renderer {
         Ok(json)
     }
 
-    /// The engine for the content added so far, opened (with the GIL released) if content
-    /// was added since the last frame.
+    /// Everything added, as one content with its default camera.
+    fn content(&self) -> Content {
+        let mut content = Content::default();
+        for item in &self.items {
+            content.merge(item.clone(), DAffine3::IDENTITY);
+        }
+        content.camera = match self.file_camera {
+            Some(c) if self.items.len() == 1 => c,
+            _ => ssbvb_engine::camera::frame_scene(&content.scene, 40.0),
+        };
+        if self.items.len() == 1 {
+            content.pipeline = self.items[0].pipeline.clone();
+            content.gpu_budget_mib = self.items[0].gpu_budget_mib;
+        }
+        content
+    }
+
+    /// The engine for the content added so far: opened (with the GIL released) the first
+    /// time, and handed the content again when it changed (the device kept, and the
+    /// compiled pipelines where they draw the new scene as they would a fresh one).
     fn engine(&mut self, py: Python<'_>) -> PyResult<&mut Engine> {
-        if self.engine.is_none() {
-            let mut content = Content::default();
-            for item in &self.items {
-                content.merge(item.clone(), DAffine3::IDENTITY);
-            }
-            content.camera = match self.file_camera {
-                Some(c) if self.items.len() == 1 => c,
-                _ => ssbvb_engine::camera::frame_scene(&content.scene, 40.0),
-            };
-            if self.items.len() == 1 {
-                content.pipeline = self.items[0].pipeline.clone();
-                content.gpu_budget_mib = self.items[0].gpu_budget_mib;
-            }
+        if self.engine.is_none() || self.dirty {
+            let content = self.content();
             let options = self.options.clone();
-            let engine = py
-                .detach(|| Engine::open(content, &options))
-                .map_err(to_py)?;
+            let engine = match self.engine.take() {
+                Some(mut engine) => {
+                    let kept = py
+                        .detach(|| engine.set_content(content).map(|kept| (engine, kept)))
+                        .map_err(to_py)?;
+                    self.pipelines_kept = Some(kept.1);
+                    kept.0
+                }
+                None => py
+                    .detach(|| Engine::open(content, &options))
+                    .map_err(to_py)?,
+            };
+            self.dirty = false;
             let fresh: Vec<_> = engine
                 .warnings()
                 .iter()
@@ -236,6 +257,8 @@ impl Renderer {
             last: None,
             engine_ms: None,
             counted: None,
+            dirty: false,
+            pipelines_kept: None,
         })
     }
 
@@ -300,10 +323,19 @@ impl Renderer {
         self.issued
             .extend(content.warnings.iter().map(ToString::to_string));
         self.items.push(content);
-        self.engine = None;
+        self.dirty = true;
         self.last = None;
         self.counted = None;
         Ok(())
+    }
+
+    /// Removes all content; the device and the compiled pipelines stay for the next.
+    fn clear(&mut self) {
+        self.items.clear();
+        self.file_camera = None;
+        self.dirty = true;
+        self.last = None;
+        self.counted = None;
     }
 
     /// Renders the content seen by `camera` (`None`: a scene file's camera, else a view
@@ -367,12 +399,14 @@ impl Renderer {
     /// What the renderer chose and measured: the pipeline form and why, the adapter, the
     /// last frame's per-pass times (ms), its wall time, the instances drawn, the wall time
     /// of the last `render` inside the engine (`engine_ms`: the frame and its readback, what
-    /// the Python call adds nothing to), its counters (`counted`, counted in one more frame
+    /// the Python call adds nothing to), whether the engine kept its compiled pipelines
+    /// when the content last changed (`pipelines_kept`), its counters (`counted`, counted in one more frame
     /// of the same view when first read), GPU memory per object and the warnings.
     #[getter]
     fn info<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let last = self.last.clone();
         let engine_ms = self.engine_ms;
+        let pipelines_kept = self.pipelines_kept;
         let counted = match last {
             Some(_) => Some(self.count(py)?),
             None => None,
@@ -392,6 +426,7 @@ impl Renderer {
             "size": engine.size(),
             "frame": last,
             "engine_ms": engine_ms,
+            "pipelines_kept": pipelines_kept,
             "counted": counted,
             "memory": engine.memory(),
             "warnings": engine.warnings().iter().map(ToString::to_string).collect::<Vec<_>>(),

@@ -167,3 +167,25 @@ def test_a_named_pipeline_draws_the_same_coverage(pipeline):
         r.render(cam)
         depth.append(r.depth())
     assert coverage_iou(*depth) >= 0.99
+
+
+def test_new_content_keeps_the_device_and_draws_what_a_fresh_renderer_draws():
+    a = ssbvb.Voxels.from_dense(ball(12))
+    b = ssbvb.Voxels.from_sparse(np.argwhere(ball(16))[::2], color=(200, 60, 60))
+    cam = ssbvb.Camera.orbit(25, 15, 40, target=(8, 8, 8))
+    fresh = ssbvb.Renderer(size=(48, 36))
+    fresh.add(b)
+    want = fresh.render(cam)
+    r = ssbvb.Renderer(size=(48, 36))
+    r.add(a)
+    before = r.render(cam)
+    r.clear()
+    r.add(b)
+    got = r.render(cam)
+    assert r.info["pipelines_kept"] is True
+    assert not np.array_equal(before, got)
+    assert np.array_equal(got, want)
+    # The one-call render keeps its renderer too.
+    first = ssbvb.render(a, size=(48, 36), camera=cam)
+    second = ssbvb.render(b, size=(48, 36), camera=cam)
+    assert np.array_equal(first, before) and np.array_equal(second, want)

@@ -178,6 +178,7 @@ impl Billboards {
 
 impl PassImpl for Billboards {
     type Params = BillboardsParams;
+    const SCENE_FREE: bool = true;
     const SHADER: &'static str = "billboards.wgsl";
     // Drawn with the filter's indirect arguments.
     const NEEDS: KindNeeds = KindNeeds::new(wgpu::DownlevelFlags::INDIRECT_EXECUTION, 1);

@@ -20,6 +20,7 @@ pub struct Composite {
 
 impl PassImpl for Composite {
     type Params = CompositeKind;
+    const SCENE_FREE: bool = true;
     const SHADER: &'static str = "composite.wgsl";
 
     fn new(init: &PassInit<'_>, _params: &CompositeKind) -> Result<Self, PassError> {

@@ -27,6 +27,7 @@ pub struct CompositeCompute {
 
 impl PassImpl for CompositeCompute {
     type Params = CompositeComputeKind;
+    const SCENE_FREE: bool = true;
     const SHADER: &'static str = "composite_compute.wgsl";
 
     fn new(init: &PassInit<'_>, _params: &CompositeComputeKind) -> Result<Self, PassError> {

@@ -49,6 +49,7 @@ pub struct EmptySpace {
 
 impl PassImpl for EmptySpace {
     type Params = EmptySpacePrepassKind;
+    const SCENE_FREE: bool = true;
     const SHADER: &'static str = "empty_space.wgsl";
 
     /// Compiles the three pipelines for `pass` (formats from the graph's resources).

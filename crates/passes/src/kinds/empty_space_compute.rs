@@ -134,6 +134,7 @@ pub struct EmptySpaceCompute {
 
 impl PassImpl for EmptySpaceCompute {
     type Params = EmptySpaceComputeParams;
+    const SCENE_FREE: bool = true;
     const SHADER: &'static str = "empty_space_compute.wgsl";
     const OWN: &'static [OwnBinding] = OWN;
     // The large triangles' dispatch is indirect; the raster steps bind three storage

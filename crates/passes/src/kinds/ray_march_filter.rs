@@ -308,6 +308,7 @@ impl MainPipelines {
 
 impl PassImpl for RayMarchFilter {
     type Params = RayMarchFilterParams;
+    const SCENE_FREE: bool = true;
     const SHADER: &'static str = "ray_march_filter.wgsl";
     const OWN: &'static [OwnBinding] = OWN;
     // Its output is the billboards' indirect draw; 16×16 threads per workgroup.

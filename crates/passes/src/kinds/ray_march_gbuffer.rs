@@ -104,6 +104,7 @@ pub struct RayMarchGBuffer {
 
 impl PassImpl for RayMarchGBuffer {
     type Params = RayMarchGBufferParams;
+    const SCENE_FREE: bool = true;
     const SHADER: &'static str = "ray_march_gbuffer.wgsl";
     const OWN: &'static [OwnBinding] = OWN;
     // A fragment shader that writes its counters and the page feedback.

@@ -68,6 +68,7 @@ struct DepthCopy {
 
 impl PassImpl for Smooth {
     type Params = SmoothParams;
+    const SCENE_FREE: bool = true;
     const SHADER: &'static str = "smooth.wgsl";
     const OWN: &'static [OwnBinding] = OWN;
     // Samples the depth of the depth-stencil it stencil-tests against.

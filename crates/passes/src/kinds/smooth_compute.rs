@@ -40,6 +40,7 @@ pub struct SmoothCompute {
 
 impl PassImpl for SmoothCompute {
     type Params = SmoothComputeParams;
+    const SCENE_FREE: bool = true;
     const SHADER: &'static str = "smooth_compute.wgsl";
     const OWN: &'static [OwnBinding] = OWN;
 

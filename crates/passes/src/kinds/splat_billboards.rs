@@ -127,6 +127,7 @@ pub struct SplatBillboards {
 
 impl PassImpl for SplatBillboards {
     type Params = SplatBillboardsParams;
+    const SCENE_FREE: bool = true;
     const SHADER: &'static str = "splat_billboards.wgsl";
     const VARIANTS: &'static [&'static str] = &[WIDE_SHADER];
     const OWN: &'static [OwnBinding] = OWN;

@@ -30,6 +30,7 @@ pub struct Triangles {
 
 impl PassImpl for Triangles {
     type Params = TrianglesKind;
+    const SCENE_FREE: bool = true;
     const SHADER: &'static str = "triangles.wgsl";
     const OWN: &'static [OwnBinding] = OWN;
 

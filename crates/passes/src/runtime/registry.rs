@@ -115,6 +115,12 @@ pub trait PassImpl: PassNode + Sized + 'static {
     /// It reads every voxel of a level (its own structures built from whole levels), so
     /// it cannot run on a scene paged under a GPU budget.
     const WHOLE_LEVELS: bool = false;
+    /// What it compiles depends on the scene only through its binding counts, whether it
+    /// streams, and its group-0 layout, and it keeps nothing of a scene from one frame to
+    /// the next: it draws another such scene as a pass made for that scene would (a
+    /// renderer of such passes keeps its pipelines when the content changes:
+    /// [`crate::Renderer::draws_as_made_for`]).
+    const SCENE_FREE: bool = false;
 
     /// Compiles the pass for `init.pass` with its typed parameters.
     fn new(init: &PassInit<'_>, params: &Self::Params) -> Result<Self, PassError>;
@@ -134,6 +140,8 @@ pub struct Registration {
     pub needs: KindNeeds,
     /// The resources it binds itself, after its slots in group 1 ([`super::bindings`]).
     pub own: &'static [OwnBinding],
+    /// [`PassImpl::SCENE_FREE`].
+    pub scene_free: bool,
 }
 
 fn create<P: PassImpl>(init: &PassInit<'_>) -> Result<Box<dyn PassNode>, PassError> {
@@ -168,6 +176,7 @@ pub const fn register<P: PassImpl>() -> Registration {
         create: create::<P>,
         needs: P::NEEDS,
         own: P::OWN,
+        scene_free: P::SCENE_FREE,
     }
 }
 

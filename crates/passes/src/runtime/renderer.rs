@@ -54,6 +54,14 @@ pub struct FrameStats {
     pub visible_instances: usize,
 }
 
+/// Whether every pass of `pipeline` is scene-free.
+fn pipeline_scene_free(pipeline: &ResolvedPipeline) -> bool {
+    pipeline
+        .passes
+        .iter()
+        .all(|p| crate::kinds::registration(&p.kind).is_some_and(|r| r.scene_free))
+}
+
 /// A pipeline ready to draw a scene: resources, passes, profiler.
 pub struct Renderer {
     /// The resolved pipeline.
@@ -72,6 +80,10 @@ pub struct Renderer {
     /// Levels finer than Auto LOD's choice this pipeline draws at (its temporal pass's
     /// `lod_bias`; [`GpuScene::lod_bias`]).
     lod_bias: u32,
+    /// Every pass is scene-free ([`crate::runtime::registry::PassImpl::SCENE_FREE`]).
+    scene_free: bool,
+    /// The scene's binding counts and whether it streamed, when the passes were made.
+    made_for: (ssbvb_gpu::scene_bindings::SceneBindings, bool),
 }
 
 impl Renderer {
@@ -155,7 +167,6 @@ impl Renderer {
             (set, buf)
         });
         Ok(Self {
-            pipeline,
             screen,
             resources,
             passes,
@@ -164,7 +175,17 @@ impl Renderer {
             counting: false,
             jitter_frame: temporal_lod_bias.map(|_| 0),
             lod_bias: temporal_lod_bias.unwrap_or(0),
+            scene_free: pipeline_scene_free(&pipeline),
+            made_for: (scene.bindings, scene.streaming.is_some()),
+            pipeline,
         })
+    }
+
+    /// Whether this renderer draws `scene` as one made for it would: every pass is
+    /// scene-free, and `scene` takes the bindings and streams (or not) as the scene it was
+    /// made for. Then a program whose content changes keeps the compiled pipelines.
+    pub fn draws_as_made_for(&self, scene: &GpuScene) -> bool {
+        self.scene_free && self.made_for == (scene.bindings, scene.streaming.is_some())
     }
 
     /// Index of a live resource by name.

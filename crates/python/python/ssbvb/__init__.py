@@ -72,6 +72,11 @@ __all__ = [
 ]
 
 
+# The renderer `render` keeps between calls (its device and compiled pipelines), for the
+# last (size, pipeline, smooth) asked.
+_kept = {}
+
+
 def render(
     x: Union[Voxels, str, PathLike],
     level: Optional[int] = None,
@@ -85,8 +90,15 @@ def render(
 
     ``camera=None`` is a scene's camera, a model's default view, or a view framing the
     voxels. ``pipeline`` and ``smooth`` are ``Renderer``'s (``smooth=False``: the exact
-    cubes, unsmoothed).
+    cubes, unsmoothed). One renderer is kept between calls with the same ``size``,
+    ``pipeline`` and ``smooth``, so later calls reuse its device and compiled pipelines.
     """
-    renderer = Renderer(size=size, pipeline=pipeline, smooth=smooth)
+    key = (tuple(size), pipeline, smooth)
+    renderer = _kept.get(key)
+    if renderer is None:
+        renderer = Renderer(size=size, pipeline=pipeline, smooth=smooth)
+        _kept.clear()
+        _kept[key] = renderer
+    renderer.clear()
     renderer.add(x, level=level)
     return renderer.render(camera)
