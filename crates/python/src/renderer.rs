@@ -13,8 +13,8 @@ use ssbvb_engine::{Content, Engine, FrameReport, RenderOptions};
 use ssbvb_voxel::progress::NoProgress;
 
 use crate::camera::Camera;
+use crate::errors::{to_py, warn_all};
 use crate::voxels::{Voxels, check_level};
-use crate::{to_py, warn_all};
 
 /// Renders voxels and scenes headless into numpy arrays.
 ///

@@ -17,7 +17,7 @@ use ssbvb_voxel::lookup::MAX_LEVEL;
 use ssbvb_voxel::progress::NoProgress;
 
 use crate::arrays::{color_arg, input};
-use crate::{to_py, warn_all};
+use crate::errors::{to_py, warn_all};
 
 /// The colour of an occupancy grid given without one (sRGB bytes).
 const DEFAULT_COLOR: [u8; 4] = [200, 200, 200, 255];
@@ -75,8 +75,8 @@ impl Voxels {
         let Some(asset) = &self.asset else {
             return Ok(Vec::new());
         };
-        let (_, voxels) =
-            level_voxels(asset, self.level).map_err(|e| crate::Error::new_err(e.to_string()))?;
+        let (_, voxels) = level_voxels(asset, self.level)
+            .map_err(|e| crate::errors::Error::new_err(e.to_string()))?;
         Ok(voxels
             .into_iter()
             .map(|v| {
@@ -378,7 +378,7 @@ pub fn voxelize(py: Python<'_>, path: PathBuf, level: Option<u32>) -> PyResult<V
         .map_err(to_py)?;
     warn_all(py, &content.warnings)?;
     let object = content.scene.objects.first().ok_or_else(|| {
-        crate::Error::new_err(format!("{}: the model holds no voxel", path.display()))
+        crate::errors::Error::new_err(format!("{}: the model holds no voxel", path.display()))
     })?;
     let asset = object.asset.clone();
     let level = match object.lod {

@@ -4,7 +4,7 @@
 
 use ssbvb_voxel::shading::srgb_to_linear;
 
-use super::{Array, ArrayData, ArrayError, MAX_AXIS_CELLS, SparseColors, VoxelArrays};
+use super::types::{Array, ArrayData, ArrayError, MAX_AXIS_CELLS, SparseColors, VoxelArrays};
 
 /// Cells (any integer coordinates) and their linear RGBA colours.
 pub(super) type Cells = (Vec<[i64; 3]>, Vec<[f32; 4]>);
