@@ -232,6 +232,12 @@ impl Renderer {
                 "size must be (width, height) with each side 1..={max}, got {size:?}"
             )));
         }
+        let max_budget = ssbvb_engine::budget::MAX_BUDGET_MIB;
+        if let Some(mib) = gpu_budget_mib.filter(|&m| m == 0 || m > max_budget) {
+            return Err(PyValueError::new_err(format!(
+                "gpu_budget_mib must be 1..={max_budget}, got {mib}"
+            )));
+        }
         if let Some(b) = backend {
             if !matches!(b, "vulkan" | "gl" | "metal" | "dx12") {
                 return Err(PyValueError::new_err(format!(

@@ -92,6 +92,8 @@ def test_bad_renderer_and_camera_arguments():
         ssbvb.Renderer(size=(0, 10))
     with pytest.raises(ValueError, match="is neither a form"):
         ssbvb.Renderer(pipeline="no-such-form")
+    with pytest.raises(ValueError, match="gpu_budget_mib must be 1..="):
+        ssbvb.Renderer(gpu_budget_mib=0)
     with pytest.raises(ValueError, match="backend must be"):
         ssbvb.Renderer(backend="opengl")
     with pytest.raises(ValueError, match="eye and target must differ"):
