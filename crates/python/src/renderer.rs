@@ -309,6 +309,15 @@ impl Renderer {
                 )));
             }
             check_level(level)?;
+            let scene = path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("ron"));
+            if scene && level.is_some() {
+                return Err(PyValueError::new_err(format!(
+                    "{}: level applies to a model file; a scene names each object's level",
+                    path.display()
+                )));
+            }
             let content = py
                 .detach(|| Content::open(&path, level, &NoProgress))
                 .map_err(to_py)?;

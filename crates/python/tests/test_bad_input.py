@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import ssbvb
-from conftest import BUNNY, ball
+from conftest import BUNNY, DEFAULT_SCENE, ball
 
 
 def test_float64_with_five_channels_is_a_value_error():
@@ -111,6 +111,11 @@ def test_bad_renderer_and_camera_arguments():
         ssbvb.Voxels.from_dense(ball(4), order="yxz")
     with pytest.raises(ValueError, match="color: component 1"):
         ssbvb.Voxels.from_dense(ball(4), color=(10, 300, 0))
+
+
+def test_a_level_for_a_scene_is_a_value_error():
+    with pytest.raises(ValueError, match="default.ron: level applies to a model file"):
+        ssbvb.render(DEFAULT_SCENE, level=5)
 
 
 def test_a_malformed_scene_is_an_ssbvb_error_naming_the_file(tmp_path):
