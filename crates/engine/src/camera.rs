@@ -131,19 +131,7 @@ mod tests {
         let mut scene = Scene::default();
         assert_eq!(frame_scene(&scene, 45.0), Camera::default());
         // One voxel, cell (0, 0, 0) of a level-2 grid: the box [-1, -0.5]³.
-        let voxels =
-            ssbvb_voxel::voxelize::voxels_from_cells(2, &[[0, 0, 0]], &[[1.0; 4]]).unwrap();
-        let set = ssbvb_voxel::voxelize::VoxelSet {
-            object_space: ssbvb_voxel::model::ObjectSpace {
-                center: DVec3::ZERO,
-                scale: 1.0,
-            },
-            voxels,
-            report: Default::default(),
-        };
-        let (asset, _) =
-            ssbvb_voxel::prepare::prepare_voxel_set(set, &ssbvb_voxel::progress::NoProgress);
-        let asset = std::sync::Arc::new(asset);
+        let asset = crate::test_support::one_voxel(2);
         scene.objects.push(ssbvb_gpu::scene::VoxelObject {
             asset,
             instances: vec![

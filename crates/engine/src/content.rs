@@ -212,28 +212,13 @@ pub fn clipping_warnings(scene: &Scene, camera: &Camera) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use ssbvb_voxel::voxelize::{VoxelSet, voxels_from_cells};
-
-    fn one_voxel() -> Arc<VoxelAsset> {
-        let voxels = voxels_from_cells(1, &[[0, 0, 0]], &[[1.0, 0.5, 0.25, 1.0]]).unwrap();
-        let set = VoxelSet {
-            object_space: ssbvb_voxel::model::ObjectSpace {
-                center: DVec3::ZERO,
-                scale: 1.0,
-            },
-            voxels,
-            report: Default::default(),
-        };
-        let (asset, _) =
-            ssbvb_voxel::prepare::prepare_voxel_set(set, &ssbvb_voxel::progress::NoProgress);
-        Arc::new(asset)
-    }
+    use crate::test_support::one_voxel;
 
     /// Merged content keeps the first's camera and objects, places the second's after
     /// the transform, and keeps one page source per object.
     #[test]
     fn merge_places_the_added_objects_and_keeps_the_first_camera() {
-        let asset = one_voxel();
+        let asset = one_voxel(1);
         let mut a = Content::of_asset(asset.clone(), 1);
         a.camera = Camera::new(DVec3::new(5.0, 0.0, 0.0), DVec3::ZERO);
         a.page_sources.clear();

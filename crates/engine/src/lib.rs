@@ -67,6 +67,9 @@ pub mod upload;
 pub mod values;
 mod warning;
 
+#[cfg(test)]
+mod test_support;
+
 pub use content::{Content, DEFAULT_MODEL_LEVEL, clipping_warnings};
 pub use engine::{Engine, FrameReport, RenderOptions};
 pub use error::{EngineError, ResultExt};
