@@ -311,14 +311,12 @@ impl Voxels {
                  use sparse()"
             )));
         }
-        let mut grid = vec![0u8; bytes as usize];
-        for (c, v) in &cells {
-            let [x, y, z] = [0, 1, 2].map(|k| (c[k] - low[k]) as usize);
-            let i = ((x * shape[1] + y) * shape[2] + z) * 4;
-            let mut rgba = v.rgba;
-            rgba[3] = rgba[3].max(1);
-            grid[i..i + 4].copy_from_slice(&rgba);
-        }
+        let grid = ssbvb_voxel::export::npy::dense_grid(
+            shape,
+            cells
+                .iter()
+                .map(|(c, v)| ([0, 1, 2].map(|k| (c[k] - low[k]) as usize), v.rgba)),
+        );
         PyArray1::from_vec(py, grid)
             .reshape([shape[0], shape[1], shape[2], 4])
             .map(Bound::into_any)

@@ -37,19 +37,30 @@ fn header(descr: &str, shape: &[u64]) -> Vec<u8> {
     out
 }
 
-/// Writes the dense RGBA grid of `edge`³ cells.
-pub fn write_dense(path: &Path, edge: u32, voxels: &[ExportVoxel]) -> Result<(), ExportError> {
-    check_size(ExportFormat::Npy { sparse: false }, edge)?;
-    let bytes = u64::from(edge).pow(3) * 4;
-    let mut grid = vec![0u8; bytes as usize];
-    let e = edge as usize;
-    for v in voxels {
-        let [x, y, z] = v.cell.map(|c| c as usize);
-        let i = ((x * e + y) * e + z) * 4;
-        let mut rgba = v.rgba;
+/// The dense RGBA grid of `shape` (C order, index `[x, y, z, c]`) holding `voxels` (cell,
+/// sRGB RGBA): alpha 0 where a cell is empty, at least 1 where it is occupied. Every cell
+/// must lie inside `shape`.
+pub fn dense_grid(
+    shape: [usize; 3],
+    voxels: impl IntoIterator<Item = ([usize; 3], [u8; 4])>,
+) -> Vec<u8> {
+    let mut grid = vec![0u8; shape.iter().product::<usize>() * 4];
+    for ([x, y, z], mut rgba) in voxels {
+        let i = ((x * shape[1] + y) * shape[2] + z) * 4;
         rgba[3] = rgba[3].max(1);
         grid[i..i + 4].copy_from_slice(&rgba);
     }
+    grid
+}
+
+/// Writes the dense RGBA grid of `edge`³ cells.
+pub fn write_dense(path: &Path, edge: u32, voxels: &[ExportVoxel]) -> Result<(), ExportError> {
+    check_size(ExportFormat::Npy { sparse: false }, edge)?;
+    let e = edge as usize;
+    let grid = dense_grid(
+        [e; 3],
+        voxels.iter().map(|v| (v.cell.map(|c| c as usize), v.rgba)),
+    );
     let e = u64::from(edge);
     let head = header("'|u1'", &[e, e, e, 4]);
     crate::load::write_atomically(path, &[&head, &grid])?;
