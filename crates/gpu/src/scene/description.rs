@@ -99,3 +99,11 @@ pub struct Scene {
     /// Translucent RGBA volumes.
     pub volumes: Vec<VolumeObject>,
 }
+
+impl Scene {
+    /// The voxel instances of every object: more than one makes the ray casters walk the
+    /// instances' hierarchy (the variant their first frame is likely to need).
+    pub fn voxel_instances(&self) -> usize {
+        self.objects.iter().map(|o| o.instances.len()).sum()
+    }
+}

@@ -150,11 +150,11 @@ impl PassImpl for RayMarchGBuffer {
             words: None,
             counted: false,
         };
-        // The variant of an uncounted frame of several instances, so that a pipeline that
-        // does not compile fails here, not at the first frame.
+        // The variant the first frame most likely needs (uncounted, the scene's instance
+        // count), so that a pipeline that does not compile fails here, not at that frame.
         this.draw(ctx, MainVariant {
             count_work: false,
-            several_instances: true,
+            several_instances: scene.scene.voxel_instances() > 1,
             paged: scene.streaming.is_some(),
         })?;
         Ok(this)
