@@ -69,3 +69,46 @@ fn the_readme_and_guide_commands_run_as_written() {
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("esvo_ray_cast"), "{text}");
 }
+
+/// `W×H` or `WxH` as `WxH`, or `None` when `text` is not a size.
+fn size_of(text: &str) -> Option<String> {
+    let text = text.replace('×', "x");
+    let (w, h) = text.split_once('x')?;
+    let number = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    (number(w) && number(h)).then(|| format!("{w}x{h}"))
+}
+
+/// The size the README says the first command's `render.png` has ("writes `render.png` at
+/// W×H"), held to the `--size` default that `ssbvb render --help` prints. No device needed.
+#[test]
+fn the_readme_states_the_default_render_size() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let sentence = "writes `render.png` at ";
+    let after = readme
+        .split_once(sentence)
+        .unwrap_or_else(|| panic!("README.md no longer says \"{sentence}W×H\""))
+        .1;
+    let stated = after.split_whitespace().next().unwrap_or_default();
+    let stated = size_of(stated.trim_end_matches([',', '.', ';', ')']))
+        .unwrap_or_else(|| panic!("README.md: `{stated}` after \"{sentence}\" is not a size"));
+
+    let out = succeeded(ssbvb().args(["render", "--help"]));
+    let help = String::from_utf8_lossy(&out.stdout);
+    let option = help
+        .split_once("--size")
+        .unwrap_or_else(|| panic!("`render --help` names no --size:\n{help}"))
+        .1;
+    // Only the text of this option: up to the next line that starts an option.
+    let option = option.split("\n  -").next().unwrap();
+    let default = option
+        .split_once("[default: ")
+        .and_then(|(_, rest)| rest.split_once(']'))
+        .and_then(|(value, _)| size_of(value))
+        .unwrap_or_else(|| panic!("`render --help` states no default --size:\n{help}"));
+
+    assert_eq!(
+        stated, default,
+        "README.md says `render` writes {stated}; `render --help` says --size defaults to {default}"
+    );
+}
