@@ -168,6 +168,11 @@ pub fn render_walking(
     )
 }
 
+/// The name test pipelines are resolved under: a file of the bundled pipelines' folder, so
+/// a text that includes a bundled file (`include: ["ssbvb_compute.ron"]`) reads it.
+pub const TEST_PIPELINE: &str =
+    concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/pipelines/test.ron");
+
 fn render_set_up(
     pipeline: &str,
     scene: Scene,
@@ -178,7 +183,7 @@ fn render_set_up(
 ) -> Frame {
     let c = ctx();
     let resolved =
-        ssbvb_graph::resolve_str(pipeline, "test pipeline").unwrap_or_else(|e| panic!("{e}"));
+        ssbvb_graph::resolve_str(pipeline, TEST_PIPELINE).unwrap_or_else(|e| panic!("{e}"));
     let mut gpu_scene = GpuScene::with_chunks(c, scene, chunks).unwrap_or_else(|e| panic!("{e}"));
     set_up(&mut gpu_scene);
     let mut renderer =
@@ -209,7 +214,7 @@ pub fn render_on(
     size: (u32, u32),
 ) -> Frame {
     let resolved =
-        ssbvb_graph::resolve_str(pipeline, "test pipeline").unwrap_or_else(|e| panic!("{e}"));
+        ssbvb_graph::resolve_str(pipeline, TEST_PIPELINE).unwrap_or_else(|e| panic!("{e}"));
     let mut gpu_scene = GpuScene::new(ctx, scene).unwrap_or_else(|e| panic!("{e}"));
     let mut renderer =
         Renderer::new(ctx, &gpu_scene, resolved, size).unwrap_or_else(|e| panic!("{e}"));

@@ -102,12 +102,16 @@ pub fn target_dir(root: &Path) -> PathBuf {
     std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from)
 }
 
+/// Copies `from` into `to` with its subfolders (pipelines include files of `shared/`).
 fn copy_dir(from: &Path, to: &Path) -> Result<()> {
     std::fs::create_dir_all(to)?;
     for e in std::fs::read_dir(from).with_context(|| format!("reading {}", from.display()))? {
         let e = e?;
-        if e.file_type()?.is_file() {
+        let kind = e.file_type()?;
+        if kind.is_file() {
             std::fs::copy(e.path(), to.join(e.file_name()))?;
+        } else if kind.is_dir() {
+            copy_dir(&e.path(), &to.join(e.file_name()))?;
         }
     }
     Ok(())

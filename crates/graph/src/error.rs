@@ -31,6 +31,8 @@ pub enum GraphError {
     Io { at: Loc, message: String },
     #[error("{at}: syntax error: {message}")]
     Syntax { at: Loc, message: String },
+    #[error("{at}: include: {message}")]
+    Include { at: Loc, message: String },
     #[error("{at}: pass `{pass}`: unknown pass kind `{found}`{hint}")]
     UnknownKind {
         at: Loc,
@@ -180,6 +182,7 @@ impl GraphError {
         match self {
             Io { at, .. }
             | Syntax { at, .. }
+            | Include { at, .. }
             | UnknownKind { at, .. }
             | DuplicatePass { at, .. }
             | DuplicateResource { at, .. }

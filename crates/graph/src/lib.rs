@@ -16,6 +16,7 @@
 pub mod edit;
 pub mod error;
 pub mod format;
+pub mod include;
 pub mod kinds;
 pub mod locate;
 pub mod resolve;
@@ -28,7 +29,7 @@ pub use kinds::*;
 pub use locate::Position;
 pub use resolve::{
     BoundSlot, Dependency, MemoryReport, PhysicalResource, ResolvedPipeline, ResolvedResource,
-    ResourceUsage, ScheduledPass, resolve_desc, resolve_file, resolve_str,
+    ResourceUsage, ScheduledPass, resolve_desc, resolve_file, resolve_str, resolve_str_with,
 };
 pub use schema::{Binding, Bindings, CountDesc, PassDesc, PipelineDesc, ResourceDesc, SizeDesc};
 pub use watch::{PipelineWatcher, ReloadOutcome};

@@ -242,6 +242,15 @@ impl Locator {
             .or_else(|| self.pass(pass))
     }
 
+    /// Where `name` is written in the `include:` list.
+    pub fn include_entry(&self, name: &str) -> Option<Position> {
+        let start = (0..self.toks.len()).find(|&i| self.is_key(i, "include"))?;
+        self.toks[start..].iter().find_map(|(t, p)| match t {
+            Tok::Str(s) if s == name => Some(*p),
+            _ => None,
+        })
+    }
+
     /// Where the top-level `output:` field is.
     pub fn output(&self) -> Option<Position> {
         (0..self.toks.len())

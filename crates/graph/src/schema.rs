@@ -14,14 +14,22 @@ pub use crate::format::{BufferLayout, Format};
 use crate::kinds::PassKind;
 
 /// A whole pipeline file: named resources, passes and the one output.
-#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, rename = "Pipeline")]
 pub struct PipelineDesc {
+    /// Files whose declarations come first (relative to this file; see [`crate::include`]).
+    /// Empty in a resolved pipeline's description, which holds what they declared.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub include: Vec<String>,
     /// Transient per-frame resources by name, in file order.
+    #[serde(default)]
     pub resources: NamedResources,
     /// Passes in file order (the order only breaks ties in the schedule).
+    #[serde(default)]
     pub passes: Vec<PassDesc>,
-    /// The resource the frame produces (a texture); everything else serves it.
+    /// The resource the frame produces (a texture); everything else serves it. Empty in a
+    /// file of shared declarations, which is included, not resolved alone.
+    #[serde(default)]
     pub output: String,
     /// Extra resources to keep alive (with the passes that write them) although the output
     /// does not need them: debug views and readback in tests.

@@ -17,12 +17,14 @@ pub enum ReloadOutcome {
     Failed(PipelineErrors),
 }
 
-/// Holds the current pipeline of a file and reloads it when the file's modification time
-/// or length changes.
+/// Holds the current pipeline of a file and reloads it when the modification time or
+/// length of the file or of a file it includes changes.
 #[derive(Debug)]
 pub struct PipelineWatcher {
     path: PathBuf,
-    stamp: Option<(SystemTime, u64)>,
+    stamp: Vec<Option<(SystemTime, u64)>>,
+    /// The files the stamp covers: the pipeline's and those it included when last read.
+    files: Vec<PathBuf>,
     current: ResolvedPipeline,
 }
 
@@ -30,11 +32,12 @@ impl PipelineWatcher {
     /// Resolves `path` once; fails if the first version is already invalid.
     pub fn new(path: impl AsRef<Path>) -> Result<Self, PipelineErrors> {
         let path = path.as_ref().to_path_buf();
-        let stamp = stamp(&path);
         let current = resolve_file(&path)?;
+        let files = files_of(&path, &current);
         Ok(Self {
             path,
-            stamp,
+            stamp: stamps(&files),
+            files,
             current,
         })
     }
@@ -49,21 +52,35 @@ impl PipelineWatcher {
         &self.path
     }
 
-    /// Checks the file and re-resolves it if it changed.
+    /// Checks the file and those it includes, and re-resolves it if one changed.
     pub fn poll(&mut self) -> ReloadOutcome {
-        let now = stamp(&self.path);
+        let now = stamps(&self.files);
         if now == self.stamp {
             return ReloadOutcome::Unchanged;
         }
         self.stamp = now;
         match resolve_file(&self.path) {
             Ok(p) => {
+                // A changed include list changes the files to watch.
+                self.files = files_of(&self.path, &p);
+                self.stamp = stamps(&self.files);
                 self.current = p;
                 ReloadOutcome::Reloaded
             }
             Err(e) => ReloadOutcome::Failed(e),
         }
     }
+}
+
+/// The pipeline's file and the files it included.
+fn files_of(path: &Path, p: &ResolvedPipeline) -> Vec<PathBuf> {
+    let mut files = vec![path.to_path_buf()];
+    files.extend(p.sources.iter().skip(1).map(PathBuf::from));
+    files
+}
+
+fn stamps(files: &[PathBuf]) -> Vec<Option<(SystemTime, u64)>> {
+    files.iter().map(|f| stamp(f)).collect()
 }
 
 fn stamp(path: &Path) -> Option<(SystemTime, u64)> {

@@ -106,6 +106,38 @@ pub async fn fetch_text(url: &str) -> Result<String, WebError> {
     })
 }
 
+/// The pipeline file at `url`, resolved with the files it includes (fetched first, each
+/// once, relative to the file that names it).
+pub async fn fetch_pipeline(url: &str) -> Result<ssbvb_graph::ResolvedPipeline, WebError> {
+    let text = fetch_text(url).await?;
+    let mut fetched = std::collections::HashMap::new();
+    let mut pending: Vec<(String, String)> = ssbvb_graph::include::includes_of(&text)
+        .into_iter()
+        .map(|n| (url.to_string(), n))
+        .collect();
+    while let Some((from, name)) = pending.pop() {
+        let path = ssbvb_graph::include::include_path(&from, &name);
+        if fetched.contains_key(&path) {
+            continue;
+        }
+        // A missing include is reported by the resolver, at the line that names it.
+        let Ok(included) = fetch_text(&path).await else {
+            continue;
+        };
+        for n in ssbvb_graph::include::includes_of(&included) {
+            pending.push((path.clone(), n));
+        }
+        fetched.insert(path, included);
+    }
+    let read = |p: &str| {
+        fetched
+            .get(p)
+            .cloned()
+            .ok_or_else(|| "not found".to_string())
+    };
+    ssbvb_graph::resolve_str_with(&text, url, &read).map_err(|e| WebError::Pipeline(e.to_string()))
+}
+
 /// The element `id`, as `T`.
 pub fn element<T: JsCast>(id: &str) -> Option<T> {
     document()

@@ -216,9 +216,7 @@ async fn choose_pipeline(
     let mut refused = Vec::new();
     for name in candidates {
         let url = format!("assets/pipelines/{name}.ron");
-        let text = fetch_text(&url).await?;
-        let resolved =
-            ssbvb_graph::resolve_str(&text, &url).map_err(|e| WebError::Pipeline(e.to_string()))?;
+        let resolved = crate::dom::fetch_pipeline(&url).await?;
         let verdict =
             ssbvb_passes::pipeline_requirements(&resolved).check_under(adapter, &adapter.limits());
         if verdict.fits() {

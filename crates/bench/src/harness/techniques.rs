@@ -234,7 +234,7 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
     // slow. The two are a pair: a stage both frames share is the same pass in both.
     Technique {
         name: "ssbvb-all-compute",
-        pipeline: PipelineSource::SharedStagesInCompute("ssbvb_compute.ron"),
+        pipeline: PipelineSource::Form("ssbvb-all-compute"),
         edit: None,
         max_level: 16,
     },
@@ -391,6 +391,7 @@ pub(crate) fn refused(e: &anyhow::Error) -> bool {
 mod tests {
     use super::*;
     use crate::harness::pipelines::technique_pipeline;
+    use ssbvb_graph::ResolvedPipeline;
 
     /// Every technique with a file of its own resolves with its edit.
     #[test]
@@ -427,5 +428,21 @@ mod tests {
             }
             assert_eq!(swapped, 2, "{all}");
         }
+    }
+
+    /// The bundled all-compute form (`ssbvb_compute.ron` included, two passes and the
+    /// output replaced) is the shared-stages edit of the compute form, as ESVO's pair is.
+    #[test]
+    fn the_all_compute_form_file_is_the_shared_stages_edit_of_the_compute_form() {
+        use crate::harness::pipelines::{bundled_pipeline, with_shared_stages_in_compute};
+        let file = bundled_pipeline("ssbvb_all_compute.ron").unwrap();
+        let edit =
+            with_shared_stages_in_compute(&bundled_pipeline("ssbvb_compute.ron").unwrap()).unwrap();
+        assert_eq!(file.desc, edit.desc);
+        assert_eq!(file.sources.len(), 2, "{:?}", file.sources);
+        let order = |p: &ResolvedPipeline| -> Vec<String> {
+            p.passes.iter().map(|s| s.name.clone()).collect()
+        };
+        assert_eq!(order(&file), order(&edit));
     }
 }

@@ -34,12 +34,13 @@ pub use resolved::{
 };
 
 use crate::error::{GraphError, Loc, PipelineErrors, suggest};
+use crate::include::{ReadSource, Sources};
 use crate::kinds::KIND_NAMES;
 use crate::locate::Locator;
 use crate::schema::PipelineDesc;
 use ctx::Ctx;
 
-/// Reads and resolves a pipeline file.
+/// Reads and resolves a pipeline file (and the files it includes, relative to it).
 pub fn resolve_file(path: &std::path::Path) -> Result<ResolvedPipeline, PipelineErrors> {
     let file = path.display().to_string();
     match std::fs::read_to_string(path) {
@@ -54,27 +55,49 @@ pub fn resolve_file(path: &std::path::Path) -> Result<ResolvedPipeline, Pipeline
     }
 }
 
-/// Parses and resolves pipeline text; `file` names it in errors.
+/// Parses and resolves pipeline text; `file` names it in errors, and the files it
+/// includes are read from the file system relative to it.
 pub fn resolve_str(src: &str, file: &str) -> Result<ResolvedPipeline, PipelineErrors> {
-    let loc = Locator::new(src);
-    let desc = parse(src, file, &loc).map_err(|errors| PipelineErrors {
+    resolve_str_with(src, file, &crate::include::read_file)
+}
+
+/// [`resolve_str`] with the included files read by `read` (given each file's path joined to
+/// its includer's folder, [`crate::include::include_path`]).
+pub fn resolve_str_with(
+    src: &str,
+    file: &str,
+    read: ReadSource<'_>,
+) -> Result<ResolvedPipeline, PipelineErrors> {
+    let errs = |errors| PipelineErrors {
         file: file.to_string(),
         errors,
-    })?;
-    resolve_parsed(&desc, file, &loc)
+    };
+    let (desc, sources) = crate::include::load(src, file, read).map_err(errs)?;
+    if desc.output.is_empty() {
+        return Err(errs(vec![GraphError::Syntax {
+            at: Loc {
+                file: file.to_string(),
+                pos: None,
+            },
+            message: "no `output:` (a pipeline names the texture it produces; a file of \
+                      shared declarations is included by pipelines, not used alone)"
+                .into(),
+        }]));
+    }
+    resolve_parsed(&desc, file, &sources)
 }
 
 /// Validates and resolves a pipeline description that has no text (built or edited in
 /// code, see [`ResolvedPipeline::edited`]): the same checks as [`resolve_str`], with errors
-/// that name the pass and resource but no line.
+/// that name the pass and resource but no line. Its `include` list is not read.
 pub fn resolve_desc(desc: &PipelineDesc, file: &str) -> Result<ResolvedPipeline, PipelineErrors> {
-    resolve_parsed(desc, file, &Locator::new(""))
+    resolve_parsed(desc, file, &Sources::single(file, ""))
 }
 
 fn resolve_parsed(
     desc: &PipelineDesc,
     file: &str,
-    loc: &Locator,
+    loc: &Sources,
 ) -> Result<ResolvedPipeline, PipelineErrors> {
     let mut ctx = Ctx {
         file,
@@ -97,9 +120,14 @@ fn resolve_parsed(
     }
 }
 
+/// The description of `src` alone (its includes unread), if it parses.
+pub(crate) fn parse_only(src: &str) -> Option<PipelineDesc> {
+    parse(src, "", &Locator::new(src)).ok()
+}
+
 /// RON → [`PipelineDesc`]. Unknown pass kinds are found by scanning the text, so all of
 /// them are reported at once with suggestions, not only the first serde meets.
-fn parse(src: &str, file: &str, loc: &Locator) -> Result<PipelineDesc, Vec<GraphError>> {
+pub(crate) fn parse(src: &str, file: &str, loc: &Locator) -> Result<PipelineDesc, Vec<GraphError>> {
     let mut errors = Vec::new();
     for (found, pos, pass) in loc.kinds() {
         if !KIND_NAMES.contains(&found.as_str()) {
@@ -169,6 +197,7 @@ impl Ctx<'_> {
         let physical = alias::allocate(&mut used.resources, used.output);
         Some(ResolvedPipeline {
             file: self.file.to_string(),
+            sources: self.loc.files(),
             desc: self.desc.clone(),
             pruned_passes: self.pruned_passes(&live),
             pruned_resources: self.pruned_resources(&used.resources),

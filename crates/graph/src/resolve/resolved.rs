@@ -93,7 +93,9 @@ pub struct PhysicalResource {
 pub struct ResolvedPipeline {
     /// File it came from.
     pub file: String,
-    /// The file as parsed.
+    /// Every file it was read from: `file` first, then the files it includes.
+    pub sources: Vec<String>,
+    /// The file as parsed, holding what its included files declare.
     pub desc: PipelineDesc,
     /// The DAG of all declared passes (node weight: pass name), edges with reasons.
     pub dag: DiGraph<String, Dependency>,

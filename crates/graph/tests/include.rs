@@ -1,0 +1,231 @@
+//! Pipelines that include others: the merged description, replacement by name, errors
+//! located in the file they are in, and reloads that follow the included files.
+
+use std::collections::HashMap;
+
+use ssbvb_graph::include::{include_path, includes_of};
+use ssbvb_graph::{PipelineErrors, ResolvedPipeline, resolve_str, resolve_str_with};
+
+/// Shared declarations: the G-buffer, the triangles and the deferred shading.
+const SHARED: &str = r#"// shared
+Pipeline(
+  resources: {
+    "gbuffer_albedo":   Texture(format: R32Uint, size: Screen),
+    "gbuffer_normal":   Texture(format: Rgba16Float, size: Screen),
+    "gbuffer_position": Texture(format: Rgba32Float, size: Screen),
+    "gbuffer_geometric_normal": Texture(format: Rg16Float, size: Screen),
+    "depth_stencil":    Texture(format: Depth32FloatStencil8, size: Screen),
+    "smoothed_normal":  Texture(format: Rgba16Float, size: Screen),
+    "color":            Texture(format: Rgba8UnormSrgb, size: Screen),
+  },
+  passes: [
+    (
+      name: "triangles",
+      kind: Triangles,
+      writes: ["gbuffer_albedo", "gbuffer_normal", "gbuffer_position", "gbuffer_geometric_normal", "depth_stencil"],
+    ),
+    (
+      name: "smooth",
+      kind: Smooth(max_i: 1.0, min_dist: 0.5),
+      reads: ["gbuffer_normal", "depth_stencil"],
+      writes: ["smoothed_normal"],
+    ),
+    (
+      name: "composite",
+      kind: Composite,
+      reads: {"albedo": "gbuffer_albedo", "normal": "smoothed_normal", "position": "gbuffer_position"},
+      writes: ["color"],
+    ),
+  ],
+)
+"#;
+
+/// The ESVO frame's own part.
+const ESVO_OWN: &str = r#"Pipeline(
+  include: ["shared/deferred.ron"],
+  passes: [
+    (
+      name: "esvo_ray_cast",
+      kind: EsvoRayCast(max_steps: 4096),
+      writes: ["gbuffer_albedo", "gbuffer_normal", "gbuffer_position", "gbuffer_geometric_normal", "depth_stencil"],
+      after: ["triangles"],
+    ),
+  ],
+  output: "color",
+)
+"#;
+
+/// The bundled ESVO frame, written whole.
+const ESVO_WHOLE: &str = include_str!("../../../assets/pipelines/esvo.ron");
+
+fn files(pairs: &[(&str, &str)]) -> HashMap<String, String> {
+    pairs
+        .iter()
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect()
+}
+
+fn resolve_in(
+    map: &HashMap<String, String>,
+    file: &str,
+) -> Result<ResolvedPipeline, PipelineErrors> {
+    let read = |p: &str| {
+        map.get(p)
+            .cloned()
+            .ok_or_else(|| "no such file".to_string())
+    };
+    resolve_str_with(&map[file], file, &read)
+}
+
+fn names(p: &ResolvedPipeline) -> Vec<&str> {
+    p.passes.iter().map(|s| s.name.as_str()).collect()
+}
+
+#[test]
+fn an_included_file_declares_what_the_whole_file_declares() {
+    let map = files(&[("p/esvo.ron", ESVO_OWN), ("p/shared/deferred.ron", SHARED)]);
+    let split = resolve_in(&map, "p/esvo.ron").unwrap();
+    let whole = resolve_str(ESVO_WHOLE, "esvo.ron").unwrap();
+    assert_eq!(names(&split), names(&whole));
+    assert_eq!(split.sources, ["p/esvo.ron", "p/shared/deferred.ron"]);
+    assert!(
+        split.desc.include.is_empty(),
+        "the merged description includes nothing"
+    );
+    // The same resources (order aside: the included ones follow the file's own).
+    let mut a: Vec<_> = split.desc.resources.0.clone();
+    let mut b: Vec<_> = whole.desc.resources.0.clone();
+    a.sort_by(|x, y| x.0.cmp(&y.0));
+    b.sort_by(|x, y| x.0.cmp(&y.0));
+    assert_eq!(a, b);
+    assert_eq!(split.physical.len(), whole.physical.len());
+}
+
+#[test]
+fn a_pass_of_the_same_name_replaces_the_included_one_in_place() {
+    let variant = r#"Pipeline(
+  include: ["esvo.ron"],
+  resources: { "color": Texture(format: Rgba8Unorm, size: Screen) },
+  passes: [
+    (
+      name: "composite",
+      kind: CompositeCompute,
+      reads: {"albedo": "gbuffer_albedo", "normal": "smoothed_normal", "position": "gbuffer_position"},
+      writes: ["color"],
+    ),
+  ],
+)"#;
+    let map = files(&[
+        ("p/esvo.ron", ESVO_OWN),
+        ("p/shared/deferred.ron", SHARED),
+        ("p/variant.ron", variant),
+    ]);
+    let p = resolve_in(&map, "p/variant.ron").unwrap();
+    let base = resolve_in(&map, "p/esvo.ron").unwrap();
+    assert_eq!(names(&p), names(&base), "one pass replaced, none added");
+    let composite = p
+        .desc
+        .passes
+        .iter()
+        .find(|s| s.name == "composite")
+        .unwrap();
+    assert_eq!(composite.kind, ssbvb_graph::PassKind::CompositeCompute);
+    assert_eq!(
+        p.desc.output, "color",
+        "the output comes from the included file"
+    );
+    assert_eq!(p.sources.len(), 3);
+    let color = p.desc.resources.0.iter().filter(|r| r.0 == "color").count();
+    assert_eq!(color, 1, "the resource replaced, not declared twice");
+}
+
+#[test]
+fn an_error_in_an_included_file_names_that_file_and_line() {
+    let broken = SHARED.replace(
+        r#"reads: ["gbuffer_normal", "depth_stencil"],"#,
+        r#"reads: ["gbuffer_normall", "depth_stencil"],"#,
+    );
+    let map = files(&[("p/esvo.ron", ESVO_OWN), ("p/shared/deferred.ron", &broken)]);
+    let e = resolve_in(&map, "p/esvo.ron").unwrap_err().to_string();
+    // Line 21 of the shared file holds the smoothing pass's reads.
+    assert!(e.contains("p/shared/deferred.ron:21:"), "{e}");
+    assert!(e.contains("gbuffer_normall"), "{e}");
+    let own_lines = e
+        .lines()
+        .skip(1)
+        .filter(|l| l.trim_start().starts_with("p/esvo.ron"));
+    assert_eq!(own_lines.count(), 0, "{e}");
+    // An error in the including file names it.
+    let own = ESVO_OWN.replace(r#"after: ["triangles"]"#, r#"after: ["triangle"]"#);
+    let map = files(&[("p/esvo.ron", &own), ("p/shared/deferred.ron", SHARED)]);
+    let e = resolve_in(&map, "p/esvo.ron").unwrap_err().to_string();
+    assert!(e.contains("p/esvo.ron:8:"), "{e}");
+}
+
+#[test]
+fn a_missing_or_circular_include_is_an_error_at_its_entry() {
+    let map = files(&[("p/esvo.ron", ESVO_OWN)]);
+    let e = resolve_in(&map, "p/esvo.ron").unwrap_err().to_string();
+    assert!(
+        e.contains("p/esvo.ron:2:") && e.contains("cannot read `p/shared/deferred.ron`"),
+        "{e}"
+    );
+    let looped = SHARED.replace("Pipeline(", r#"Pipeline(include: ["../esvo.ron"],"#);
+    let map = files(&[("p/esvo.ron", ESVO_OWN), ("p/shared/deferred.ron", &looped)]);
+    let e = resolve_in(&map, "p/esvo.ron").unwrap_err().to_string();
+    assert!(e.contains("includes itself"), "{e}");
+    // A syntax error in the included file is its own.
+    let map = files(&[
+        ("p/esvo.ron", ESVO_OWN),
+        ("p/shared/deferred.ron", "Pipeline("),
+    ]);
+    let e = resolve_in(&map, "p/esvo.ron").unwrap_err().to_string();
+    assert!(e.contains("p/shared/deferred.ron:1:"), "{e}");
+}
+
+#[test]
+fn shared_declarations_alone_are_no_pipeline() {
+    let e = resolve_str(SHARED, "shared.ron").unwrap_err().to_string();
+    assert!(e.contains("no `output:`"), "{e}");
+}
+
+#[test]
+fn include_paths_are_relative_to_the_including_file() {
+    assert_eq!(
+        include_path("a/b/p.ron", "shared/s.ron"),
+        "a/b/shared/s.ron"
+    );
+    assert_eq!(include_path("p.ron", "s.ron"), "s.ron");
+    assert_eq!(
+        include_path("http://h/assets/pipelines/p.ron", "shared/s.ron"),
+        "http://h/assets/pipelines/shared/s.ron"
+    );
+    assert_eq!(include_path("a/p.ron", "/abs/s.ron"), "/abs/s.ron");
+    assert_eq!(include_path("a/shared/s.ron", "../p.ron"), "a/p.ron");
+    assert_eq!(include_path("a/./p.ron", "./s.ron"), "a/s.ron");
+    assert_eq!(include_path("p.ron", "../s.ron"), "../s.ron");
+    assert_eq!(includes_of(ESVO_OWN), ["shared/deferred.ron"]);
+    assert!(includes_of(ESVO_WHOLE).is_empty());
+    assert!(includes_of("not ron (").is_empty());
+}
+
+#[test]
+fn the_watcher_reloads_when_an_included_file_changes() {
+    use ssbvb_graph::{PipelineWatcher, ReloadOutcome};
+    let dir = std::env::temp_dir().join(format!("ssbvb-include-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("shared")).unwrap();
+    let path = dir.join("esvo.ron");
+    std::fs::write(&path, ESVO_OWN).unwrap();
+    std::fs::write(dir.join("shared/deferred.ron"), SHARED).unwrap();
+    let mut w = PipelineWatcher::new(&path).unwrap();
+    assert!(matches!(w.poll(), ReloadOutcome::Unchanged));
+    // The smoothing pruned by an edit of the included file only.
+    let edited = SHARED.replace(
+        r#""normal": "smoothed_normal""#,
+        r#""normal": "gbuffer_normal""#,
+    );
+    std::fs::write(dir.join("shared/deferred.ron"), edited).unwrap();
+    assert!(matches!(w.poll(), ReloadOutcome::Reloaded));
+    assert_eq!(w.current().pruned_passes, ["smooth"]);
+    std::fs::remove_dir_all(&dir).ok();
+}
