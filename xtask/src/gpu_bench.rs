@@ -184,11 +184,11 @@ fn steps(out: &Path, frames: u32, skip_paper: bool, forms: &[Form]) -> Vec<Step>
             .collect()
     };
     // Every form; the crowd leaves out the paper's raster form (one billboard per visible
-    // voxel of 4096 bunnies) and adds the peeled filter.
+    // voxel of 4096 bunnies).
     let all = names(&|_| true).join(",");
     let crowd = names(&|f| f.name != "ssbvb-unique").join(",");
     let forms_techniques = format!("ssbvb,{all},{BASELINES},octree,octree-compute");
-    let crowd_techniques = format!("ssbvb,{crowd},ssbvb-peel,{BASELINES},octree-compute");
+    let crowd_techniques = format!("ssbvb,{crowd},{BASELINES},octree-compute");
     let o = |sub: &str| out.join(sub).display().to_string();
     let f = frames.to_string();
     let mut v = vec![Step {
@@ -493,7 +493,7 @@ mod tests {
             ("ssbvb-compute", "pipelines/ssbvb_compute.ron"),
             ("ssbvb-all-compute", "pipelines/ssbvb_all_compute.ron"),
             ("ssbvb-splat", "pipelines/ssbvb_splat.ron"),
-            ("ssbvb-unique", "pipelines/ssbvb.ron"),
+            ("ssbvb-unique", "pipelines/ssbvb_unique.ron"),
         ]
         .map(|(name, file)| Form {
             name: name.into(),
@@ -514,7 +514,7 @@ mod tests {
              ssbvb-unique,esvo,esvo-compute,esvo-all-compute"
         ));
         assert!(!s[2].args.join(" ").contains("ssbvb-unique"));
-        assert!(s[2].args.join(" ").contains("ssbvb-peel"));
+        assert!(s[2].args.join(" ").contains("octree-compute"));
         let renders: Vec<&Step> = s.iter().filter(|s| s.args[0] == "render").collect();
         // Two scenes, the default and each of the six forms.
         assert_eq!(renders.len(), 14);
@@ -532,7 +532,7 @@ mod tests {
             renders
                 .iter()
                 .any(|r| r.args.join(" ").contains("bunnies_4096.ron")
-                    && r.args.join(" ").contains("ssbvb.ron"))
+                    && r.args.join(" ").contains("ssbvb_unique.ron"))
         );
         assert!(
             s.iter()

@@ -26,7 +26,7 @@ const PUPPETEER: &str = "puppeteer-core@24.43.1";
 const CASES: &[(&str, &str, Option<&str>)] = &[
     ("default", "default", None),
     ("esvo", "default", Some("esvo")),
-    ("octree", "default", Some("octree_ray_cast")),
+    ("octree", "default", Some("octree")),
 ];
 
 /// Runs the browser test; `Ok(false)` when a check fails.

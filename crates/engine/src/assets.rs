@@ -20,8 +20,8 @@ const FILES: &[(&str, &[u8])] = &[
         include_bytes!("../../../assets/scenes/default.ron"),
     ),
     (
-        "pipelines/ssbvb.ron",
-        include_bytes!("../../../assets/pipelines/ssbvb.ron"),
+        "pipelines/ssbvb_unique.ron",
+        include_bytes!("../../../assets/pipelines/ssbvb_unique.ron"),
     ),
     (
         "pipelines/ssbvb_splat.ron",
@@ -46,10 +46,6 @@ const FILES: &[(&str, &[u8])] = &[
     (
         "pipelines/ssbvb_aa.ron",
         include_bytes!("../../../assets/pipelines/ssbvb_aa.ron"),
-    ),
-    (
-        "pipelines/ssbvb_raster_aa.ron",
-        include_bytes!("../../../assets/pipelines/ssbvb_raster_aa.ron"),
     ),
     (
         "pipelines/ssbvb_edge_aa.ron",
@@ -80,8 +76,8 @@ const FILES: &[(&str, &[u8])] = &[
         include_bytes!("../../../assets/pipelines/dense_dda.ron"),
     ),
     (
-        "pipelines/octree_ray_cast.ron",
-        include_bytes!("../../../assets/pipelines/octree_ray_cast.ron"),
+        "pipelines/octree.ron",
+        include_bytes!("../../../assets/pipelines/octree.ron"),
     ),
     (
         "pipelines/esvo.ron",

@@ -201,7 +201,7 @@ mod tests {
         let p = dir.path().join("sub/calibration.json");
         assert!(load(&p).unwrap().is_none());
         store(&p, entry("580.1", "pipelines/ssbvb_splat.ron")).unwrap();
-        store(&p, entry("580.2", "pipelines/ssbvb.ron")).unwrap();
+        store(&p, entry("580.2", "pipelines/ssbvb_unique.ron")).unwrap();
         // The same key again replaces its entry.
         store(&p, entry("580.2", "pipelines/ssbvb_pixel.ron")).unwrap();
         let f = load(&p).unwrap().unwrap();
@@ -233,7 +233,7 @@ mod tests {
             let e = format!("{:#}", load(&p).unwrap_err());
             assert!(e.contains("calibration.json"), "{e}");
         }
-        store(&p, entry("1", "pipelines/ssbvb.ron")).unwrap();
+        store(&p, entry("1", "pipelines/ssbvb_unique.ron")).unwrap();
         assert_eq!(load(&p).unwrap().unwrap().entries.len(), 1);
     }
 
@@ -241,14 +241,14 @@ mod tests {
     fn summaries_list_the_forms_fastest_first() {
         let mut e = entry("1", "pipelines/ssbvb_pixel.ron");
         e.forms.push(FormTime {
-            pipeline: "pipelines/ssbvb.ron".into(),
+            pipeline: "pipelines/ssbvb_unique.ron".into(),
             frame_ms: 3.5,
             clock: "gpu".into(),
         });
         assert_eq!(
             e.summary(),
             "scenes/default.ron at 64x48: pipelines/ssbvb_pixel.ron 1.00 ms (gpu), \
-             pipelines/ssbvb.ron 3.50 ms (gpu)"
+             pipelines/ssbvb_unique.ron 3.50 ms (gpu)"
         );
     }
 }

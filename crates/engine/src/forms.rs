@@ -51,8 +51,8 @@ pub const FORMS: [Form; 6] = [
         file: "pipelines/ssbvb_direct.ron",
         what: "each pixel's hit written straight into the G-buffer by the march (no SSBVB)",
         rule: Some(
-            "the fastest SSBVB frame measured on lavapipe, a CPU adapter, where fragment \
-             work costs what compute work costs (docs/benchmarks.md)",
+            "on a CPU adapter fragment work costs what compute work costs, so the march in \
+             the fragment stage saves the SSBVB's append and splat (docs/benchmarks.md)",
         ),
         cpu_only: true,
         calibrated: true,
@@ -62,9 +62,8 @@ pub const FORMS: [Form; 6] = [
         file: "pipelines/ssbvb_pixel.ron",
         what: "each pixel's hit written at its pixel (no billboard)",
         rule: Some(
-            "the fastest compute-marched SSBVB frame measured; on the NVIDIA H200 the \
-             billboards were the frame's costliest stage, and this form has none \
-             (docs/benchmarks.md)",
+            "the march in compute and no billboard, the stage that costs most where \
+             fragment work is slow (docs/benchmarks.md)",
         ),
         cpu_only: false,
         calibrated: true,
@@ -95,9 +94,9 @@ pub const FORMS: [Form; 6] = [
     },
     Form {
         name: "ssbvb-unique",
-        file: "pipelines/ssbvb.ron",
+        file: "pipelines/ssbvb_unique.ron",
         what: "rasterized billboards",
-        rule: Some("the paper's frame"),
+        rule: Some("the paper's frame, for adapters the forms before it do not run on"),
         cpu_only: false,
         calibrated: true,
     },
@@ -275,7 +274,7 @@ mod tests {
         );
         // A CPU adapter without what the marched forms need gets the raster form.
         let r = rule("", vec![cpu("cpu", &["x"])], vec![cpu("cpu", &[])]).0;
-        assert!(r.pipeline.ends_with("pipelines/ssbvb.ron"), "{r:?}");
+        assert!(r.pipeline.ends_with("pipelines/ssbvb_unique.ron"), "{r:?}");
     }
 
     #[test]
@@ -303,7 +302,7 @@ mod tests {
             vec![verdict("gpu", true, &[])],
         )
         .0;
-        assert!(c.pipeline.ends_with("pipelines/ssbvb.ron"), "{c:?}");
+        assert!(c.pipeline.ends_with("pipelines/ssbvb_unique.ron"), "{c:?}");
         assert!(
             c.reason
                 .contains("not each pixel's hit written at its pixel")
@@ -323,7 +322,7 @@ mod tests {
             vec![verdict("gpu", true, &[]), verdict("cpu", true, &[])],
         )
         .0;
-        assert!(c.pipeline.ends_with("pipelines/ssbvb.ron"), "{c:?}");
+        assert!(c.pipeline.ends_with("pipelines/ssbvb_unique.ron"), "{c:?}");
         assert_eq!(c.adapter.as_deref(), Some("gpu [Vulkan, DiscreteGpu]"));
     }
 
@@ -345,7 +344,10 @@ mod tests {
             vec![verdict("gpu", true, &["a"])],
             vec![verdict("gpu", true, &["b"])],
         );
-        assert!(none.pipeline.ends_with("pipelines/ssbvb.ron"), "{none:?}");
+        assert!(
+            none.pipeline.ends_with("pipelines/ssbvb_unique.ron"),
+            "{none:?}"
+        );
         assert!(none.reason.contains("no adapter fits"), "{none:?}");
         assert_eq!(none.adapter, None);
         assert!(picked.is_none());

@@ -7,7 +7,7 @@
 //!
 //! ```ron
 //! Scene(
-//!   pipeline: "../pipelines/ssbvb.ron",
+//!   pipeline: "../pipelines/ssbvb_unique.ron",
 //!   camera: (position: (1.8, 1.2, 2.6), look_at: (0.0, -0.1, 0.0), fov_y: 45.0),
 //!   objects: [
 //!     (model: "../models/bunny.obj", level: 8, lod: Fixed(8),

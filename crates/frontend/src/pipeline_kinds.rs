@@ -349,7 +349,7 @@ mod tests {
             "default 1024",
             "at least 1",
             "used by: ",
-            "ssbvb.ron",
+            "ssbvb_unique.ron",
         ] {
             assert!(one.contains(want), "{want}\n{one}");
         }

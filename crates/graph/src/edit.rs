@@ -65,7 +65,7 @@ mod tests {
     use crate::kinds::{PassKind, RayMarchFilterParams};
     use crate::schema::{ResourceDesc, SizeDesc};
 
-    const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
+    const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb_unique.ron");
 
     fn filter(p: &crate::ResolvedPipeline) -> PassKind {
         p.passes
@@ -78,7 +78,7 @@ mod tests {
 
     #[test]
     fn kind_edits_re_resolve_and_report_what_changed() {
-        let p = crate::resolve_str(SSBVB, "ssbvb.ron").unwrap();
+        let p = crate::resolve_str(SSBVB, "ssbvb_unique.ron").unwrap();
         let mut changed = 0;
         let q = p
             .edited(|d| {
@@ -122,7 +122,7 @@ mod tests {
 
     #[test]
     fn resource_edits_change_sizes() {
-        let p = crate::resolve_str(SSBVB, "ssbvb.ron").unwrap();
+        let p = crate::resolve_str(SSBVB, "ssbvb_unique.ron").unwrap();
         let scale = |d: &mut crate::PipelineDesc, names: &[&str]| {
             for n in names {
                 if let Some(ResourceDesc::Texture { size, .. }) = d.resource_mut(n) {
@@ -150,7 +150,7 @@ mod tests {
 
     #[test]
     fn pass_kind_swaps_keep_the_variant() {
-        let p = crate::resolve_str(SSBVB, "ssbvb.ron").unwrap();
+        let p = crate::resolve_str(SSBVB, "ssbvb_unique.ron").unwrap();
         let k = PassKind::RayMarchFilter(RayMarchFilterParams {
             max_steps: 9,
             unique_voxels: true,

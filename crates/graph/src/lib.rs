@@ -28,8 +28,9 @@ pub use format::{BufferLayout, Format};
 pub use kinds::*;
 pub use locate::Position;
 pub use resolve::{
-    BoundSlot, Dependency, MemoryReport, PhysicalResource, ResolvedPipeline, ResolvedResource,
-    ResourceUsage, ScheduledPass, resolve_desc, resolve_file, resolve_str, resolve_str_with,
+    BoundSlot, Dependency, MemoryReport, PhysicalResource, RENAMED_FILES, ResolvedPipeline,
+    ResolvedResource, ResourceUsage, ScheduledPass, current_path, resolve_desc, resolve_file,
+    resolve_str, resolve_str_with,
 };
 pub use schema::{Binding, Bindings, CountDesc, PassDesc, PipelineDesc, ResourceDesc, SizeDesc};
 pub use watch::{PipelineWatcher, ReloadOutcome};

@@ -229,3 +229,17 @@ fn the_watcher_reloads_when_an_included_file_changes() {
     assert_eq!(w.current().pruned_passes, ["smooth"]);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn the_old_paths_of_renamed_bundled_files_still_load() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/pipelines");
+    for (old, new) in ssbvb_graph::RENAMED_FILES {
+        let old_path = std::path::Path::new(dir).join(old);
+        assert!(!old_path.exists(), "{old} is back");
+        let p = ssbvb_graph::resolve_file(&old_path).unwrap();
+        assert!(p.file.ends_with(new), "{}", p.file);
+    }
+    // A missing file of another name is still an error naming it.
+    let e = ssbvb_graph::resolve_file(&std::path::Path::new(dir).join("nope.ron")).unwrap_err();
+    assert!(e.to_string().contains("nope.ron"), "{e}");
+}

@@ -3,7 +3,7 @@
 
 use ssbvb_graph::{GraphError, PipelineErrors, ResolvedPipeline, resolve_file, resolve_str};
 
-const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
+const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb_unique.ron");
 
 fn ok(src: &str) -> ResolvedPipeline {
     match resolve_str(src, "test.ron") {
@@ -84,7 +84,7 @@ fn ssbvb_pipeline_resolves_in_the_expected_order() {
 fn resolve_file_reads_the_bundled_pipeline_and_reports_missing_files() {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../../assets/pipelines/ssbvb.ron"
+        "/../../assets/pipelines/ssbvb_unique.ron"
     );
     resolve_file(std::path::Path::new(path)).expect("bundled pipeline resolves");
     let e = resolve_file(std::path::Path::new("/nonexistent/p.ron")).unwrap_err();
@@ -430,7 +430,7 @@ fn garbage_never_panics() {
             Err(e) => assert_located(&e, "cut.ron", &s),
         }
     }
-    let full = resolve_str(SSBVB, "ssbvb.ron").unwrap();
+    let full = resolve_str(SSBVB, "ssbvb_unique.ron").unwrap();
     for i in (0..bytes.len()).step_by(13) {
         let mut b = bytes.to_vec();
         b[i] = b"(){}[]\":,x0"[i % 11];
@@ -539,7 +539,7 @@ fn the_cube_raster_pipeline_resolves_and_merging_defaults_to_on() {
 #[test]
 fn bad_parameters_name_pass_kind_rule_and_line() {
     const DENSE: &str = include_str!("../../../assets/pipelines/dense_dda.ron");
-    const OCTREE: &str = include_str!("../../../assets/pipelines/octree_ray_cast.ron");
+    const OCTREE: &str = include_str!("../../../assets/pipelines/octree.ron");
     const SPLAT: &str = include_str!("../../../assets/pipelines/ssbvb_splat.ron");
     const RASTAVOX: &str = include_str!("../../../assets/pipelines/rastavox.ron");
     let cases: [(&str, &str, &str, &str, &str); 12] = [

@@ -8,7 +8,7 @@ use ssbvb_graph::{
 };
 use wgpu_types::{BufferUsages, TextureUsages};
 
-const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
+const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb_unique.ron");
 
 /// The SSBVB pipeline with `decl` as the declaration of the `color` output (a texture) or
 /// of `billboard_draw` (a buffer): the error it gives, if any.
@@ -167,7 +167,7 @@ fn sizes_counts_and_bytes_at_a_screen_size() {
     assert_eq!(buf.bytes((4, 5)), 4 * 5 * 32);
     // The SSBVB pipeline at 32x16: every resource's bytes, summed, with and without
     // aliasing (texels x bytes per texel; the SSBVB 32 bytes per pixel; one draw).
-    let p = resolve_str(SSBVB, "ssbvb.ron").unwrap();
+    let p = resolve_str(SSBVB, "ssbvb_unique.ron").unwrap();
     let px = 32 * 16;
     let texel_bytes: u64 = [16, 4, 4, 8, 16, 4, 8, 8, 4].iter().sum();
     let unaliased = px * texel_bytes + px * 32 + 16;
@@ -180,7 +180,7 @@ fn sizes_counts_and_bytes_at_a_screen_size() {
 
 #[test]
 fn usages_follow_the_slots_each_resource_is_bound_to() {
-    let p = resolve_str(SSBVB, "ssbvb.ron").unwrap();
+    let p = resolve_str(SSBVB, "ssbvb_unique.ron").unwrap();
     let usage = |name: &str| p.resources[p.resource(name).expect(name)].usage;
     let t = ResourceUsage::Texture;
     // Buffers are cleared and may be read back; the output texture is read back.
@@ -283,7 +283,7 @@ fn splat_billboards_take_the_billboards_parameters() {
 
 #[test]
 fn typed_edits_touch_exactly_what_they_name() {
-    let p = resolve_str(SSBVB, "ssbvb.ron").unwrap();
+    let p = resolve_str(SSBVB, "ssbvb_unique.ron").unwrap();
     let mut d = p.desc.clone();
     match d.resource_mut("ssbvb") {
         Some(ResourceDesc::Buffer { layout, .. }) => assert_eq!(*layout, BufferLayout::VoxelSlot),

@@ -8,7 +8,7 @@ pub const SCENES: &[&str] = &["default", "bunnies_64", "bunnies_4096"];
 
 /// The ray casters the page offers besides the SSBVB forms (file stems under
 /// `assets/pipelines/`).
-pub const RAY_CASTERS: &[&str] = &["esvo", "octree_ray_cast"];
+pub const RAY_CASTERS: &[&str] = &["esvo", "octree"];
 
 /// The bundled pipelines the page offers (file stems under `assets/pipelines/`): the SSBVB
 /// forms of the engine's table ([`ssbvb_engine::FORMS`]), then the ray casters.
@@ -48,13 +48,25 @@ impl PageParams {
         for (key, value) in pairs {
             match key {
                 "scene" => p.scene = one_of("scene", value, SCENES)?,
-                "pipeline" => p.pipeline = Some(one_of("pipeline", value, &pipelines())?),
+                "pipeline" => {
+                    p.pipeline = Some(one_of("pipeline", current_stem(value), &pipelines())?)
+                }
                 "size" => p.size = Some(parse_size(value)?),
                 _ => {}
             }
         }
         Ok(p)
     }
+}
+
+/// A pipeline's stem, or the new stem of a renamed bundled file's old one
+/// ([`ssbvb_graph::RENAMED_FILES`]).
+fn current_stem(stem: &str) -> &str {
+    ssbvb_graph::RENAMED_FILES
+        .iter()
+        .find(|(old, _)| old.strip_suffix(".ron") == Some(stem))
+        .and_then(|(_, new)| new.strip_suffix(".ron"))
+        .unwrap_or(stem)
 }
 
 fn one_of(key: &str, value: &str, names: &[&str]) -> Result<String, WebError> {
@@ -107,6 +119,8 @@ mod tests {
         .unwrap();
         assert_eq!(p.scene, "bunnies_64");
         assert_eq!(p.pipeline.as_deref(), Some("esvo"));
+        let old = PageParams::parse([("pipeline", "octree_ray_cast")]).unwrap();
+        assert_eq!(old.pipeline.as_deref(), Some("octree"));
         assert_eq!(p.size, Some((320, 240)));
     }
 

@@ -53,7 +53,7 @@ fn every_chunk_of_every_stream_is_read_like_a_single_binding() {
         "{nodes} nodes, chunks of 2^{node_bits}"
     );
     let cam = Camera::new(DVec3::new(1.6, 0.9, 2.2), DVec3::new(0.0, 0.05, 0.0));
-    let octree = include_str!("../../../assets/pipelines/octree_ray_cast.ron");
+    let octree = include_str!("../../../assets/pipelines/octree.ron");
     let esvo = include_str!("../../../assets/pipelines/esvo.ron");
     // The casters' compute form reads the chunks through its own pipelines.
     let compute = |text: &str, kind: &str| {
@@ -67,7 +67,7 @@ fn every_chunk_of_every_stream_is_read_like_a_single_binding() {
     for (name, pipeline) in [
         (
             "ssbvb",
-            include_str!("../../../assets/pipelines/ssbvb.ron").to_string(),
+            include_str!("../../../assets/pipelines/ssbvb_unique.ron").to_string(),
         ),
         ("octree", octree.to_string()),
         ("octree compute", compute(octree, "OctreeRayCast")),

@@ -9,7 +9,7 @@ use ssbvb_gpu::scene::{LodPolicy, Scene, TriangleObject, VoxelObject};
 use ssbvb_voxel::accuracy;
 use ssbvb_voxel::camera::Camera;
 
-const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
+const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb_unique.ron");
 const SIZE: (u32, u32) = (120, 90);
 
 fn camera() -> Camera {

@@ -87,7 +87,7 @@ fn a_refused_allocation_is_an_error_naming_the_resource_and_its_size() {
     // The render graph: a frame target is refused, by name, with its size.
     let gpu_scene = ssbvb_gpu::scene::GpuScene::new(&ctx, scene).unwrap();
     let path = format!(
-        "{}/../assets/pipelines/ssbvb.ron",
+        "{}/../assets/pipelines/ssbvb_unique.ron",
         env!("CARGO_MANIFEST_DIR")
     );
     let src = std::fs::read_to_string(&path).unwrap();

@@ -11,7 +11,7 @@ use ssbvb_voxel::reference::{Instance, SampleGrid, render_supersampled};
 use ssbvb_voxel::shading::srgb_to_linear;
 
 const EDGE_AA: &str = include_str!("../../../assets/pipelines/ssbvb_edge_aa.ron");
-const PLAIN: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
+const PLAIN: &str = include_str!("../../../assets/pipelines/ssbvb_unique.ron");
 const SIZE: (u32, u32) = (96, 72);
 const LEVEL: u32 = 6;
 

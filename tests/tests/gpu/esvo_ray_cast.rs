@@ -218,7 +218,7 @@ fn esvo_matches_the_reference_far_away() {
     // The same pixels as the octree caster's (the error is the G-buffer's, not ESVO's).
     let octree = measure(
         "OctreeRayCast",
-        include_str!("../../../assets/pipelines/octree_ray_cast.ron"),
+        include_str!("../../../assets/pipelines/octree.ron"),
         "far narrow, two bunnies",
         &scene,
         level,

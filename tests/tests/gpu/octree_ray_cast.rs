@@ -1,4 +1,4 @@
-//! The sparse-voxel-octree baseline (`assets/pipelines/octree_ray_cast.ron`) against the
+//! The sparse-voxel-octree baseline (`assets/pipelines/octree.ron`) against the
 //! CPU reference: a stack-based front-to-back descent of the octree finds the same first
 //! voxel as the reference's exact traversal, so coverage IoU must be ≥ 0.99 (f32 vs f64
 //! ties on voxel edges) and the median depth error ≤ 0.01 voxel, with no NaN in the
@@ -9,7 +9,7 @@ use glam::DVec3;
 use ssbvb_voxel::accuracy;
 use ssbvb_voxel::camera::Camera;
 
-const OCTREE: &str = include_str!("../../../assets/pipelines/octree_ray_cast.ron");
+const OCTREE: &str = include_str!("../../../assets/pipelines/octree.ron");
 const SIZE: (u32, u32) = (120, 90);
 
 fn cameras() -> Vec<Camera> {

@@ -6,8 +6,8 @@ use ssbvb_passes::{PassError, Renderer};
 #[test]
 fn frame_resources_follow_the_resolved_graph() {
     let c = ssbvb_tests::ctx();
-    let src = include_str!("../../../assets/pipelines/ssbvb.ron");
-    let p = ssbvb_graph::resolve_str(src, "ssbvb.ron").unwrap();
+    let src = include_str!("../../../assets/pipelines/ssbvb_unique.ron");
+    let p = ssbvb_graph::resolve_str(src, "ssbvb_unique.ron").unwrap();
     let res = ssbvb_passes::runtime::resources::FrameResources::new(c, &p, (32, 16)).unwrap();
     // Aliased resources share one texture object.
     let entry = p.resource("entry").unwrap();

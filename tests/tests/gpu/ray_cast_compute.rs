@@ -14,7 +14,7 @@ use ssbvb_gpu::scene::Scene;
 use ssbvb_voxel::camera::Camera;
 
 const ESVO: &str = include_str!("../../../assets/pipelines/esvo.ron");
-const OCTREE: &str = include_str!("../../../assets/pipelines/octree_ray_cast.ron");
+const OCTREE: &str = include_str!("../../../assets/pipelines/octree.ron");
 
 /// The attachments the casters write.
 const GBUFFER: [&str; 5] = [

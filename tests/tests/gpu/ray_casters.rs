@@ -8,7 +8,7 @@ use ssbvb_voxel::accuracy;
 use ssbvb_voxel::camera::Camera;
 
 const DENSE_DDA: &str = include_str!("../../../assets/pipelines/dense_dda.ron");
-const OCTREE: &str = include_str!("../../../assets/pipelines/octree_ray_cast.ron");
+const OCTREE: &str = include_str!("../../../assets/pipelines/octree.ron");
 const CUBES: &str = include_str!("../../../assets/pipelines/cube_raster.ron");
 const SIZE: (u32, u32) = (120, 90);
 const LEVEL: u32 = 5;

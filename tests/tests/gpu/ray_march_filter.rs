@@ -562,7 +562,7 @@ fn differing_pixels(x: &[u8], y: &[u8]) -> usize {
 /// either way in a few pixels (as in `unique_voxels_draw_the_same_gbuffer_...`).
 #[test]
 fn uncounted_frames_draw_the_same_and_report_no_filter_counts() {
-    let pipeline = include_str!("../../../assets/pipelines/ssbvb.ron").replace(
+    let pipeline = include_str!("../../../assets/pipelines/ssbvb_unique.ron").replace(
         r#"output: "color","#,
         r#"output: "color", keep: ["billboard_draw", "ssbvb", "gbuffer_position", "gbuffer_normal", "gbuffer_albedo"],"#,
     );

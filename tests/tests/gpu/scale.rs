@@ -184,7 +184,7 @@ fn near_camera_overdraw_is_bounded_in_the_default_pipeline() {
         ),
         ("mid", Camera::new(DVec3::new(1.6, 1.1, 2.4), DVec3::ZERO)),
     ];
-    let default = include_str!("../../../assets/pipelines/ssbvb.ron");
+    let default = include_str!("../../../assets/pipelines/ssbvb_unique.ron");
     let flat = include_str!("../../../assets/pipelines/ssbvb_flat.ron");
     for (name, camera) in views {
         let reference = ssbvb_tests::reference_of(&scene, &camera, size);
@@ -258,7 +258,7 @@ fn the_far_narrow_view_matches_the_reference() {
     let reference = ssbvb_tests::reference_of(&scene, &camera, size);
     assert!(reference.coverage() > 1500, "{}", reference.coverage());
     let f = ssbvb_tests::render(
-        include_str!("../../../assets/pipelines/ssbvb.ron"),
+        include_str!("../../../assets/pipelines/ssbvb_unique.ron"),
         scene,
         &camera,
         size,
@@ -309,10 +309,13 @@ fn the_far_narrow_view_of_two_bunnies_matches_the_reference() {
     assert!(behind > 300, "the second bunny shows in {behind} px");
     let cell = 2.0 / (1u64 << level) as f64;
     for (name, src) in [
-        ("ssbvb", include_str!("../../../assets/pipelines/ssbvb.ron")),
+        (
+            "ssbvb",
+            include_str!("../../../assets/pipelines/ssbvb_unique.ron"),
+        ),
         (
             "octree",
-            include_str!("../../../assets/pipelines/octree_ray_cast.ron"),
+            include_str!("../../../assets/pipelines/octree.ron"),
         ),
         (
             "dense",

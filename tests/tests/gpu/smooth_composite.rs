@@ -6,7 +6,7 @@ use ssbvb_gpu::scene::TriangleObject;
 use ssbvb_tests::f16_to_f32;
 use ssbvb_voxel::camera::Camera;
 
-const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
+const SSBVB: &str = include_str!("../../../assets/pipelines/ssbvb_unique.ron");
 const SIZE: (u32, u32) = (160, 120);
 
 fn scene(level: u32) -> ssbvb_gpu::scene::Scene {
@@ -351,7 +351,7 @@ fn every_exact_technique_shades_like_the_reference() {
         ),
         (
             "octree",
-            include_str!("../../../assets/pipelines/octree_ray_cast.ron").to_string(),
+            include_str!("../../../assets/pipelines/octree.ron").to_string(),
         ),
         (
             "cube raster",
@@ -518,7 +518,7 @@ fn a_linear_8_bit_output_is_srgb_encoded_by_the_composite() {
     let format = r#""color":            Texture(format: Rgba8UnormSrgb, size: Screen),"#;
     assert!(
         SSBVB.contains(format),
-        "ssbvb.ron no longer declares {format}"
+        "ssbvb_unique.ron no longer declares {format}"
     );
     let linear = SSBVB.replace(
         format,

@@ -14,7 +14,7 @@ use ssbvb_passes::kinds::splat_billboards::has_wide_atomics;
 use ssbvb_tests::{Frame, model_asset, render, single_object_scene};
 use ssbvb_voxel::camera::Camera;
 
-const DEFAULT: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
+const DEFAULT: &str = include_str!("../../../assets/pipelines/ssbvb_unique.ron");
 const SPLAT: &str = include_str!("../../../assets/pipelines/ssbvb_splat.ron");
 const PIXEL: &str = include_str!("../../../assets/pipelines/ssbvb_pixel.ron");
 

@@ -15,7 +15,7 @@ use ssbvb_voxel::camera::Camera;
 
 const SIZE: (u32, u32) = (128, 96);
 const LEVEL: u32 = 8;
-const PIPELINE: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
+const PIPELINE: &str = include_str!("../../../assets/pipelines/ssbvb_unique.ron");
 const DIRECT: &str = include_str!("../../../assets/pipelines/ssbvb_direct.ron");
 
 fn asset() -> Arc<VoxelAsset> {
@@ -320,7 +320,7 @@ fn passes_that_read_whole_levels_are_refused_under_a_budget() {
     let scene = ssbvb_tests::single_object_scene(asset(), LEVEL);
     let s = GpuScene::streamed(c, scene, &StreamingOptions::mib(64)).unwrap();
     for p in [
-        include_str!("../../../assets/pipelines/octree_ray_cast.ron"),
+        include_str!("../../../assets/pipelines/octree.ron"),
         include_str!("../../../assets/pipelines/cube_raster.ron"),
     ] {
         let resolved = ssbvb_graph::resolve_str(p, "p").unwrap();

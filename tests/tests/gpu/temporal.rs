@@ -1,5 +1,5 @@
 //! Temporal anti-aliasing (`assets/pipelines/ssbvb_aa.ron`, the default frame's, and
-//! `ssbvb_raster_aa.ron`, the raster form's): a still camera converges toward the
+//! `pipelines/raster_aa.ron` here, the raster form's): a still camera converges toward the
 //! supersampled reference, a moving one stays nearer it than one sample and flickers less,
 //! a camera cut drops the history and a small move keeps it.
 
@@ -14,8 +14,8 @@ use ssbvb_voxel::shading::srgb_to_linear;
 
 const AA: &str = include_str!("../../../assets/pipelines/ssbvb_aa.ron");
 const PLAIN: &str = include_str!("../../../assets/pipelines/ssbvb_pixel.ron");
-const RASTER_AA: &str = include_str!("../../../assets/pipelines/ssbvb_raster_aa.ron");
-const RASTER: &str = include_str!("../../../assets/pipelines/ssbvb.ron");
+const RASTER_AA: &str = include_str!("pipelines/raster_aa.ron");
+const RASTER: &str = include_str!("../../../assets/pipelines/ssbvb_unique.ron");
 const SIZE: (u32, u32) = (96, 72);
 const LEVEL: u32 = 6;
 

@@ -104,7 +104,7 @@ fn replaced(src: &str, from: &str, to: &str) -> String {
 fn exact_filter_techniques() -> Vec<Technique> {
     let keep = r#"output: "color", keep: ["ssbvb", "billboard_draw"],"#;
     let unique = replaced(
-        include_str!("../../../assets/pipelines/ssbvb.ron"),
+        include_str!("../../../assets/pipelines/ssbvb_unique.ron"),
         "march: Fast",
         "march: Exact",
     );
@@ -152,7 +152,7 @@ fn ray_caster_techniques() -> Vec<Technique> {
 }
 
 const DENSE_DDA: &str = include_str!("../../../assets/pipelines/dense_dda.ron");
-const OCTREE: &str = include_str!("../../../assets/pipelines/octree_ray_cast.ron");
+const OCTREE: &str = include_str!("../../../assets/pipelines/octree.ron");
 const ESVO: &str = include_str!("../../../assets/pipelines/esvo.ron");
 
 /// Per pixel, the technique's hit (`None`: not covered, or not known for this pixel).

@@ -2,8 +2,8 @@
 //! one pass parameter changed, and the finest level it supports. Adding a technique is one
 //! entry in [`TECHNIQUES`].
 
-use anyhow::{Context, Result};
-use ssbvb_graph::{BillboardMode, MarchMode, PassKind};
+use anyhow::Result;
+use ssbvb_graph::PassKind;
 
 use crate::args::{BenchArgs, Preset};
 
@@ -50,69 +50,12 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         edit: None,
         max_level: 16,
     },
-    Technique {
-        name: "ssbvb-raybox",
-        pipeline: PipelineSource::File("ssbvb_flat.ron"),
-        edit: Some(|k| match k {
-            PassKind::Billboards(b) => {
-                b.mode = BillboardMode::RayBox;
-                true
-            }
-            _ => false,
-        }),
-        max_level: 16,
-    },
-    // Per-pixel slots with exact billboards and the fast march: the march's accuracy
-    // (same voxel, depth, coverage) against `ssbvb-raybox`'s.
-    Technique {
-        name: "ssbvb-raybox-fast",
-        pipeline: PipelineSource::File("ssbvb_flat.ron"),
-        edit: Some(|k| match k {
-            PassKind::Billboards(b) => {
-                b.mode = BillboardMode::RayBox;
-                true
-            }
-            PassKind::RayMarchFilter(f) => {
-                f.march = MarchMode::Fast;
-                true
-            }
-            _ => false,
-        }),
-        max_level: 16,
-    },
-    // The paper's frame with rasterized billboards (`ssbvb.ron`): each visible voxel
+    // The paper's frame with rasterized billboards (`ssbvb_unique.ron`): each visible voxel
     // appended once.
     Technique {
         name: "ssbvb-unique",
         pipeline: PipelineSource::Form("ssbvb-unique"),
         edit: None,
-        max_level: 16,
-    },
-    // The raster form with the exact march (the CPU reference's rules).
-    Technique {
-        name: "ssbvb-exact",
-        pipeline: PipelineSource::File("ssbvb.ron"),
-        edit: Some(|k| match k {
-            PassKind::RayMarchFilter(f) => {
-                f.march = MarchMode::Exact;
-                true
-            }
-            _ => false,
-        }),
-        max_level: 16,
-    },
-    // The raster form with the fast march (the file's own since the fast
-    // march became the default; kept by name, left out of runs that name no technique).
-    Technique {
-        name: "ssbvb-fast",
-        pipeline: PipelineSource::File("ssbvb.ron"),
-        edit: Some(|k| match k {
-            PassKind::RayMarchFilter(f) => {
-                f.march = MarchMode::Fast;
-                true
-            }
-            _ => false,
-        }),
         max_level: 16,
     },
     // The default frame (no billboard) with temporal anti-aliasing (jittered frames blended
@@ -121,21 +64,6 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
     Technique {
         name: "ssbvb-aa",
         pipeline: PipelineSource::File("ssbvb_aa.ron"),
-        edit: None,
-        max_level: 16,
-    },
-    // The raster form with the same temporal anti-aliasing and ray-box billboards.
-    Technique {
-        name: "ssbvb-raster-aa",
-        pipeline: PipelineSource::File("ssbvb_raster_aa.ron"),
-        edit: None,
-        max_level: 16,
-    },
-    // The raster form with single-frame anti-aliasing (`EdgeAa`, FXAA-style): the
-    // option for stills.
-    Technique {
-        name: "ssbvb-edge-aa",
-        pipeline: PipelineSource::File("ssbvb_edge_aa.ron"),
         edit: None,
         max_level: 16,
     },
@@ -169,20 +97,6 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         edit: None,
         max_level: 16,
     },
-    // The same with the filter's second proxy layer (`RayMarchFilter(peel: true)`): rays hit
-    // before any other instance's proxy skip the walk over the instances' boxes.
-    Technique {
-        name: "ssbvb-peel",
-        pipeline: PipelineSource::File("ssbvb_pixel.ron"),
-        edit: Some(|k| match k {
-            PassKind::RayMarchFilter(f) => {
-                f.peel = true;
-                true
-            }
-            _ => false,
-        }),
-        max_level: 16,
-    },
     Technique {
         name: "dense-dda",
         pipeline: PipelineSource::File("dense_dda.ron"),
@@ -191,7 +105,7 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
     },
     Technique {
         name: "octree",
-        pipeline: PipelineSource::File("octree_ray_cast.ron"),
+        pipeline: PipelineSource::File("octree.ron"),
         edit: None,
         max_level: 16,
     },
@@ -206,7 +120,7 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
     // form of the baseline where fragment work is slow (docs/benchmarks.md, the H200).
     Technique {
         name: "octree-compute",
-        pipeline: PipelineSource::File("octree_ray_cast.ron"),
+        pipeline: PipelineSource::File("octree.ron"),
         edit: Some(|k| match k {
             PassKind::OctreeRayCast(o) => {
                 o.compute = true;
@@ -256,18 +170,6 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
         edit: None,
         max_level: 16,
     },
-    Technique {
-        name: "cube-raster-array",
-        pipeline: PipelineSource::File("cube_raster.ron"),
-        edit: Some(|k| match k {
-            PassKind::CubeRaster(c) => {
-                c.merge_full_nodes = false;
-                true
-            }
-            _ => false,
-        }),
-        max_level: 16,
-    },
     // RastaVox at pixel error 0 (every chunk at its finest level: comparable with the
     // exact techniques); `--preset rastavox` sweeps the pixel error.
     Technique {
@@ -284,12 +186,13 @@ pub(crate) const TECHNIQUES: &[Technique] = &[
     },
 ];
 
-/// The techniques of `--preset paper`: SSBVB with rasterized billboards (fast march), the same
-/// with the exact march, and every ray caster (the octree casters in both forms); then the
-/// SSBVB frame with splatted billboards, the default SSBVB frame `render` chooses on this
-/// adapter, and ESVO's compute form with the smoothing and the composite in compute too
-/// (the fair baseline where a calibration made the default the all-compute form; appended:
-/// earlier columns keep their order).
+/// The columns of `--preset paper`: SSBVB with rasterized billboards, the same with the
+/// exact march (a removed technique, [`REMOVED`]: its keys stay in the preset's output,
+/// empty), and every ray caster (the octree casters in both forms); then the SSBVB frame
+/// with splatted billboards, the default SSBVB frame `render` chooses on this adapter, and
+/// ESVO's compute form with the smoothing and the composite in compute too (the fair
+/// baseline where a calibration made the default the all-compute form; appended: earlier
+/// columns keep their order).
 pub(crate) const PAPER_TECHNIQUES: &[&str] = &[
     "ssbvb-unique",
     "ssbvb-exact",
@@ -303,24 +206,63 @@ pub(crate) const PAPER_TECHNIQUES: &[&str] = &[
     "esvo-all-compute",
 ];
 
-/// Techniques left out unless named: the raster form by another name, the direct form (the
-/// default `ssbvb` on a CPU adapter, where CI runs), the pixel form with
-/// the filter's second proxy layer (its image; a crowd's knob), the compute forms of the
-/// octree casters (their fragment forms' images; the paper preset runs them) and the
-/// still-image anti-aliasing and the raster form's temporal one (the quality preset runs
-/// them), and the all-compute pair (the images of their forms with fragment smoothing;
-/// `gpu-bench` runs them).
-const ALIASES: &[&str] = &[
-    "ssbvb-fast",
+/// Techniques left out unless named: the direct form (the default `ssbvb` on a CPU adapter,
+/// where CI runs), the compute forms of the octree casters (their fragment forms' images;
+/// the paper preset runs them) and the all-compute pair (the images of their forms with
+/// fragment smoothing; `gpu-bench` runs them).
+const LEFT_OUT: &[&str] = &[
     "ssbvb-direct",
-    "ssbvb-peel",
     "octree-compute",
     "esvo-compute",
-    "ssbvb-edge-aa",
-    "ssbvb-raster-aa",
     "ssbvb-all-compute",
     "esvo-all-compute",
 ];
+
+/// Old technique names still accepted, with the name they go by now.
+pub(crate) const RENAMED: &[(&str, &str)] = &[
+    // The raster form with the fast march: the file's own setting.
+    ("ssbvb-fast", "ssbvb-unique"),
+];
+
+/// Techniques that were experiments and left the product: knob settings no adapter's rule
+/// or calibration picks (docs/benchmarks.md keeps what they measured).
+pub(crate) const REMOVED: &[&str] = &[
+    "ssbvb-raybox",
+    "ssbvb-raybox-fast",
+    "ssbvb-exact",
+    "ssbvb-peel",
+    "ssbvb-raster-aa",
+    "ssbvb-edge-aa",
+    "cube-raster-array",
+];
+
+/// The last revision that had the techniques of [`REMOVED`].
+pub(crate) const REMOVED_AT: &str = "8c208c3";
+
+/// The technique named `name` (or by its old name, said on stderr).
+fn by_name(name: &str) -> Result<&'static Technique> {
+    let current = match RENAMED.iter().find(|(old, _)| *old == name) {
+        Some((old, new)) => {
+            eprintln!("note: technique `{old}` is `{new}` now");
+            *new
+        }
+        None => name,
+    };
+    if let Some(t) = TECHNIQUES.iter().find(|t| t.name == current) {
+        return Ok(t);
+    }
+    if REMOVED.contains(&name) {
+        anyhow::bail!(
+            "technique `{name}` was an experiment and was removed (its numbers are in \
+             docs/benchmarks.md; the code is at revision {REMOVED_AT}); known: {}",
+            technique_names().join(", ")
+        );
+    }
+    anyhow::bail!(
+        "unknown technique `{name}`; known: {}",
+        technique_names().join(", ")
+    )
+}
 
 /// Technique names, for `--techniques`.
 fn technique_names() -> Vec<&'static str> {
@@ -336,9 +278,7 @@ pub(crate) fn select(args: &BenchArgs) -> Result<Vec<&'static Technique>> {
         // unique-voxel SSBVB; name the others with --techniques to include them.
         None if matches!(args.preset, Preset::Study) => TECHNIQUES
             .iter()
-            .filter(|t| {
-                !matches!(t.name, "ssbvb-flat" | "ssbvb-raybox") && !ALIASES.contains(&t.name)
-            })
+            .filter(|t| t.name != "ssbvb-flat" && !LEFT_OUT.contains(&t.name))
             .collect(),
         // The paper compares SSBVB with ray casting.
         None if matches!(args.preset, Preset::Paper) => TECHNIQUES
@@ -347,19 +287,9 @@ pub(crate) fn select(args: &BenchArgs) -> Result<Vec<&'static Technique>> {
             .collect(),
         None => TECHNIQUES
             .iter()
-            .filter(|t| !ALIASES.contains(&t.name))
+            .filter(|t| !LEFT_OUT.contains(&t.name))
             .collect(),
-        Some(names) => names
-            .iter()
-            .map(|n| {
-                TECHNIQUES.iter().find(|t| t.name == n).with_context(|| {
-                    format!(
-                        "unknown technique `{n}`; known: {}",
-                        technique_names().join(", ")
-                    )
-                })
-            })
-            .collect::<Result<_>>()?,
+        Some(names) => names.iter().map(|n| by_name(n)).collect::<Result<_>>()?,
     })
 }
 
@@ -392,6 +322,35 @@ mod tests {
     use super::*;
     use crate::harness::pipelines::technique_pipeline;
     use ssbvb_graph::ResolvedPipeline;
+
+    /// An old name gives the technique it is now; a removed one says so and where its code
+    /// is; an unknown one lists the current names only.
+    #[test]
+    fn old_names_removed_names_and_unknown_names() {
+        assert_eq!(by_name("ssbvb-fast").unwrap().name, "ssbvb-unique");
+        assert_eq!(by_name("esvo").unwrap().name, "esvo");
+        let removed = by_name("ssbvb-peel").unwrap_err().to_string();
+        assert!(
+            removed.contains("was an experiment") && removed.contains(REMOVED_AT),
+            "{removed}"
+        );
+        let unknown = by_name("ssbvb-nope").unwrap_err().to_string();
+        assert!(
+            unknown.contains("unknown technique `ssbvb-nope`"),
+            "{unknown}"
+        );
+        let known = unknown.split("known: ").nth(1).unwrap();
+        assert_eq!(known.split(", ").count(), TECHNIQUES.len());
+        for (old, _) in RENAMED {
+            assert!(!known.split(", ").any(|n| n == *old), "{known}");
+        }
+        // Names are unique and no current name is an old or removed one.
+        for t in TECHNIQUES {
+            assert_eq!(TECHNIQUES.iter().filter(|u| u.name == t.name).count(), 1);
+            assert!(!REMOVED.contains(&t.name) && !RENAMED.iter().any(|r| r.0 == t.name));
+        }
+        assert!(TECHNIQUES.len() <= 17, "{} techniques", TECHNIQUES.len());
+    }
 
     /// Every technique with a file of its own resolves with its edit.
     #[test]

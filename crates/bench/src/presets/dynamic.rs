@@ -124,7 +124,7 @@ impl Bench<'_> {
 
 /// Runs `ssbvb bench --preset dynamic`.
 pub(crate) fn run(args: &BenchArgs) -> Result<()> {
-    let pipeline = bundled_pipeline("ssbvb.ron")?;
+    let pipeline = bundled_pipeline("ssbvb_unique.ron")?;
     let ctx = ssbvb_engine::choice::headless_context(&[&pipeline])?;
     let animator = Animator::new(&ctx)?;
     let model = assets_dir().join("models/bunny.obj");

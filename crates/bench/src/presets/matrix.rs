@@ -490,17 +490,12 @@ fn run_one(ctx: &GpuContext, t: &Technique, c: &Cell) -> Result<Row> {
             t.name,
             "ssbvb"
                 | "ssbvb-unique"
-                | "ssbvb-exact"
-                | "ssbvb-fast"
                 | "ssbvb-splat"
                 | "ssbvb-pixel"
                 | "ssbvb-direct"
                 | "ssbvb-compute"
                 | "ssbvb-all-compute"
-                | "ssbvb-peel"
                 | "ssbvb-aa"
-                | "ssbvb-raster-aa"
-                | "ssbvb-edge-aa"
         ) {
             m.slot_same_voxel_rate
         } else {

@@ -135,7 +135,8 @@ fn measure(
         )?,
     };
     let full = s.total_memory();
-    let mut r = ssbvb_engine::upload::renderer(ctx, &s, bundled_pipeline("ssbvb.ron")?, size)?;
+    let mut r =
+        ssbvb_engine::upload::renderer(ctx, &s, bundled_pipeline("ssbvb_unique.ron")?, size)?;
     let (n, converged) = ssbvb_engine::budget::converge(ctx, &mut r, &mut s, camera, MAX_FRAMES)?;
     let times = timed_frames(ctx, &mut r, &mut s, camera, frames)?;
     let hits = ssbvb_passes::measure::gbuffer_hits(ctx, &r)?;
@@ -198,7 +199,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         .unwrap_or_else(|| DEFAULT_BUDGETS.to_vec());
     let size = args.first_size((640, 480));
     let camera = bench_camera();
-    let pipeline = bundled_pipeline("ssbvb.ron")?;
+    let pipeline = bundled_pipeline("ssbvb_unique.ron")?;
     let ctx = ssbvb_engine::choice::headless_context(&[&pipeline])?;
     let cfg = Config {
         ctx: &ctx,
@@ -372,7 +373,8 @@ fn fly_through(
         one_object(asset, LodPolicy::Fixed(level)),
         ssbvb_engine::upload::Residency::Streamed(options),
     )?;
-    let mut r = ssbvb_engine::upload::renderer(ctx, &s, bundled_pipeline("ssbvb.ron")?, size)?;
+    let mut r =
+        ssbvb_engine::upload::renderer(ctx, &s, bundled_pipeline("ssbvb_unique.ron")?, size)?;
     // The first view converges first (a start-up, not a stall).
     ssbvb_engine::budget::converge(ctx, &mut r, &mut s, &fly_camera(0, n), MAX_FRAMES)?;
     let start = s.streaming_stats().map_or(0, |st| st.pages_streamed);

@@ -12,7 +12,7 @@ use anyhow::Result;
 use serde::Serialize;
 
 use crate::args::{BenchArgs, Preset};
-use crate::harness::techniques::PAPER_TECHNIQUES;
+use crate::harness::techniques::{PAPER_TECHNIQUES, REMOVED};
 use crate::presets::figure8::{self, Figure8};
 use crate::presets::{matrix, scale};
 use crate::report;
@@ -148,11 +148,13 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         preset: Preset::Scale,
         instances: Some(vec![GRID_INSTANCES]),
         sizes: Some(vec![(width, height)]),
-        techniques: Some(
-            args.techniques
-                .clone()
-                .unwrap_or_else(|| PAPER_TECHNIQUES.iter().map(|t| t.to_string()).collect()),
-        ),
+        techniques: Some(args.techniques.clone().unwrap_or_else(|| {
+            PAPER_TECHNIQUES
+                .iter()
+                .filter(|t| !REMOVED.contains(t))
+                .map(|t| t.to_string())
+                .collect()
+        })),
         ..args.clone()
     };
     let grid = scale::run_with(&grid_args, false)?;

@@ -184,7 +184,7 @@ fn wide_scene_knobs(d: Knobs) -> Vec<Knobs> {
 
 /// Runs `ssbvb bench --preset vct`.
 pub(crate) fn run(args: &BenchArgs) -> Result<()> {
-    let plain = bundled_pipeline("ssbvb.ron")?;
+    let plain = bundled_pipeline("ssbvb_unique.ron")?;
     let vct_path = assets_dir().join("pipelines/ssbvb_vct.ron");
     let base = std::fs::read_to_string(&vct_path)
         .with_context(|| format!("reading {}", vct_path.display()))?;

@@ -17,7 +17,7 @@ pub fn list(dir: &Path) -> Vec<PathBuf> {
     files
 }
 
-/// Short label of a pipeline file: its stem (`ssbvb`, `dense_dda`, …).
+/// Short label of a pipeline file: its stem (`ssbvb_direct`, `dense_dda`, …).
 pub fn label(path: &Path) -> String {
     path.file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -40,7 +40,7 @@ mod tests {
     fn lists_the_bundled_pipelines() {
         let files = list(&crate::render_cmd::assets_dir().join("pipelines"));
         let names: Vec<String> = files.iter().map(|p| label(p)).collect();
-        assert!(names.contains(&"ssbvb".to_string()), "{names:?}");
+        assert!(names.contains(&"ssbvb_unique".to_string()), "{names:?}");
         assert!(names.contains(&"dense_dda".to_string()), "{names:?}");
         let mut sorted = names.clone();
         sorted.sort();

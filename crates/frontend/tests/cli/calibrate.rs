@@ -50,8 +50,7 @@ fn calibration_sets_the_default_form_for_its_own_adapter_only() {
     assert_eq!(entry["adapter"]["limits"], "adapter");
 
     // Make the raster form the measured fastest: render follows the file, not the rule.
-    let raster =
-        serde_json::json!({"pipeline": "pipelines/ssbvb.ron", "frame_ms": 0.001, "clock": "wall"});
+    let raster = serde_json::json!({"pipeline": "pipelines/ssbvb_unique.ron", "frame_ms": 0.001, "clock": "wall"});
     json["entries"][0]["forms"]
         .as_array_mut()
         .unwrap()
@@ -64,7 +63,7 @@ fn calibration_sets_the_default_form_for_its_own_adapter_only() {
         report["pipeline"]
             .as_str()
             .unwrap()
-            .ends_with("pipelines/ssbvb.ron")
+            .ends_with("pipelines/ssbvb_unique.ron")
             && choice["reason"]
                 .as_str()
                 .unwrap()

@@ -21,7 +21,7 @@ fn gl_draws_what_vulkan_draws() {
         ("assets/scenes/bunnies_64.ron", None),
         (
             "assets/scenes/default.ron",
-            Some("assets/pipelines/ssbvb.ron"),
+            Some("assets/pipelines/ssbvb_unique.ron"),
         ),
         (
             "assets/scenes/default.ron",

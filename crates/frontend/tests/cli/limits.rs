@@ -48,7 +48,7 @@ fn webgpu_limits_are_checked_up_front_and_named() {
             .args(["render", "--size", "32x24", "--json", "--pipeline"])
             .arg(
                 std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                    .join("../../assets/pipelines/ssbvb.ron"),
+                    .join("../../assets/pipelines/ssbvb_unique.ron"),
             )
             .arg("-o")
             .arg(&png),
@@ -59,7 +59,7 @@ fn webgpu_limits_are_checked_up_front_and_named() {
         json["pipeline"]
             .as_str()
             .unwrap()
-            .ends_with("pipelines/ssbvb.ron"),
+            .ends_with("pipelines/ssbvb_unique.ron"),
         "{json}"
     );
 

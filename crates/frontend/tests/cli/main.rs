@@ -82,7 +82,7 @@ pub(crate) fn stdout_json(out: &Output) -> serde_json::Value {
     serde_json::from_slice(&out.stdout).expect("stdout is one JSON object")
 }
 
-const SSBVB: &str = include_str!("../../../../assets/pipelines/ssbvb.ron");
+const SSBVB: &str = include_str!("../../../../assets/pipelines/ssbvb_unique.ron");
 
 fn check(src: &str) -> (bool, String) {
     let dir = tempfile::tempdir().unwrap();
@@ -281,7 +281,7 @@ fn render_json_and_bench_quick() {
             );
         } else if matches!(
             r[col("technique")],
-            "ssbvb-flat" | "ssbvb-unique" | "ssbvb-exact" | "ssbvb-splat"
+            "ssbvb-flat" | "ssbvb-unique" | "ssbvb-splat"
         ) {
             assert!(iou >= 0.995, "{r:?}");
             assert!((0.45..=0.55).contains(&depth), "{r:?}");
@@ -313,7 +313,7 @@ fn render_json_and_bench_quick() {
         if technique.starts_with("ssbvb") {
             let fill: f64 = r[col("fill_count")].parse().unwrap();
             let covered: f64 = r[col("covered_pixels")].parse().unwrap();
-            if matches!(technique, "ssbvb-unique" | "ssbvb-exact" | "ssbvb-splat") {
+            if matches!(technique, "ssbvb-unique" | "ssbvb-splat") {
                 assert!(fill < covered * 0.9 && fill > 0.0, "{r:?}");
             } else {
                 assert!((fill / covered - 1.0).abs() < 0.01, "{r:?}");
@@ -711,7 +711,7 @@ fn render_under_a_gpu_budget_converges_to_the_unbudgeted_image() {
             "--gpu-budget",
             "1",
             "--pipeline",
-            "assets/pipelines/octree_ray_cast.ron",
+            "assets/pipelines/octree.ron",
         ],
         "octree.png",
     );

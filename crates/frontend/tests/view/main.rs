@@ -233,7 +233,7 @@ fn view_under_a_gpu_budget_streams_to_the_rendered_image() {
 fn view_keeps_rendering_and_holds_memory_while_its_pipeline_is_rewritten() {
     let dir = tempfile::tempdir().unwrap();
     let pipeline = dir.path().join("p.ron");
-    let good = std::fs::read_to_string(root().join("assets/pipelines/ssbvb.ron")).unwrap();
+    let good = std::fs::read_to_string(root().join("assets/pipelines/ssbvb_unique.ron")).unwrap();
     let bad = good.replace("kind: Composite,", "kind: Compsite,");
     assert_ne!(good, bad);
     std::fs::write(&pipeline, &good).unwrap();

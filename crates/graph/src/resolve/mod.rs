@@ -40,8 +40,35 @@ use crate::locate::Locator;
 use crate::schema::PipelineDesc;
 use ctx::Ctx;
 
-/// Reads and resolves a pipeline file (and the files it includes, relative to it).
+/// Bundled pipeline files that were renamed so that a technique's name is its file's stem:
+/// (old file name, new file name).
+pub const RENAMED_FILES: &[(&str, &str)] = &[
+    ("ssbvb.ron", "ssbvb_unique.ron"),
+    ("octree_ray_cast.ron", "octree.ron"),
+];
+
+/// `path`, or where a renamed file ([`RENAMED_FILES`]) went when `path` names the old file
+/// and is gone.
+pub fn current_path(path: &std::path::Path) -> std::path::PathBuf {
+    if !path.exists() {
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or_default();
+        if let Some((_, new)) = RENAMED_FILES.iter().find(|(old, _)| *old == name) {
+            let moved = path.with_file_name(new);
+            if moved.is_file() {
+                return moved;
+            }
+        }
+    }
+    path.to_path_buf()
+}
+
+/// Reads and resolves a pipeline file (and the files it includes, relative to it). The old
+/// path of a renamed bundled file reads the new one ([`current_path`]).
 pub fn resolve_file(path: &std::path::Path) -> Result<ResolvedPipeline, PipelineErrors> {
+    let path = &current_path(path);
     let file = path.display().to_string();
     match std::fs::read_to_string(path) {
         Ok(src) => resolve_str(&src, &file),

@@ -114,8 +114,8 @@ mod tests {
 
     #[test]
     fn the_default_pipeline_needs_compute_indirect_and_read_only_depth() {
-        let src = include_str!("../../../../assets/pipelines/ssbvb.ron");
-        let p = ssbvb_graph::resolve_str(src, "ssbvb.ron").unwrap();
+        let src = include_str!("../../../../assets/pipelines/ssbvb_unique.ron");
+        let p = ssbvb_graph::resolve_str(src, "ssbvb_unique.ron").unwrap();
         let req = pipeline_requirements(&p);
         let flags = req
             .downlevel

@@ -96,16 +96,7 @@ const NO_HYSTERESIS: &str = "ssbvb-unique-no-hysteresis";
 fn quality_techniques(args: &BenchArgs) -> Result<Vec<&'static Technique>> {
     techniques::select_or(
         args,
-        &[
-            "ssbvb-unique",
-            "ssbvb-aa",
-            "ssbvb-raster-aa",
-            "ssbvb-edge-aa",
-            "ssbvb-flat",
-            "ssbvb-raybox",
-            "octree",
-            "esvo",
-        ],
+        &["ssbvb-unique", "ssbvb-aa", "ssbvb-flat", "octree", "esvo"],
     )
 }
 
