@@ -185,7 +185,7 @@ pub fn include_path(file: &str, name: &str) -> String {
 /// The files `src` includes, as written (empty when it includes none or does not parse):
 /// what a reader that cannot block (the browser) fetches before resolving.
 pub fn includes_of(src: &str) -> Vec<String> {
-    crate::resolve::parse_only(src).map_or_else(Vec::new, |d| d.include)
+    crate::parse::parse_only(src).map_or_else(Vec::new, |d| d.include)
 }
 
 /// Reads `src` (named `file`) and every file it includes, merged into one description.
@@ -213,7 +213,7 @@ fn load_file(
     errors: &mut Vec<GraphError>,
 ) -> Option<PipelineDesc> {
     let loc = Locator::new(src);
-    let own = match crate::resolve::parse(src, file, &loc) {
+    let own = match crate::parse::parse(src, file, &loc) {
         Ok(d) => d,
         Err(e) => {
             errors.extend(e);

@@ -19,6 +19,7 @@ pub mod format;
 pub mod include;
 pub mod kinds;
 pub mod locate;
+mod parse;
 pub mod resolve;
 pub mod schema;
 pub mod watch;

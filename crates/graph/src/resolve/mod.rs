@@ -13,7 +13,8 @@
 //! 6. allocate: first/last use per resource, and resources with one descriptor whose
 //!    lifetimes do not overlap share a physical resource.
 //!
-//! This module holds the entry points and step 1; the public result types are in
+//! This module holds the entry points (step 1 is `crate::parse`, per file, with
+//! `crate::include` merging the included files); the public result types are in
 //! `resolved` and the state the phases share in `ctx`. Each later step is a phase in its
 //! own file (`declare`, `bind`, `dag`, `schedule`, `alias`), run in order by
 //! `Ctx::resolve`. Every phase records all the errors it finds and the
@@ -33,10 +34,8 @@ pub use resolved::{
     ResolvedPipeline, ResolvedResource, ResourceUsage, ScheduledPass,
 };
 
-use crate::error::{GraphError, Loc, PipelineErrors, suggest};
+use crate::error::{GraphError, Loc, PipelineErrors};
 use crate::include::{ReadSource, Sources};
-use crate::kinds::KIND_NAMES;
-use crate::locate::Locator;
 use crate::schema::PipelineDesc;
 use ctx::Ctx;
 
@@ -143,64 +142,6 @@ fn resolve_parsed(
                 file: file.to_string(),
                 errors,
             })
-        }
-    }
-}
-
-/// The description of `src` alone (its includes unread), if it parses.
-pub(crate) fn parse_only(src: &str) -> Option<PipelineDesc> {
-    parse(src, "", &Locator::new(src)).ok()
-}
-
-/// RON → [`PipelineDesc`]. Unknown pass kinds are found by scanning the text, so all of
-/// them are reported at once with suggestions, not only the first serde meets.
-pub(crate) fn parse(src: &str, file: &str, loc: &Locator) -> Result<PipelineDesc, Vec<GraphError>> {
-    let mut errors = Vec::new();
-    for (found, pos, pass) in loc.kinds() {
-        if !KIND_NAMES.contains(&found.as_str()) {
-            errors.push(GraphError::UnknownKind {
-                at: Loc {
-                    file: file.to_string(),
-                    pos: Some(pos),
-                },
-                pass: pass.unwrap_or_else(|| "?".to_string()),
-                found: found.clone(),
-                hint: suggest(&found, KIND_NAMES.iter().copied()),
-            });
-        }
-    }
-    match ron::Options::default()
-        .with_default_extension(ron::extensions::Extensions::UNWRAP_VARIANT_NEWTYPES)
-        .from_str::<PipelineDesc>(src)
-    {
-        Ok(d) if errors.is_empty() => Ok(d),
-        Ok(_) => Err(errors),
-        Err(e) => {
-            let pos = crate::locate::Position {
-                line: e.span.start.line,
-                col: e.span.start.col,
-            };
-            let already = matches!(e.code, ron::Error::NoSuchEnumVariant { outer: Some(ref o), .. } if o == "PassKind");
-            if !already || errors.is_empty() {
-                let message = match &e.code {
-                    ron::Error::NoSuchEnumVariant {
-                        expected, found, ..
-                    } => format!(
-                        "unexpected `{found}`{}",
-                        suggest(found, expected.iter().copied())
-                    ),
-                    other => other.to_string(),
-                };
-                errors.push(GraphError::Syntax {
-                    at: Loc {
-                        file: file.to_string(),
-                        pos: Some(pos),
-                    },
-                    message,
-                });
-            }
-            errors.sort_by_key(|e| e.loc().pos);
-            Err(errors)
         }
     }
 }
