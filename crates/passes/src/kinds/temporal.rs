@@ -18,24 +18,8 @@ use crate::runtime::recorder::{Recorder, slot_format};
 use crate::runtime::registry::{OwnBinding, OwnKind, PassImpl, PassInit};
 use crate::runtime::resources::render_target;
 
-/// Frames of the jitter sequence before it repeats.
-pub const JITTER_PERIOD: u64 = 16;
-
-/// The sub-pixel offset of frame `i` (pixels, in (-0.5, 0.5)²): the Halton (2, 3) sequence.
-pub fn jitter(i: u64) -> [f64; 2] {
-    let k = i % JITTER_PERIOD + 1;
-    [halton(k, 2) - 0.5, halton(k, 3) - 0.5]
-}
-
-fn halton(mut k: u64, base: u64) -> f64 {
-    let (mut f, mut r) = (1.0, 0.0);
-    while k > 0 {
-        f /= base as f64;
-        r += f * (k % base) as f64;
-        k /= base;
-    }
-    r
-}
+// The renderer jitters the frames this pass averages; the sequence is the runtime's.
+pub use crate::runtime::jitter::{JITTER_PERIOD, jitter};
 
 /// What the pass binds itself: its constants, the history it reads and the history's
 /// bilinear sampler (the cubic filter's taps).
@@ -188,6 +172,12 @@ impl Temporal {
 }
 
 impl PassNode for Temporal {
+    /// Every frame jittered, and Auto LOD `lod_bias` levels finer (the jittered positions
+    /// sample a pixel 4 × 4).
+    fn jittered_lod_bias(&self) -> Option<u32> {
+        Some(self.params.lod_bias)
+    }
+
     fn record(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,

@@ -7,6 +7,7 @@ pub mod adapter_needs;
 pub mod bindings;
 pub mod counters;
 pub mod embed;
+pub mod jitter;
 pub mod node;
 pub mod pipelines;
 pub mod recorder;

@@ -47,6 +47,13 @@ pub trait PassNode: MaybeSendSync {
         Ok(None)
     }
 
+    /// Whether the frames of a pipeline with this pass are jittered by a sub-pixel offset
+    /// (what a temporal pass averages), and then how many levels finer Auto LOD draws
+    /// (`Some(lod_bias)`; `None` for every pass that does not ask for jitter).
+    fn jittered_lod_bias(&self) -> Option<u32> {
+        None
+    }
+
     /// For a temporal pass: the share of the last frame's pixels whose history was
     /// rejected (none to reproject, or clamped away), read back (`None` for every other
     /// pass).

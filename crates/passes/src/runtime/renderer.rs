@@ -74,8 +74,9 @@ pub struct Renderer {
     first_writes: Vec<Vec<&'static str>>,
     queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
     counting: bool,
-    /// With a `Temporal` pass: the index of the next frame's jitter
-    /// ([`crate::kinds::temporal::jitter`]); `None`: frames are not jittered.
+    /// With a pass that asks for jittered frames ([`PassNode::jittered_lod_bias`]): the
+    /// index of the next frame's jitter ([`super::jitter::jitter`]); `None`: frames are
+    /// not jittered.
     jitter_frame: Option<u64>,
     /// Levels finer than Auto LOD's choice this pipeline draws at (its temporal pass's
     /// `lod_bias`; [`GpuScene::lod_bias`]).
@@ -120,10 +121,6 @@ impl Renderer {
             )));
         }
         let resources = FrameResources::with_imports(ctx, &pipeline, screen, imports)?;
-        let temporal_lod_bias = pipeline.passes.iter().find_map(|p| match &p.kind {
-            ssbvb_graph::PassKind::Temporal(t) => Some(t.lod_bias),
-            _ => None,
-        });
         let mut passes = Vec::new();
         for p in &pipeline.passes {
             let node = ctx
@@ -133,6 +130,8 @@ impl Renderer {
                 .map_err(PassError::Gpu)??;
             passes.push(node);
         }
+        // A pass that averages jittered frames asks for them (and for finer levels).
+        let jittered_lod_bias = passes.iter().find_map(|n| n.jittered_lod_bias());
         // Physical resources already written earlier in the frame (aliases included: a
         // reused physical resource starts over for its new alias).
         let mut written: Vec<Option<usize>> = vec![None; pipeline.physical.len()];
@@ -173,8 +172,8 @@ impl Renderer {
             first_writes,
             queries,
             counting: false,
-            jitter_frame: temporal_lod_bias.map(|_| 0),
-            lod_bias: temporal_lod_bias.unwrap_or(0),
+            jitter_frame: jittered_lod_bias.map(|_| 0),
+            lod_bias: jittered_lod_bias.unwrap_or(0),
             scene_free: pipeline_scene_free(&pipeline),
             made_for: (scene.bindings, scene.streaming.is_some()),
             pipeline,
@@ -287,7 +286,7 @@ impl Renderer {
         scene.jitter = match &mut self.jitter_frame {
             Some(i) => {
                 *i += 1;
-                crate::kinds::temporal::jitter(*i - 1)
+                super::jitter::jitter(*i - 1)
             }
             None => [0.0; 2],
         };
