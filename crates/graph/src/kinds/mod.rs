@@ -27,6 +27,7 @@ mod splat_billboards;
 mod temporal;
 mod triangles;
 mod volume_slices;
+mod writers;
 
 pub use billboards::{BillboardMode, BillboardsParams};
 pub use composite::{CompositeComputeKind, CompositeKind};
@@ -49,6 +50,7 @@ pub use splat_billboards::SplatBillboardsParams;
 pub use temporal::{MAX_LOD_BIAS, MAX_VARIANCE_CLIP, TemporalParams};
 pub use triangles::TrianglesKind;
 pub use volume_slices::{MAX_MIP_BIAS, MAX_SLICE_SPACING, MIN_SLICE_SPACING, VolumeSlicesParams};
+pub use writers::{Writer, WritersRule};
 
 use spec::pass_kinds;
 

@@ -7,7 +7,7 @@
 //! 3. build a petgraph DAG: an edge from each writer of a resource to each reader, and one
 //!    for each `after`; writers of one resource must be ordered; cycles are named; a pass
 //!    that needs something of the passes writing what it reads is checked against them
-//!    (`pixel_entries`);
+//!    (`writers`);
 //! 4. prune what does not reach the output, walking back from the output's writers;
 //! 5. schedule topologically (file order breaks ties, so schedules are stable);
 //! 6. allocate: first/last use per resource, and resources with one descriptor whose
@@ -25,9 +25,9 @@ mod bind;
 mod ctx;
 mod dag;
 mod declare;
-mod pixel_entries;
 mod resolved;
 mod schedule;
+mod writers;
 
 pub use resolved::{
     BoundSlot, Dependency, MAX_BUFFER_ELEMENTS, MAX_TEXTURE_EDGE, MemoryReport, PhysicalResource,
@@ -153,7 +153,7 @@ impl Ctx<'_> {
         let declared = self.declare();
         let bindings = self.bind(&declared.resources);
         let dag = self.build_dag(&bindings, &declared.passes);
-        self.check_pixel_entries(&dag, &bindings);
+        self.check_writers_rules(&dag, &bindings);
         let roots = self.roots(&declared.resources, &dag.writers);
         if !self.errors.is_empty() || dag.cyclic {
             return None;
