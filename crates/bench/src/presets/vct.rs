@@ -12,11 +12,11 @@
 use std::path::Path;
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use serde::Serialize;
 use ssbvb_gpu::GpuContext;
 use ssbvb_gpu::scene::Scene;
-use ssbvb_graph::ResolvedPipeline;
+use ssbvb_graph::{PassKind, ResolvedPipeline, ResourceDesc, SizeDesc};
 use ssbvb_passes::measure::lighting::{LitFrame, compare, monte_carlo_reference};
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::lighting::LightingSample;
@@ -93,34 +93,31 @@ struct Knobs {
     scale: f32,
 }
 
-/// `ssbvb_vct.ron` with its `ConeTrace(...)` knobs replaced and its cone targets at
-/// `scale` times the screen.
-fn pipeline_text(base: &str, k: &Knobs) -> String {
-    let Knobs {
-        cones,
-        aperture,
-        step_scale,
-        resolution,
-        scale,
-        ..
-    } = *k;
-    base.lines()
-        .map(|l| {
-            let t = l.trim_start();
-            let target = t.starts_with("\"occlusion\":") || t.starts_with("\"indirect\":");
-            if target && t.contains("Texture(") {
-                let name = t.split(':').next().unwrap_or_default();
-                format!("    {name}: Texture(format: Rgba16Float, size: ScreenScaled({scale:.2})),")
-            } else if t.starts_with("kind: ConeTrace(") {
-                format!(
-                    "      kind: ConeTrace(cones: {cones}, aperture: {aperture:.1}, max_distance: 0.5, step_scale: {step_scale}, shadow_aperture: 6.0, resolution: {resolution}),"
-                )
-            } else {
-                l.to_string()
+/// `ssbvb_vct.ron` (`base`) with its `ConeTrace` knobs set and its cone targets at `scale`
+/// times the screen: a typed edit of the resolved description.
+fn pipeline_with(base: &ResolvedPipeline, k: &Knobs) -> Result<ResolvedPipeline> {
+    let mut traced = 0;
+    let p = base
+        .edited(|d| {
+            traced = d.edit_kinds(|kind| match kind {
+                PassKind::ConeTrace(c) => {
+                    c.cones = k.cones;
+                    c.aperture = k.aperture;
+                    c.step_scale = k.step_scale;
+                    c.resolution = k.resolution;
+                    true
+                }
+                _ => false,
+            });
+            for target in ["occlusion", "indirect"] {
+                if let Some(ResourceDesc::Texture { size, .. }) = d.resource_mut(target) {
+                    *size = SizeDesc::ScreenScaled(k.scale);
+                }
             }
         })
-        .collect::<Vec<_>>()
-        .join("\n")
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    anyhow::ensure!(traced == 1, "{} has {traced} ConeTrace passes", base.file);
+    Ok(p)
 }
 
 /// The knobs of the default scene's rows: the defaults, traced at full resolution, and
@@ -185,9 +182,6 @@ fn wide_scene_knobs(d: Knobs) -> Vec<Knobs> {
 /// Runs `ssbvb bench --preset vct`.
 pub(crate) fn run(args: &BenchArgs) -> Result<()> {
     let plain = bundled_pipeline("ssbvb_unique.ron")?;
-    let vct_path = assets_dir().join("pipelines/ssbvb_vct.ron");
-    let base = std::fs::read_to_string(&vct_path)
-        .with_context(|| format!("reading {}", vct_path.display()))?;
     let vct = bundled_pipeline("ssbvb_vct.ron")?;
     let ctx = ssbvb_engine::choice::headless_context(&[&plain, &vct])?;
     let size = args.first_size((640, 480));
@@ -218,7 +212,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         rows.push(measure_plain(&s, &plain)?);
         let mut reference = None;
         for k in &sweeps {
-            let row = measure_cones(&s, &base, k, &mut reference)?;
+            let row = measure_cones(&s, &vct, k, &mut reference)?;
             if !args.json {
                 eprintln!(
                     "vct {file} {}: {} cones, {}°, step {}, res {}, scale {}: frame {:.1} ms, cones {:.1} ms (filter {:.1}); AO error {:.4}, lit {:.2} dB",
@@ -272,19 +266,17 @@ struct SceneRun<'a> {
     frames: usize,
 }
 
-/// The cone-lit frame with knobs `k` (`base`: the text of `ssbvb_vct.ron`): the volume
+/// The cone-lit frame with knobs `k` (`base`: `ssbvb_vct.ron`): the volume
 /// built on the CPU, the frame timed, and its lighting compared with the Monte Carlo
 /// `reference` (computed on the first call, then reused: it does not depend on the knobs).
 fn measure_cones(
     s: &SceneRun,
-    base: &str,
+    base: &ResolvedPipeline,
     k: &Knobs,
     reference: &mut Option<Vec<(usize, LightingSample)>>,
 ) -> Result<VctRow> {
     let (ctx, scene) = (s.ctx, s.scene);
-    let text = pipeline_text(base, k);
-    let pipeline = ssbvb_graph::resolve_str(&text, "ssbvb_vct.ron (bench)")
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let pipeline = pipeline_with(base, k)?;
     let t0 = Instant::now();
     let volume = RadianceVolume::build(
         &ssbvb_passes::kinds::cone_trace::volume_instances(scene),
@@ -497,4 +489,56 @@ fn trade_plot(dir: &Path, rows: &[VctRow]) -> Result<()> {
         &series,
     )?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The knobs reach the cone pass and the cone targets, and the defaults are the file's.
+    #[test]
+    fn knobs_are_typed_edits_of_the_bundled_pipeline() {
+        let base = bundled_pipeline("ssbvb_vct.ron").unwrap();
+        let d = Knobs {
+            sweep: "default",
+            cones: DEFAULT_CONES,
+            aperture: DEFAULT_APERTURE,
+            step_scale: DEFAULT_STEP_SCALE,
+            resolution: DEFAULT_RESOLUTION,
+            scale: DEFAULT_SCALE,
+        };
+        assert_eq!(pipeline_with(&base, &d).unwrap().desc, base.desc);
+        let k = Knobs {
+            cones: 16,
+            aperture: 30.0,
+            step_scale: 2.0,
+            resolution: 64,
+            scale: 1.0,
+            ..d
+        };
+        let p = pipeline_with(&base, &k).unwrap();
+        let cone = p.desc.passes.iter().find_map(|s| match &s.kind {
+            PassKind::ConeTrace(c) => Some(c.clone()),
+            _ => None,
+        });
+        let c = cone.unwrap();
+        assert_eq!(
+            (c.cones, c.aperture, c.step_scale, c.resolution),
+            (16, 30.0, 2.0, 64)
+        );
+        for target in ["occlusion", "indirect"] {
+            let r = p
+                .desc
+                .resources
+                .0
+                .iter()
+                .find(|(n, _)| n == target)
+                .unwrap();
+            assert!(
+                matches!(r.1, ResourceDesc::Texture { size: SizeDesc::ScreenScaled(s), .. } if s == 1.0),
+                "{target}: {:?}",
+                r.1
+            );
+        }
+    }
 }

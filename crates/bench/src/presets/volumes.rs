@@ -15,7 +15,6 @@
 //!
 //! Writes volumes.csv, volumes.json and volumes.md.
 
-use std::path::PathBuf;
 use std::sync::Arc;
 
 use anyhow::{Context, Result};
@@ -23,7 +22,7 @@ use glam::{DAffine3, DMat4, DVec3, DVec4};
 use serde::Serialize;
 use ssbvb_gpu::GpuContext;
 use ssbvb_gpu::scene::{Scene, TriangleObject, VolumeObject};
-use ssbvb_graph::ResolvedPipeline;
+use ssbvb_graph::{PassKind, ResolvedPipeline};
 use ssbvb_voxel::camera::Camera;
 use ssbvb_voxel::model::{Mesh, ObjectSpace};
 use ssbvb_voxel::rgba_volume::RgbaVolume;
@@ -35,9 +34,6 @@ use crate::args::BenchArgs;
 use crate::harness::TimedFrames;
 use crate::table::{Column, Fmt, Table, size, write_report};
 use ssbvb_engine::assets::assets_dir;
-
-/// The default knobs as `volumetric.ron` writes them (the rows replace this text).
-const DEFAULT_KNOBS: &str = "VolumeSlices(slice_spacing: 0.5, mip_bias: 0.0)";
 
 #[derive(Debug, Clone)]
 struct KnobRow {
@@ -213,41 +209,39 @@ fn camera_at(distance: f64) -> Camera {
 /// The bundled `volumetric.ron`: its text (whose knobs the rows replace) and the pipeline
 /// as it is.
 struct Volumetric {
-    path: PathBuf,
-    base: String,
     default: ResolvedPipeline,
 }
 
 impl Volumetric {
     fn load() -> Result<Self> {
         let path = assets_dir().join("pipelines/volumetric.ron");
-        let base = std::fs::read_to_string(&path)
-            .with_context(|| format!("reading {}", path.display()))?;
-        anyhow::ensure!(
-            base.contains(DEFAULT_KNOBS),
-            "{} no longer writes `{DEFAULT_KNOBS}`",
-            path.display()
-        );
-        let default = Self::resolve(&path, &base)?;
-        Ok(Volumetric {
-            path,
-            base,
-            default,
-        })
+        let default = ssbvb_graph::resolve_file(&path).map_err(|e| anyhow::anyhow!("{e}"))?;
+        Ok(Volumetric { default })
     }
 
-    fn resolve(path: &std::path::Path, text: &str) -> Result<ResolvedPipeline> {
-        ssbvb_graph::resolve_str(text, &path.display().to_string())
-            .map_err(|e| anyhow::anyhow!("{e}"))
-    }
-
-    /// The pipeline with `slice_spacing` and `mip_bias` in place of the defaults.
+    /// The pipeline with `slice_spacing` and `mip_bias` in place of the file's (a typed
+    /// edit of its `VolumeSlices` pass).
     fn with_knobs(&self, spacing: f32, bias: f32) -> Result<ResolvedPipeline> {
-        let text = self.base.replace(
-            DEFAULT_KNOBS,
-            &format!("VolumeSlices(slice_spacing: {spacing:?}, mip_bias: {bias:?})"),
+        let mut sliced = 0;
+        let p = self
+            .default
+            .edited(|d| {
+                sliced = d.edit_kinds(|k| match k {
+                    PassKind::VolumeSlices(v) => {
+                        v.slice_spacing = spacing;
+                        v.mip_bias = bias;
+                        true
+                    }
+                    _ => false,
+                });
+            })
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        anyhow::ensure!(
+            sliced == 1,
+            "{} has {sliced} VolumeSlices passes",
+            self.default.file
         );
-        Self::resolve(&self.path, &text)
+        Ok(p)
     }
 }
 
@@ -608,5 +602,23 @@ mod tests {
         let header = knobs_table(&[]).csv_header();
         assert_eq!(header, crossover_table(&[]).csv_header());
         assert!(header.starts_with("table,subject,sweep,width,height,"));
+    }
+
+    /// The knobs reach the slices pass; the file's own values are the defaults.
+    #[test]
+    fn knobs_are_typed_edits_of_the_bundled_pipeline() {
+        let v = Volumetric::load().unwrap();
+        let knobs = |p: &ResolvedPipeline| {
+            p.desc.passes.iter().find_map(|s| match &s.kind {
+                PassKind::VolumeSlices(v) => Some((v.slice_spacing, v.mip_bias)),
+                _ => None,
+            })
+        };
+        assert_eq!(knobs(&v.default), Some((0.5, 0.0)));
+        assert_eq!(knobs(&v.with_knobs(2.0, 1.5).unwrap()), Some((2.0, 1.5)));
+        assert!(
+            v.with_knobs(-1.0, 0.0).is_err(),
+            "an invalid spacing is refused"
+        );
     }
 }
