@@ -518,7 +518,7 @@ mod tests {
         };
         let p = pipeline_with(&base, &k).unwrap();
         let cone = p.desc.passes.iter().find_map(|s| match &s.kind {
-            PassKind::ConeTrace(c) => Some(c.clone()),
+            PassKind::ConeTrace(c) => Some(*c),
             _ => None,
         });
         let c = cone.unwrap();
