@@ -7,53 +7,10 @@ use ssbvb_graph::include::{include_path, includes_of};
 use ssbvb_graph::{PipelineErrors, ResolvedPipeline, resolve_str, resolve_str_with};
 
 /// Shared declarations: the G-buffer, the triangles and the deferred shading.
-const SHARED: &str = r#"// shared
-Pipeline(
-  resources: {
-    "gbuffer_albedo":   Texture(format: R32Uint, size: Screen),
-    "gbuffer_normal":   Texture(format: Rgba16Float, size: Screen),
-    "gbuffer_position": Texture(format: Rgba32Float, size: Screen),
-    "gbuffer_geometric_normal": Texture(format: Rg16Float, size: Screen),
-    "depth_stencil":    Texture(format: Depth32FloatStencil8, size: Screen),
-    "smoothed_normal":  Texture(format: Rgba16Float, size: Screen),
-    "color":            Texture(format: Rgba8UnormSrgb, size: Screen),
-  },
-  passes: [
-    (
-      name: "triangles",
-      kind: Triangles,
-      writes: ["gbuffer_albedo", "gbuffer_normal", "gbuffer_position", "gbuffer_geometric_normal", "depth_stencil"],
-    ),
-    (
-      name: "smooth",
-      kind: Smooth(max_i: 1.0, min_dist: 0.5),
-      reads: ["gbuffer_normal", "depth_stencil"],
-      writes: ["smoothed_normal"],
-    ),
-    (
-      name: "composite",
-      kind: Composite,
-      reads: {"albedo": "gbuffer_albedo", "normal": "smoothed_normal", "position": "gbuffer_position"},
-      writes: ["color"],
-    ),
-  ],
-)
-"#;
+const SHARED: &str = include_str!("include/deferred.ron");
 
 /// The ESVO frame's own part.
-const ESVO_OWN: &str = r#"Pipeline(
-  include: ["shared/deferred.ron"],
-  passes: [
-    (
-      name: "esvo_ray_cast",
-      kind: EsvoRayCast(max_steps: 4096),
-      writes: ["gbuffer_albedo", "gbuffer_normal", "gbuffer_position", "gbuffer_geometric_normal", "depth_stencil"],
-      after: ["triangles"],
-    ),
-  ],
-  output: "color",
-)
-"#;
+const ESVO_OWN: &str = include_str!("include/esvo_own.ron");
 
 /// The bundled ESVO frame, written whole.
 const ESVO_WHOLE: &str = include_str!("../../../assets/pipelines/esvo.ron");

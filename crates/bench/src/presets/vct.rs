@@ -120,6 +120,18 @@ fn pipeline_with(base: &ResolvedPipeline, k: &Knobs) -> Result<ResolvedPipeline>
     Ok(p)
 }
 
+impl Knobs {
+    /// The file's knobs (`ssbvb_vct.ron`'s `ConeTrace` and cone targets).
+    const DEFAULTS: Knobs = Knobs {
+        sweep: "default",
+        cones: DEFAULT_CONES,
+        aperture: DEFAULT_APERTURE,
+        step_scale: DEFAULT_STEP_SCALE,
+        resolution: DEFAULT_RESOLUTION,
+        scale: DEFAULT_SCALE,
+    };
+}
+
 /// The knobs of the default scene's rows: the defaults, traced at full resolution, and
 /// one knob at a time swept.
 fn default_scene_knobs(d: Knobs) -> Vec<Knobs> {
@@ -186,14 +198,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
     let ctx = ssbvb_engine::choice::headless_context(&[&plain, &vct])?;
     let size = args.first_size((640, 480));
     let frames = args.frames.unwrap_or(3).max(1);
-    let d = Knobs {
-        sweep: "default",
-        cones: DEFAULT_CONES,
-        aperture: DEFAULT_APERTURE,
-        step_scale: DEFAULT_STEP_SCALE,
-        resolution: DEFAULT_RESOLUTION,
-        scale: DEFAULT_SCALE,
-    };
+    let d = Knobs::DEFAULTS;
     let mut rows = Vec::new();
     for (file, sweeps) in [
         ("default.ron", default_scene_knobs(d)),
@@ -499,14 +504,7 @@ mod tests {
     #[test]
     fn knobs_are_typed_edits_of_the_bundled_pipeline() {
         let base = bundled_pipeline("ssbvb_vct.ron").unwrap();
-        let d = Knobs {
-            sweep: "default",
-            cones: DEFAULT_CONES,
-            aperture: DEFAULT_APERTURE,
-            step_scale: DEFAULT_STEP_SCALE,
-            resolution: DEFAULT_RESOLUTION,
-            scale: DEFAULT_SCALE,
-        };
+        let d = Knobs::DEFAULTS;
         assert_eq!(pipeline_with(&base, &d).unwrap().desc, base.desc);
         let k = Knobs {
             cones: 16,
