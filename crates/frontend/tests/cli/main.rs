@@ -235,8 +235,8 @@ fn render_json_and_bench_quick() {
         .as_str()
         .unwrap()
         .ends_with("ssbvb_direct.ron");
-    // 16 techniques x 2 levels.
-    assert_eq!(rows.len(), 32, "{csv}");
+    // 12 techniques (those not left out unless named) x 2 levels.
+    assert_eq!(rows.len(), 24, "{csv}");
     let flip_of = |technique: &str, level: &str| -> f64 {
         let r: Vec<&str> = csv
             .lines()
