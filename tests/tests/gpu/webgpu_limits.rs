@@ -25,7 +25,8 @@ fn minimal_device() -> (GpuContext, ssbvb_tests::UncapturedErrors) {
 
 /// The output of `pipeline` (RON text) over `scene` on `ctx`, 64 × 48.
 fn draw(ctx: &GpuContext, pipeline: &str, scene: ssbvb_gpu::scene::Scene) -> Vec<u8> {
-    let resolved = ssbvb_graph::resolve_str(pipeline, "pipeline").unwrap_or_else(|e| panic!("{e}"));
+    let resolved = ssbvb_graph::resolve_str(pipeline, ssbvb_tests::TEST_PIPELINE)
+        .unwrap_or_else(|e| panic!("{e}"));
     let camera = Camera::new(DVec3::new(0.9, 0.5, 1.8), DVec3::ZERO);
     let mut gpu_scene = GpuScene::new(ctx, scene).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(gpu_scene.bindings, SceneBindings::SMALLEST);
