@@ -160,14 +160,20 @@ impl Sources {
 /// by two ways is one file, and a loop is seen).
 pub fn include_path(file: &str, name: &str) -> String {
     if name.starts_with('/') || name.contains("://") {
-        return name.to_string();
+        return normalise(name);
     }
-    let joined = match file.rfind(['/', '\\']) {
-        Some(i) => format!("{}/{name}", &file[..i]),
-        None => name.to_string(),
-    };
+    let file = file.replace('\\', "/");
+    match file.rfind('/') {
+        Some(i) => normalise(&format!("{}/{name}", &file[..i])),
+        None => normalise(name),
+    }
+}
+
+/// `path` with `/` for `\\` and without `.` and the `..` that follow a folder.
+fn normalise(path: &str) -> String {
+    let path = path.replace('\\', "/");
     let mut parts: Vec<&str> = Vec::new();
-    for part in joined.split('/') {
+    for part in path.split('/') {
         match part {
             "." => {}
             ".." if parts
@@ -188,91 +194,130 @@ pub fn includes_of(src: &str) -> Vec<String> {
     crate::parse::parse_only(src).map_or_else(Vec::new, |d| d.include)
 }
 
+/// How deep includes may nest (a deeper chain is an error at the include that goes past).
+pub const MAX_INCLUDE_DEPTH: usize = 16;
+
+/// The largest included file read (a pipeline file is a few kilobytes).
+pub const MAX_INCLUDE_BYTES: u64 = 1 << 20;
+
 /// Reads `src` (named `file`) and every file it includes, merged into one description.
 pub(crate) fn load(
     src: &str,
     file: &str,
     read: ReadSource<'_>,
 ) -> Result<(PipelineDesc, Sources), Vec<GraphError>> {
-    let mut sources = Sources::default();
-    let mut errors = Vec::new();
-    let mut stack = vec![file.to_string()];
-    let merged = load_file(src, file, read, &mut stack, &mut sources, &mut errors);
+    let file = normalise(file);
+    let mut walk = Walk {
+        read,
+        stack: vec![file.clone()],
+        sources: Sources::default(),
+        errors: Vec::new(),
+    };
+    let merged = walk.file(src, &file);
     match merged {
-        Some(desc) if errors.is_empty() => Ok((desc, sources)),
-        _ => Err(errors),
+        Some(desc) if walk.errors.is_empty() => Ok((desc, walk.sources)),
+        _ => Err(walk.errors),
     }
 }
 
-fn load_file(
-    src: &str,
-    file: &str,
-    read: ReadSource<'_>,
-    stack: &mut Vec<String>,
-    sources: &mut Sources,
-    errors: &mut Vec<GraphError>,
-) -> Option<PipelineDesc> {
-    let loc = Locator::new(src);
-    let own = match crate::parse::parse(src, file, &loc) {
-        Ok(d) => d,
-        Err(e) => {
-            errors.extend(e);
-            return None;
-        }
-    };
-    let ix = sources.files.len();
-    sources.files.push((file.to_string(), loc));
-    let mut merged = PipelineDesc::default();
-    for name in &own.include {
-        let at = Loc {
-            file: file.to_string(),
-            pos: sources.files[ix].1.include_entry(name),
-        };
-        let path = include_path(file, name);
-        if stack.contains(&path) {
-            errors.push(GraphError::Include {
-                at,
-                message: format!(
-                    "`{path}` includes itself ({} -> {path})",
-                    stack.join(" -> ")
-                ),
-            });
-            continue;
-        }
-        let text = match read(&path) {
-            Ok(t) => t,
-            Err(message) => {
-                errors.push(GraphError::Include {
-                    at,
-                    message: format!("cannot read `{path}`: {message}"),
-                });
-                continue;
+/// The state of one [`load`]: the includes being read (to see a loop), the files read
+/// and the errors found.
+struct Walk<'a> {
+    read: ReadSource<'a>,
+    stack: Vec<String>,
+    sources: Sources,
+    errors: Vec<GraphError>,
+}
+
+impl Walk<'_> {
+    /// `src` merged with what it includes; `None` when it does not parse.
+    fn file(&mut self, src: &str, file: &str) -> Option<PipelineDesc> {
+        let loc = Locator::new(src);
+        let own = match crate::parse::parse(src, file, &loc) {
+            Ok(d) => d,
+            Err(e) => {
+                self.errors.extend(e);
+                return None;
             }
         };
-        stack.push(path.clone());
-        let included = load_file(&text, &path, read, stack, sources, errors);
-        stack.pop();
-        if let Some(d) = included {
-            merge_into(&mut merged, d);
+        let ix = self.sources.files.len();
+        self.sources.files.push((file.to_string(), loc));
+        let mut merged = PipelineDesc::default();
+        for name in &own.include {
+            let at = Loc {
+                file: file.to_string(),
+                pos: self.sources.files[ix].1.include_entry(name),
+            };
+            let path = include_path(file, name);
+            // A file already read by another include is merged once: its declarations
+            // are in, and an override made over them stays.
+            if self.sources.files.iter().any(|(f, _)| *f == path) && !self.stack.contains(&path) {
+                continue;
+            }
+            let problem = if self.stack.contains(&path) {
+                Some(format!(
+                    "`{path}` includes itself ({} -> {path})",
+                    self.stack.join(" -> ")
+                ))
+            } else if self.stack.len() > MAX_INCLUDE_DEPTH {
+                Some(format!(
+                    "includes nest deeper than {MAX_INCLUDE_DEPTH} files at `{path}`"
+                ))
+            } else {
+                None
+            };
+            if let Some(message) = problem {
+                self.errors.push(GraphError::Include { at, message });
+                continue;
+            }
+            let text = match (self.read)(&path) {
+                Ok(t) => t,
+                Err(message) => {
+                    self.errors.push(GraphError::Include {
+                        at,
+                        message: format!("cannot read `{path}`: {message}"),
+                    });
+                    continue;
+                }
+            };
+            self.stack.push(path.clone());
+            let included = self.file(&text, &path);
+            self.stack.pop();
+            if let Some(d) = included {
+                merge_into(&mut merged, d);
+            }
         }
+        Some(self.sources.apply(own, merged, ix))
     }
-    Some(sources.apply(own, merged, ix))
 }
 
-/// Appends an included file's merged declarations (a later include replaces an earlier
-/// one's declaration of the same name). Where each came from was recorded when its own
-/// file was applied ([`Sources::apply`], which runs for included files first).
+/// Appends an included file's merged declarations: one of a name an earlier include
+/// declared replaces it (the later include wins); the rest, duplicates within the file
+/// included, are appended for the resolver to report. Where each came from was recorded
+/// when its own file was applied ([`Sources::apply`], which runs for included files first).
 fn merge_into(into: &mut PipelineDesc, d: PipelineDesc) {
+    let earlier: Vec<String> = into.resources.0.iter().map(|(n, _)| n.clone()).collect();
+    let mut replaced: Vec<String> = Vec::new();
     for (name, desc) in d.resources.0 {
-        match into.resources.0.iter_mut().find(|(n, _)| *n == name) {
-            Some(slot) => slot.1 = desc,
-            None => into.resources.0.push((name, desc)),
+        let slot = into.resources.0.iter_mut().find(|(n, _)| *n == name);
+        match slot {
+            Some(slot) if earlier.contains(&name) && !replaced.contains(&name) => {
+                slot.1 = desc;
+                replaced.push(name);
+            }
+            _ => into.resources.0.push((name, desc)),
         }
     }
+    let earlier: Vec<String> = into.passes.iter().map(|p| p.name.clone()).collect();
+    let mut replaced: Vec<String> = Vec::new();
     for pass in d.passes {
-        match into.passes.iter_mut().find(|p| p.name == pass.name) {
-            Some(slot) => *slot = pass,
-            None => into.passes.push(pass),
+        let slot = into.passes.iter_mut().find(|p| p.name == pass.name);
+        match slot {
+            Some(slot) if earlier.contains(&pass.name) && !replaced.contains(&pass.name) => {
+                replaced.push(pass.name.clone());
+                *slot = pass;
+            }
+            _ => into.passes.push(pass),
         }
     }
     if !d.output.is_empty() {
@@ -285,7 +330,18 @@ fn merge_into(into: &mut PipelineDesc, d: PipelineDesc) {
     }
 }
 
-/// Reads included files from the file system.
+/// Reads included files from the file system: regular files of at most
+/// [`MAX_INCLUDE_BYTES`] (not a device, a pipe or a folder).
 pub fn read_file(path: &str) -> Result<String, String> {
+    let meta = std::fs::metadata(path).map_err(|e| e.to_string())?;
+    if !meta.is_file() {
+        return Err("not a regular file".into());
+    }
+    if meta.len() > MAX_INCLUDE_BYTES {
+        return Err(format!(
+            "{} bytes, more than a pipeline file holds ({MAX_INCLUDE_BYTES})",
+            meta.len()
+        ));
+    }
     std::fs::read_to_string(path).map_err(|e| e.to_string())
 }

@@ -32,11 +32,14 @@ impl PipelineWatcher {
     /// Resolves `path` once; fails if the first version is already invalid.
     pub fn new(path: impl AsRef<Path>) -> Result<Self, PipelineErrors> {
         let path = path.as_ref().to_path_buf();
+        // Stamps from before the read: an edit saved while resolving is seen next poll.
+        let before = stamps(std::slice::from_ref(&path));
         let current = resolve_file(&path)?;
-        let files = files_of(&path, &current);
+        let files = files_of(&current);
+        let stamp = restamp(&files, std::slice::from_ref(&path), &before);
         Ok(Self {
             path,
-            stamp: stamps(&files),
+            stamp,
             files,
             current,
         })
@@ -58,25 +61,62 @@ impl PipelineWatcher {
         if now == self.stamp {
             return ReloadOutcome::Unchanged;
         }
-        self.stamp = now;
         match resolve_file(&self.path) {
             Ok(p) => {
                 // A changed include list changes the files to watch.
-                self.files = files_of(&self.path, &p);
-                self.stamp = stamps(&self.files);
+                let files = files_of(&p);
+                self.stamp = restamp(&files, &self.files, &now);
+                self.files = files;
                 self.current = p;
                 ReloadOutcome::Reloaded
             }
-            Err(e) => ReloadOutcome::Failed(e),
+            Err(e) => {
+                // The files it names now are watched too, so that fixing a newly included
+                // file reloads.
+                let mut files = self.files.clone();
+                for f in named_includes(&self.files[0]) {
+                    if !files.contains(&f) {
+                        files.push(f);
+                    }
+                }
+                self.stamp = restamp(&files, &self.files, &now);
+                self.files = files;
+                ReloadOutcome::Failed(e)
+            }
         }
     }
 }
 
-/// The pipeline's file and the files it included.
-fn files_of(path: &Path, p: &ResolvedPipeline) -> Vec<PathBuf> {
-    let mut files = vec![path.to_path_buf()];
-    files.extend(p.sources.iter().skip(1).map(PathBuf::from));
+/// The files a pipeline was read from: the file itself (where a renamed file's old path
+/// led, [`crate::current_path`]) and those it included.
+fn files_of(p: &ResolvedPipeline) -> Vec<PathBuf> {
+    p.sources.iter().map(PathBuf::from).collect()
+}
+
+/// The files `top` includes directly, as paths (none when it cannot be read or parsed).
+fn named_includes(top: &Path) -> Vec<PathBuf> {
+    let file = top.display().to_string();
+    let text = std::fs::read_to_string(top).unwrap_or_default();
+    crate::include::includes_of(&text)
+        .iter()
+        .map(|n| PathBuf::from(crate::include::include_path(&file, n)))
+        .collect()
+}
+
+/// The stamps of `files`: those of `seen` taken before the last read (`at`) where a file
+/// was watched then, the file's stamp now where it is new.
+fn restamp(
+    files: &[PathBuf],
+    seen: &[PathBuf],
+    at: &[Option<(SystemTime, u64)>],
+) -> Vec<Option<(SystemTime, u64)>> {
     files
+        .iter()
+        .map(|f| match seen.iter().position(|s| s == f) {
+            Some(i) => at[i],
+            None => stamp(f),
+        })
+        .collect()
 }
 
 fn stamps(files: &[PathBuf]) -> Vec<Option<(SystemTime, u64)>> {

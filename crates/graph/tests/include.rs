@@ -200,3 +200,118 @@ fn the_old_paths_of_renamed_bundled_files_still_load() {
     let e = ssbvb_graph::resolve_file(&std::path::Path::new(dir).join("nope.ron")).unwrap_err();
     assert!(e.to_string().contains("nope.ron"), "{e}");
 }
+
+#[test]
+fn a_duplicate_inside_an_included_file_is_still_reported() {
+    let doubled = SHARED.replace(
+        r#"    "color":            Texture(format: Rgba8UnormSrgb, size: Screen),"#,
+        r#"    "color":            Texture(format: Rgba8UnormSrgb, size: Screen),
+    "color":            Texture(format: Rgba8UnormSrgb, size: Screen),"#,
+    );
+    assert_ne!(doubled, SHARED);
+    let map = files(&[
+        ("p/esvo.ron", ESVO_OWN),
+        ("p/shared/deferred.ron", &doubled),
+    ]);
+    let e = resolve_in(&map, "p/esvo.ron").unwrap_err().to_string();
+    assert!(
+        e.contains("p/shared/deferred.ron:") && e.contains("color"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_file_included_by_two_ways_is_merged_once_and_an_override_stays() {
+    // The variant includes the ESVO frame (which includes the shared file), replaces the
+    // composite, then includes the shared file again: the replacement must stay.
+    let variant = r#"Pipeline(
+  include: ["esvo_compute_composite.ron", "shared/deferred.ron"],
+)"#;
+    let middle = r#"Pipeline(
+  include: ["esvo.ron"],
+  resources: { "color": Texture(format: Rgba8Unorm, size: Screen) },
+  passes: [
+    (
+      name: "composite",
+      kind: CompositeCompute,
+      reads: {"albedo": "gbuffer_albedo", "normal": "smoothed_normal", "position": "gbuffer_position"},
+      writes: ["color"],
+    ),
+  ],
+)"#;
+    let map = files(&[
+        ("p/esvo.ron", ESVO_OWN),
+        ("p/shared/deferred.ron", SHARED),
+        ("p/esvo_compute_composite.ron", middle),
+        ("p/variant.ron", variant),
+    ]);
+    let p = resolve_in(&map, "p/variant.ron").unwrap();
+    let composite = p
+        .desc
+        .passes
+        .iter()
+        .find(|s| s.name == "composite")
+        .unwrap();
+    assert_eq!(composite.kind, ssbvb_graph::PassKind::CompositeCompute);
+    assert_eq!(p.sources.len(), 4, "{:?}", p.sources);
+}
+
+#[test]
+fn includes_nest_to_a_bound_and_read_only_regular_files() {
+    // A chain of files each including the next: past the bound it is an error.
+    let mut pairs: Vec<(String, String)> = Vec::new();
+    for i in 0..40 {
+        pairs.push((
+            format!("c/{i}.ron"),
+            format!(r#"Pipeline(include: ["{}.ron"])"#, i + 1),
+        ));
+    }
+    pairs.push(("c/40.ron".into(), SHARED.into()));
+    let map: HashMap<String, String> = pairs.into_iter().collect();
+    let e = resolve_in(&map, "c/0.ron").unwrap_err().to_string();
+    assert!(e.contains("nest deeper than"), "{e}");
+    // The file system reader refuses what is not a regular file.
+    assert!(ssbvb_graph::include::read_file("/dev/null").is_err());
+    assert!(ssbvb_graph::include::read_file(env!("CARGO_MANIFEST_DIR")).is_err());
+}
+
+#[test]
+fn the_watcher_of_a_renamed_files_old_path_watches_the_new_file() {
+    use ssbvb_graph::{PipelineWatcher, ReloadOutcome};
+    let dir = std::env::temp_dir().join(format!("ssbvb-renamed-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("ssbvb_unique.ron"), ESVO_WHOLE).unwrap();
+    let mut w = PipelineWatcher::new(dir.join("ssbvb.ron")).unwrap();
+    assert!(matches!(w.poll(), ReloadOutcome::Unchanged));
+    let edited = ESVO_WHOLE.replace(
+        r#""normal": "smoothed_normal""#,
+        r#""normal": "gbuffer_normal""#,
+    );
+    std::fs::write(dir.join("ssbvb_unique.ron"), edited).unwrap();
+    assert!(matches!(w.poll(), ReloadOutcome::Reloaded));
+    assert_eq!(w.current().pruned_passes, ["smooth"]);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn after_a_failed_reload_a_newly_included_file_is_watched() {
+    use ssbvb_graph::{PipelineWatcher, ReloadOutcome};
+    let dir = std::env::temp_dir().join(format!("ssbvb-new-include-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("shared")).unwrap();
+    std::fs::write(dir.join("shared/deferred.ron"), SHARED).unwrap();
+    std::fs::write(dir.join("p.ron"), ESVO_WHOLE).unwrap();
+    let mut w = PipelineWatcher::new(dir.join("p.ron")).unwrap();
+    // The file now includes a broken file: the reload fails.
+    std::fs::write(dir.join("shared/broken.ron"), "Pipeline(").unwrap();
+    std::fs::write(
+        dir.join("p.ron"),
+        ESVO_OWN.replace("shared/deferred.ron", "shared/broken.ron"),
+    )
+    .unwrap();
+    assert!(matches!(w.poll(), ReloadOutcome::Failed(_)));
+    // Fixing the included file alone reloads.
+    std::fs::write(dir.join("shared/broken.ron"), SHARED).unwrap();
+    assert!(matches!(w.poll(), ReloadOutcome::Reloaded));
+    assert_eq!(w.current().sources.len(), 2);
+    std::fs::remove_dir_all(&dir).ok();
+}

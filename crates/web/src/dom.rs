@@ -111,18 +111,23 @@ pub async fn fetch_text(url: &str) -> Result<String, WebError> {
 pub async fn fetch_pipeline(url: &str) -> Result<ssbvb_graph::ResolvedPipeline, WebError> {
     let text = fetch_text(url).await?;
     let mut fetched = std::collections::HashMap::new();
+    let mut failed = std::collections::HashMap::new();
     let mut pending: Vec<(String, String)> = ssbvb_graph::include::includes_of(&text)
         .into_iter()
         .map(|n| (url.to_string(), n))
         .collect();
     while let Some((from, name)) = pending.pop() {
         let path = ssbvb_graph::include::include_path(&from, &name);
-        if fetched.contains_key(&path) {
+        if fetched.contains_key(&path) || failed.contains_key(&path) {
             continue;
         }
-        // A missing include is reported by the resolver, at the line that names it.
-        let Ok(included) = fetch_text(&path).await else {
-            continue;
+        // A failed fetch is reported by the resolver, at the line that names it.
+        let included = match fetch_text(&path).await {
+            Ok(t) => t,
+            Err(e) => {
+                failed.insert(path, e.to_string());
+                continue;
+            }
         };
         for n in ssbvb_graph::include::includes_of(&included) {
             pending.push((path.clone(), n));

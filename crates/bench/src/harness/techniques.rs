@@ -289,7 +289,17 @@ pub(crate) fn select(args: &BenchArgs) -> Result<Vec<&'static Technique>> {
             .iter()
             .filter(|t| !LEFT_OUT.contains(&t.name))
             .collect(),
-        Some(names) => names.iter().map(|n| by_name(n)).collect::<Result<_>>()?,
+        Some(names) => {
+            let mut chosen: Vec<&'static Technique> = Vec::new();
+            for n in names {
+                let t = by_name(n)?;
+                // An old name and its new one name one technique, measured once.
+                if !chosen.iter().any(|c| c.name == t.name) {
+                    chosen.push(t);
+                }
+            }
+            chosen
+        }
     })
 }
 
