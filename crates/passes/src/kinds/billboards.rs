@@ -112,7 +112,12 @@ pub struct Billboards {
 impl Billboards {
     /// Compiles the pipeline with explicit options (for measurements of culling and size).
     pub fn with_options(init: &PassInit<'_>, options: BillboardOptions) -> Result<Self, PassError> {
-        let (ctx, scene, pipeline, pass) = init.parts();
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         if !(options.size_scale.is_finite() && options.size_scale > 0.0) {
             return Err(PassError::BadScene(format!(
                 "pass `{}`: size_scale must be positive, got {}",

@@ -31,7 +31,12 @@ impl PassImpl for CompositeCompute {
     const SHADER: &'static str = "composite_compute.wgsl";
 
     fn new(init: &PassInit<'_>, _params: &CompositeComputeKind) -> Result<Self, PassError> {
-        let (ctx, scene, pipeline, pass) = init.parts();
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         let module = ctx.shader(
             Self::SHADER,
             &shaders::source_for(Self::SHADER, &scene.bindings)?,

@@ -201,7 +201,12 @@ impl PassImpl for ConeTrace {
     const WHOLE_LEVELS: bool = true;
 
     fn new(init: &PassInit<'_>, params: &ConeTraceParams) -> Result<Self, PassError> {
-        let (ctx, scene, pipeline, pass) = init.parts();
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         let d = &ctx.device;
         check_target_size(pipeline, pass)?;
         let volume = RadianceVolume::build(

@@ -26,7 +26,12 @@ impl PassImpl for EdgeAa {
     /// Compiles the pass for the output's format; `threshold` and `subpixel` become the
     /// WGSL overrides `THRESHOLD` and `SUBPIXEL`.
     fn new(init: &PassInit<'_>, params: &EdgeAaParams) -> Result<Self, PassError> {
-        let (ctx, scene, pipeline, pass) = init.parts();
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         let d = &ctx.device;
         let module = ctx.shader(Self::SHADER, &shaders::source_for(Self::SHADER, &scene.bindings)?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, &[]);

@@ -54,7 +54,12 @@ impl PassImpl for EmptySpace {
 
     /// Compiles the three pipelines for `pass` (formats from the graph's resources).
     fn new(init: &PassInit<'_>, _params: &EmptySpacePrepassKind) -> Result<Self, PassError> {
-        let (ctx, scene, pipeline, pass) = init.parts();
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         let module = ctx.shader("empty_space.wgsl", &shaders::source_for("empty_space.wgsl", &scene.bindings)?)?;
         let entry_format = slot_format(ctx, pipeline, pass, "entry");
         let depth_format = slot_format(ctx, pipeline, pass, "prepass_depth");

@@ -201,7 +201,12 @@ impl PulledPipeline {
         fs_entry: &str,
         special: Option<&Specialized>,
     ) -> Result<Self, PassError> {
-        let (ctx, scene, pipeline, pass) = init.parts();
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         let (shader, own) = (special.map_or(P::SHADER, |s| s.file), P::OWN);
         let module = match special {
             Some(s) => ctx.shader(shader, &s.source)?,

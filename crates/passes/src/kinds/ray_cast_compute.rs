@@ -64,7 +64,12 @@ impl ComputeCast {
         constants: &[(&'static str, f64)],
         special: &Specialized,
     ) -> Result<Self, PassError> {
-        let (ctx, scene, pipeline, pass) = init.parts();
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         let resolve =
             PulledPipeline::with_fragment_for::<P>(init, constants, "fs_resolve", special)?;
         let module = ctx.shader(P::SHADER, &special.source)?;

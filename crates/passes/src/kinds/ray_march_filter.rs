@@ -321,7 +321,12 @@ impl PassImpl for RayMarchFilter {
     /// needs it. `max_steps` becomes the WGSL override `MAX_STEPS`, `march: Fast` the
     /// override `FAST_MARCH`.
     fn new(init: &PassInit<'_>, params: &RayMarchFilterParams) -> Result<Self, PassError> {
-        let (ctx, scene, pipeline, pass) = init.parts();
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         let RayMarchFilterParams {
             max_steps,
             unique_voxels,

@@ -116,7 +116,12 @@ impl PassImpl for RayMarchGBuffer {
     /// Compiles `mark_tiles`; the draw is compiled per [`MainVariant`] when a frame first
     /// needs it. `max_steps` becomes `MAX_STEPS`, `march: Fast` `FAST_MARCH`.
     fn new(init: &PassInit<'_>, params: &RayMarchGBufferParams) -> Result<Self, PassError> {
-        let (ctx, scene, pipeline, pass) = init.parts();
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         let module = ctx.shader(
             Self::SHADER,
             &shaders::source_for(Self::SHADER, &scene.bindings)?,

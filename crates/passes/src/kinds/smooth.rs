@@ -76,7 +76,12 @@ impl PassImpl for Smooth {
 
     /// Compiles both pipelines (voxel pixels smoothed, all others copied).
     fn new(init: &PassInit<'_>, params: &SmoothParams) -> Result<Self, PassError> {
-        let (ctx, scene, pipeline, pass) = init.parts();
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         let SmoothParams {
             max_i,
             min_dist,

@@ -46,7 +46,12 @@ impl PassImpl for SmoothCompute {
 
     /// Compiles the pipeline; `max_i` and `min_dist` become the WGSL overrides of Eq. 1.
     fn new(init: &PassInit<'_>, params: &SmoothComputeParams) -> Result<Self, PassError> {
-        let (ctx, scene, pipeline, pass) = init.parts();
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         // GL keeps a depth-stencil texture's sampled aspect on the texture, not the view:
         // of the two views bound here one would read the other's aspect.
         if ctx.adapter.get_info().backend == wgpu::Backend::Gl {

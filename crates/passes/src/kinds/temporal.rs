@@ -79,7 +79,12 @@ impl PassImpl for Temporal {
     const OWN: &'static [OwnBinding] = OWN;
 
     fn new(init: &PassInit<'_>, params: &TemporalParams) -> Result<Self, PassError> {
-        let (ctx, scene, pipeline, pass) = init.parts();
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         let d = &ctx.device;
         let module = ctx.shader(Self::SHADER, &shaders::source_for(Self::SHADER, &scene.bindings)?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, OWN);

@@ -36,7 +36,12 @@ impl PassImpl for Triangles {
 
     /// Compiles the pipeline for the formats bound to `pass`.
     fn new(init: &PassInit<'_>, _params: &TrianglesKind) -> Result<Self, PassError> {
-        let (ctx, scene, pipeline, pass) = init.parts();
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         let d = &ctx.device;
         let module = ctx.shader("triangles.wgsl", &shaders::source_for("triangles.wgsl", &scene.bindings)?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, OWN);

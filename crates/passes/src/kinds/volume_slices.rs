@@ -251,7 +251,12 @@ impl PassImpl for VolumeSlices {
     const NEEDS: KindNeeds = KindNeeds::NONE;
 
     fn new(init: &PassInit<'_>, params: &VolumeSlicesParams) -> Result<Self, PassError> {
-        let (ctx, scene, pipeline, pass) = init.parts();
+        let PassInit {
+            ctx,
+            scene,
+            pipeline,
+            pass,
+        } = *init;
         let d = &ctx.device;
         // Texel lengths and the level by distance assume a uniform scale (no shear).
         for v in &scene.scene.volumes {

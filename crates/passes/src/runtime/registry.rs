@@ -26,20 +26,6 @@ pub struct PassInit<'a> {
     pub pass: &'a ScheduledPass,
 }
 
-impl<'a> PassInit<'a> {
-    /// `(ctx, scene, pipeline, pass)`.
-    pub fn parts(
-        &self,
-    ) -> (
-        &'a GpuContext,
-        &'a GpuScene,
-        &'a ResolvedPipeline,
-        &'a ScheduledPass,
-    ) {
-        (self.ctx, self.scene, self.pipeline, self.pass)
-    }
-}
-
 /// What one pass kind needs from an adapter beyond what every pipeline needs.
 #[derive(Debug, Clone, Copy)]
 pub struct KindNeeds {
