@@ -66,7 +66,7 @@ fn billboard_quad(slot: VoxelSlot) -> Quad {
     var q: Quad;
     q.valid = false;
     q.near_field = false;
-    if slot.instance >= u32(frame.misc.w) {
+    if slot.instance >= u32(frame.shine_near_far_count.w) {
         return q;
     }
     let inst = instances[slot.instance];
@@ -83,7 +83,7 @@ fn billboard_quad(slot: VoxelSlot) -> Quad {
     let r = circumradius(inst.object_to_world, size);
     let view3 = mat3x3(frame.view[0].xyz, frame.view[1].xyz, frame.view[2].xyz);
     let cv = cv_exact;
-    let near = frame.misc.y;
+    let near = frame.shine_near_far_count.y;
     q.valid = true;
     q.cz = cv.z;
     q.c = c;

@@ -29,7 +29,7 @@ struct Frame {
     // Light colour in rgb; specular strength in w.
     light_color: vec4<f32>,
     // x: shininess, y: near, z: far (0 = infinite), w: number of visible instances.
-    misc: vec4<f32>,
+    shine_near_far_count: vec4<f32>,
     // xy: the frame's sub-pixel jitter in pixels (a temporal pass's; 0 otherwise): pixel
     // `px` shows the unjittered camera's ray through `px + xy`, and `proj` is sheared to
     // match. zw: 0.
@@ -413,7 +413,7 @@ fn shade_lit(
     let ndh = max(dot(n, h), 0.0);
     var spec = 0.0;
     if ndl > 0.0 && ndh > 0.0 {
-        spec = frame.light_color.w * pow(ndh, max(frame.misc.x, 0.0));
+        spec = frame.light_color.w * pow(ndh, max(frame.shine_near_far_count.x, 0.0));
     }
     let c = frame.light_color.rgb;
     return ao * frame.light_dir.w * albedo + shadow * ndl * albedo * c + shadow * spec * c

@@ -137,7 +137,7 @@ fn has_proxy(e: vec4<f32>, count: u32) -> bool {
 
 // The visible instances of the frame.
 fn visible_count() -> u32 {
-    return u32(max(frame.misc.w, 0.0));
+    return u32(max(frame.shine_near_far_count.w, 0.0));
 }
 
 

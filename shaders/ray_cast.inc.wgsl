@@ -83,7 +83,7 @@ fn cast_pixel(px: vec2<f32>) -> vec3<f32> {
     best_inst = 0u;
     cast_steps = 0u;
     cast_words = 0u;
-    instance_walk(px, dir, BIG, u32(frame.misc.w));
+    instance_walk(px, dir, BIG, u32(frame.shine_near_far_count.w));
     let lane = (u32(px.x) + u32(px.y)) % COUNTER_LANES;
     if COUNT_WORK && cast_steps > 0u {
         atomicAdd(&ray_counters[COUNTER_LANE_WORDS * lane], 1u);

@@ -80,7 +80,7 @@ fn box_tiles(lo: vec3<f32>, hi: vec3<f32>) -> vec4<u32> {
 // hierarchy; its leaves hold the instances' boxes, as the walk tests them).
 @compute @workgroup_size(64)
 fn mark_cast_tiles(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let count = u32(max(frame.misc.w, 0.0));
+    let count = u32(max(frame.shine_near_far_count.w, 0.0));
     if count == 0u || gid.x >= 2u * count - 1u {
         return;
     }

@@ -32,7 +32,7 @@ pub struct FrameUniform {
     /// Light colour (rgb), specular (w).
     pub light_color: [f32; 4],
     /// shininess, near, far (0 = infinite), visible instance count.
-    pub misc: [f32; 4],
+    pub shine_near_far_count: [f32; 4],
     /// Sub-pixel jitter in pixels (xy; `proj` sheared to match), zw 0.
     pub jitter: [f32; 4],
     /// The scene's word stream ([`super::SceneBindings`]): log2 of its words per binding,

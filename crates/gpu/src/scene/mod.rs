@@ -423,7 +423,7 @@ impl GpuScene {
         }
         let mut bvh = instance_bvh(&uniforms, &self.lod_bounds);
         let mut frame = frame;
-        frame.misc[3] = visible.len() as f32;
+        frame.shine_near_far_count[3] = visible.len() as f32;
         frame.prepass[0] = u32::from(!visible.iter().any(|v| v.back_faces || v.camera_inside));
         let lists = if self.instance_lists {
             tile_lists::tile_lists(&bvh, &frame, 8 * bvh.len())

@@ -66,7 +66,7 @@ pub fn jittered_frame_uniform(
             light.color[2],
             light.specular,
         ],
-        misc: [
+        shine_near_far_count: [
             light.shininess,
             camera.near as f32,
             if camera.is_infinite() {

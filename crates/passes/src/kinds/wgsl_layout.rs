@@ -59,7 +59,7 @@ pub fn shared_structs() -> Vec<StructLayout> {
                 screen,
                 light_dir,
                 light_color,
-                misc,
+                shine_near_far_count,
                 jitter,
                 streams,
                 prepass
