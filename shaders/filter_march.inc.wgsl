@@ -12,10 +12,7 @@
 //   `page_feedback: array<atomic<u32>>` (sparse_march.inc.wgsl);
 // - the overrides MAX_STEPS, FAST_MARCH and PAGED (sparse_march.inc.wgsl),
 //   SEVERAL_INSTANCES (more than one instance may be visible: the walk is compiled in) and
-//   COUNT_WORK (count the work into the counters);
-// - `fn walk_floor(px: vec2<i32>, size: vec2<i32>) -> f32`: a distance below which no
-//   other instance's voxel lies on the texel's ray (a hit before it skips the walk), or a
-//   negative number when there is none.
+//   COUNT_WORK (count the work into the counters).
 
 // Words of the counters: rays, then (low, high) pairs of sums, then the histogram
 // (RayMarchFilter::counters reads them).
@@ -169,7 +166,7 @@ fn march_pixel(px: vec2<i32>) -> bool {
     prepass_inst = k;
     // Every voxel of another instance lies behind the floor: a hit before it needs no
     // walk, and the walk passes over boxes the ray leaves before it.
-    let floor = max(walk_floor(px, size), prepass_floor);
+    let floor = prepass_floor;
     if floor >= 0.0 {
         walk_t_min = floor;
     }

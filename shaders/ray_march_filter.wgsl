@@ -82,84 +82,12 @@ override CLAIM_HEADER: u32 = 1u;
 // `main`'s indirect dispatch, written by `list_tiles` (the only entry point binding it:
 // a dispatch may not bind the buffer it reads its arguments from).
 @group(1) @binding(4) var<storage, read_write> filter_dispatch: array<u32, 3>;
-// `RayMarchFilter(peel: true)`: the second proxy layer (`vs_peel`, `fs_peel`, drawn by the
-// pass before `main`): per texel the bits of the eye distance to the nearest proxy of an
-// instance other than the texel's prepass instance; +inf where there is none, 0 where no
-// layer was drawn (then no ray skips its walk). A 1 × 1 texture without `peel`.
-@group(1) @binding(5) var peel_t: texture_2d<u32>;
-override PEEL: bool = false;
 
 // Page feedback (sparse_march.inc.wgsl's; only compute shaders see group 0's).
 @group(0) @binding(3) var<storage, read_write> page_feedback: array<atomic<u32>>;
 
 //#include "filter_march.inc.wgsl"
 //#include "tile_list.inc.wgsl"
-
-// Every voxel of another instance lies behind that instance's proxy: with the second
-// layer, a distance before which none lies on the texel's ray.
-fn walk_floor(px: vec2<i32>, size: vec2<i32>) -> f32 {
-    if PEEL {
-        return max(peel_bound(px, size), 0.0);
-    }
-    return -1.0;
-}
-
-// The second layer's distance at texel `q` (+inf: no other proxy; 0: no layer drawn).
-fn peel_at(q: vec2<i32>) -> f32 {
-    return bitcast<f32>(textureLoad(peel_t, q, 0).x);
-}
-
-// A distance below which no other instance's proxy lies on texel `px`'s ray: the least
-// second-layer distance over the texel and its four neighbours (a proxy edge that vertex
-// snapping moved past this texel's centre still covers a neighbour), less an eighth of
-// the spread of the finite ones (how far snapping can move a face along the ray, as in
-// `entry_margin`) and 1e-4 of itself for the f32 rounding of the interpolated distance.
-fn peel_bound(px: vec2<i32>, size: vec2<i32>) -> f32 {
-    var lo = peel_at(px);
-    var hi = select(0.0, lo, lo < BIG);
-    var offsets = array(vec2(1, 0), vec2(-1, 0), vec2(0, 1), vec2(0, -1));
-    for (var i = 0u; i < 4u; i++) {
-        let q = px + offsets[i];
-        if all(q >= vec2(0)) && all(q < size) {
-            let v = peel_at(q);
-            lo = min(lo, v);
-            hi = select(hi, max(hi, v), v < BIG);
-        }
-    }
-    if !(lo < BIG) {
-        return lo;
-    }
-    return lo - 0.125 * (hi - lo) - 1e-4 * lo;
-}
-
-struct PeelOut {
-    @builtin(position) clip: vec4<f32>,
-    // View-space position on the proxy (its length is the eye distance).
-    @location(0) view_pos: vec3<f32>,
-    @location(1) @interpolate(flat) instance: u32,
-}
-
-// The second layer's vertices: the prepass's proxies, as `empty_space.wgsl` draws them.
-@vertex
-fn vs_peel(@location(0) position: vec4<f32>, @builtin(instance_index) instance: u32) -> PeelOut {
-    let view = instances[instance].object_to_view * vec4(position.xyz, 1.0);
-    var out: PeelOut;
-    out.clip = frame.proj * view;
-    out.view_pos = view.xyz;
-    out.instance = instance;
-    return out;
-}
-
-// A proxy fragment of an instance other than the texel's prepass instance: its eye
-// distance (the nearest wins the depth test).
-@fragment
-fn fs_peel(in: PeelOut) -> @location(0) u32 {
-    let e = textureLoad(entry, vec2<i32>(in.clip.xy), 0);
-    if e.w == f32(in.instance + 1u) {
-        discard;
-    }
-    return bitcast<u32>(length(in.view_pos));
-}
 
 // The slot's voxel: `packed_voxel` with the grid level of its cell in `uv` (the billboard
 // pass sizes the voxel by it: a voxel of a coarser LOD is larger).

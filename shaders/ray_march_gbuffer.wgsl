@@ -47,11 +47,6 @@ const TILE_PX: u32 = 16u;
 
 //#include "filter_march.inc.wgsl"
 
-// No second proxy layer: every ray walks the other instances' boxes.
-fn walk_floor(px: vec2<i32>, size: vec2<i32>) -> f32 {
-    return -1.0;
-}
-
 // Tiles across the prepass.
 fn tiles_across() -> u32 {
     return (textureDimensions(entry).x + TILE_PX - 1u) / TILE_PX;

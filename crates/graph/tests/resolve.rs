@@ -761,3 +761,24 @@ fn a_binding_list_of_the_wrong_type_says_what_is_expected() {
         Some(line_of(&src, "reads: 5"))
     );
 }
+
+#[test]
+fn the_removed_second_proxy_layer_is_refused_by_name_and_false_still_loads() {
+    let src = include_str!("../../../assets/pipelines/ssbvb_pixel.ron");
+    let filter = "RayMarchFilter(max_steps: 1024, unique_voxels: false, march: Fast)";
+    assert!(src.contains(filter));
+    let off = src.replace(
+        filter,
+        "RayMarchFilter(max_steps: 1024, unique_voxels: false, march: Fast, peel: false)",
+    );
+    resolve_str(&off, "off.ron").unwrap();
+    let on = src.replace(
+        filter,
+        "RayMarchFilter(max_steps: 1024, unique_voxels: false, march: Fast, peel: true)",
+    );
+    let e = resolve_str(&on, "on.ron").unwrap_err().to_string();
+    assert!(
+        e.contains("peel: true was removed") && e.contains("8c208c3"),
+        "{e}"
+    );
+}

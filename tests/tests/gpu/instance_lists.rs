@@ -11,7 +11,7 @@
 //! reference. And where they can spare box tests they must: the
 //! crowd's rays test well under the walk's boxes.
 
-use glam::{DAffine3, DVec3};
+use glam::{DAffine3, DQuat, DVec3};
 use ssbvb_gpu::scene::{LodPolicy, Scene, VoxelObject};
 use ssbvb_tests::{ctx, model_asset, reference_of, render_walking};
 use ssbvb_voxel::accuracy;
@@ -69,7 +69,7 @@ fn views() -> Vec<(&'static str, Scene, Camera)> {
         ),
         (
             "nine",
-            crate::peel::nine(),
+            nine(),
             Camera::new(DVec3::new(1.0, 1.5, 5.5), DVec3::new(0.0, 0.0, -1.5)),
         ),
         ("cubes", cubes, cubes_camera),
@@ -161,5 +161,28 @@ fn a_compute_caster_draws_the_same_by_tile_lists_as_by_the_hierarchy() {
                 "{name}: {attachment}: {differing} bytes differ"
             );
         }
+    }
+}
+
+/// Nine overlapping instances (scaled, rotated about two axes).
+fn nine() -> Scene {
+    let xfs = (0..9)
+        .map(|k| {
+            let (i, j) = ((k % 3) as f64, (k / 3) as f64);
+            let k = k as f64;
+            DAffine3::from_scale_rotation_translation(
+                DVec3::splat(0.8 + 0.05 * k),
+                DQuat::from_rotation_y(0.4 * k) * DQuat::from_rotation_x(0.1 * k),
+                DVec3::new(i * 1.3 - 1.3, j * 1.2 - 1.2, -0.4 * k),
+            )
+        })
+        .collect();
+    Scene {
+        objects: vec![VoxelObject {
+            asset: model_asset("bunny.obj", 5),
+            instances: xfs,
+            lod: LodPolicy::Fixed(5),
+        }],
+        ..Default::default()
     }
 }

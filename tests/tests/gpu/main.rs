@@ -23,7 +23,6 @@ mod gpu_voxelize;
 mod instance_lists;
 mod local_edit;
 mod octree_ray_cast;
-mod peel;
 mod pipeline;
 mod pixel_splat;
 mod rastavox;

@@ -96,7 +96,6 @@ pub const TEST_MAP: &[(&str, &[&str])] = &[
             "ray_march_gbuffer::",
             "scale::counters",
             "scale::a_grid",
-            "peel::",
         ],
     ),
     (

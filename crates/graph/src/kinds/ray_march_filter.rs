@@ -23,11 +23,9 @@ pub struct RayMarchFilterParams {
     /// How plane crossing times are computed (default `Exact`).
     #[serde(default)]
     pub march: MarchMode,
-    /// Draw a second proxy layer before marching: per pixel, the nearest proxy of an
-    /// instance other than the prepass's. A ray whose prepass instance is hit before that
-    /// layer (with a margin) skips the walk over the other instances' boxes, since every
-    /// voxel of theirs lies behind their proxies. Same hits; pays where many instances
-    /// are visible (a crowd), costs a proxy pass there, and nothing with one instance.
+    /// Removed: the second proxy layer (an experiment, no faster than the walk by screen
+    /// tiles; its code is at revision 8c208c3). Still read so that files writing
+    /// `peel: false` load; `true` is refused.
     #[serde(default)]
     pub peel: bool,
 }
@@ -66,7 +64,7 @@ impl KindSpec for RayMarchFilterParams {
         ParamDesc::new("max_steps", "u32", "at least 1"),
         ParamDesc::new("unique_voxels", "bool", "true or false"),
         ParamDesc::new("march", "Exact | Fast", "either"),
-        ParamDesc::new("peel", "bool", "true or false"),
+        ParamDesc::new("peel", "bool", "false (removed)"),
     ];
     const NAME: &'static str = "RayMarchFilter";
     const STAGE: PassStage = PassStage::Compute;
@@ -81,6 +79,15 @@ impl KindSpec for RayMarchFilterParams {
     /// `clear_draw` resets the indirect draw before `main` appends the hits to it.
     const ENTRY_POINTS: &'static [&'static str] = &["clear_draw", "main"];
     fn problems(&self) -> Vec<String> {
-        steps_problems(self.max_steps)
+        let mut p = steps_problems(self.max_steps);
+        if self.peel {
+            p.push(
+                "peel: true was removed (the second proxy layer, an experiment no faster \
+                 than the walk by screen tiles; its code is at revision 8c208c3): leave \
+                 peel out"
+                    .into(),
+            );
+        }
+        p
     }
 }

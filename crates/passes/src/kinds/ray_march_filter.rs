@@ -43,7 +43,6 @@ use crate::error::PassError;
 use crate::runtime::node::{CounterSource, PassNode};
 use ssbvb_gpu::shaders;
 
-mod peel;
 
 /// Mirror of WGSL `VoxelSlot` (32 bytes): one SSBVB entry.
 #[repr(C)]
@@ -109,8 +108,6 @@ pub struct RayMarchFilter {
     /// the claim table (the table follows the filter's size, the keys grow with the
     /// visible instances).
     words: FilterWords,
-    /// The second proxy layer (`peel`).
-    peel: peel::Peel,
 }
 
 /// Words of the counter buffer: rays, (low, high) sums of steps, boxes, marches and
@@ -133,15 +130,10 @@ pub const OWN: &[OwnBinding] = &[
         name: "filter_dispatch",
         kind: OwnKind::StorageReadWrite,
     },
-    OwnBinding {
-        name: "peel_t",
-        kind: OwnKind::Texture2dUint,
-    },
 ];
 
-/// Group-1 bindings of `clear_draw`, `mark_tiles` and `main`: the slots, the words and the
-/// second proxy layer (`peel`).
-const MAIN_BINDINGS: [u32; 5] = [0, 1, 2, 3, 5];
+/// Group-1 bindings of `clear_draw`, `mark_tiles` and `main`: the slots and the words.
+const MAIN_BINDINGS: [u32; 4] = [0, 1, 2, 3];
 /// Group-1 bindings of `list_tiles`: the prepass (for its size), the words and the
 /// arguments.
 const LIST_BINDINGS: [u32; 3] = [0, 3, 4];
@@ -282,7 +274,7 @@ struct MainPipelines {
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
     /// The pass's own overrides (from its parameters).
-    constants: [(&'static str, f64); 7],
+    constants: [(&'static str, f64); 6],
     label: String,
     built: VariantCache<MainVariant, wgpu::ComputePipeline>,
 }
@@ -331,7 +323,7 @@ impl PassImpl for RayMarchFilter {
             max_steps,
             unique_voxels,
             march,
-            peel,
+            ..
         } = *params;
         let module = ctx.shader(
             "ray_march_filter.wgsl",
@@ -342,7 +334,6 @@ impl PassImpl for RayMarchFilter {
             ("MAX_STEPS", f64::from(max_steps)),
             ("UNIQUE_VOXELS", flag(unique_voxels)),
             ("FAST_MARCH", flag(march == MarchMode::Fast)),
-            ("PEEL", flag(peel)),
             ("TILE_AT", TILE_AT as f64),
             ("CLAIM_HEADER", CLAIM_HEADER as f64),
             (
@@ -363,7 +354,6 @@ impl PassImpl for RayMarchFilter {
             let list = compute_pipeline(d, &layout, &module, "list_tiles", &constants);
             (list, bindings)
         })?;
-        let peel = ctx.validated(&label, |d| peel::Peel::new(d, &scene.layout, &module, peel))??;
         let dispatch = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("filter dispatch arguments"),
             size: 16,
@@ -391,7 +381,6 @@ impl PassImpl for RayMarchFilter {
             bindings,
             unique_voxels,
             words,
-            peel,
         })
     }
 }
@@ -405,17 +394,9 @@ impl PassNode for RayMarchFilter {
         self.prepare_words(rec, encoder)?;
         let entry = &rec.texture("entry").texture;
         let (w, h) = (entry.width(), entry.height());
-        let peeled = self.peel.record(encoder, rec, (w, h))?;
-        let bind_group = self.bindings.bind_group(
-            rec,
-            &[
-                ("filter_words", self.words.buffer.as_entire_binding()),
-                (
-                    "peel_t",
-                    wgpu::BindingResource::TextureView(self.peel.view()),
-                ),
-            ],
-        )?;
+        let bind_group = self
+            .bindings
+            .bind_group(rec, &[("filter_words", self.words.buffer.as_entire_binding())])?;
         let list_group = self.list_bindings.bind_group(
             rec,
             &[
@@ -433,14 +414,7 @@ impl PassNode for RayMarchFilter {
         if self.counted {
             encoder.clear_buffer(&self.words.buffer, 0, Some(COUNTER_WORDS as u64 * 4));
         }
-        // With the second layer drawn, its render pass began the pass's time.
-        let timestamps = rec.compute_timestamps().map(|t| match peeled {
-            true => wgpu::ComputePassTimestampWrites {
-                beginning_of_pass_write_index: None,
-                ..t
-            },
-            false => t,
-        });
+        let timestamps = rec.compute_timestamps();
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(&rec.pass.name),
             timestamp_writes: timestamps,
