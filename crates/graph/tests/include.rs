@@ -12,6 +12,9 @@ const SHARED: &str = include_str!("include/deferred.ron");
 /// The ESVO frame's own part.
 const ESVO_OWN: &str = include_str!("include/esvo_own.ron");
 
+/// The ESVO frame of `p/esvo.ron` with its composite replaced by the compute one.
+const COMPOSITE_IN_COMPUTE: &str = include_str!("include/composite_in_compute.ron");
+
 /// The bundled ESVO frame, written whole.
 const ESVO_WHOLE: &str = include_str!("../../../assets/pipelines/esvo.ron");
 
@@ -32,6 +35,11 @@ fn resolve_in(
             .ok_or_else(|| "no such file".to_string())
     };
     resolve_str_with(&map[file], file, &read)
+}
+
+fn kind_of(p: &ResolvedPipeline, pass: &str) -> ssbvb_graph::PassKind {
+    let found = p.desc.passes.iter().find(|s| s.name == pass);
+    found.unwrap().kind.clone()
 }
 
 fn names(p: &ResolvedPipeline) -> Vec<&str> {
@@ -60,18 +68,7 @@ fn an_included_file_declares_what_the_whole_file_declares() {
 
 #[test]
 fn a_pass_of_the_same_name_replaces_the_included_one_in_place() {
-    let variant = r#"Pipeline(
-  include: ["esvo.ron"],
-  resources: { "color": Texture(format: Rgba8Unorm, size: Screen) },
-  passes: [
-    (
-      name: "composite",
-      kind: CompositeCompute,
-      reads: {"albedo": "gbuffer_albedo", "normal": "smoothed_normal", "position": "gbuffer_position"},
-      writes: ["color"],
-    ),
-  ],
-)"#;
+    let variant = COMPOSITE_IN_COMPUTE;
     let map = files(&[
         ("p/esvo.ron", ESVO_OWN),
         ("p/shared/deferred.ron", SHARED),
@@ -80,13 +77,10 @@ fn a_pass_of_the_same_name_replaces_the_included_one_in_place() {
     let p = resolve_in(&map, "p/variant.ron").unwrap();
     let base = resolve_in(&map, "p/esvo.ron").unwrap();
     assert_eq!(names(&p), names(&base), "one pass replaced, none added");
-    let composite = p
-        .desc
-        .passes
-        .iter()
-        .find(|s| s.name == "composite")
-        .unwrap();
-    assert_eq!(composite.kind, ssbvb_graph::PassKind::CompositeCompute);
+    assert_eq!(
+        kind_of(&p, "composite"),
+        ssbvb_graph::PassKind::CompositeCompute
+    );
     assert_eq!(
         p.desc.output, "color",
         "the output comes from the included file"
@@ -177,14 +171,21 @@ fn the_watcher_reloads_when_an_included_file_changes() {
     let mut w = PipelineWatcher::new(&path).unwrap();
     assert!(matches!(w.poll(), ReloadOutcome::Unchanged));
     // The smoothing pruned by an edit of the included file only.
-    let edited = SHARED.replace(
+    reloads_unsmoothed(&mut w, &dir.join("shared/deferred.ron"), SHARED);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Writes `text` with the composite reading the unsmoothed normal to `file`, and checks
+/// that `w` reloads with the smoothing pruned.
+fn reloads_unsmoothed(w: &mut ssbvb_graph::PipelineWatcher, file: &std::path::Path, text: &str) {
+    let edited = text.replace(
         r#""normal": "smoothed_normal""#,
         r#""normal": "gbuffer_normal""#,
     );
-    std::fs::write(dir.join("shared/deferred.ron"), edited).unwrap();
-    assert!(matches!(w.poll(), ReloadOutcome::Reloaded));
+    assert_ne!(edited, text);
+    std::fs::write(file, edited).unwrap();
+    assert!(matches!(w.poll(), ssbvb_graph::ReloadOutcome::Reloaded));
     assert_eq!(w.current().pruned_passes, ["smooth"]);
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
@@ -227,18 +228,7 @@ fn a_file_included_by_two_ways_is_merged_once_and_an_override_stays() {
     let variant = r#"Pipeline(
   include: ["esvo_compute_composite.ron", "shared/deferred.ron"],
 )"#;
-    let middle = r#"Pipeline(
-  include: ["esvo.ron"],
-  resources: { "color": Texture(format: Rgba8Unorm, size: Screen) },
-  passes: [
-    (
-      name: "composite",
-      kind: CompositeCompute,
-      reads: {"albedo": "gbuffer_albedo", "normal": "smoothed_normal", "position": "gbuffer_position"},
-      writes: ["color"],
-    ),
-  ],
-)"#;
+    let middle = COMPOSITE_IN_COMPUTE;
     let map = files(&[
         ("p/esvo.ron", ESVO_OWN),
         ("p/shared/deferred.ron", SHARED),
@@ -246,13 +236,10 @@ fn a_file_included_by_two_ways_is_merged_once_and_an_override_stays() {
         ("p/variant.ron", variant),
     ]);
     let p = resolve_in(&map, "p/variant.ron").unwrap();
-    let composite = p
-        .desc
-        .passes
-        .iter()
-        .find(|s| s.name == "composite")
-        .unwrap();
-    assert_eq!(composite.kind, ssbvb_graph::PassKind::CompositeCompute);
+    assert_eq!(
+        kind_of(&p, "composite"),
+        ssbvb_graph::PassKind::CompositeCompute
+    );
     assert_eq!(p.sources.len(), 4, "{:?}", p.sources);
 }
 
@@ -283,13 +270,7 @@ fn the_watcher_of_a_renamed_files_old_path_watches_the_new_file() {
     std::fs::write(dir.join("ssbvb_unique.ron"), ESVO_WHOLE).unwrap();
     let mut w = PipelineWatcher::new(dir.join("ssbvb.ron")).unwrap();
     assert!(matches!(w.poll(), ReloadOutcome::Unchanged));
-    let edited = ESVO_WHOLE.replace(
-        r#""normal": "smoothed_normal""#,
-        r#""normal": "gbuffer_normal""#,
-    );
-    std::fs::write(dir.join("ssbvb_unique.ron"), edited).unwrap();
-    assert!(matches!(w.poll(), ReloadOutcome::Reloaded));
-    assert_eq!(w.current().pruned_passes, ["smooth"]);
+    reloads_unsmoothed(&mut w, &dir.join("ssbvb_unique.ron"), ESVO_WHOLE);
     std::fs::remove_dir_all(&dir).ok();
 }
 

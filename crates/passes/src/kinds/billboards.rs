@@ -112,12 +112,7 @@ pub struct Billboards {
 impl Billboards {
     /// Compiles the pipeline with explicit options (for measurements of culling and size).
     pub fn with_options(init: &PassInit<'_>, options: BillboardOptions) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = (init.ctx, init.scene, init.pipeline, init.pass);
         if !(options.size_scale.is_finite() && options.size_scale > 0.0) {
             return Err(PassError::BadScene(format!(
                 "pass `{}`: size_scale must be positive, got {}",

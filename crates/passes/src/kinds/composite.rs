@@ -33,12 +33,7 @@ impl Composite {
     /// `ConeComposite`'s, which differs only in what it reads) for the output's format
     /// (sRGB encoding in the shader for 8-bit non-sRGB targets).
     pub fn compile(init: &PassInit<'_>, shader: &str) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = (init.ctx, init.scene, init.pipeline, init.pass);
         let d = &ctx.device;
         let module = ctx.shader(shader, &shaders::source_for(shader, &scene.bindings)?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, &[]);

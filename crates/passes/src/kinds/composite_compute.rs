@@ -31,12 +31,7 @@ impl PassImpl for CompositeCompute {
     const SHADER: &'static str = "composite_compute.wgsl";
 
     fn new(init: &PassInit<'_>, _params: &CompositeComputeKind) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = (init.ctx, init.scene, init.pipeline, init.pass);
         let module = ctx.shader(
             Self::SHADER,
             &shaders::source_for(Self::SHADER, &scene.bindings)?,

@@ -201,12 +201,7 @@ impl PassImpl for ConeTrace {
     const WHOLE_LEVELS: bool = true;
 
     fn new(init: &PassInit<'_>, params: &ConeTraceParams) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = (init.ctx, init.scene, init.pipeline, init.pass);
         let d = &ctx.device;
         check_target_size(pipeline, pass)?;
         let volume = RadianceVolume::build(

@@ -26,12 +26,7 @@ impl PassImpl for EdgeAa {
     /// Compiles the pass for the output's format; `threshold` and `subpixel` become the
     /// WGSL overrides `THRESHOLD` and `SUBPIXEL`.
     fn new(init: &PassInit<'_>, params: &EdgeAaParams) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = (init.ctx, init.scene, init.pipeline, init.pass);
         let d = &ctx.device;
         let module = ctx.shader(Self::SHADER, &shaders::source_for(Self::SHADER, &scene.bindings)?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, &[]);

@@ -54,12 +54,7 @@ impl PassImpl for EmptySpace {
 
     /// Compiles the three pipelines for `pass` (formats from the graph's resources).
     fn new(init: &PassInit<'_>, _params: &EmptySpacePrepassKind) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = (init.ctx, init.scene, init.pipeline, init.pass);
         let module = ctx.shader("empty_space.wgsl", &shaders::source_for("empty_space.wgsl", &scene.bindings)?)?;
         let entry_format = slot_format(ctx, pipeline, pass, "entry");
         let depth_format = slot_format(ctx, pipeline, pass, "prepass_depth");

@@ -142,12 +142,7 @@ impl PassImpl for EmptySpaceCompute {
     const NEEDS: KindNeeds = KindNeeds::new(wgpu::DownlevelFlags::INDIRECT_EXECUTION, 3);
 
     fn new(init: &PassInit<'_>, params: &EmptySpaceComputeParams) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = (init.ctx, init.scene, init.pipeline, init.pass);
         let module = ctx.shader(
             Self::SHADER,
             &shaders::source_for(Self::SHADER, &scene.bindings)?,

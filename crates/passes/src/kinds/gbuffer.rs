@@ -201,12 +201,7 @@ impl PulledPipeline {
         fs_entry: &str,
         special: Option<&Specialized>,
     ) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = (init.ctx, init.scene, init.pipeline, init.pass);
         let (shader, own) = (special.map_or(P::SHADER, |s| s.file), P::OWN);
         let module = match special {
             Some(s) => ctx.shader(shader, &s.source)?,

@@ -64,12 +64,7 @@ impl ComputeCast {
         constants: &[(&'static str, f64)],
         special: &Specialized,
     ) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = (init.ctx, init.scene, init.pipeline, init.pass);
         let resolve =
             PulledPipeline::with_fragment_for::<P>(init, constants, "fs_resolve", special)?;
         let module = ctx.shader(P::SHADER, &special.source)?;

@@ -313,12 +313,7 @@ impl PassImpl for RayMarchFilter {
     /// needs it. `max_steps` becomes the WGSL override `MAX_STEPS`, `march: Fast` the
     /// override `FAST_MARCH`.
     fn new(init: &PassInit<'_>, params: &RayMarchFilterParams) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = (init.ctx, init.scene, init.pipeline, init.pass);
         let RayMarchFilterParams {
             max_steps,
             unique_voxels,

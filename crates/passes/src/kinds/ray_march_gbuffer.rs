@@ -116,12 +116,7 @@ impl PassImpl for RayMarchGBuffer {
     /// Compiles `mark_tiles`; the draw is compiled per [`MainVariant`] when a frame first
     /// needs it. `max_steps` becomes `MAX_STEPS`, `march: Fast` `FAST_MARCH`.
     fn new(init: &PassInit<'_>, params: &RayMarchGBufferParams) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = (init.ctx, init.scene, init.pipeline, init.pass);
         let module = ctx.shader(
             Self::SHADER,
             &shaders::source_for(Self::SHADER, &scene.bindings)?,

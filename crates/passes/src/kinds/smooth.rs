@@ -76,12 +76,7 @@ impl PassImpl for Smooth {
 
     /// Compiles both pipelines (voxel pixels smoothed, all others copied).
     fn new(init: &PassInit<'_>, params: &SmoothParams) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = (init.ctx, init.scene, init.pipeline, init.pass);
         let SmoothParams {
             max_i,
             min_dist,

@@ -46,12 +46,7 @@ impl PassImpl for SmoothCompute {
 
     /// Compiles the pipeline; `max_i` and `min_dist` become the WGSL overrides of Eq. 1.
     fn new(init: &PassInit<'_>, params: &SmoothComputeParams) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = (init.ctx, init.scene, init.pipeline, init.pass);
         // GL keeps a depth-stencil texture's sampled aspect on the texture, not the view:
         // of the two views bound here one would read the other's aspect.
         if ctx.adapter.get_info().backend == wgpu::Backend::Gl {

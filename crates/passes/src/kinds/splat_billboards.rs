@@ -143,12 +143,7 @@ impl PassImpl for SplatBillboards {
     /// Compiles the splat and the resolve; `mode` becomes the WGSL overrides `RAY_BOX` and
     /// `PIXEL`.
     fn new(init: &PassInit<'_>, params: &SplatBillboardsParams) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = (init.ctx, init.scene, init.pipeline, init.pass);
         let constants = [
             ("SIZE_SCALE", f64::from(params.size_scale)),
             ("CULL_COS", f64::from(crate::kinds::billboards::DEFAULT_CULL_COS)),

@@ -79,12 +79,7 @@ impl PassImpl for Temporal {
     const OWN: &'static [OwnBinding] = OWN;
 
     fn new(init: &PassInit<'_>, params: &TemporalParams) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = (init.ctx, init.scene, init.pipeline, init.pass);
         let d = &ctx.device;
         let module = ctx.shader(Self::SHADER, &shaders::source_for(Self::SHADER, &scene.bindings)?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, OWN);

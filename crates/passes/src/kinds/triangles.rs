@@ -36,12 +36,7 @@ impl PassImpl for Triangles {
 
     /// Compiles the pipeline for the formats bound to `pass`.
     fn new(init: &PassInit<'_>, _params: &TrianglesKind) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = (init.ctx, init.scene, init.pipeline, init.pass);
         let d = &ctx.device;
         let module = ctx.shader("triangles.wgsl", &shaders::source_for("triangles.wgsl", &scene.bindings)?)?;
         let bindings = PassBindings::new(ctx, pipeline, pass, OWN);

@@ -251,12 +251,7 @@ impl PassImpl for VolumeSlices {
     const NEEDS: KindNeeds = KindNeeds::NONE;
 
     fn new(init: &PassInit<'_>, params: &VolumeSlicesParams) -> Result<Self, PassError> {
-        let PassInit {
-            ctx,
-            scene,
-            pipeline,
-            pass,
-        } = *init;
+        let (ctx, scene, pipeline, pass) = (init.ctx, init.scene, init.pipeline, init.pass);
         let d = &ctx.device;
         // Texel lengths and the level by distance assume a uniform scale (no shear).
         for v in &scene.scene.volumes {
