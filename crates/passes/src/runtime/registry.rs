@@ -6,7 +6,7 @@
 
 use ssbvb_gpu::requirements::LimitNeed;
 use ssbvb_gpu::{GpuContext, wgpu};
-use ssbvb_graph::{KindSpec, OfKind, ResolvedPipeline, ScheduledPass};
+use ssbvb_graph::{KindSpec, OfKind, PassKind, ResolvedPipeline, ScheduledPass};
 
 use ssbvb_gpu::scene::GpuScene;
 
@@ -116,6 +116,8 @@ pub trait PassImpl: PassNode + Sized + 'static {
 pub struct Registration {
     /// The kind's name as written in RON (`PassKind::name`).
     pub kind: &'static str,
+    /// Whether a [`PassKind`] value is this kind (its variant, through `OfKind`).
+    pub is_kind: fn(&PassKind) -> bool,
     /// Its WGSL file under `shaders/` (same name as its module).
     pub shader: &'static str,
     /// Other forms of that file ([`PassImpl::VARIANTS`]).
@@ -128,6 +130,10 @@ pub struct Registration {
     pub own: &'static [OwnBinding],
     /// [`PassImpl::SCENE_FREE`].
     pub scene_free: bool,
+}
+
+fn is_kind<P: PassImpl>(kind: &PassKind) -> bool {
+    P::Params::of_kind(kind).is_some()
 }
 
 fn create<P: PassImpl>(init: &PassInit<'_>) -> Result<Box<dyn PassNode>, PassError> {
@@ -157,6 +163,7 @@ fn create<P: PassImpl>(init: &PassInit<'_>) -> Result<Box<dyn PassNode>, PassErr
 pub const fn register<P: PassImpl>() -> Registration {
     Registration {
         kind: <P::Params as KindSpec>::NAME,
+        is_kind: is_kind::<P>,
         shader: P::SHADER,
         variants: P::VARIANTS,
         create: create::<P>,
